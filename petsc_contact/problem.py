@@ -1,0 +1,117 @@
+"""The periodic hard-wall contact as a bound-constrained QP in the gap (DESIGN.md section 3).
+
+A rigid surface with heights ``h`` (peaks toward the elastic body) is pressed with nominal
+pressure ``p0`` onto an elastic half-space.  With the gap ``g >= 0`` as unknown,
+
+    Pi(g) = a^2 [ 1/2 (g + h)^T K (g + h) + p0 sum(g) ],     g >= 0,
+
+where ``K`` is the periodic stiffness (``E*|q|/2``, annihilating constants).  Its gradient is
+``a^2 p`` with the contact pressure ``p = K(g + h) + p0``, so the bound-constrained optimum is
+exactly the hard-wall KKT system ``g >= 0, p >= 0, p g = 0``.
+
+TAO sees the scaled problem in ``x = g / l`` (``l = h_rms``):
+
+    f(x) = s / l * Pi(l x) / a^2,     s = 1 / (sqrt(n^2) p0),
+
+whose gradient is ``s p``, so TAO's 2-norm of the projected gradient is the rms pressure
+residual in units of ``p0`` and ``-tao_gatol 1e-8`` means "pressures to 1e-8 p0".
+The Hessian is ``s l K``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .fft import SerialFFT, SlabFFT, wavevector_magnitude
+from .greens import periodic_compliance, periodic_stiffness
+from .grid import Grid
+from .operator import FourierOperator
+
+
+class PeriodicProblem:
+    """Operators and scaled objective of the periodic contact of one surface.
+
+    Parameters
+    ----------
+    grid, fft
+        Layout and FFT backend.
+    heights
+        This rank's slab of the rigid surface heights (the mean is removed).
+    modulus
+        Contact modulus ``E*``.
+    """
+
+    def __init__(self, grid: Grid, fft: SerialFFT | SlabFFT, heights: np.ndarray,
+                 modulus: float) -> None:
+        if not np.isfinite(modulus) or modulus <= 0:
+            raise ValueError(f"modulus must be positive and finite, got {modulus}")
+        self.grid = grid
+        self.modulus = float(modulus)
+        self.heights = np.ascontiguousarray(heights - grid.mean(heights), dtype=float)
+        self.h_rms = grid.rms(self.heights)
+        self.scale_length = self.h_rms if self.h_rms > 0 else grid.length
+        q = wavevector_magnitude(grid, fft)
+        q0 = 2 * np.pi / grid.length
+        self.stiffness = FourierOperator(grid, fft, periodic_stiffness(q, modulus))
+        self.hessian = FourierOperator(grid, fft, periodic_stiffness(q, modulus))
+        self.preconditioner = FourierOperator(grid, fft, periodic_compliance(q, modulus, q0))
+        self._base_hessian = self.hessian.kernel.copy()
+        self._base_preconditioner = self.preconditioner.kernel.copy()
+        self.pixel_stiffness = self.stiffness.diagonal()
+        self.nominal_pressure = np.nan
+        self._s = np.nan
+
+    def set_pressure(self, p0: float) -> None:
+        """Set the nominal pressure ``p0 > 0`` and rescale the TAO-facing operators."""
+        if not np.isfinite(p0) or p0 <= 0:
+            raise ValueError(f"nominal pressure must be positive and finite, got {p0}")
+        self.nominal_pressure = float(p0)
+        self._s = 1.0 / (np.sqrt(self.grid.size) * p0)
+        c = self._s * self.scale_length
+        self.hessian.kernel = self._base_hessian * c
+        self.preconditioner.kernel = self._base_preconditioner / c
+
+    def pressure(self, gap: np.ndarray) -> np.ndarray:
+        """Contact pressure ``p = K(g + h) + p0`` of a gap field (local slab)."""
+        p = self.stiffness.apply_array(gap + self.heights, np.empty(self.grid.local_shape))
+        p += self.nominal_pressure
+        return p
+
+    def start(self, x0: np.ndarray) -> None:
+        """Take ``x0`` as the reference point of :meth:`objective_gradient` (one FFT)."""
+        self._x_ref = np.array(x0, dtype=float).reshape(-1)
+        self._d = np.empty_like(self._x_ref)
+        self._p_ref = self.pressure(self._x_ref.reshape(self.grid.local_shape)
+                                    * self.scale_length).reshape(-1)
+
+    def objective_gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
+        """Scaled objective relative to the reference, ``f(x) - f(x_ref)``; ``grad <- s p``.
+
+        With ``d = x - x_ref``: ``f(x) - f(x_ref) = s d.p_ref + s l / 2 d.K d`` and
+        ``p = p_ref + l K d``.  Evaluating the *difference* keeps its rounding error
+        proportional to the decrease itself, so line searches still see progress when the
+        pressure residual is ``1e-10 p0``; the absolute energy would drown it.
+        """
+        grid, ell, fft = self.grid, self.scale_length, self.stiffness.fft
+        d = self._d
+        np.subtract(x, self._x_ref, out=d)
+        fft.real[...] = d.reshape(grid.local_shape)
+        self.stiffness.applications += 1
+        fft.forward()
+        fft.spectrum *= self.stiffness.kernel
+        fft.backward()
+        kd = fft.result.reshape(-1)
+        d_pref, d_kd = grid.sum(np.dot(d, self._p_ref), np.dot(d, kd))
+        np.multiply(kd, ell, out=grad)
+        grad += self._p_ref
+        grad *= self._s
+        return self._s * (d_pref + 0.5 * ell * d_kd)
+
+    def initial_gap(self) -> np.ndarray:
+        """Gap at first touch of the undeformed surfaces, ``max(h) - h``."""
+        return self.grid.max(float(self.heights.max())) - self.heights
+
+    def full_contact_pressure(self) -> float:
+        """Nominal pressure at which contact becomes complete, ``-min(K h)`` (DESIGN.md 7)."""
+        kh = self.stiffness.apply_array(self.heights, np.empty(self.grid.local_shape))
+        return -self.grid.min(float(kh.min()))

@@ -1,0 +1,192 @@
+"""The TAO driver: a bound-constrained minimisation on the grid's PETSc Vecs.
+
+The solver type and every tolerance come from the PETSc options database (``-tao_type``,
+``-tao_gatol``, ``-tao_max_it``, ``-options_file``, ...); the package only sets defaults
+before ``setFromOptions``, so options always win.
+
+Quasi-Newton types of the BQNK family (``bqnls``, ``bqnkls``, ``bqnktr``, ``bqnktl``) get
+the Fourier compliance as the initial inverse Hessian ``J0`` of their LMVM matrix.
+petsc4py 3.18 does not wrap ``TaoGetLMVMMatrix``/``MatLMVMSetJ0PC``, so this goes through
+ctypes on the same ``libpetsc`` that petsc4py uses; ``-petsc_contact_no_j0`` turns it off.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import time
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+
+from .grid import Grid
+from .operator import FourierOperator, shell_matrix
+
+BOUND_TYPES = ("bqnls", "blmvm", "bncg", "tron", "gpcg", "bnls", "bntr", "bntl",
+               "bqnkls", "bqnktr", "bqnktl", "bqpip", "python")
+J0_TYPES = ("bqnls", "bqnkls", "bqnktr", "bqnktl")
+KSP_TYPES = ("tron", "gpcg", "bnls", "bntr", "bntl", "bqpip")
+DEFAULT_TYPE = "bqnls"
+DEFAULT_GATOL = 1e-8
+DEFAULT_MAX_IT = 20000
+
+ObjGrad = Callable[[np.ndarray, np.ndarray], float]
+
+
+@dataclass
+class SolveInfo:
+    """What TAO reports for one solve (``reason`` is TAO's name, e.g. ``CONVERGED_GATOL``)."""
+
+    tao_type: str
+    reason: str
+    reason_code: int
+    iterations: int
+    objective_gradient_evaluations: int
+    hessian_applications: int
+    preconditioner_applications: int
+    gradient_norm: float
+    solve_time: float
+    tolerance: float
+
+
+def _reason_names(petsc: Any) -> dict[int, str]:
+    reasons = petsc.TAO.Reason
+    return {getattr(reasons, k): k for k in dir(reasons) if k.isupper()}
+
+
+def _libpetsc() -> ctypes.CDLL:
+    lib = ctypes.CDLL("libpetsc_real.so.3.18")
+    for name in ("TaoGetLMVMMatrix", "MatLMVMSetJ0PC"):
+        getattr(lib, name).argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+        getattr(lib, name).restype = ctypes.c_int
+    return lib
+
+
+def attach_lmvm_j0(tao: Any, pc: Any) -> None:
+    """Make ``pc`` the initial inverse Hessian of a BQNK-type TAO's LMVM matrix."""
+    lib = _libpetsc()
+    lmvm = ctypes.c_void_p()
+    if lib.TaoGetLMVMMatrix(ctypes.c_void_p(tao.handle), ctypes.byref(lmvm)) != 0:
+        raise RuntimeError("TaoGetLMVMMatrix failed")
+    if lib.MatLMVMSetJ0PC(lmvm, ctypes.c_void_p(pc.handle)) != 0:
+        raise RuntimeError("MatLMVMSetJ0PC failed")
+
+
+def requested_type(petsc: Any) -> str:
+    """The TAO type the options database asks for (``DEFAULT_TYPE`` if none)."""
+    opts = petsc.Options()
+    return opts.getString("tao_type", DEFAULT_TYPE) if opts.hasName("tao_type") else DEFAULT_TYPE
+
+
+def check_tao_type(petsc: Any) -> str:
+    """Raise ``ValueError`` unless ``-tao_type`` names a bound-constrained TAO type."""
+    t = requested_type(petsc)
+    if t not in BOUND_TYPES:
+        raise ValueError(f"unknown or unbounded TAO type '{t}'; choose one of: "
+                         + ", ".join(BOUND_TYPES))
+    return t
+
+
+class BoundSolver:
+    """Minimise a convex quadratic with ``x >= lower`` by TAO on the grid's row-slab Vecs.
+
+    Parameters
+    ----------
+    petsc
+        The ``petsc4py.PETSc`` module.
+    grid
+        Layout of the unknowns.
+    hessian
+        Fourier operator giving the exact Hessian (shell ``Mat``).
+    preconditioner
+        Fourier operator approximating the inverse Hessian (LMVM ``J0``), or ``None``.
+    """
+
+    def __init__(self, petsc: Any, grid: Grid, hessian: FourierOperator,
+                 preconditioner: FourierOperator | None) -> None:
+        self.petsc = petsc
+        self.grid = grid
+        self.hessian_op = hessian
+        self.preconditioner_op = preconditioner
+        self.tao_type = check_tao_type(petsc)
+        self.hessian = shell_matrix(petsc, hessian)
+        self.x = self.hessian.createVecRight()
+        self.lower = self.x.duplicate()
+        self.upper = self.x.duplicate()
+        self.upper.set(petsc.INFINITY)
+        self.pc = None
+        use_j0 = not petsc.Options().getBool("petsc_contact_no_j0", False)
+        if preconditioner is not None and self.tao_type in J0_TYPES and use_j0:
+            self.pc = petsc.PC().createPython(preconditioner, comm=grid.comm)
+            self.pc.setOperators(self.hessian)
+            self.pc.setUp()
+        self._reasons = _reason_names(petsc)
+
+    def solve(self, objgrad: ObjGrad, x0: np.ndarray, lower: float = 0.0,
+              monitor: Callable[[int, float, float], None] | None = None
+              ) -> tuple[np.ndarray, SolveInfo]:
+        """Run TAO from ``x0`` (local flat array); return the local solution and TAO's report."""
+        petsc = self.petsc
+        counts = {"objgrad": 0}
+
+        def tao_objgrad(tao: Any, x: Any, g: Any) -> float:
+            counts["objgrad"] += 1
+            with g as garr:
+                return objgrad(x.array_r, garr)
+
+        def tao_hessian(tao: Any, x: Any, H: Any, P: Any) -> None:
+            pass  # the Hessian is constant: the shell Mat already is it
+
+        with self.x as xa:
+            xa[...] = x0.reshape(-1)
+        self.lower.set(lower)
+        tao = petsc.TAO().create(comm=self.grid.comm)
+        try:
+            tao.setType(self.tao_type)
+            tao.setObjectiveGradient(tao_objgrad, None)
+            tao.setHessian(tao_hessian, self.hessian, self.hessian)
+            tao.setVariableBounds(self.lower, self.upper)
+            tao.setTolerances(gatol=DEFAULT_GATOL, grtol=0.0, gttol=0.0)
+            tao.setMaximumIterations(DEFAULT_MAX_IT)
+            tao.setMaximumFunctionEvaluations(10 * DEFAULT_MAX_IT)
+            if self.tao_type in KSP_TYPES:
+                tao.getKSP().getPC().setType("none")
+            tao.setFromOptions()
+            if self.pc is not None:
+                attach_lmvm_j0(tao, self.pc)
+            if monitor is not None:
+                tao.setMonitor(lambda t: monitor(*t.getSolutionStatus()[:3]))
+            gatol, grtol, _ = tao.getTolerances()
+            h0, p0 = self.hessian_op.applications, self._pc_count()
+            start = time.perf_counter()
+            tao.solve(self.x)
+            elapsed = self.grid.max(time.perf_counter() - start)
+            its, _, gnorm, _, _, code = tao.getSolutionStatus()
+            code = int(code)
+            info = SolveInfo(
+                tao_type=tao.getType(), reason=self._reasons.get(code, str(code)),
+                reason_code=code, iterations=int(its),
+                objective_gradient_evaluations=counts["objgrad"],
+                hessian_applications=self.hessian_op.applications - h0,
+                preconditioner_applications=self._pc_count() - p0,
+                gradient_norm=float(gnorm), solve_time=elapsed,
+                tolerance=float(gatol))
+        finally:
+            tao.destroy()
+        return self.x.array_r.copy(), info
+
+    def _pc_count(self) -> int:
+        return self.preconditioner_op.applications if self.preconditioner_op is not None else 0
+
+    def __enter__(self) -> "BoundSolver":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Destroy the PETSc objects (needed for a clean exit, DESIGN.md section 9)."""
+        for obj in (self.pc, self.hessian, self.x, self.lower, self.upper):
+            if obj is not None:
+                obj.destroy()
+        self.pc = None

@@ -1,0 +1,160 @@
+"""Self-affine random surfaces with a roll-off (paper Eq. 5) and their statistics.
+
+Conventions (DESIGN.md section 5): for the DFT ``H(q) = sum_x h(x) exp(-i q.x)``,
+``C(q) = a^4 |H(q)|^2 / ((2 pi)^2 A0)`` so that ``h_rms^2 = sum_q C(q) (2 pi / L)^2``, the
+discrete form of ``integral d^2q C(q)``.
+
+Generation is Fourier filtering of Gaussian white noise: the DFT of real white noise has
+Hermitian symmetry, complex Gaussian coefficients (Gaussian real and imaginary parts, uniform
+phases), and it is multiplied by ``sqrt(C(q))``.  The white noise of row ``i`` is drawn from
+``numpy.random.default_rng([seed, i])``, so a seed gives the same surface for any number of
+MPI ranks and on any machine with the same numpy stream.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .fft import SerialFFT, SlabFFT, half_spectrum_weights, wavevector_magnitude
+from .grid import Grid
+
+FFT = SerialFFT | SlabFFT
+
+
+def psd_shape(q: np.ndarray, q0: float, qr: float, q1: float, hurst: float) -> np.ndarray:
+    """``C(q)/C0`` of paper Eq. (5).
+
+    ``0`` for ``q < q0``; ``1`` for ``q0 <= q < qr``; ``(q/qr)^(-2-2H)`` for ``qr <= q < q1``;
+    ``0`` for ``q >= q1``.
+    """
+    q = np.asarray(q, dtype=float)
+    with np.errstate(divide="ignore"):
+        tail = (np.maximum(q, qr) / qr) ** (-2.0 - 2.0 * hurst)
+    shape = np.where(q < qr, 1.0, tail)
+    return np.where((q >= q0 * (1 - 1e-12)) & (q < q1), shape, 0.0)
+
+
+def check_spectrum_parameters(n: int, hurst: float, rolloff_ratio: float,
+                              cutoff_ratio: float) -> None:
+    """Raise ``ValueError`` with a one-line reason for an impossible spectrum."""
+    if not 0.0 <= hurst <= 1.0:
+        raise ValueError(f"Hurst exponent must be in [0, 1], got {hurst}")
+    if not 1.0 <= rolloff_ratio <= cutoff_ratio:
+        raise ValueError("need 1 <= L/lambda_r <= L/lambda_1, got "
+                         f"L/lambda_r = {rolloff_ratio}, L/lambda_1 = {cutoff_ratio}")
+    if cutoff_ratio > n / 2:
+        raise ValueError(f"L/lambda_1 = {cutoff_ratio} exceeds the Nyquist limit n/2 = {n // 2}")
+
+
+def white_noise(grid: Grid, seed: int) -> np.ndarray:
+    """Unit-variance Gaussian white noise on this rank's rows, independent of the rank count."""
+    rows = range(grid.rows.start, grid.rows.stop)
+    return np.array([np.random.default_rng([seed, i]).standard_normal(grid.n) for i in rows]
+                    ).reshape(grid.local_shape)
+
+
+def spectrum_sums(grid: Grid, fft: FFT, shape: np.ndarray) -> tuple[float, float]:
+    """``(sum C, sum q^2 C) (2 pi/L)^2`` over the full spectrum for a half-spectrum ``C``."""
+    w = half_spectrum_weights(grid, fft) * shape
+    q2 = wavevector_magnitude(grid, fft) ** 2
+    dq2 = (2 * np.pi / grid.length) ** 2
+    s0, s2 = grid.sum(w.sum(), (w * q2).sum())
+    return s0 * dq2, s2 * dq2
+
+
+def self_affine(grid: Grid, fft: FFT, *, hurst: float, rolloff_ratio: float,
+                cutoff_ratio: float, seed: int, rms_height: float | None = None,
+                rms_slope: float | None = None, exact: bool = False) -> np.ndarray:
+    """A seeded self-affine surface with roll-off, this rank's row slab.
+
+    Parameters
+    ----------
+    grid, fft
+        The grid and its FFT.
+    hurst
+        Hurst exponent ``H``.
+    rolloff_ratio, cutoff_ratio
+        ``L/lambda_r`` and ``L/lambda_1`` (paper Eq. 5).
+    seed
+        Random seed (any non-negative integer).
+    rms_height, rms_slope
+        Exactly one target: ``C0`` is chosen so that the *expected* ``h_rms^2`` (or
+        ``h'_rms^2 = integral q^2 C d^2q``) of the discrete spectrum equals the target.
+    exact
+        Rescale the realisation so that the realised value equals the target exactly.
+
+    Returns
+    -------
+    numpy.ndarray
+        Heights, mean zero, shape ``grid.local_shape``.
+    """
+    check_spectrum_parameters(grid.n, hurst, rolloff_ratio, cutoff_ratio)
+    if (rms_height is None) == (rms_slope is None):
+        raise ValueError("give exactly one of rms_height and rms_slope")
+    target = rms_height if rms_height is not None else rms_slope
+    if not np.isfinite(target) or target < 0:
+        raise ValueError(f"rms target must be non-negative and finite, got {target}")
+    q0 = 2 * np.pi / grid.length
+    shape = psd_shape(wavevector_magnitude(grid, fft), q0, q0 * rolloff_ratio,
+                      q0 * cutoff_ratio, hurst)
+    s0, s2 = spectrum_sums(grid, fft, shape)
+    c0 = target**2 / (s0 if rms_height is not None else s2)
+    fft.real[...] = white_noise(grid, seed)
+    fft.forward()
+    fft.spectrum *= np.sqrt(c0 * shape * (2 * np.pi / grid.length) ** 2 * grid.size) / grid.size
+    fft.backward()
+    h = fft.result.copy()
+    if exact and target > 0:
+        realised = rms_of(grid, fft, h, slope=rms_slope is not None)
+        h *= target / realised
+    return h
+
+
+def fourier_power(grid: Grid, fft: FFT, h: np.ndarray) -> np.ndarray:
+    """``C(q)`` of a realisation on the local half-spectrum block (DESIGN.md section 5)."""
+    fft.real[...] = h
+    fft.forward()
+    a = grid.pixel
+    return np.abs(fft.spectrum) ** 2 * a**4 / ((2 * np.pi) ** 2 * grid.length**2)
+
+
+def rms_of(grid: Grid, fft: FFT, h: np.ndarray, slope: bool = False) -> float:
+    """Realised rms height, or rms slope from the spectrum (exact spectral derivative)."""
+    if not slope:
+        return grid.rms(h - grid.mean(h))
+    return float(np.sqrt(spectrum_sums(grid, fft, fourier_power(grid, fft, h))[1]))
+
+
+def radial_psd(grid: Grid, fft: FFT, h: np.ndarray, bins: int | None = None
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Radially averaged PSD of a realisation.
+
+    Parameters
+    ----------
+    bins
+        Number of logarithmic bins between ``q0`` and the Nyquist wavevector; ``None`` gives
+        linear bins of width ``q0`` centred on ``k q0``.
+
+    Returns
+    -------
+    q, C
+        Mean ``|q|`` and mean ``C(q)`` of the non-empty bins (same on every rank).
+    """
+    c = fourier_power(grid, fft, h)
+    q = wavevector_magnitude(grid, fft)
+    w = half_spectrum_weights(grid, fft) * np.ones_like(q)
+    q0 = 2 * np.pi / grid.length
+    qmax = np.pi / grid.pixel * np.sqrt(2)
+    if bins is None:
+        index = np.rint(q / q0).astype(int)
+        nbins = int(np.rint(qmax / q0)) + 2
+    else:
+        edges = np.geomspace(q0 * 0.999, qmax * 1.001, bins + 1)
+        index = np.searchsorted(edges, q) - 1
+        nbins = bins + 1
+    index = np.clip(index, 0, nbins - 1)
+    stats = [np.bincount(index.ravel(), weights=(w * x).ravel(), minlength=nbins)
+             for x in (np.ones_like(q), q, c)]
+    count, qsum, csum = grid.sum(*np.concatenate(stats)).reshape(3, nbins)
+    keep = (count > 0) & (qsum > 0)
+    return qsum[keep] / count[keep], csum[keep] / count[keep]

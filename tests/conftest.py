@@ -1,0 +1,33 @@
+"""Shared helpers: run the CLI as a user does, and build grids in-process."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def cli(*args: str, mpi: int = 0, timeout: float = 300) -> subprocess.CompletedProcess:
+    """Run ``petsc-contact ARGS`` (under ``mpiexec -n mpi`` if ``mpi``) with this interpreter."""
+    cmd = [sys.executable, "-m", "petsc_contact.cli", *args]
+    if mpi:
+        cmd = [shutil.which("mpiexec") or "mpiexec", "--oversubscribe", "-n", str(mpi), *cmd]
+    env = dict(os.environ)
+    env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               PYTHONPATH=str(ROOT))
+    env.pop("PETSC_DIR", None)  # the package must find PETSc by itself
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env,
+                          stdin=subprocess.DEVNULL)
+
+
+@pytest.fixture(scope="session")
+def petsc():
+    from petsc_contact import _petsc
+
+    return _petsc.init([])

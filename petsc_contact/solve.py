@@ -22,13 +22,13 @@ import numpy as np
 from .grid import Grid
 from .operator import FourierOperator, shell_matrix
 
-BOUND_TYPES = ("bqnls", "blmvm", "bncg", "tron", "gpcg", "bnls", "bntr", "bntl",
+BOUND_TYPES = ("tron", "bqnls", "blmvm", "bncg", "gpcg", "bnls", "bntr", "bntl",
                "bqnkls", "bqnktr", "bqnktl", "bqpip", "python")
 J0_TYPES = ("bqnls", "bqnkls", "bqnktr", "bqnktl")
 KSP_TYPES = ("tron", "gpcg", "bnls", "bntr", "bntl", "bqpip")
-DEFAULT_TYPE = "bqnls"
+DEFAULT_TYPE = "tron"
 DEFAULT_GATOL = 1e-8
-DEFAULT_MAX_IT = 20000
+DEFAULT_MAX_IT = 5000
 
 ObjGrad = Callable[[np.ndarray, np.ndarray], float]
 

@@ -12,6 +12,8 @@ def make(n=128, **kw):
     grid = Grid(n, 1.0)
     fft = make_fft(grid)
     args = dict(hurst=0.7, rolloff_ratio=4, cutoff_ratio=n // 4, seed=3, rms_slope=0.1)
+    if "rms_height" in kw:
+        del args["rms_slope"]
     args.update(kw)
     return grid, fft, self_affine(grid, fft, **args)
 

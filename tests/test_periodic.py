@@ -1,0 +1,159 @@
+"""Periodic contact against analytic solutions and identities (DESIGN.md section 7)."""
+
+import numpy as np
+import pytest
+
+from petsc_contact import periodic_contact
+from petsc_contact.fft import make_fft, wavevector_magnitude
+from petsc_contact.greens import periodic_stiffness
+from petsc_contact.grid import Grid
+from petsc_contact.operator import FourierOperator
+from petsc_contact.surface import self_affine
+
+TIGHT = ["-tao_gatol", "1e-11"]
+N_WAVE = 256
+DELTA, LENGTH, MODULUS = 0.01, 1.0, 2.0
+P_STAR = np.pi * MODULUS * DELTA / LENGTH  # Westergaard full-contact pressure
+
+
+def wave():
+    x = np.arange(N_WAVE) * LENGTH / N_WAVE
+    return np.repeat(DELTA * np.cos(2 * np.pi * x / LENGTH)[:, None], N_WAVE, axis=1), x
+
+
+def westergaard(x, p0):
+    """Half-width and pressure of the periodic 1-D wave contact (DESIGN.md section 7)."""
+    half = LENGTH / np.pi * np.arcsin(np.sqrt(p0 / P_STAR))
+    xs = (x + LENGTH / 2) % LENGTH - LENGTH / 2  # periodic distance to the peak
+    s2 = np.sin(np.pi * half / LENGTH) ** 2
+    inside = np.abs(xs) < half
+    p = np.zeros_like(x)
+    p[inside] = 2 * p0 * np.cos(np.pi * xs[inside] / LENGTH) / s2 * np.sqrt(
+        s2 - np.sin(np.pi * xs[inside] / LENGTH) ** 2)
+    return half, p
+
+
+@pytest.fixture(scope="module")
+def rough():
+    grid = Grid(128, 1.0)
+    return self_affine(grid, make_fft(grid), hurst=0.7, rolloff_ratio=2, cutoff_ratio=32,
+                       seed=7, rms_slope=0.1)
+
+
+@pytest.mark.parametrize("tao_type", ["tron", "bnls"])
+def test_westergaard(tao_type):
+    """Contact width within one pixel; pressure within discretisation error.
+
+    The pressure has a square-root edge, so a pixel-centred discretisation converges like
+    sqrt(a/L) at the edges and much faster inside: we compare the rms error over the inner
+    80% of the contact to 1% of the peak pressure, and the total force to 1e-9.
+    """
+    h, x = wave()
+    fracs = [0.05, 0.3, 0.7]
+    steps = periodic_contact(h, LENGTH, MODULUS, [f * P_STAR for f in fracs],
+                             options=["-tao_type", tao_type, *TIGHT], fields=True)
+    pix = LENGTH / N_WAVE
+    for f, step in zip(fracs, steps):
+        assert step.converged, step.scalars["verification"]
+        half, p_exact = westergaard(x, f * P_STAR)
+        contact_px = np.count_nonzero(step.gap[:, 0] == 0)
+        assert abs(contact_px * pix - 2 * half) <= pix * (1 + 1e-9)
+        p = step.pressure[:, 0]
+        inner = np.abs((x + LENGTH / 2) % LENGTH - LENGTH / 2) < 0.8 * half
+        err = np.sqrt(np.mean((p[inner] - p_exact[inner]) ** 2))
+        assert err < 0.01 * p_exact.max()
+        assert step.scalars["area_fraction"] == pytest.approx(contact_px / N_WAVE, abs=1e-12)
+
+
+def test_identities_rough(rough):
+    """Force balance, complementarity and the energy identity on a rough surface."""
+    p0s = [1e-3, 3e-3]
+    steps = periodic_contact(rough, 1.0, 1.0, p0s, options=["-tao_type", "tron", *TIGHT],
+                             fields=True)
+    grid = Grid(128, 1.0)
+    fft = make_fft(grid)
+    k = FourierOperator(grid, fft, periodic_stiffness(wavevector_magnitude(grid, fft), 1.0))
+    for p0, step in zip(p0s, steps):
+        s = step.scalars
+        assert step.converged
+        # force balance: the mean pressure on the contact set is p0
+        assert s["contact_pressure_mean"] == pytest.approx(p0, rel=1e-10)
+        # complementarity (Tamaas-style) and signs
+        assert s["complementarity"] < 1e-12
+        assert s["min_gap"] >= 0
+        assert s["min_pressure"] > -1e-10 * p0
+        # energy: 1/2 <u K u> from an independent FFT of the displacement u = g + h
+        u = step.gap + rough - rough.mean()
+        energy = 0.5 * np.mean(u * k.apply_array(u, np.empty_like(u)))
+        assert s["elastic_energy"] == pytest.approx(energy, rel=1e-9)
+        # pressure equals the stiffness applied to the displacement, plus p0
+        assert np.allclose(step.pressure, k.apply_array(u, np.empty_like(u)) + p0,
+                           atol=1e-9 * p0)
+
+
+def test_work_equals_energy(rough):
+    """dU = -p0 du_bar: the elastic energy gained equals the work of the load (trapezoid
+    rule on a fine sweep; its error is O(dp^2), below 1e-3 here)."""
+    p0s = np.linspace(2e-3, 4e-3, 21)
+    steps = periodic_contact(rough, 1.0, 1.0, p0s, options=["-tao_type", "tron", *TIGHT])
+    u = np.array([s.scalars["mean_gap"] for s in steps])
+    energy = np.array([s.scalars["elastic_energy"] for s in steps])
+    work = -np.trapz(p0s, u)
+    assert energy[-1] - energy[0] == pytest.approx(work, rel=1e-3)
+
+
+def test_full_contact_limit(rough):
+    grid = Grid(128, 1.0)
+    fft = make_fft(grid)
+    k = FourierOperator(grid, fft, periodic_stiffness(wavevector_magnitude(grid, fft), 1.0))
+    h = rough - rough.mean()
+    kh = k.apply_array(h, np.empty_like(h))
+    p_full = -kh.min()
+    steps = periodic_contact(rough, 1.0, 1.0, [0.98 * p_full, 1.5 * p_full],
+                             options=["-tao_type", "bnls", *TIGHT], fields=True)
+    below, above = steps
+    assert below.scalars["area_fraction"] < 1.0
+    assert above.converged
+    assert above.scalars["area_fraction"] == 1.0
+    assert np.abs(above.gap).max() == 0.0
+    assert np.allclose(above.pressure, 1.5 * p_full + kh, rtol=0, atol=1e-12 * p_full)
+    assert above.scalars["elastic_energy"] == pytest.approx(0.5 * np.mean(h * kh), rel=1e-12)
+
+
+def test_cross_solver_agreement(rough):
+    """Different TAO types reach the same solution (mean gap to 1e-6, area to two pixels)
+    at their default tolerance (BQNLS at its options file's 1e-7, see options/bqnls.opts)."""
+    results = {}
+    for t in ("tron", "bqnls", "blmvm", "bncg", "bnls"):
+        opts = ["-tao_type", t] + (["-tao_gatol", "1e-7"] if t == "bqnls" else [])
+        (step,) = periodic_contact(rough, 1.0, 1.0, [2e-3], options=opts)
+        assert step.converged, (t, step.scalars["verification"])
+        results[t] = step.scalars
+    ref = results["tron"]
+    for t, s in results.items():
+        assert s["mean_gap"] == pytest.approx(ref["mean_gap"], rel=1e-6), t
+        assert abs(s["area_fraction"] - ref["area_fraction"]) * 128**2 <= 2, t
+
+
+def test_single_asperity_and_huge_load(rough):
+    steps = periodic_contact(rough, 1.0, 1.0, [1e-7, 1e-6, 10.0],
+                             options=["-tao_type", "tron"])
+    assert all(s.converged for s in steps), [s.scalars["verification"] for s in steps]
+    assert 0 < steps[0].scalars["area_fraction"] < 1e-3
+    assert steps[-1].scalars["area_fraction"] == 1.0
+
+
+def test_not_converged_is_flagged(rough):
+    (step,) = periodic_contact(rough, 1.0, 1.0, [1e-2],
+                               options=["-tao_type", "blmvm", "-tao_max_it", "3"])
+    assert not step.converged
+    assert step.scalars["tao_reason"] == "DIVERGED_MAXITS"
+    assert "did not converge" in step.scalars["verification"]
+
+
+def test_options_do_not_leak(rough):
+    periodic_contact(rough, 1.0, 1.0, [1e-2], options=["-tao_type", "bncg"])
+    (step,) = periodic_contact(rough, 1.0, 1.0, [1e-2])
+    from petsc_contact.solve import DEFAULT_TYPE
+
+    assert step.scalars["tao_type"] == DEFAULT_TYPE

@@ -225,11 +225,12 @@ def run_periodic(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
     writer = StepWriter(args.output, grid, _attributes(args, argv, petsc, realised),
                         heights, fields)
     table: list[dict[str, Any]] = []
+    p_full = problem.full_contact_pressure()  # collective: every rank computes it
     try:
         if root and not args.quiet:
             print(f"# periodic {n}x{n}, L = {args.length:g}, E* = {args.modulus:g}, "
                   f"h_rms = {realised['rms_height']:.4g}, h'_rms = {realised['rms_slope']:.4g}, "
-                  f"full contact at p0 = {problem.full_contact_pressure():.4g}", flush=True)
+                  f"full contact at p0 = {p_full:.4g}", flush=True)
             print(HEADER, flush=True)
         for i, step in enumerate(sweep(petsc, problem, args.pressures, bool(fields))):
             writer.append(step.scalars, {"gap": step.gap, "pressure": step.pressure}

@@ -1,0 +1,132 @@
+"""The command line as users script it: schema, bad input, atomic output, MPI agreement."""
+
+import json
+
+import h5py
+import numpy as np
+import pytest
+
+from conftest import cli
+
+GEN = ["--grid", "64", "--hurst", "0.7", "--rms-slope", "0.1", "--rolloff-ratio", "2",
+       "--cutoff-ratio", "16", "--seed", "4"]
+
+
+def test_periodic_run_schema(tmp_path):
+    out = tmp_path / "run.h5"
+    r = cli("periodic", *GEN, "--pressures", "1e-3,1e-2", "--output", str(out), "--fields",
+            "-tao_type", "bnls")
+    assert r.returncode == 0, r.stderr
+    assert len([l for l in r.stdout.splitlines() if "CONVERGED" in l]) == 2
+    with h5py.File(out) as f:
+        for name in ("nominal_pressure", "mean_gap", "area_fraction", "iterations",
+                     "solve_time", "converged", "tao_reason", "elastic_energy", "max_pressure",
+                     "min_gap", "min_pressure", "complementarity", "kkt_residual",
+                     "objective_gradient_evaluations", "hessian_applications"):
+            assert f[name].shape == (2,), name
+        assert f["converged"][:].all()
+        assert f["heights"].shape == (64, 64)
+        assert f["gap"].shape == f["pressure"].shape == (2, 64, 64)
+        assert np.allclose(f["pressure"][1].mean(), 1e-2, rtol=1e-9)
+        assert f.attrs["seed"] == 4 and f.attrs["complete"]
+        assert "-tao_type bnls" in f.attrs["petsc_options"]
+        assert json.loads(f.attrs["versions"])["petsc"].startswith("3.")
+        assert json.loads(f.attrs["parameters"])["pressures"] == [1e-3, 1e-2]
+
+
+def test_rerun_from_file_reproduces(tmp_path):
+    """The heights stored in a result file reproduce the run."""
+    first = tmp_path / "a.h5"
+    assert cli("periodic", *GEN, "--pressures", "3e-3", "--output", str(first)).returncode == 0
+    with h5py.File(first) as f:
+        np.save(tmp_path / "h.npy", f["heights"][:])
+        gap = f["mean_gap"][0]
+    second = tmp_path / "b.h5"
+    r = cli("periodic", "--heights", str(tmp_path / "h.npy"), "--pressures", "3e-3",
+            "--output", str(second))
+    assert r.returncode == 0, r.stderr
+    with h5py.File(second) as f:
+        assert f["mean_gap"][0] == pytest.approx(gap, rel=1e-12)
+
+
+def test_not_converged_exit_status(tmp_path):
+    out = tmp_path / "bad.h5"
+    r = cli("periodic", *GEN, "--pressures", "1e-2", "--output", str(out),
+            "-tao_type", "blmvm", "-tao_max_it", "2")
+    assert r.returncode == 1
+    assert "did NOT converge" in r.stderr
+    with h5py.File(out) as f:
+        assert not f["converged"][0]
+        assert f["tao_reason"][0].decode() == "DIVERGED_MAXITS"
+
+
+def _bad_inputs(tmp):
+    np.save(tmp / "nan.npy", np.full((8, 8), np.nan))
+    np.save(tmp / "rect.npy", np.zeros((8, 6)))
+    np.save(tmp / "cube.npy", np.zeros((4, 4, 4)))
+    (tmp / "junk.npy").write_text("not an array")
+    ok = np.random.default_rng(0).standard_normal((16, 16))
+    np.save(tmp / "ok.npy", ok)
+    base = ["--pressures", "1e-3"]
+    return {
+        "NaN": ["--heights", str(tmp / "nan.npy"), *base],
+        "square": ["--heights", str(tmp / "rect.npy"), *base],
+        "2-D": ["--heights", str(tmp / "cube.npy"), *base],
+        "does not exist": ["--heights", str(tmp / "missing.npy"), *base],
+        "cannot read": ["--heights", str(tmp / "junk.npy"), *base],
+        "--modulus": ["--heights", str(tmp / "ok.npy"), "--modulus", "-1", *base],
+        "--length": ["--heights", str(tmp / "ok.npy"), "--length", "0", *base],
+        "--pressures": ["--heights", str(tmp / "ok.npy"), "--pressures", "1e-3,-2"],
+        "unknown or unbounded TAO type": ["--heights", str(tmp / "ok.npy"), *base,
+                                          "-tao_type", "nosuch"],
+    }
+
+
+def test_bad_input_one_line_no_output(tmp_path):
+    for expected, args in _bad_inputs(tmp_path).items():
+        out = tmp_path / "out.h5"
+        r = cli("periodic", *args, "--output", str(out))
+        assert r.returncode == 2, (expected, r.stderr)
+        lines = r.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("petsc-contact: error:"), r.stderr
+        assert expected in lines[0], (expected, lines[0])
+        assert not out.exists() and not (tmp_path / "out.h5.partial").exists()
+
+
+def test_unwritable_output_and_atomic_replace(tmp_path):
+    np.save(tmp_path / "ok.npy", np.random.default_rng(0).standard_normal((16, 16)))
+    r = cli("periodic", "--heights", str(tmp_path / "ok.npy"), "--pressures", "1e-3",
+            "--output", str(tmp_path / "no" / "such" / "dir.h5"))
+    assert r.returncode == 2 and "does not exist" in r.stderr
+    out = tmp_path / "keep.h5"
+    out.write_bytes(b"previous result")
+    r = cli("periodic", "--heights", str(tmp_path / "ok.npy"), "--pressures", "1e-3",
+            "--output", str(out), "-tao_type", "nosuch")
+    assert r.returncode == 2
+    assert out.read_bytes() == b"previous result"
+
+
+def test_help_documents_options():
+    r = cli("periodic", "--help")
+    assert r.returncode == 0
+    for opt in ("--heights", "--grid", "--hurst", "--rms-slope", "--rms-height",
+                "--rolloff-ratio", "--cutoff-ratio", "--seed", "--length", "--modulus",
+                "--pressures", "--output", "--fields", "--plot"):
+        assert opt in r.stdout
+
+
+@pytest.mark.parametrize("ranks", [2, 3])
+def test_mpi_matches_serial(tmp_path, ranks):
+    """Same surface for any rank count; mean gap to 1e-8, area to two pixels (n = 64)."""
+    args = ["periodic", *GEN, "--pressures", "1e-3,1e-2"]
+    serial, par = tmp_path / "s.h5", tmp_path / "p.h5"
+    r = cli(*args, "--output", str(serial))
+    assert r.returncode == 0, r.stderr
+    r = cli(*args, "--output", str(par), mpi=ranks)
+    assert r.returncode == 0, r.stdout + r.stderr
+    with h5py.File(serial) as s, h5py.File(par) as p:
+        hs, hp = s["heights"][:], p["heights"][:]  # same noise; FFTs differ only in rounding
+        assert np.abs(hp - hs).max() <= 1e-12 * np.abs(hs).max()
+        assert p.attrs["mpi_size"] == ranks
+        assert np.allclose(p["mean_gap"][:], s["mean_gap"][:], rtol=1e-8, atol=0)
+        assert np.all(np.abs(p["area_fraction"][:] - s["area_fraction"][:]) * 64**2 <= 2)

@@ -23,7 +23,7 @@ EXIT_INTERRUPTED = 130
 
 DEMO = {"grid": 512, "hurst": 0.7, "rms_slope": 0.1, "rolloff_ratio": 2.0,
         "cutoff_ratio": 64.0, "seed": 1, "length": 1.0, "modulus": 1.0,
-        "pressures": "3e-5,1e-4,3e-4,1e-3,3e-3,1e-2,2e-2,4e-2"}
+        "pressures": "3e-5,1e-4,3e-4,1e-3,3e-3,1e-2,2e-2,3e-2"}
 
 _PETSC_OPTION = re.compile(r"^-[A-Za-z_]")
 _NUMBER = re.compile(r"^-?(\d|\.\d)")

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .fft import SerialFFT, SlabFFT
+from .fft import SerialFFT, SlabFFT, half_spectrum_weights
 from .grid import Grid
 
 
@@ -45,8 +45,6 @@ class FourierOperator:
 
     def diagonal(self) -> float:
         """The (constant) diagonal entry of the circulant operator."""
-        from .fft import half_spectrum_weights
-
         w = half_spectrum_weights(self.grid, self.fft)
         return float(self.grid.sum((w * self.kernel).sum())[0])
 

@@ -24,3 +24,48 @@ def periodic_compliance(q: np.ndarray, modulus: float, q_zero: float) -> np.ndar
     """
     q = np.asarray(q, dtype=float)
     return 2.0 / (modulus * np.where(q > 0, q, q_zero))
+
+
+def _corner_primitive(xi: np.ndarray, eta: np.ndarray) -> np.ndarray:
+    """``G(xi, eta) = int_0^xi int_0^eta dx dy / sqrt(x^2 + y^2)``, odd in each argument.
+
+    For ``s, t > 0``: ``G = s asinh(t/s) + t asinh(s/t)``; ``G = 0`` on the axes.
+    """
+    s, t = np.abs(xi), np.abs(eta)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g = np.where((s > 0) & (t > 0), s * np.arcsinh(t / s) + t * np.arcsinh(s / t), 0.0)
+    return np.sign(xi) * np.sign(eta) * g
+
+
+def love_pixel_displacement(x: np.ndarray, y: np.ndarray, pixel: float,
+                            modulus: float) -> np.ndarray:
+    """Normal surface displacement at ``(x, y)`` under unit pressure on one square pixel.
+
+    The pixel ``[-a/2, a/2]^2`` (``a = pixel``) carries a uniform unit pressure on an
+    elastic half-space of contact modulus ``E*``; Boussinesq's point-force solution
+    integrated over the square (Love 1929; Johnson, Contact Mechanics, 1985, eq. 3.25) gives
+
+        u(x, y) = 1/(pi E*) sum_corners (+-) G(x - x_c, y - y_c)
+
+    with the primitive ``G`` of ``1/r`` (see :func:`_corner_primitive`).  At the pixel's own
+    centre ``u = 4 a asinh(1) / (pi E*)``.
+    """
+    h = 0.5 * pixel
+    total = (_corner_primitive(x + h, y + h) - _corner_primitive(x + h, y - h)
+             - _corner_primitive(x - h, y + h) + _corner_primitive(x - h, y - h))
+    return total / (np.pi * modulus)
+
+
+def hockney_kernel(n: int, pixel: float, modulus: float, rows: slice = slice(None)
+                   ) -> np.ndarray:
+    """The pixel influence function on the ``2n x 2n`` zero-padding grid (Hockney 1970).
+
+    Entry ``[i, j]`` is the displacement at offset ``(i, j) * pixel`` with offsets taken
+    periodically in ``[-n, n)`` (numpy's ``fftfreq`` order).  Circular convolution of a
+    pressure zero-padded from ``n x n`` to ``2n x 2n`` with this kernel, read back on the
+    first ``n x n`` block, is the exact non-periodic (free-boundary) convolution, because
+    no offset between two footprint pixels exceeds ``n - 1``.  ``rows`` selects the rows
+    to evaluate (a rank's slab).
+    """
+    offsets = np.fft.fftfreq(2 * n) * 2 * n * pixel
+    return love_pixel_displacement(offsets[rows, None], offsets[None, :], pixel, modulus)

@@ -9,6 +9,8 @@ is smaller, never by a tolerance on the gap alone.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from .grid import Grid
@@ -26,7 +28,7 @@ def natural_residual(gap: np.ndarray, pressure: np.ndarray, pixel_stiffness: flo
 
 
 def step_observables(grid: Grid, gap: np.ndarray, pressure: np.ndarray, heights: np.ndarray,
-                     nominal_pressure: float, pixel_stiffness: float) -> dict[str, float]:
+                     nominal_pressure: float, pixel_stiffness: float) -> dict[str, Any]:
     """Scalars of one load step (same on every rank).
 
     Returns
@@ -37,7 +39,8 @@ def step_observables(grid: Grid, gap: np.ndarray, pressure: np.ndarray, heights:
         ``elastic_energy`` per apparent area, ``1/2 mean((g + h)(p - p0))``;
         ``max_pressure``; ``min_gap``; ``min_pressure`` (over all pixels; negative values
         are tension); ``complementarity`` ``sum(p+ g) / (sum(p+) h_rms)`` as Tamaas reports
-        it; ``kkt_residual`` ``rms(min(k g, p)) / p0``.
+        it; ``kkt_residual`` ``rms(min(k g, p)) / p0``; ``contact``, the local boolean
+        contact mask (not a scalar: callers pop it).
     """
     contact = contact_mask(gap, pressure, pixel_stiffness)
     p_plus = np.maximum(pressure, 0.0)
@@ -59,4 +62,5 @@ def step_observables(grid: Grid, gap: np.ndarray, pressure: np.ndarray, heights:
         "min_pressure": grid.min(float(pressure.min())),
         "complementarity": pg / (p_sum * h_rms) if p_sum > 0 and h_rms > 0 else 0.0,
         "kkt_residual": np.sqrt(r2 / n) / nominal_pressure,
+        "contact": contact,
     }

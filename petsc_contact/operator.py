@@ -1,9 +1,11 @@
 """Fourier-diagonal operators as PETSc shell matrices and preconditioners.
 
 :class:`FourierOperator` applies ``y = IFFT(kernel * FFT(x))`` to the row-slab PETSc Vecs of
-a :class:`~petsc_contact.grid.Grid`.  The same object serves as the context of a Python
-``Mat`` (``mult``) and of a Python ``PC`` (``apply``), so one class gives TAO both the exact
-Hessian and the Fourier preconditioner.
+a :class:`~petsc_contact.grid.Grid` (the periodic geometry).  :class:`PaddedOperator` does
+the same on a ``2n x 2n`` zero-padded copy of an ``n x n`` field and reads back the first
+block: the free-boundary convolution of the punch (Hockney 1970).  Either object serves as
+the context of a Python ``Mat`` (``mult``) and of a Python ``PC`` (``apply``), so one class
+gives TAO both the exact Hessian and the Fourier preconditioner.
 """
 
 from __future__ import annotations
@@ -12,11 +14,40 @@ from typing import Any
 
 import numpy as np
 
-from .fft import SerialFFT, SlabFFT, half_spectrum_weights
-from .grid import Grid
+from .fft import SerialFFT, SlabFFT, half_spectrum_weights, make_fft
+from .grid import Grid, block_rows
 
 
-class FourierOperator:
+class ShellInterface:
+    """The petsc4py Python ``Mat`` and ``PC`` methods of an operator with ``apply_array``.
+
+    Subclasses define ``apply_array(x, out)`` on local arrays and ``diagonal()``.
+    """
+
+    applications: int
+
+    def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def diagonal(self) -> float:
+        raise NotImplementedError
+
+    def mult(self, mat: Any, x: Any, y: Any) -> None:
+        with y as out:
+            self.apply_array(x.array_r, out)
+
+    multTranspose = mult
+
+    def getDiagonal(self, mat: Any, d: Any) -> None:
+        d.set(self.diagonal())
+
+    def apply(self, pc: Any, x: Any, y: Any) -> None:
+        self.mult(None, x, y)
+
+    applyTranspose = apply
+
+
+class FourierOperator(ShellInterface):
     """Convolution with a real, even kernel given on the local half-spectrum block.
 
     Parameters
@@ -48,21 +79,105 @@ class FourierOperator:
         w = half_spectrum_weights(self.grid, self.fft)
         return float(self.grid.sum((w * self.kernel).sum())[0])
 
-    # petsc4py Python Mat interface
-    def mult(self, mat: Any, x: Any, y: Any) -> None:
-        with y as out:
-            self.apply_array(x.array_r, out)
 
-    multTranspose = mult
+class PaddedOperator(ShellInterface):
+    """Free-boundary convolution of an ``n x n`` field by zero padding to ``2n x 2n``.
 
-    def getDiagonal(self, mat: Any, d: Any) -> None:
-        d.set(self.diagonal())
+    Parameters
+    ----------
+    grid
+        The ``n x n`` footprint grid (its row slabs are the Vec layout).
+    kernel_rows
+        ``f(rows) -> array`` giving rows ``rows`` of the real ``2n x 2n`` kernel in numpy's
+        ``fftfreq`` offset order (e.g. :func:`~petsc_contact.greens.hockney_kernel`).
+        It must be even in both offsets, so that its spectrum is real.
+    fft
+        FFT backend of the padded ``2n x 2n`` grid; pass one to share it between operators.
 
-    # petsc4py Python PC interface
-    def apply(self, pc: Any, x: Any, y: Any) -> None:
-        self.mult(None, x, y)
+    Notes
+    -----
+    Under MPI the footprint rows a rank owns and the padded rows it transforms differ;
+    rows move with one ``Alltoallv`` each way (:class:`RowExchange`).
+    """
 
-    applyTranspose = apply
+    def __init__(self, grid: Grid, kernel_rows: Any, fft: SerialFFT | SlabFFT | None = None
+                 ) -> None:
+        self.grid = grid
+        self.padded = Grid(2 * grid.n, 2 * grid.length, grid.comm)
+        self.fft = fft if fft is not None else make_fft(self.padded)
+        self.fft.real[...] = kernel_rows(self.padded.rows)
+        self.fft.forward()
+        self.spectrum = np.ascontiguousarray(self.fft.spectrum.real) / self.padded.size
+        self._centre = float(kernel_rows(slice(0, 1))[0, 0])
+        self.exchange = RowExchange(grid.comm, grid.n, self.padded.n)
+        self.applications = 0
+
+    def with_spectrum(self, spectrum: np.ndarray) -> "PaddedOperator":
+        """Another operator on the same padded FFT with the given (normalised) spectrum."""
+        other = object.__new__(PaddedOperator)
+        other.__dict__.update(self.__dict__)
+        other.spectrum = spectrum
+        w = half_spectrum_weights(self.padded, self.fft)
+        other._centre = float(self.grid.sum((w * spectrum).sum())[0])
+        other.applications = 0
+        return other
+
+    def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """``out <- P^T C P x``: pad, circular convolution, keep the footprint block."""
+        self.applications += 1
+        n = self.grid.n
+        real = self.fft.real
+        real[...] = 0.0
+        self.exchange.to_padded(x.reshape(self.grid.local_shape), real[:, :n])
+        self.fft.forward()
+        self.fft.spectrum *= self.spectrum
+        self.fft.backward()
+        self.exchange.to_footprint(self.fft.result[:, :n], out.reshape(self.grid.local_shape))
+        return out
+
+    def diagonal(self) -> float:
+        """The constant diagonal entry (the kernel at zero offset)."""
+        return self._centre
+
+
+class RowExchange:
+    """Move the first ``n`` rows between the ``n``-row and ``m``-row slab layouts of a comm.
+
+    Row ``i`` of the footprint is row ``i`` of the padded grid; each rank owns
+    :func:`~petsc_contact.grid.block_rows` of both.  With one rank this is a copy.
+    """
+
+    def __init__(self, comm: Any, n: int, m: int) -> None:
+        self.comm = comm
+        size = comm.size
+        mine_f = block_rows(n, size, comm.rank)
+        mine_p = block_rows(m, size, comm.rank)
+
+        def overlap(a: slice, b: slice) -> int:
+            return max(0, min(a.stop, b.stop, n) - max(a.start, b.start))
+
+        self.send = [overlap(mine_f, block_rows(m, size, q)) * n for q in range(size)]
+        self.recv = [overlap(block_rows(n, size, q), mine_p) * n for q in range(size)]
+        self.rows_in = sum(self.recv) // n  # footprint rows present in my padded slab
+
+    def to_padded(self, footprint: np.ndarray, padded: np.ndarray) -> None:
+        """Write my footprint rows into the padded slabs (``padded`` is my ``[:, :n]`` view)."""
+        if self.comm.size == 1:
+            padded[:footprint.shape[0]] = footprint
+            return
+        buf = np.empty((self.rows_in, footprint.shape[1]))
+        self.comm.Alltoallv([np.ascontiguousarray(footprint), self.send], [buf, self.recv])
+        padded[:self.rows_in] = buf
+
+    def to_footprint(self, padded: np.ndarray, footprint: np.ndarray) -> None:
+        """Read my footprint rows back from the padded slabs."""
+        if self.comm.size == 1:
+            footprint[...] = padded[:footprint.shape[0]]
+            return
+        buf = np.ascontiguousarray(padded[:self.rows_in])
+        out = np.empty_like(footprint)
+        self.comm.Alltoallv([buf, self.recv], [out, self.send])
+        footprint[...] = out
 
 
 def shell_matrix(petsc: Any, op: FourierOperator) -> Any:

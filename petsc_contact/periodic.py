@@ -13,7 +13,7 @@ is within ten times the tolerance TAO was asked for.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
@@ -25,6 +25,7 @@ from .observables import step_observables
 from .output import check_finite
 from .problem import PeriodicProblem
 from .solve import BoundSolver, SolveInfo
+from .stiffness import periodic_stiffness_exact
 
 VERIFY_FACTOR = 10.0
 
@@ -36,7 +37,7 @@ class Step:
     scalars: dict[str, Any]
     gap: np.ndarray | None = None
     pressure: np.ndarray | None = None
-    fields: dict[str, np.ndarray] = field(default_factory=dict)
+    state: np.ndarray | None = None  # the local solution a later step can restart from
 
     @property
     def converged(self) -> bool:
@@ -68,9 +69,17 @@ def check_pressures(pressures: Sequence[float]) -> list[float]:
 
 
 def sweep(petsc: Any, problem: PeriodicProblem, pressures: Sequence[float],
-          fields: bool = False, monitor: Callable[[int, float, float], None] | None = None
-          ) -> Iterator[Step]:
+          fields: bool = False, monitor: Callable[[int, float, float], None] | None = None,
+          stiffness: bool = False, start: np.ndarray | None = None) -> Iterator[Step]:
     """Solve the pressures in the given order, each warm-started from the last converged gap.
+
+    Parameters
+    ----------
+    stiffness
+        Add ``stiffness``, the exact ``-dp0/du_bar`` with the contact set held fixed
+        (:func:`~petsc_contact.stiffness.periodic_stiffness_exact`), and its CG iterations.
+    start
+        Local gap slab to start from (e.g. a resumed run's last state); default: first touch.
 
     Yields
     ------
@@ -80,7 +89,7 @@ def sweep(petsc: Any, problem: PeriodicProblem, pressures: Sequence[float],
     """
     grid = problem.grid
     ell = problem.scale_length
-    x = problem.initial_gap().reshape(-1) / ell
+    x = (problem.initial_gap() if start is None else start).reshape(-1) / ell
     with BoundSolver(petsc, grid, problem.hessian, problem.preconditioner) as solver:
         for p0 in check_pressures(pressures):
             problem.set_pressure(p0)
@@ -97,6 +106,7 @@ def sweep(petsc: Any, problem: PeriodicProblem, pressures: Sequence[float],
             pressure = problem.pressure(gap)
             obs = step_observables(grid, gap, pressure, problem.heights, p0,
                                    problem.pixel_stiffness)
+            contact = obs.pop("contact")
             grtol = petsc.Options().getReal("tao_grtol", 0.0)
             verdict = verify(info, obs, ell, history[0] if history else np.inf, grtol)
             if verdict == "ok":
@@ -110,12 +120,19 @@ def sweep(petsc: Any, problem: PeriodicProblem, pressures: Sequence[float],
                        "hessian_applications": info.hessian_applications,
                        "preconditioner_applications": info.preconditioner_applications,
                        "gradient_norm": info.gradient_norm, "tolerance": info.tolerance}
-            yield Step(scalars, gap if fields else None, pressure if fields else None)
+            if stiffness:
+                k, its = (periodic_stiffness_exact(petsc, grid, problem.stiffness,
+                                                   problem.compliance, contact)
+                          if verdict == "ok" else (np.nan, 0))
+                scalars.update(stiffness=k, stiffness_iterations=its)
+            yield Step(scalars, gap if fields else None, pressure if fields else None,
+                       state=gap)
 
 
 def periodic_contact(heights: np.ndarray, length: float, modulus: float,
                      pressures: Sequence[float], options: Sequence[str] | None = None,
-                     fields: bool = False, comm: Any = None) -> list[Step]:
+                     fields: bool = False, comm: Any = None, stiffness: bool = False
+                     ) -> list[Step]:
     """Solve the periodic contact of ``heights`` for each nominal pressure.
 
     Parameters
@@ -132,6 +149,8 @@ def periodic_contact(heights: np.ndarray, length: float, modulus: float,
         Keep the local ``gap`` and ``pressure`` slabs of every step.
     comm
         mpi4py communicator (default ``COMM_WORLD``).
+    stiffness
+        Add the exact incremental stiffness ``stiffness`` to every step (see :func:`sweep`).
 
     Returns
     -------
@@ -144,4 +163,4 @@ def periodic_contact(heights: np.ndarray, length: float, modulus: float,
         local = grid.scatter(heights)
         check_finite(grid, local)
         problem = PeriodicProblem(grid, make_fft(grid), local, modulus)
-        return list(sweep(petsc, problem, pressures, fields))
+        return list(sweep(petsc, problem, pressures, fields, stiffness=stiffness))

@@ -1,4 +1,4 @@
-"""PNG summary of a load sweep: contact area and mean gap against nominal pressure."""
+"""PNG summaries of load sweeps (periodic: area and mean gap; punch: force and stiffness)."""
 
 from __future__ import annotations
 
@@ -12,11 +12,7 @@ def plot_sweep(path: str, steps: Sequence[dict[str, Any]], modulus: float, h_rms
 
     Steps that did not converge are drawn as red crosses.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = _pyplot()
     p = np.array([s["nominal_pressure"] for s in steps]) / modulus
     area = np.array([s["area_fraction"] for s in steps])
     gap = np.array([s["mean_gap"] for s in steps]) / (h_rms if h_rms > 0 else 1.0)
@@ -30,7 +26,42 @@ def plot_sweep(path: str, steps: Sequence[dict[str, Any]], modulus: float, h_rms
         ax1.legend()
     ax1.set(xlabel="$p_0/E^*$", ylabel="$A/A_0$", title="contact area")
     ax2.set(xlabel=r"$\bar u/h_\mathrm{rms}$", ylabel="$p_0/E^*$", title="mean gap")
-    for ax in (ax1, ax2):
+    _finish(fig, (ax1, ax2), path)
+
+
+def plot_punch(path: str, steps: Sequence[dict[str, Any]]) -> None:
+    """Two panels: force vs approach, and interfacial stiffness per area vs nominal pressure."""
+    plt = _pyplot()
+    ok = np.array([bool(s["converged"]) for s in steps])
+    d = np.array([s["approach"] for s in steps])
+    f = np.array([s["force"] for s in steps])
+    p = np.array([s["nominal_pressure"] for s in steps])
+    k = np.array([s["interfacial_stiffness"] for s in steps])
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.8), constrained_layout=True)
+    ax1.plot(d[ok], f[ok], "o-")
+    ax2.loglog(p[ok & (p > 0)], k[ok & (p > 0)], "o-")
+    if (~ok).any():
+        ax1.plot(d[~ok], f[~ok], "rx", ms=10, label="NOT converged")
+        ax1.legend()
+    ax1.set(xlabel=r"approach $\delta$", ylabel="force $F$", title="punch")
+    ax2.set(xlabel="$F/L_p^2$", ylabel="$K$ (per area)", title="interfacial stiffness, Eq. 2")
+    _finish(fig, (ax1, ax2), path)
+
+
+def _pyplot() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _finish(fig: Any, axes: Sequence[Any], path: str) -> None:
+    for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
     fig.savefig(path, dpi=110)
+    fig.clf()
+    import matplotlib.pyplot as plt
+
     plt.close(fig)

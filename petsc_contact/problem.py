@@ -54,6 +54,7 @@ class PeriodicProblem:
         q0 = 2 * np.pi / grid.length
         self.stiffness = FourierOperator(grid, fft, periodic_stiffness(q, modulus))
         self.hessian = FourierOperator(grid, fft, periodic_stiffness(q, modulus))
+        self.compliance = FourierOperator(grid, fft, periodic_compliance(q, modulus, q0))
         self.preconditioner = FourierOperator(grid, fft, periodic_compliance(q, modulus, q0))
         self._base_hessian = self.hessian.kernel.copy()
         self._base_preconditioner = self.preconditioner.kernel.copy()

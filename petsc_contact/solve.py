@@ -4,6 +4,11 @@ The solver type and every tolerance come from the PETSc options database (``-tao
 ``-tao_gatol``, ``-tao_max_it``, ``-options_file``, ...); the package only sets defaults
 before ``setFromOptions``, so options always win.
 
+The default is ``-tao_type python`` with the package's Fourier-preconditioned active-set
+conjugate gradient (:class:`petsc_contact.cg.PreconditionedCG`, the fastest robust choice
+measured, README "Solvers"); any other Python type is chosen with ``-tao_python_type``.
+A Python type that has ``set_preconditioner`` receives the Fourier preconditioner.
+
 Quasi-Newton types of the BQNK family (``bqnls``, ``bqnkls``, ``bqnktr``, ``bqnktl``) get
 the Fourier compliance as the initial inverse Hessian ``J0`` of their LMVM matrix.
 petsc4py 3.18 does not wrap ``TaoGetLMVMMatrix``/``MatLMVMSetJ0PC``, so this goes through
@@ -26,7 +31,8 @@ BOUND_TYPES = ("tron", "bqnls", "blmvm", "bncg", "gpcg", "bnls", "bntr", "bntl",
                "bqnkls", "bqnktr", "bqnktl", "bqpip", "python")
 J0_TYPES = ("bqnls", "bqnkls", "bqnktr", "bqnktl")
 KSP_TYPES = ("tron", "gpcg", "bnls", "bntr", "bntl", "bqpip")
-DEFAULT_TYPE = "tron"
+DEFAULT_TYPE = "python"
+DEFAULT_PYTHON_TYPE = "petsc_contact.cg.PreconditionedCG"
 DEFAULT_GATOL = 1e-8
 DEFAULT_MAX_IT = 5000
 
@@ -52,6 +58,11 @@ class SolveInfo:
 def _reason_names(petsc: Any) -> dict[int, str]:
     reasons = petsc.TAO.Reason
     return {getattr(reasons, k): k for k in dir(reasons) if k.isupper()}
+
+
+def _type_name(tao: Any, context: Any) -> str:
+    """TAO's type, with the class of a Python type (``python:PreconditionedCG``)."""
+    return f"python:{type(context).__name__}" if context is not None else tao.getType()
 
 
 def _libpetsc() -> ctypes.CDLL:
@@ -116,16 +127,20 @@ class BoundSolver:
         self.upper.set(petsc.INFINITY)
         self.pc = None
         use_j0 = not petsc.Options().getBool("petsc_contact_no_j0", False)
-        if preconditioner is not None and self.tao_type in J0_TYPES and use_j0:
+        wants_pc = (self.tao_type in J0_TYPES and use_j0) or self.tao_type == "python"
+        if preconditioner is not None and wants_pc:
             self.pc = petsc.PC().createPython(preconditioner, comm=grid.comm)
             self.pc.setOperators(self.hessian)
             self.pc.setUp()
         self._reasons = _reason_names(petsc)
 
     def solve(self, objgrad: ObjGrad, x0: np.ndarray, lower: float = 0.0,
-              monitor: Callable[[int, float, float], None] | None = None
-              ) -> tuple[np.ndarray, SolveInfo]:
-        """Run TAO from ``x0`` (local flat array); return the local solution and TAO's report."""
+              monitor: Callable[[int, float, float], None] | None = None,
+              upper: np.ndarray | None = None) -> tuple[np.ndarray, SolveInfo]:
+        """Run TAO from ``x0`` (local flat array); return the local solution and TAO's report.
+
+        ``upper`` is an optional local array of upper bounds (default: none).
+        """
         petsc = self.petsc
         counts = {"objgrad": 0}
 
@@ -140,9 +155,16 @@ class BoundSolver:
         with self.x as xa:
             xa[...] = x0.reshape(-1)
         self.lower.set(lower)
+        if upper is None:
+            self.upper.set(petsc.INFINITY)
+        else:
+            with self.upper as ua:
+                ua[...] = upper
         tao = petsc.TAO().create(comm=self.grid.comm)
         try:
             tao.setType(self.tao_type)
+            if self.tao_type == "python":
+                tao.setPythonType(DEFAULT_PYTHON_TYPE)
             tao.setObjectiveGradient(tao_objgrad, None)
             tao.setHessian(tao_hessian, self.hessian, self.hessian)
             tao.setVariableBounds(self.lower, self.upper)
@@ -152,8 +174,11 @@ class BoundSolver:
             if self.tao_type in KSP_TYPES:
                 tao.getKSP().getPC().setType("none")
             tao.setFromOptions()
-            if self.pc is not None:
+            if self.pc is not None and self.tao_type in J0_TYPES:
                 attach_lmvm_j0(tao, self.pc)
+            context = tao.getPythonContext() if self.tao_type == "python" else None
+            if self.pc is not None and hasattr(context, "set_preconditioner"):
+                context.set_preconditioner(self.pc)
             if monitor is not None:
                 tao.setMonitor(lambda t: monitor(*t.getSolutionStatus()[:3]))
             gatol, grtol, _ = tao.getTolerances()
@@ -164,7 +189,7 @@ class BoundSolver:
             its, _, gnorm, _, _, code = tao.getSolutionStatus()
             code = int(code)
             info = SolveInfo(
-                tao_type=tao.getType(), reason=self._reasons.get(code, str(code)),
+                tao_type=_type_name(tao, context), reason=self._reasons.get(code, str(code)),
                 reason_code=code, iterations=int(its),
                 objective_gradient_evaluations=counts["objgrad"],
                 hessian_applications=self.hessian_op.applications - h0,

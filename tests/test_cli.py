@@ -111,7 +111,11 @@ def test_help_documents_options():
     assert r.returncode == 0
     for opt in ("--heights", "--grid", "--hurst", "--rms-slope", "--rms-height",
                 "--rolloff-ratio", "--cutoff-ratio", "--seed", "--length", "--modulus",
-                "--pressures", "--output", "--fields", "--plot"):
+                "--pressures", "--output", "--fields", "--plot", "--stiffness"):
+        assert opt in r.stdout
+    r = cli("punch", "--help")
+    assert r.returncode == 0
+    for opt in ("--approaches", "--forces", "--footprint", "--flat-stiffness", "--length"):
         assert opt in r.stdout
 
 
@@ -130,3 +134,53 @@ def test_mpi_matches_serial(tmp_path, ranks):
         assert p.attrs["mpi_size"] == ranks
         assert np.allclose(p["mean_gap"][:], s["mean_gap"][:], rtol=1e-8, atol=0)
         assert np.all(np.abs(p["area_fraction"][:] - s["area_fraction"][:]) * 64**2 <= 2)
+
+
+PUNCH = ["punch", "--grid", "32", "--hurst", "0.7", "--rms-height", "1e-3", "--seed", "2",
+         "--cutoff-ratio", "8"]
+
+
+def test_punch_run_schema(tmp_path):
+    out = tmp_path / "punch.h5"
+    r = cli(*PUNCH, "--approaches", "1e-3,3e-3", "--output", str(out), "--stiffness")
+    assert r.returncode == 0, r.stderr
+    with h5py.File(out) as f:
+        for name in ("approach", "force", "nominal_pressure", "area_fraction",
+                     "total_stiffness", "interfacial_stiffness", "iterations", "solve_time",
+                     "converged", "tao_reason", "max_pressure", "stiffness"):
+            assert f[name].shape == (2,), name
+        assert f.attrs["geometry"] == "punch" and f.attrs["complete"]
+        assert np.array_equal(f["stiffness"][:], f["interfacial_stiffness"][:])
+        assert np.all(np.diff(f["force"][:]) > 0)
+    loads = tmp_path / "forces.h5"
+    r = cli(*PUNCH, "--forces", "1e-5,1e-4", "--output", str(loads), "--footprint", "disk")
+    assert r.returncode == 0, r.stderr
+    with h5py.File(loads) as f:
+        assert np.allclose(f["force"][:], [1e-5, 1e-4], rtol=1e-6)
+    r = cli(*PUNCH, "--approaches", "1e-3", "--forces", "1e-3", "--output", str(out))
+    assert r.returncode == 2 and "not allowed with" in r.stderr
+    r = cli(*PUNCH, "--approaches", "-1e-3", "--output", str(out))
+    assert r.returncode == 2 and "--approaches" in r.stderr
+
+
+def test_periodic_stiffness_dataset(tmp_path):
+    out = tmp_path / "k.h5"
+    r = cli("periodic", *GEN, "--pressures", "1e-3,1e-2", "--stiffness", "--output", str(out))
+    assert r.returncode == 0, r.stderr
+    with h5py.File(out) as f:
+        k = f["stiffness"][:]
+        assert np.all(k > 0) and k[1] > k[0]
+
+
+@pytest.mark.parametrize("ranks", [2, 3])
+def test_mpi_punch_matches_serial(tmp_path, ranks):
+    """The padded operator moves rows between layouts: same forces for any rank count."""
+    args = [*PUNCH, "--approaches", "1e-3,3e-3"]
+    serial, par = tmp_path / "s.h5", tmp_path / "p.h5"
+    assert cli(*args, "--output", str(serial)).returncode == 0
+    r = cli(*args, "--output", str(par), mpi=ranks)
+    assert r.returncode == 0, r.stdout + r.stderr
+    with h5py.File(serial) as s, h5py.File(par) as p:
+        assert np.allclose(p["force"][:], s["force"][:], rtol=1e-8, atol=0)
+        assert np.allclose(p["total_stiffness"][:], s["total_stiffness"][:], rtol=1e-8)
+        assert np.all(np.abs(p["area_fraction"][:] - s["area_fraction"][:]) * 32**2 <= 2)

@@ -1,0 +1,339 @@
+"""A rigid rough square punch on a non-periodic elastic half-space (paper section II, App. A).
+
+The punch face has heights ``h`` on an ``n x n`` footprint of side ``Lp`` (pixel ``a``);
+it is pressed by the rigid approach ``δ`` (measured from first touch) into a half-space of
+contact modulus ``E*``.  The unknown is the pressure ``p >= 0`` on the footprint, zero
+outside by construction; the dual QP (DESIGN.md section 3)
+
+    W(p) = a^2 [ 1/2 p^T G p - p^T (δ - s) ],   p >= 0,      s = max(h) - h,
+
+has the gap ``g = G p + s - δ`` as gradient, with ``G`` the free-boundary compliance
+(Love's pixel kernel convolved on the ``2n x 2n`` zero-padded grid, :class:`PaddedOperator`).
+
+TAO sees ``x = p / p_s`` with ``p_s = E* l / a`` and ``l`` the rms of the recess ``s``
+(or the pixel size for a flat punch); the scaled gradient is ``g / (l sqrt(n^2))``, so
+``-tao_gatol 1e-8`` asks for gaps on the contact set within ``1e-8 l`` rms.
+
+Per step: approach, force ``F = a^2 sum(p)``, nominal pressure ``F / Lp^2``, area fraction
+(of footprint pixels; contact when ``p > k g``, ``k = 1/G_00``), exact total stiffness
+``dF/dδ`` with the contact set fixed, and the interfacial stiffness per area from springs in
+series (paper Eq. 2), ``1/K_int = 1/K_tot - 1/K_flat``, ``K = K_int / Lp^2``.  ``K_flat`` is
+the flat punch of the same footprint computed on the same grid (default: discretisation
+errors cancel) or Pharr, Oliver & Brotzen's ``β 2 E* sqrt(A/π)``, ``β = 1.012`` (square).
+
+Load control (``forces=``) wraps the displacement-controlled solve in a safeguarded Newton
+iteration on ``δ`` that uses the exact ``dF/dδ``; ``F(δ)`` is increasing and convex.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Iterator, Sequence
+
+import numpy as np
+
+from . import _petsc
+from .greens import hockney_kernel
+from .grid import Grid
+from .output import check_finite
+from .operator import PaddedOperator
+from .periodic import Step, VERIFY_FACTOR
+from .solve import BoundSolver, SolveInfo
+from .stiffness import punch_stiffness_exact
+
+PHARR_BETA = 1.012
+FORCE_RTOL = 1e-6
+MAX_NEWTON = 60
+
+
+def flat_punch_stiffness(modulus: float, area: float, beta: float = PHARR_BETA) -> float:
+    """Pharr, Oliver & Brotzen (1992): ``K = β 2 E* sqrt(A/π)`` (β = 1.012 for a square)."""
+    return beta * 2.0 * modulus * np.sqrt(area / np.pi)
+
+
+def interfacial_stiffness(total: float, flat: float) -> float:
+    """Springs in series (paper Eq. 2): ``1/K_int = 1/K_tot - 1/K_flat``.
+
+    ``inf`` when the punch is as stiff as the flat one (full contact), 0 without contact.
+    """
+    if not total > 0:
+        return 0.0
+    with np.errstate(divide="ignore"):
+        return float(1.0 / (np.float64(1.0) / total - np.float64(1.0) / flat))
+
+
+class PunchProblem:
+    """Operators and scaled dual objective of a rigid punch on a free half-space.
+
+    Parameters
+    ----------
+    grid
+        The ``n x n`` footprint grid (side ``Lp``).
+    heights
+        This rank's slab of the punch face heights (peaks toward the half-space).
+    modulus
+        Contact modulus ``E*``.
+    footprint
+        This rank's slab of a boolean mask of the pixels that belong to the punch
+        (default: the whole square); pressure is held at zero elsewhere.
+    """
+
+    def __init__(self, grid: Grid, heights: np.ndarray, modulus: float,
+                 footprint: np.ndarray | None = None) -> None:
+        if not np.isfinite(modulus) or modulus <= 0:
+            raise ValueError(f"modulus must be positive and finite, got {modulus}")
+        self.grid = grid
+        self.modulus = float(modulus)
+        self.footprint = (np.ones(grid.local_shape, dtype=bool) if footprint is None
+                          else np.asarray(footprint, dtype=bool).reshape(grid.local_shape))
+        self.footprint_pixels = int(grid.sum(np.count_nonzero(self.footprint))[0])
+        if self.footprint_pixels == 0:
+            raise ValueError("the punch footprint is empty")
+        h = np.asarray(heights, dtype=float).reshape(grid.local_shape)
+        top = grid.max(float(np.where(self.footprint, h, -np.inf).max(initial=-np.inf)))
+        self.recess = np.where(self.footprint, top - h, 0.0)
+        mean = grid.sum(self.recess.sum())[0] / self.footprint_pixels
+        dev = np.where(self.footprint, self.recess - mean, 0.0)
+        rms = float(np.sqrt(grid.sum(np.vdot(dev, dev))[0] / self.footprint_pixels))
+        self.scale_length = rms if rms > 0 else grid.pixel
+        n, a = grid.n, grid.pixel
+        self.compliance = PaddedOperator(
+            grid, lambda rows: hockney_kernel(n, a, self.modulus, rows))
+        padded_size = self.compliance.padded.size
+        self.inverse = self.compliance.with_spectrum(
+            1.0 / (self.compliance.spectrum * padded_size ** 2))
+        self.pixel_stiffness = 1.0 / self.compliance.diagonal()
+        self._scale = a * np.sqrt(grid.size) / self.modulus  # H = G / _scale
+        self.hessian = self.compliance.with_spectrum(self.compliance.spectrum / self._scale)
+        self.preconditioner = self.inverse.with_spectrum(self.inverse.spectrum * self._scale)
+        self.pressure_scale = self.modulus * self.scale_length / a
+        self.approach = np.nan
+
+    @property
+    def upper_bound(self) -> np.ndarray:
+        """Upper bound of the scaled pressure: ``inf`` on the footprint, 0 elsewhere."""
+        return np.where(self.footprint, np.inf, 0.0).reshape(-1)
+
+    def set_approach(self, delta: float) -> None:
+        """Prescribe the rigid approach ``δ`` (beyond first touch; ``δ >= 0``)."""
+        if not np.isfinite(delta) or delta < 0:
+            raise ValueError(f"approach must be non-negative and finite, got {delta}")
+        self.approach = float(delta)
+
+    def gap(self, pressure: np.ndarray) -> np.ndarray:
+        """``g = G p + s - δ`` on the footprint (local slab; zero off the footprint)."""
+        u = self.compliance.apply_array(pressure, np.empty(self.grid.local_shape))
+        return np.where(self.footprint, u + self.recess - self.approach, 0.0)
+
+    def objective_gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
+        """Scaled ``W``; ``grad <- g / (l sqrt(n^2))`` (``g`` zeroed off the footprint)."""
+        grid = self.grid
+        c = 1.0 / (self.scale_length * np.sqrt(grid.size))
+        p = x.reshape(grid.local_shape) * self.pressure_scale
+        u = self.compliance.apply_array(p, np.empty(grid.local_shape))
+        g = np.where(self.footprint, u + self.recess - self.approach, 0.0)
+        grad[...] = (g * c).reshape(-1)
+        (w,) = grid.sum(np.vdot(x, (0.5 * u + self.recess - self.approach).reshape(-1)))
+        return c * float(w)
+
+    def flat_stiffness_on_grid(self, petsc: Any) -> float:
+        """``dF/dδ`` of the flat punch of the same footprint, on the same grid."""
+        k, _ = punch_stiffness_exact(petsc, self.grid, self.compliance, self.inverse,
+                                     self.footprint)
+        return k
+
+
+def punch_observables(problem: PunchProblem, pressure: np.ndarray, gap: np.ndarray
+                      ) -> dict[str, float]:
+    """Scalars of one punch step (same on every rank); see the module docstring."""
+    grid, fp = problem.grid, problem.footprint
+    k = problem.pixel_stiffness
+    contact = fp & (pressure > k * gap)
+    r = np.where(fp, np.minimum(gap, pressure / k), 0.0)
+    p_sum, n_contact, pg, r2 = grid.sum(pressure.sum(), np.count_nonzero(contact),
+                                        np.vdot(pressure, np.maximum(gap, 0.0)),
+                                        np.vdot(r, r))
+    ell = problem.scale_length
+    area = grid.length ** 2
+    force = grid.pixel ** 2 * p_sum
+    return {
+        "approach": problem.approach,
+        "force": force,
+        "nominal_pressure": force / area,
+        "area_fraction": n_contact / problem.footprint_pixels,
+        "max_pressure": grid.max(float(pressure.max(initial=0.0))),
+        "min_gap": grid.min(float(np.where(fp, gap, np.inf).min(initial=np.inf))),
+        "complementarity": pg / (p_sum * ell) if p_sum > 0 else 0.0,
+        "kkt_residual": float(np.sqrt(r2 / problem.footprint_pixels)) / ell,
+        "contact": contact,
+    }
+
+
+def verify_punch(info: SolveInfo, obs: dict[str, Any]) -> str:
+    """``'ok'`` or the reason a TAO answer cannot be used (natural residual in units of l)."""
+    if info.reason_code <= 0:
+        return f"TAO did not converge ({info.reason})"
+    if not obs["kkt_residual"] <= VERIFY_FACTOR * info.tolerance:
+        return (f"KKT residual {obs['kkt_residual']:.2e} > {VERIFY_FACTOR:g} x tolerance "
+                f"{info.tolerance:.1e}")
+    return "ok"
+
+
+class PunchSolver:
+    """Displacement- and load-controlled solves of one :class:`PunchProblem` (warm-started)."""
+
+    def __init__(self, petsc: Any, problem: PunchProblem, flat: str = "grid",
+                 beta: float = PHARR_BETA) -> None:
+        if flat not in ("grid", "analytic"):
+            raise ValueError(f"flat-punch stiffness must be 'grid' or 'analytic', got {flat}")
+        self.petsc = petsc
+        self.problem = problem
+        grid = problem.grid
+        self.k_flat_analytic = flat_punch_stiffness(
+            problem.modulus, problem.footprint_pixels * grid.pixel ** 2, beta)
+        self.k_flat_grid = problem.flat_stiffness_on_grid(petsc) if flat == "grid" else np.nan
+        self.flat = flat
+        self.k_flat = self.k_flat_grid if flat == "grid" else self.k_flat_analytic
+        self.x = np.zeros(int(np.prod(grid.local_shape)))
+        self.solver = BoundSolver(petsc, grid, problem.hessian, problem.preconditioner)
+
+    def close(self) -> None:
+        self.solver.close()
+
+    def __enter__(self) -> "PunchSolver":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def at_approach(self, delta: float, fields: bool = False,
+                    monitor: Callable[[int, float, float], None] | None = None) -> Step:
+        """Solve at approach ``δ`` from the last converged pressure."""
+        pb = self.problem
+        pb.set_approach(delta)
+        x_new, info = self.solver.solve(pb.objective_gradient, self.x, monitor=monitor,
+                                        upper=pb.upper_bound)
+        pressure = x_new.reshape(pb.grid.local_shape) * pb.pressure_scale
+        gap = pb.gap(pressure)
+        obs = punch_observables(pb, pressure, gap)
+        contact = obs.pop("contact")
+        verdict = verify_punch(info, obs)
+        k_tot, k_its = (punch_stiffness_exact(self.petsc, pb.grid, pb.compliance, pb.inverse,
+                                              contact) if verdict == "ok" else (np.nan, 0))
+        if verdict == "ok":
+            self.x = x_new
+        area = pb.grid.length ** 2
+        k_int = interfacial_stiffness(k_tot, self.k_flat)
+        scalars = {**obs, "total_stiffness": k_tot, "interfacial_stiffness": k_int / area,
+                   "flat_punch_stiffness": self.k_flat, "stiffness_iterations": k_its,
+                   "iterations": info.iterations, "solve_time": info.solve_time,
+                   "converged": verdict == "ok", "verification": verdict,
+                   "tao_type": info.tao_type, "tao_reason": info.reason,
+                   "tao_reason_code": info.reason_code,
+                   "objective_gradient_evaluations": info.objective_gradient_evaluations,
+                   "hessian_applications": info.hessian_applications,
+                   "preconditioner_applications": info.preconditioner_applications,
+                   "gradient_norm": info.gradient_norm, "tolerance": info.tolerance}
+        return Step(scalars, gap if fields else None, pressure if fields else None)
+
+    def at_force(self, force: float, fields: bool = False, rtol: float = FORCE_RTOL,
+                 monitor: Callable[[int, float, float], None] | None = None) -> Step:
+        """Find ``δ`` with ``F(δ) = force`` (relative tolerance ``rtol``) and solve there.
+
+        Safeguarded Newton on the increasing, convex ``F(δ)`` with the exact ``dF/dδ``,
+        bracketed from below by ``force / K_flat`` (a rough punch is never stiffer than
+        the flat one; the 1% of β is within the bracket's slack).  The step's scalars add ``target_force`` and ``newton_iterations``.
+        """
+        if not np.isfinite(force) or force <= 0:
+            raise ValueError(f"force must be positive and finite, got {force}")
+        lo, hi = 0.0, np.inf
+        delta = force / self.k_flat_analytic
+        total_its, total_time = 0, 0.0
+        for newton in range(1, MAX_NEWTON + 1):
+            step = self.at_approach(delta, fields, monitor)
+            s = step.scalars
+            total_its += s["iterations"]
+            total_time += s["solve_time"]
+            if not step.converged:
+                break
+            f, k = s["force"], s["total_stiffness"]
+            if abs(f - force) <= rtol * force:
+                break
+            if f < force:
+                lo = delta
+            else:
+                hi = delta
+            guess = delta + (force - f) / k if k > 0 else np.inf
+            if not lo < guess < hi:
+                guess = 2 * lo + self.problem.scale_length if not np.isfinite(hi) \
+                    else 0.5 * (lo + hi)
+            delta = guess
+        else:
+            s["converged"] = False
+            s["verification"] = f"force not reached in {MAX_NEWTON} Newton steps"
+        s.update(target_force=force, newton_iterations=newton, iterations=total_its,
+                 solve_time=total_time)
+        return step
+
+
+def punch_contact(heights: np.ndarray, length: float, modulus: float,
+                  approaches: Sequence[float] | None = None,
+                  forces: Sequence[float] | None = None,
+                  options: Sequence[str] | None = None, fields: bool = False,
+                  footprint: np.ndarray | None = None, flat: str = "grid",
+                  beta: float = PHARR_BETA, comm: Any = None) -> list[Step]:
+    """Press a rigid punch with face ``heights`` into a free elastic half-space.
+
+    Parameters
+    ----------
+    heights
+        Full ``n x n`` height map of the punch face (every rank passes the same array).
+    length, modulus
+        Footprint side ``Lp`` and contact modulus ``E*``.
+    approaches, forces
+        Exactly one of them: rigid approaches ``δ`` beyond first touch (displacement
+        control), or total forces ``F`` (load control).  Solved in order, warm-started.
+    options
+        PETSc options (``-tao_type``, ``-tao_gatol``, ...).
+    fields
+        Keep the local ``gap`` and ``pressure`` slabs of every step.
+    footprint
+        Optional full ``n x n`` boolean mask of the punch (e.g. a disk); default square.
+    flat
+        ``'grid'`` or ``'analytic'``: which flat-punch stiffness goes into Eq. 2.
+    beta
+        Shape factor of the analytic flat punch (1.012 square, 1 for a disk).
+
+    Returns
+    -------
+    list of Step
+    """
+    return list(punch_steps(heights, length, modulus, approaches, forces, options, fields,
+                            footprint, flat, beta, comm))
+
+
+def punch_steps(heights: np.ndarray, length: float, modulus: float,
+                approaches: Sequence[float] | None, forces: Sequence[float] | None,
+                options: Sequence[str] | None = None, fields: bool = False,
+                footprint: np.ndarray | None = None, flat: str = "grid",
+                beta: float = PHARR_BETA, comm: Any = None, monitor: Callable[[int, float, float], None] | None = None
+                ) -> Iterator[Step]:
+    """Generator form of :func:`punch_contact` (steps are yielded as they finish)."""
+    from mpi4py import MPI
+
+    if (approaches is None) == (forces is None):
+        raise ValueError("give either approaches or forces")
+    values = [float(v) for v in (approaches if approaches is not None else forces)]
+    if not values:
+        raise ValueError("give at least one approach or force")
+    with _petsc.scoped_options(options) as petsc:
+        grid = Grid(int(heights.shape[0]), float(length), comm or MPI.COMM_WORLD)
+        local = grid.scatter(heights)
+        check_finite(grid, local)
+        mask = None if footprint is None else grid.scatter(footprint).astype(bool)
+        problem = PunchProblem(grid, local, modulus, mask)
+        with PunchSolver(petsc, problem, flat, beta) as solver:
+            for v in values:
+                if approaches is not None:
+                    yield solver.at_approach(v, fields, monitor)
+                else:
+                    yield solver.at_force(v, fields, monitor=monitor)

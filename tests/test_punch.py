@@ -1,0 +1,141 @@
+"""The rigid punch on a free half-space: operator, Hertz, flat punches, stiff cases."""
+
+import numpy as np
+import pytest
+
+from petsc_contact.greens import hockney_kernel, love_pixel_displacement
+from petsc_contact.grid import Grid
+from petsc_contact.fft import make_fft
+from petsc_contact.operator import PaddedOperator
+from petsc_contact.punch import flat_punch_stiffness, interfacial_stiffness, punch_contact
+from petsc_contact.surface import self_affine
+
+N = 128  # footprint pixels per side for the analytic comparisons
+
+
+def centres(n, length=1.0):
+    return (np.arange(n) + 0.5) * length / n - length / 2
+
+
+def test_padded_operator_against_direct_summation():
+    """FFT on the 2n x 2n padded grid = dense Love-kernel matrix; symmetric, SPD (n = 12)."""
+    n, a, modulus = 12, 0.1, 3.0
+    grid = Grid(n, n * a)
+    op = PaddedOperator(grid, lambda rows: hockney_kernel(n, a, modulus, rows))
+    x = np.repeat(np.arange(n) * a, n)
+    y = np.tile(np.arange(n) * a, n)
+    # direct summation of the closed form, point by point (no FFT, no padding)
+    dense = love_pixel_displacement(x[:, None] - x[None, :], y[:, None] - y[None, :], a,
+                                    modulus)
+    rng = np.random.default_rng(1)
+    for _ in range(3):  # repeated applications must not depend on leftover buffer contents
+        v = rng.standard_normal((n, n))
+        out = op.apply_array(v, np.empty((n, n)))
+        assert np.allclose(out.ravel(), dense @ v.ravel(), rtol=0, atol=1e-13 * np.abs(out).max())
+    assert np.allclose(dense, dense.T, rtol=0, atol=1e-15 * dense.max())
+    assert np.linalg.eigvalsh(dense).min() > 0
+    u, w = rng.standard_normal((2, n, n))
+    gu, gw = (op.apply_array(v, np.empty((n, n))) for v in (u, w))
+    assert np.vdot(w, gu) == pytest.approx(np.vdot(u, gw), rel=1e-13)  # the FFT operator too
+    assert op.diagonal() == pytest.approx(dense[0, 0], rel=1e-14)
+    assert dense[0, 0] == pytest.approx(4 * a * np.arcsinh(1) / (np.pi * modulus), rel=1e-14)
+
+
+def test_hertz():
+    """Sphere R = 1 in a 128^2 footprint of side 1, contact radius 0.14-0.3 (18-38 pixels).
+
+    Contact radius from the contact area, force and pressure (rms over r < 0.9 a, relative to
+    the peak) within 1% of Hertz.
+    """
+    x = centres(N)
+    r2 = x[:, None] ** 2 + x[None, :] ** 2
+    radius, modulus = 1.0, 2.0
+    deltas = [0.02, 0.05, 0.09]
+    steps = punch_contact(-r2 / (2 * radius), 1.0, modulus, approaches=deltas, fields=True)
+    for d, step in zip(deltas, steps):
+        s = step.scalars
+        assert step.converged, s["verification"]
+        a = np.sqrt(radius * d)
+        force = 4 / 3 * modulus * np.sqrt(radius) * d ** 1.5
+        assert np.sqrt(s["area_fraction"] / np.pi) == pytest.approx(a, rel=0.01)
+        assert s["force"] == pytest.approx(force, rel=0.01)
+        p_hertz = 3 * force / (2 * np.pi * a * a) * np.sqrt(np.clip(1 - r2 / a ** 2, 0, None))
+        inner = r2 < (0.9 * a) ** 2
+        err = np.sqrt(np.mean((step.pressure[inner] - p_hertz[inner]) ** 2))
+        assert err < 0.01 * p_hertz.max()
+        assert s["total_stiffness"] == pytest.approx(2 * modulus * a, rel=0.01)
+
+
+def test_flat_square_punch():
+    """Stiffness within 1% of 1.012 x 2 E* sqrt(A/pi) (Pharr et al.) on 128^2; pressure grows
+    monotonically from the centre to the edge (the edge singularity)."""
+    (step,) = punch_contact(np.zeros((N, N)), 1.0, 1.0, approaches=[1e-3], fields=True)
+    s = step.scalars
+    assert step.converged and s["area_fraction"] == 1.0
+    assert s["force"] / 1e-3 == pytest.approx(flat_punch_stiffness(1.0, 1.0), rel=0.01)
+    assert s["total_stiffness"] == pytest.approx(s["force"] / 1e-3, rel=1e-8)
+    assert s["flat_punch_stiffness"] == pytest.approx(s["total_stiffness"], rel=1e-8)
+    line = step.pressure[N // 2, N // 2:]
+    assert np.all(np.diff(line) > 0)
+    assert s["max_pressure"] == pytest.approx(step.pressure[0, 0], rel=1e-12)  # the corner
+
+
+def test_flat_circular_punch():
+    """Masked disk footprint: stiffness within 1% of 2 E* r (r from the pixel area)."""
+    x = centres(N)
+    disk = x[:, None] ** 2 + x[None, :] ** 2 < 0.45 ** 2
+    modulus = 3.0
+    (step,) = punch_contact(np.zeros((N, N)), 1.0, modulus, approaches=[1e-3], fields=True,
+                            footprint=disk, beta=1.0)
+    r = np.sqrt(disk.sum() / N ** 2 / np.pi)
+    assert step.converged
+    assert step.scalars["total_stiffness"] == pytest.approx(2 * modulus * r, rel=0.01)
+    assert np.all(step.pressure[~disk] == 0)
+    assert step.scalars["area_fraction"] == 1.0
+
+
+@pytest.fixture(scope="module")
+def rough():
+    grid = Grid(64, 1.0)
+    return self_affine(grid, make_fft(grid), hurst=0.7, rolloff_ratio=1, cutoff_ratio=16,
+                       seed=3, rms_height=1e-3)
+
+
+def test_stiffness_matches_force_difference(rough):
+    """Exact dF/dδ (contact set fixed) against a central difference of F(δ) (2%: the contact
+    set changes inside the difference step) and springs in series (Eq. 2)."""
+    d, eps = 3e-3, 2e-5
+    steps = punch_contact(rough, 1.0, 1.0, approaches=[d - eps, d, d + eps])
+    assert all(s.converged for s in steps)
+    lo, mid, hi = (s.scalars for s in steps)
+    assert mid["total_stiffness"] == pytest.approx((hi["force"] - lo["force"]) / (2 * eps),
+                                                   rel=0.02)
+    k_int = interfacial_stiffness(mid["total_stiffness"], mid["flat_punch_stiffness"])
+    assert mid["interfacial_stiffness"] == pytest.approx(k_int, rel=1e-12)
+    assert 1 / k_int == pytest.approx(1 / mid["total_stiffness"]
+                                      - 1 / mid["flat_punch_stiffness"], rel=1e-12)
+
+
+def test_load_control_reaches_force(rough):
+    forces = [1e-5, 1e-4, 1e-3]
+    steps = punch_contact(rough, 1.0, 1.0, forces=forces)
+    for f, step in zip(forces, steps):
+        s = step.scalars
+        assert step.converged, s["verification"]
+        assert s["force"] == pytest.approx(f, rel=1e-6)
+    (check,) = punch_contact(rough, 1.0, 1.0, approaches=[steps[1].scalars["approach"]])
+    assert check.scalars["force"] == pytest.approx(1e-4, rel=1e-6)
+
+
+@pytest.mark.parametrize("solver", [[], ["-tao_type", "tron"]])
+def test_edge_singularity_at_high_load(rough, solver):
+    """Pressed 200 h_rms beyond first touch: full contact, the corner carries the peak
+    pressure, and the solve converges (default: ~20 iterations, tron: ~10)."""
+    (step,) = punch_contact(rough, 1.0, 1.0, approaches=[0.2], options=solver, fields=True)
+    s = step.scalars
+    assert step.converged, s["verification"]
+    assert s["area_fraction"] == 1.0
+    assert s["iterations"] < 200
+    corners = step.pressure[[0, 0, -1, -1], [0, -1, 0, -1]]
+    assert s["max_pressure"] == pytest.approx(corners.max(), rel=1e-12)
+    assert s["max_pressure"] > 5 * s["nominal_pressure"]

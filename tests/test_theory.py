@@ -1,0 +1,95 @@
+"""Theory module: the finite-size scaling prefactors, Persson theory, Eq. 7."""
+
+import numpy as np
+import pytest
+
+from petsc_contact import theory
+
+
+@pytest.mark.parametrize("hurst", [0.3, 0.5, 0.7, 0.9])
+def test_theta_from_the_energy(hurst):
+    """theta(H) against an independent route: differentiate the total elastic energy of
+    Appendix B numerically, k = F / (dU/dF), and divide by the power law of Eq. (B-eq1)."""
+    beta, s, h_bar = theory.NAYAK_BETA, 1.0, 0.01
+    chi = ((2 - hurst) / (hurst * s)) ** 0.5 * np.pi ** (hurst - 2) / (beta * h_bar)
+    kappa = theory.KAPPA0 + theory.kappa1(hurst)
+    e = (1 + 2 * hurst) / (1 + hurst)
+
+    def energy(f):
+        return 4 / 3 * kappa * chi ** (-1 / (1 + hurst)) * (0.75 * f) ** e
+
+    f, df = 1e-3, 1e-9
+    k = f / ((energy(f + df) - energy(f - df)) / (2 * df))
+    theta_num = k / (f / (h_bar * np.sqrt(s))) ** (1 / (1 + hurst))
+    assert theory.theta(hurst) == pytest.approx(theta_num, rel=1e-6)
+
+
+def test_theta_values_and_limits():
+    assert theory.theta(0.7) == pytest.approx(0.91, abs=0.005)  # DESIGN.md section 6
+    assert theory.theta(0.8) == pytest.approx(0.95, abs=0.005)
+    inv0, inv1 = theory.inverse_theta_parts(np.array([1e-6, 0.5]))
+    assert inv0[0] < 0.01 * inv0[1] and inv1[0] > 0.1  # H -> 0: only theta1 survives
+
+
+def test_crossover_as_printed_and_continuity():
+    """p_c of P-oldEqno6 with the paper's q_r h_rms (DESIGN.md section 6 numbers), and the
+    power law (P-oldEqno5) meets K = p/(gamma h_rms) exactly at p_c."""
+    h1 = 5.7e-3 / (2 * np.pi)  # q_r h_rms = 5.7e-3, L = lambda_r = 1
+    h8 = 1.3e-2 / (2 * np.pi * 8)  # L / lambda_r = 8
+    pc1 = theory.crossover_pressure(1.0, h1, 0.7, 1.0, 1.0)
+    pc8 = theory.crossover_pressure(1.0, h8, 0.7, 1.0, 8.0)
+    assert pc1 == pytest.approx(1.2e-5, rel=0.05)
+    assert pc8 == pytest.approx(6.4e-7, rel=0.05)
+    for h, ratio, pc in ((h1, 1.0, pc1), (h8, 8.0, pc8)):
+        k_pl = theory.finite_size_stiffness(pc, 1.0, h, 0.7, 1.0, ratio)
+        assert k_pl == pytest.approx(theory.linear_stiffness(pc, h), rel=1e-10)
+
+
+@pytest.fixture(scope="module")
+def spectrum():
+    """Self-affine PSD of Eq. 5 (H = 0.7, L/lambda_r = 2, L/lambda_1 = 64), h_rms = 1."""
+    q0 = 2 * np.pi
+    q = np.geomspace(q0, 64 * q0, 6000)
+    c = np.where(q < 2 * q0, 1.0, (q / (2 * q0)) ** (-2 - 2 * 0.7))
+    return q, c / (2 * np.pi * np.trapz(q * c, q))
+
+
+def test_persson_exponential_regime(spectrum):
+    """u_bar = -u0 ln p + const with u0 ~ 0.4 h_rms at intermediate loads; K = p/u0."""
+    q, c = spectrum
+    p = np.geomspace(1e-5, 1e-3, 5)
+    u = theory.persson_mean_gap(p, q, c, 1.0)
+    u0 = -np.gradient(u, np.log(p))
+    assert np.all(np.diff(u) < 0)
+    assert np.allclose(u0, u0.mean(), rtol=1e-3)
+    assert 0.35 < u0.mean() < 0.5
+    k = theory.persson_stiffness(p, q, c, 1.0)
+    assert np.allclose(k, p / u0, rtol=1e-3)
+
+
+def test_persson_stiffness_is_the_derivative(spectrum):
+    q, c = spectrum
+    p, dp = 0.05, 1e-5
+    u = theory.persson_mean_gap(np.array([p - dp, p + dp]), q, c, 1.0)
+    assert theory.persson_stiffness(p, q, c, 1.0) == pytest.approx(
+        -2 * dp / (u[1] - u[0]), rel=1e-4)
+
+
+def test_persson_scaling(spectrum):
+    """Heights scaled by c (C -> c^2 C): u_bar(p) -> c u_bar(p/c)."""
+    q, psd = spectrum
+    c, p = 3.0, 2e-3
+    assert theory.persson_mean_gap(p, q, c * c * psd, 1.0) == pytest.approx(
+        c * theory.persson_mean_gap(p / c, q, psd, 1.0), rel=1e-9)
+
+
+def test_block_correction_recovers_interfacial_stiffness():
+    """Synthetic experiment: u_bar = -u0 ln(p/p1) so K = p/u0; the block adds p d/E' to s."""
+    u0, d, e_block = 1e-4, 1e-2, 4.2e6
+    p = np.geomspace(1e3, 1e5, 200)
+    s = u0 * np.log(p / p[0]) + p * d / e_block
+    k_star, k = theory.block_corrected_stiffness(p, s, e_block, d)
+    assert np.allclose(k_star, 1 / (u0 / p + d / e_block), rtol=1e-3)
+    assert np.allclose(k[1:-1], p[1:-1] / u0, rtol=1e-3)
+    with pytest.raises(ValueError):
+        theory.block_corrected_stiffness(p[:2], s[:2], e_block, d)

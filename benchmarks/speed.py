@@ -53,6 +53,7 @@ def main() -> None:
     ap.add_argument("--grid", type=int, nargs="+", default=[512])
     ap.add_argument("--types", nargs="+", default=["tron", "bqnls"])
     ap.add_argument("--pressures", type=float, nargs="+", default=[1e-3, 1e-2])
+    ap.add_argument("--no-peers", action="store_true", help="skip Tamaas")
     args = ap.parse_args()
     for n in args.grid:
         grid = Grid(n, 1.0)
@@ -65,7 +66,8 @@ def main() -> None:
         with tempfile.TemporaryDirectory() as tmp:
             path = os.path.join(tmp, "h.npy")
             np.save(path, h)
-            peer = {r["pressure"]: r for r in tamaas(path, args.pressures)}
+            peer = ({} if args.no_peers else
+                    {r["pressure"]: r for r in tamaas(path, args.pressures)})
         for t in args.types:
             for p0 in args.pressures:
                 (s,) = periodic_contact(h, 1.0, 1.0, [p0], options=["-tao_type", t])

@@ -37,8 +37,16 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from scipy.linalg import blas
 
 REFRESH_EVERY = 50
+
+
+def _bound(values: np.ndarray) -> np.ndarray | float:
+    """A bound array, or its value when it is the same everywhere (saves a memory pass)."""
+    if values.size and values.min() == values.max():
+        return float(values[0])
+    return values
 
 
 class PolonskyKeer:
@@ -79,7 +87,7 @@ class PolonskyKeer:
         g_vec, d_vec, w_vec, r_vec, z_vec = (x.duplicate() for _ in range(5))
         xa, g, d, w = x.array, g_vec.array, d_vec.array, w_vec.array
         r, z = r_vec.array, z_vec.array
-        lower, upper = lower_vec.array_r, upper_vec.array_r
+        lower, upper = _bound(lower_vec.array_r), _bound(upper_vec.array_r)
         has_upper = bool(np.isfinite(upper).any())
 
         def allsum(*values: float) -> np.ndarray:
@@ -92,17 +100,19 @@ class PolonskyKeer:
         f = evaluate()
         free = np.empty(xa.shape, dtype=bool)
         free_old = np.zeros_like(free)
+        work = np.empty_like(free)
         rz_old = 1.0
         rnorm0 = None
         since_refresh = 0
         d[...] = 0.0
         it = 0
         while True:
-            # free set and projected gradient r = P_F g
+            # free set F = {x > lower} U {g < 0} (minus {x >= upper, g < 0}); r = P_F g
             np.greater(xa, lower, out=free)
-            free |= g < 0
+            np.less(g, 0.0, out=work)
+            free |= work
             if has_upper:
-                free &= ~((xa >= upper) & (g < 0))
+                free &= ~((xa >= upper) & work)
             np.multiply(g, free, out=r)
             (rr,) = allsum(np.dot(r, r))
             rnorm = float(np.sqrt(rr))
@@ -127,12 +137,13 @@ class PolonskyKeer:
                 z *= free
             else:
                 z[...] = r
-            changed, rz = allsum(np.count_nonzero(free != free_old), np.dot(r, z))
+            np.not_equal(free, free_old, out=work)
+            changed, rz = allsum(np.count_nonzero(work), np.dot(r, z))
             beta = rz / rz_old if changed == 0 else 0.0
             rz_old = rz
             free_old[...] = free
             d *= beta
-            d -= z
+            blas.daxpy(z, d, a=-1.0)
             hessian.mult(d_vec, w_vec)
             rd, dw = allsum(np.dot(r, d), np.dot(d, w))
             if not rd < 0:  # rounding made d useless: restart from steepest descent
@@ -145,9 +156,11 @@ class PolonskyKeer:
                 if not np.isfinite(alpha):
                     tao.setConvergedReason(reasons.DIVERGED_USER)
                     break
-            xa += alpha * d
-            (clipped,) = allsum(np.count_nonzero(xa < lower)
-                                + (np.count_nonzero(xa > upper) if has_upper else 0))
+            blas.daxpy(d, xa, a=alpha)
+            (clipped,) = allsum(np.count_nonzero(xa < lower) if np.ndim(lower)
+                                else float(xa.min(initial=np.inf) < lower))
+            if has_upper:
+                clipped += allsum(np.count_nonzero(xa > upper))[0]
             if clipped or since_refresh >= REFRESH_EVERY:
                 np.maximum(xa, lower, out=xa)
                 if has_upper:
@@ -155,7 +168,7 @@ class PolonskyKeer:
                 f, since_refresh = evaluate(), 0
             else:
                 f += alpha * rd + 0.5 * alpha * alpha * dw
-                g += alpha * w
+                blas.daxpy(w, g, a=alpha)
                 since_refresh += 1
         for v in (g_vec, d_vec, w_vec, r_vec, z_vec):
             v.destroy()

@@ -9,11 +9,13 @@ flags it); 2 bad input; 130 interrupted (finished steps kept in ``OUT.h5.partial
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import re
 import signal
 import sys
-from typing import Any, Sequence
+from dataclasses import dataclass
+from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 
@@ -68,6 +70,29 @@ def _float_list(text: str) -> list[float]:
         raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got '{text}'")
 
 
+def _sweep_spec(text: str) -> list[float]:
+    values = _float_list(text)
+    if len(values) not in (1, 3) or values[0] < 2 or values[0] != int(values[0]):
+        raise argparse.ArgumentTypeError(f"expected N or N,PMIN,PMAX with N >= 2, got '{text}'")
+    if len(values) == 3 and not 0 < values[1] < values[2]:
+        raise argparse.ArgumentTypeError(f"need 0 < PMIN < PMAX, got '{text}'")
+    return values
+
+
+def _seed_list(text: str) -> list[int]:
+    try:
+        if "-" in text.strip("-") and "," not in text:
+            a, b = (int(v) for v in text.split("-", 1))
+            seeds = list(range(a, b + 1))
+        else:
+            seeds = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected K1,K2,... or A-B, got '{text}'")
+    if not seeds or len(set(seeds)) != len(seeds):
+        raise argparse.ArgumentTypeError(f"need distinct seeds, got '{text}'")
+    return seeds
+
+
 def _surface_arguments(p: argparse.ArgumentParser) -> None:
     s = p.add_argument_group("surface (a file, or a generated self-affine surface, paper Eq. 5)")
     s.add_argument("--heights", metavar="FILE",
@@ -106,9 +131,13 @@ def _run_arguments(p: argparse.ArgumentParser, defaults: dict[str, Any] | None =
                             "(default) or beta x 2 E* sqrt(A/pi), beta = 1.012 (square) or 1 "
                             "(disk)")
     else:
-        p.add_argument("--pressures", type=_float_list, required="pressures" not in d,
-                       default=_float_list(d["pressures"]) if "pressures" in d else None,
-                       metavar="P1,P2,...", help="nominal pressures p0 (units of E*), in order")
+        loads = p.add_mutually_exclusive_group(required="pressures" not in d)
+        loads.add_argument("--pressures", type=_float_list,
+                           default=_float_list(d["pressures"]) if "pressures" in d else None,
+                           metavar="P1,P2,...", help="nominal pressures p0 (units of E*), in order")
+        loads.add_argument("--sweep", type=_sweep_spec, metavar="N[,PMIN,PMAX]",
+                           help="N log-spaced pressures from PMIN to PMAX (default: 1e-4 and "
+                                "0.9 times the full-contact pressure -min(K h))")
     p.add_argument("--stiffness", action="store_true",
                    help="add the exact incremental stiffness per area (contact set held "
                         "fixed) as the dataset 'stiffness'")
@@ -119,6 +148,9 @@ def _run_arguments(p: argparse.ArgumentParser, defaults: dict[str, Any] | None =
     p.add_argument("--plot", metavar="PNG", default=d.get("plot"),
                    help="write a PNG of the results against load")
     p.add_argument("--quiet", action="store_true", help="no table on standard output")
+    p.add_argument("--resume", action="store_true",
+                   help="continue an interrupted run from OUT.h5.partial (same options): "
+                        "finished steps are kept, not recomputed")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -142,6 +174,28 @@ def build_parser() -> argparse.ArgumentParser:
                                      "controlled.")
     _surface_arguments(pun)
     _run_arguments(pun, punch=True)
+    ens = sub.add_parser("ensemble", help="periodic sweeps over many seeds, with statistics",
+                         description="The periodic scene for each seed (one resumable file "
+                                     "OUT_seedK.h5 per seed), then mean, std and standard "
+                                     "error over seeds of every per-step quantity in OUT.h5.")
+    _surface_arguments(ens)
+    _run_arguments(ens)
+    ens.add_argument("--seeds", type=_seed_list, required=True, metavar="K1,K2,...|A-B",
+                     help="the seeds (a list, or a range A-B inclusive)")
+    exp = sub.add_parser("experiment", help="K(p) from a measured p(s) table (paper Eq. 7)",
+                         description="Interfacial stiffness from a squeeze test of an elastic "
+                                     "block of thickness d and effective modulus E' (paper "
+                                     "section III): K* = dp/ds, K = K*/(1 - K* d/E').")
+    exp.add_argument("--table", required=True, metavar="FILE.csv",
+                     help="two columns: nominal pressure p, displacement s of the block's "
+                          "top (header lines starting with # are skipped)")
+    exp.add_argument("--modulus", type=float, required=True, metavar="EPRIME",
+                     help="effective Young's modulus E' of the block (pressure units)")
+    exp.add_argument("--thickness", type=float, required=True, metavar="D",
+                     help="block thickness d (length units of s)")
+    exp.add_argument("--output", required=True, metavar="OUT.h5")
+    exp.add_argument("--plot", metavar="PNG", help="K and K* against p")
+    exp.add_argument("--quiet", action="store_true", help="no table on standard output")
     demo = sub.add_parser("demo", help="the default scene (periodic 512^2, H=0.7, slope 0.1)",
                           description="The default scene: periodic 512 x 512 self-affine "
                                       "surface, H = 0.7, rms slope 0.1, L/lambda_r = 2, "
@@ -174,8 +228,10 @@ def _check_numbers(args: argparse.Namespace) -> None:
         v = getattr(args, name)
         if not (np.isfinite(v) and v > 0):
             raise InputError(f"--{name} must be positive and finite, got {v}")
-    name = next(n for n in ("pressures", "approaches", "forces")
-                if getattr(args, n, None) is not None)
+    name = next((n for n in ("pressures", "approaches", "forces")
+                 if getattr(args, n, None) is not None), None)
+    if name is None:
+        return
     values = getattr(args, name)
     if not values:
         raise InputError(f"--{name} needs at least one value")
@@ -213,13 +269,14 @@ PUNCH_COLUMNS = (("approach", "approach", "{:>11.4e}"), ("force", "force", "{:>1
 def _header(columns: tuple[tuple[str, str, str], ...]) -> str:
     widths = [len(fmt.format(0.0)) for _, _, fmt in columns]
     head = " ".join(f"{title:>{w}}" for (title, _, _), w in zip(columns, widths))
-    return f"{'step':>4} {head} {'area':>9} {'its':>6} {'time_s':>8} {'kkt':>9}  tao_reason"
+    return f"{'step':>7} {head} {'area':>9} {'its':>6} {'time_s':>8} {'kkt':>9}  tao_reason"
 
 
-def _row(i: int, s: dict[str, Any], columns: tuple[tuple[str, str, str], ...]) -> str:
+def _row(i: int, total: int, s: dict[str, Any], columns: tuple[tuple[str, str, str], ...]
+         ) -> str:
     flag = "" if s["converged"] else "   <-- NOT CONVERGED: " + s["verification"]
     values = " ".join(fmt.format(s[key]) for _, key, fmt in columns)
-    return (f"{i:>4} {values} {s['area_fraction']:>9.5f} {s['iterations']:>6d} "
+    return (f"{f'{i + 1}/{total}':>7} {values} {s['area_fraction']:>9.5f} {s['iterations']:>6d} "
             f"{s['solve_time']:>8.3f} {s['kkt_residual']:>9.1e}  {s['tao_reason']}{flag}")
 
 
@@ -249,7 +306,7 @@ def _disk(n: int) -> np.ndarray:
 def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
     """Run ``periodic``, ``demo`` or ``punch``; write the HDF5 file (and plot)."""
     from . import _petsc
-    from .output import StepWriter, check_writable, load_heights
+    from .output import StepWriter, check_writable, load_heights, read_resume
 
     _check_numbers(args)
     generated = _generated(args)
@@ -274,32 +331,39 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
     root = grid.comm.rank == 0
     fields = ("gap", "pressure") if args.fields else ()
     if punch:
-        steps, columns, intro, solver = _punch_steps(petsc, args, grid, heights, fields)
+        plan = _punch_plan(petsc, args, grid, heights)
     else:
-        steps, columns, intro, solver = _periodic_steps(petsc, args, grid, fft, heights, fields)
-    writer = StepWriter(args.output, grid, _attributes(args, argv, petsc, realised),
-                        heights, fields)
-    table: list[dict[str, Any]] = []
+        plan = _periodic_plan(petsc, args, grid, fft, heights)
+    attributes = _attributes(args, argv, petsc, realised)
+    done, state = read_resume(args.output, attributes["parameters"]) if args.resume else (0, None)
+    total = len(plan.loads)
+    if done:
+        writer = StepWriter.reopen(args.output, grid, fields)
+        if root and not args.quiet:
+            print(f"# resuming {args.output}.partial after {done} of {total} steps", flush=True)
+    else:
+        writer = StepWriter(args.output, grid, attributes, heights, fields)
+    start = grid.scatter(state) if state is not None else None
+    table: list[dict[str, Any]] = _finished_rows(args.output, done) if done and root else []
     try:
         if root and not args.quiet:
             print(f"# {args.command} {n}x{n}, L = {args.length:g}, E* = {args.modulus:g}, "
                   f"h_rms = {realised['rms_height']:.4g}, h'_rms = {realised['rms_slope']:.4g}"
-                  f"{intro}", flush=True)
-            print(_header(columns), flush=True)
-        for i, step in enumerate(steps):
+                  f"{plan.intro}", flush=True)
+            print(_header(plan.columns), flush=True)
+        for i, step in enumerate(plan.steps(plan.loads[done:], start, bool(fields)), done):
             if punch and args.stiffness:
                 step.scalars["stiffness"] = step.scalars["interfacial_stiffness"]
             writer.append(step.scalars, {"gap": step.gap, "pressure": step.pressure}
-                          if fields else None)
+                          if fields else None, state=step.state)
             table.append(step.scalars)
             if root and not args.quiet:
-                print(_row(i, step.scalars, columns), flush=True)
+                print(_row(i, total, step.scalars, plan.columns), flush=True)
     except KeyboardInterrupt:
         writer.abandon()
         return EXIT_INTERRUPTED
     finally:
-        if solver is not None:
-            solver.close()
+        plan.close()
     writer.finish()
     if args.plot and root:
         from .plot import plot_punch, plot_sweep
@@ -310,7 +374,7 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
             plot_sweep(args.plot, table, args.modulus, realised["rms_height"])
     failed = [s for s in table if not s["converged"]]
     if failed and root:
-        load = columns[0]
+        load = plan.columns[0]
         print(f"petsc-contact: error: {len(failed)} of {len(table)} load steps did NOT converge "
               f"(first: {load[0]} = {failed[0][load[1]]:g}, {failed[0]['verification']}); "
               f"they are flagged converged = False in {args.output}", file=sys.stderr)
@@ -319,37 +383,178 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
     return EXIT_NOT_CONVERGED if failed else 0
 
 
-def _periodic_steps(petsc: Any, args: argparse.Namespace, grid: Any, fft: Any,
-                    heights: np.ndarray, fields: tuple[str, ...]) -> tuple[Any, ...]:
+@dataclass
+class Plan:
+    """What a geometry runs: its loads, a step generator, table columns, a closer."""
+
+    loads: list[float]
+    steps: Callable[[list[float], np.ndarray | None, bool], Iterator[Any]]
+    columns: tuple[tuple[str, str, str], ...]
+    intro: str
+    close: Callable[[], None] = lambda: None
+
+
+def _periodic_plan(petsc: Any, args: argparse.Namespace, grid: Any, fft: Any,
+                   heights: np.ndarray) -> Plan:
     from .periodic import sweep
     from .problem import PeriodicProblem
 
     problem = PeriodicProblem(grid, fft, heights, args.modulus)
     p_full = problem.full_contact_pressure()  # collective: every rank computes it
-    steps = sweep(petsc, problem, args.pressures, bool(fields), stiffness=args.stiffness)
-    return steps, PERIODIC_COLUMNS, f", full contact at p0 = {p_full:.4g}", None
+    if args.sweep is not None:
+        n, lo, hi = (args.sweep + [1e-4 * p_full, 0.9 * p_full])[:3] if len(args.sweep) == 1 \
+            else args.sweep
+        args.pressures = [float(p) for p in np.geomspace(lo, hi, int(n))]
+        args.sweep = None  # resolved: the file records the pressures themselves
+
+    def steps(loads: list[float], start: np.ndarray | None, fields: bool) -> Iterator[Any]:
+        return sweep(petsc, problem, loads, fields, stiffness=args.stiffness, start=start)
+
+    return Plan(list(args.pressures), steps, PERIODIC_COLUMNS,
+                f", full contact at p0 = {p_full:.4g}")
 
 
-def _punch_steps(petsc: Any, args: argparse.Namespace, grid: Any, heights: np.ndarray,
-                 fields: tuple[str, ...]) -> tuple[Any, ...]:
+def _punch_plan(petsc: Any, args: argparse.Namespace, grid: Any, heights: np.ndarray) -> Plan:
     from .punch import PHARR_BETA, PunchProblem, PunchSolver
 
     mask = grid.scatter(_disk(grid.n)) > 0 if args.footprint == "disk" else None
     problem = PunchProblem(grid, heights, args.modulus, mask)
     solver = PunchSolver(petsc, problem, args.flat_stiffness,
                          1.0 if args.footprint == "disk" else PHARR_BETA)
+    by_force = args.forces is not None
 
-    def steps() -> Any:
-        if args.approaches is not None:
-            for d in args.approaches:
-                yield solver.at_approach(d, bool(fields))
-        else:
-            for f in args.forces:
-                yield solver.at_force(f, bool(fields))
+    def steps(loads: list[float], start: np.ndarray | None, fields: bool) -> Iterator[Any]:
+        if start is not None:
+            solver.restart_from(start)
+        for v in loads:
+            yield solver.at_force(v, fields) if by_force else solver.at_approach(v, fields)
 
     intro = (f", K_flat = {solver.k_flat:.6g} ({args.flat_stiffness}; analytic "
              f"{solver.k_flat_analytic:.6g})")
-    return steps(), PUNCH_COLUMNS + (("p0", "nominal_pressure", "{:>10.3e}"),), intro, solver
+    return Plan(list(args.forces if by_force else args.approaches), steps,
+                PUNCH_COLUMNS + (("p0", "nominal_pressure", "{:>10.3e}"),), intro,
+                solver.close)
+
+
+def _finished_rows(path: str, steps: int) -> list[dict[str, Any]]:
+    """The per-step scalars already in an interrupted run's partial file (for the plot)."""
+    import h5py
+
+    with h5py.File(path + ".partial", "r") as f:
+        names = [k for k in f if f[k].ndim == 1 and f[k].shape[0] >= steps]
+        rows = [{k: f[k][i] for k in names} for i in range(steps)]
+    for row in rows:
+        for k, v in row.items():
+            row[k] = v.decode() if isinstance(v, bytes) else v
+    return rows
+
+
+def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
+    """One periodic run per seed (each resumable), then statistics over seeds in OUT.h5."""
+    import h5py
+
+    from .ensemble import ensemble_statistics
+    from .output import check_writable
+
+    if args.heights is not None:
+        raise InputError("ensemble needs a generated surface (--grid, --hurst, ...), "
+                         "not --heights")
+    if args.pressures is None and len(args.sweep) == 1:
+        raise InputError("ensemble needs the same pressures for every seed: give "
+                         "--pressures or --sweep N,PMIN,PMAX")
+    check_writable(args.output)
+    stem = args.output[:-3] if args.output.endswith(".h5") else args.output
+    files, status = [], 0
+    for seed in args.seeds:
+        path = f"{stem}_seed{seed}.h5"
+        files.append(path)
+        if args.resume and os.path.exists(path):
+            continue  # finished earlier: nothing recomputed
+        one = argparse.Namespace(**{**vars(args), "seed": seed, "output": path,
+                                    "command": "periodic", "plot": None})
+        del one.seeds
+        code = run(one, argv, petsc_args)
+        if code == EXIT_INTERRUPTED:
+            return code
+        status = max(status, code)
+    from mpi4py import MPI
+
+    if MPI.COMM_WORLD.rank == 0:
+        _write_ensemble(args, files, ensemble_statistics, h5py)
+        if not args.quiet:
+            print(f"# wrote {args.output} ({len(files)} seeds)")
+    return status
+
+
+ENSEMBLE_QUANTITIES = ("mean_gap", "area_fraction", "stiffness", "elastic_energy",
+                       "max_pressure", "iterations", "solve_time")
+
+
+def _write_ensemble(args: argparse.Namespace, files: list[str], stats: Any, h5py: Any) -> None:
+    tables: dict[str, list[np.ndarray]] = {}
+    for path in files:
+        with h5py.File(path, "r") as f:
+            ok = f["converged"][:]
+            pressure = f["nominal_pressure"][:]
+            for q in ENSEMBLE_QUANTITIES:
+                if q in f:
+                    tables.setdefault(q, []).append(np.where(ok, f[q][:], np.nan))
+    partial = args.output + ".partial"
+    with h5py.File(partial, "w") as out:
+        out.attrs["geometry"] = "periodic ensemble"
+        out.attrs["parameters"] = json.dumps({k: v for k, v in vars(args).items()
+                                              if k not in ("quiet",)})
+        out.attrs["seed_files"] = json.dumps([os.path.abspath(p) for p in files])
+        out["seeds"] = np.array(args.seeds)
+        out["nominal_pressure"] = pressure
+        for q, rows in tables.items():
+            values = np.array(rows)
+            out[q] = values
+            for name, v in stats(values).items():
+                out[f"{q}_{name}"] = v
+        out.attrs["complete"] = True
+    os.replace(partial, args.output)
+
+
+def run_experiment(args: argparse.Namespace) -> int:
+    """``petsc-contact experiment``: Eq. 7 on a measured ``p(s)`` table."""
+    from .output import check_writable
+    from .theory import block_corrected_stiffness
+
+    for name in ("modulus", "thickness"):
+        v = getattr(args, name)
+        if not (np.isfinite(v) and v > 0):
+            raise InputError(f"--{name} must be positive and finite, got {v}")
+    if not os.path.isfile(args.table):
+        raise InputError(f"table '{args.table}' does not exist")
+    try:
+        table = np.loadtxt(args.table, delimiter=",", comments="#", ndmin=2)
+    except ValueError as exc:
+        raise InputError(f"cannot read '{args.table}' as two numeric columns: {exc}") from None
+    if table.shape[1] != 2 or not np.all(np.isfinite(table)):
+        raise InputError(f"'{args.table}' must have two finite columns (p, s)")
+    check_writable(args.output)
+    p, disp = table[:, 0], table[:, 1]
+    k_star, k = block_corrected_stiffness(p, disp, args.modulus, args.thickness)
+    import h5py
+
+    partial = args.output + ".partial"
+    with h5py.File(partial, "w") as f:
+        f["pressure"], f["displacement"] = p, disp
+        f["measured_stiffness"], f["stiffness"] = k_star, k
+        f.attrs.update(geometry="experiment", block_modulus=args.modulus,
+                       thickness=args.thickness, table=os.path.abspath(args.table),
+                       formula="K* = dp/ds (2nd-order differences), K = K*/(1 - K* d/E')")
+    os.replace(partial, args.output)
+    if not args.quiet:
+        print(f"{'p':>12} {'s':>12} {'K*':>12} {'K':>12}")
+        for row in zip(p, disp, k_star, k):
+            print(" ".join(f"{v:>12.5g}" for v in row))
+    if args.plot:
+        from .plot import plot_experiment
+
+        plot_experiment(args.plot, p, k_star, k)
+    return 0
 
 
 def _interrupt(signum: int, frame: Any) -> None:
@@ -362,6 +567,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(ours)
     signal.signal(signal.SIGTERM, _interrupt)
     try:
+        if args.command == "ensemble":
+            return run_ensemble(args, argv, petsc_args)
+        if args.command == "experiment":
+            return run_experiment(args)
         return run(args, argv, petsc_args)
     except (InputError, ValueError, OSError) as exc:
         _error(str(exc))

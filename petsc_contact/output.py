@@ -145,9 +145,31 @@ class StepWriter:
                                          chunks=(1, min(grid.n, 256), min(grid.n, 256)))
             self.file.flush()
 
-    def append(self, scalars: dict[str, Any], fields: dict[str, np.ndarray] | None = None) -> None:
-        """Add one load step: scalars (numbers, bools or strings) and the requested fields."""
+    @classmethod
+    def reopen(cls, path: str, grid: Grid, fields: tuple[str, ...] = ()) -> "StepWriter":
+        """Continue writing an interrupted run's ``path + '.partial'`` (see :func:`read_resume`)."""
+        self = object.__new__(cls)
+        self.path, self.partial, self.grid, self.fields = path, path + ".partial", grid, fields
+        self.root = grid.comm.rank == 0
+        self.file = None
+        steps = 0
+        if self.root:
+            import h5py
+
+            self.file = h5py.File(self.partial, "a")
+            steps = int(self.file["converged"].shape[0]) if "converged" in self.file else 0
+        self.steps = grid.comm.bcast(steps, root=0)
+        return self
+
+    def append(self, scalars: dict[str, Any], fields: dict[str, np.ndarray] | None = None,
+               state: np.ndarray | None = None) -> None:
+        """Add one load step: scalars (numbers, bools or strings) and the requested fields.
+
+        ``state`` (local slab) is the solution a resumed run restarts from; it is kept in
+        the dataset ``resume_state`` until :meth:`finish` removes it.
+        """
         gathered = {k: self.grid.gather(fields[k]) for k in self.fields} if fields else {}
+        full_state = self.grid.gather(state) if state is not None else None
         if self.root:
             f = self.file
             for key, value in scalars.items():
@@ -160,6 +182,12 @@ class StepWriter:
                 d = f[key]
                 d.resize((self.steps + 1, self.grid.n, self.grid.n))
                 d[self.steps] = value
+            if full_state is not None:
+                if "resume_state" not in f:
+                    f.create_dataset("resume_state", data=full_state)
+                else:
+                    f["resume_state"][...] = full_state
+                f["resume_state"].attrs["after_step"] = self.steps
             f.flush()
         self.steps += 1
 
@@ -167,6 +195,8 @@ class StepWriter:
         """Mark complete and rename into place (the earlier ``path``, if any, is replaced)."""
         if self.root and self.file is not None:
             self.file.attrs["complete"] = True
+            if "resume_state" in self.file:
+                del self.file["resume_state"]
             self.file.close()
             self.file = None
             os.replace(self.partial, self.path)
@@ -179,6 +209,46 @@ class StepWriter:
             self.file = None
             print(f"petsc-contact: interrupted; {self.steps} finished step(s) kept in "
                   f"{self.partial}", file=sys.stderr)
+
+
+def read_resume(path: str, parameters: dict[str, Any]) -> tuple[int, np.ndarray | None]:
+    """Finished steps and last state of an interrupted run ``path + '.partial'``.
+
+    Returns ``(0, None)`` when there is nothing to resume.  Raises ``ValueError`` when the
+    partial file belongs to a different run (its ``parameters`` differ, apart from
+    ``resume`` and ``quiet``), so a resume never mixes two runs.
+    """
+    import h5py
+
+    partial = path + ".partial"
+    if not os.path.exists(partial):
+        return 0, None
+    ignore = ("resume", "quiet")
+    mine = {k: v for k, v in parameters.items() if k not in ignore}
+    with h5py.File(partial, "r") as f:
+        theirs = {k: v for k, v in json.loads(f.attrs["parameters"]).items()
+                  if k not in ignore}
+        mine = json.loads(json.dumps(mine))
+        changed = sorted(k for k in set(mine) | set(theirs)
+                         if not _same(mine.get(k), theirs.get(k)))
+        if changed:
+            raise ValueError(f"cannot resume '{partial}': it was run with different "
+                             f"parameters ({', '.join(changed)})")
+        steps = int(f["converged"].shape[0]) if "converged" in f else 0
+        state = f["resume_state"][...] if "resume_state" in f else None
+    return steps, state
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Equal parameters; floats to 1e-9 relative (derived loads carry FFT rounding)."""
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    if isinstance(a, float) or isinstance(b, float):
+        try:
+            return bool(np.isclose(float(a), float(b), rtol=1e-9, atol=0.0))
+        except (TypeError, ValueError):
+            return False
+    return a == b
 
 
 def h5_dtype(value: Any) -> Any:

@@ -37,7 +37,7 @@ class Step:
     scalars: dict[str, Any]
     gap: np.ndarray | None = None
     pressure: np.ndarray | None = None
-    state: np.ndarray | None = None  # the local solution a later step can restart from
+    state: np.ndarray | None = None  # local gap/pressure the next step starts from
 
     @property
     def converged(self) -> bool:
@@ -126,7 +126,7 @@ def sweep(petsc: Any, problem: PeriodicProblem, pressures: Sequence[float],
                           if verdict == "ok" else (np.nan, 0))
                 scalars.update(stiffness=k, stiffness_iterations=its)
             yield Step(scalars, gap if fields else None, pressure if fields else None,
-                       state=gap)
+                       state=x.reshape(grid.local_shape) * ell)
 
 
 def periodic_contact(heights: np.ndarray, length: float, modulus: float,

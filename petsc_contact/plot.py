@@ -48,6 +48,18 @@ def plot_punch(path: str, steps: Sequence[dict[str, Any]]) -> None:
     _finish(fig, (ax1, ax2), path)
 
 
+def plot_experiment(path: str, pressure: np.ndarray, k_star: np.ndarray, k: np.ndarray
+                    ) -> None:
+    """``K`` (Eq. 7) and the measured ``K* = dp/ds`` against pressure, log-log."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(5, 3.8), constrained_layout=True)
+    ax.loglog(pressure, k_star, "s", mfc="none", label="$K^* = dp/ds$")
+    ax.loglog(pressure, k, "o-", label="$K = K^*/(1 - K^* d/E')$")
+    ax.set(xlabel="$p$", ylabel="stiffness per area", title="experiment (paper Eq. 7)")
+    ax.legend()
+    _finish(fig, (ax,), path)
+
+
 def _pyplot() -> Any:
     import matplotlib
 

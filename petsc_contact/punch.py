@@ -233,7 +233,12 @@ class PunchSolver:
                    "hessian_applications": info.hessian_applications,
                    "preconditioner_applications": info.preconditioner_applications,
                    "gradient_norm": info.gradient_norm, "tolerance": info.tolerance}
-        return Step(scalars, gap if fields else None, pressure if fields else None)
+        return Step(scalars, gap if fields else None, pressure if fields else None,
+                    state=self.x.reshape(pb.grid.local_shape) * pb.pressure_scale)
+
+    def restart_from(self, pressure: np.ndarray) -> None:
+        """Start the next solve from this local pressure slab (a resumed run's state)."""
+        self.x = (np.asarray(pressure, dtype=float) / self.problem.pressure_scale).reshape(-1)
 
     def at_force(self, force: float, fields: bool = False, rtol: float = FORCE_RTOL,
                  monitor: Callable[[int, float, float], None] | None = None) -> Step:

@@ -115,3 +115,21 @@ def punch_stiffness_exact(petsc: Any, grid: Grid, compliance: ShellInterface,
         return 0.0, 0
     y, its = restricted_solve(petsc, grid, compliance, inverse, contact)
     return grid.pixel ** 2 * float(grid.sum(y.sum())[0]), its
+
+
+def sweep_stiffness(pressure: np.ndarray, mean_gap: np.ndarray) -> np.ndarray:
+    """``K = -dp0/du_bar`` from a load sweep, by finite differences (DESIGN.md section 4).
+
+    Scheme: ``K = -p0 d(ln p0)/du_bar`` with second-order central differences on the
+    non-uniform ``u_bar`` table (``numpy.gradient``, second-order one-sided at both ends).
+    Differentiating ``ln p0`` is exact for the exponential regime ``p0 ~ exp(-u_bar/u0)``
+    and keeps log-spaced sweeps accurate.  The error is ``O(du^2)`` where the contact set
+    changes smoothly; steps must be strictly ordered in ``u_bar``.
+    """
+    p = np.asarray(pressure, dtype=float)
+    u = np.asarray(mean_gap, dtype=float)
+    if p.ndim != 1 or p.shape != u.shape or p.size < 3:
+        raise ValueError("need at least three load steps")
+    if np.any(np.diff(u) == 0):
+        raise ValueError("mean gaps must differ between steps")
+    return -p * np.gradient(np.log(p), u, edge_order=2)

@@ -1,0 +1,66 @@
+"""Ensembles over surface realisations and power-law fits of K(p) (pure numpy on results).
+
+:func:`ensemble_statistics` reduces per-seed sweeps (arrays ``seeds x steps``) to mean,
+standard deviation and standard error; :func:`power_law_fit` fits ``K = c p^alpha`` to the
+lowest points of a stiffness curve, as the paper does with four points (Figs. 3-4).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class PowerLaw:
+    """``K = prefactor * p^alpha`` fitted in log-log; ``alpha_error`` is one standard error."""
+
+    alpha: float
+    alpha_error: float
+    prefactor: float
+    points: int
+
+
+def power_law_fit(pressure: np.ndarray, stiffness: np.ndarray, points: int = 4) -> PowerLaw:
+    """Least-squares line through ``(ln p, ln K)`` of the ``points`` lowest pressures.
+
+    The standard error of the slope is ``s / sqrt(sum (x - x_mean)^2)`` with ``s^2`` the
+    residual variance over ``points - 2`` degrees of freedom (0 for an exact power law;
+    ``nan`` with two points, where it cannot be estimated).
+    """
+    p = np.asarray(pressure, dtype=float)
+    k = np.asarray(stiffness, dtype=float)
+    keep = np.isfinite(p) & np.isfinite(k) & (p > 0) & (k > 0)
+    p, k = p[keep], k[keep]
+    if p.size < points or points < 2:
+        raise ValueError(f"need at least {max(points, 2)} positive finite points, got {p.size}")
+    order = np.argsort(p)[:points]
+    x, y = np.log(p[order]), np.log(k[order])
+    xm = x - x.mean()
+    slope = float(np.dot(xm, y - y.mean()) / np.dot(xm, xm))
+    intercept = float(y.mean() - slope * x.mean())
+    if points > 2:
+        resid = y - (intercept + slope * x)
+        error = float(np.sqrt(np.dot(resid, resid) / (points - 2) / np.dot(xm, xm)))
+    else:
+        error = float("nan")
+    return PowerLaw(slope, error, float(np.exp(intercept)), points)
+
+
+def ensemble_statistics(values: np.ndarray) -> dict[str, np.ndarray]:
+    """Mean, standard deviation (ddof 1) and standard error over axis 0 (the seeds).
+
+    Non-finite entries (e.g. a step that did not converge) are left out per column.
+    """
+    v = np.asarray(values, dtype=float)
+    ok = np.isfinite(v)
+    count = ok.sum(axis=0)
+    mean = np.where(ok, v, 0.0).sum(axis=0) / np.maximum(count, 1)
+    dev = np.where(ok, v - mean, 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        std = np.sqrt((dev * dev).sum(axis=0) / (count - 1))
+        sem = std / np.sqrt(count)
+    mean = np.where(count > 0, mean, np.nan)
+    return {"mean": mean, "std": np.where(count > 1, std, np.nan),
+            "sem": np.where(count > 1, sem, np.nan), "count": count}

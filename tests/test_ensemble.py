@@ -1,0 +1,74 @@
+"""Ensembles over seeds, power-law fits, and the experiment subcommand (Eq. 7)."""
+
+import h5py
+import numpy as np
+import pytest
+
+from conftest import cli
+from petsc_contact.ensemble import ensemble_statistics, power_law_fit
+
+
+def test_power_law_fit_exact_and_noisy():
+    p = np.geomspace(1e-6, 1e-3, 10)
+    fit = power_law_fit(p, 3.0 * p ** 0.62, points=4)
+    assert fit.alpha == pytest.approx(0.62, rel=1e-12) and fit.alpha_error < 1e-12
+    assert fit.prefactor == pytest.approx(3.0, rel=1e-10)
+    # log-normal noise of 5%: the fitted slopes scatter by about the reported error
+    rng = np.random.default_rng(0)
+    fits = [power_law_fit(p, p ** 0.6 * np.exp(0.05 * rng.standard_normal(p.size)), points=6)
+            for _ in range(400)]
+    alphas = np.array([f.alpha for f in fits])
+    assert alphas.mean() == pytest.approx(0.6, abs=0.01)
+    assert np.median([f.alpha_error for f in fits]) == pytest.approx(alphas.std(), rel=0.3)
+    with pytest.raises(ValueError):
+        power_law_fit(p[:3], p[:3], points=4)
+
+
+def test_ensemble_statistics_skip_failed_steps():
+    v = np.array([[1.0, 2.0], [3.0, np.nan], [5.0, 4.0]])
+    s = ensemble_statistics(v)
+    assert np.allclose(s["mean"], [3.0, 3.0])
+    assert np.allclose(s["std"], [2.0, np.sqrt(2.0)])
+    assert np.array_equal(s["count"], [3, 2])
+
+
+def test_ensemble_command(tmp_path):
+    out = tmp_path / "ens.h5"
+    args = ["ensemble", "--grid", "32", "--hurst", "0.7", "--rms-slope", "0.1", "--seeds", "0-3",
+            "--pressures", "1e-3,1e-2", "--stiffness", "--output", str(out), "--quiet"]
+    r = cli(*args)
+    assert r.returncode == 0, r.stderr
+    with h5py.File(out) as f:
+        gaps = f["mean_gap"][:]
+        assert gaps.shape == (4, 2) and list(f["seeds"][:]) == [0, 1, 2, 3]
+        assert np.allclose(f["mean_gap_mean"][:], gaps.mean(axis=0))
+        assert np.allclose(f["mean_gap_std"][:], gaps.std(axis=0, ddof=1))
+        assert np.all(f["mean_gap_std"][:] > 0)  # different seeds, different surfaces
+        assert np.all(f["stiffness"][:] > 0)
+    for k in range(4):
+        with h5py.File(tmp_path / f"ens_seed{k}.h5") as f:
+            assert f.attrs["seed"] == k and np.allclose(f["mean_gap"][:], gaps[k])
+    before = (tmp_path / "ens_seed2.h5").stat().st_mtime_ns
+    r = cli(*args, "--resume")
+    assert r.returncode == 0 and (tmp_path / "ens_seed2.h5").stat().st_mtime_ns == before
+    r = cli(*args[:-6], "--sweep", "4", "--output", str(out))
+    assert r.returncode == 2 and "same pressures" in r.stderr
+
+
+def test_experiment_command(tmp_path):
+    """A synthetic squeeze test with u_bar = -u0 ln p: Eq. 7 recovers K = p/u0."""
+    u0, d, e = 1e-4, 1e-2, 4.2e6
+    p = np.geomspace(1e3, 1e5, 60)
+    s = u0 * np.log(p / p[0]) + p * d / e
+    table = tmp_path / "ps.csv"
+    np.savetxt(table, np.column_stack([p, s]), delimiter=",", header="p, s")
+    out = tmp_path / "exp.h5"
+    r = cli("experiment", "--table", str(table), "--modulus", str(e), "--thickness", str(d),
+            "--output", str(out), "--quiet")
+    assert r.returncode == 0, r.stderr
+    with h5py.File(out) as f:
+        assert np.allclose(f["stiffness"][1:-1], p[1:-1] / u0, rtol=5e-3)
+    (tmp_path / "bad.csv").write_text("1,2,3\n4,5,6\n7,8,9\n")
+    r = cli("experiment", "--table", str(tmp_path / "bad.csv"), "--modulus", "1",
+            "--thickness", "1", "--output", str(out))
+    assert r.returncode == 2 and "two finite columns" in r.stderr

@@ -400,7 +400,7 @@ def _periodic_plan(petsc: Any, args: argparse.Namespace, grid: Any, fft: Any,
     from .problem import PeriodicProblem
 
     problem = PeriodicProblem(grid, fft, heights, args.modulus)
-    p_full = problem.full_contact_pressure()  # collective: every rank computes it
+    p_full = problem.full_contact_pressure()
     if args.sweep is not None:
         n, lo, hi = (args.sweep + [1e-4 * p_full, 0.9 * p_full])[:3] if len(args.sweep) == 1 \
             else args.sweep

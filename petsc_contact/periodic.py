@@ -101,7 +101,8 @@ def sweep(petsc: Any, problem: PeriodicProblem, pressures: Sequence[float],
                 if monitor is not None:
                     monitor(it, f, gnorm)
 
-            x_new, info = solver.solve(problem.objective_gradient, x, monitor=record)
+            x_new, info = solver.solve(problem.objective_gradient, x, monitor=record,
+                                       gatol_floor=problem.rounding_floor(p0))
             gap = x_new.reshape(grid.local_shape) * ell
             pressure = problem.pressure(gap)
             obs = step_observables(grid, gap, pressure, problem.heights, p0,

@@ -27,6 +27,8 @@ from .greens import periodic_compliance, periodic_stiffness
 from .grid import Grid
 from .operator import FourierOperator
 
+ROUNDING_FACTOR = 100.0
+
 
 class PeriodicProblem:
     """Operators and scaled objective of the periodic contact of one surface.
@@ -59,6 +61,9 @@ class PeriodicProblem:
         self._base_hessian = self.hessian.kernel.copy()
         self._base_preconditioner = self.preconditioner.kernel.copy()
         self.pixel_stiffness = self.stiffness.diagonal()
+        kh = self.stiffness.apply_array(self.heights, np.empty(grid.local_shape))
+        self.elastic_pressure_rms = grid.rms(kh)  # rms(K h) ~ E* h'_rms / 2
+        self._min_kh = grid.min(float(kh.min()))
         self.nominal_pressure = np.nan
         self._s = np.nan
 
@@ -112,5 +117,14 @@ class PeriodicProblem:
 
     def full_contact_pressure(self) -> float:
         """Nominal pressure at which contact becomes complete, ``-min(K h)`` (DESIGN.md 7)."""
-        kh = self.stiffness.apply_array(self.heights, np.empty(self.grid.local_shape))
-        return -self.grid.min(float(kh.min()))
+        return -self._min_kh
+
+    def rounding_floor(self, p0: float) -> float:
+        """The smallest rms pressure residual (in units of ``p0``) double precision resolves.
+
+        Pressures are differences of elastic stresses of size ``rms(K h) ~ E* h'_rms/2``;
+        an FFT convolution rounds them at ``~eps`` of that, times a safety factor of 100
+        for the ``log n`` growth and the sum over pixels.  It matters only at the tiniest
+        loads: ``1e-8`` at ``p0 ~ 2e-7 E*`` for ``h'_rms = 0.1``.
+        """
+        return ROUNDING_FACTOR * np.finfo(float).eps * self.elastic_pressure_rms / p0

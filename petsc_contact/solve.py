@@ -136,10 +136,14 @@ class BoundSolver:
 
     def solve(self, objgrad: ObjGrad, x0: np.ndarray, lower: float = 0.0,
               monitor: Callable[[int, float, float], None] | None = None,
-              upper: np.ndarray | None = None) -> tuple[np.ndarray, SolveInfo]:
+              upper: np.ndarray | None = None, gatol_floor: float = 0.0
+              ) -> tuple[np.ndarray, SolveInfo]:
         """Run TAO from ``x0`` (local flat array); return the local solution and TAO's report.
 
         ``upper`` is an optional local array of upper bounds (default: none).
+        ``gatol_floor`` raises TAO's absolute tolerance to what double precision can resolve
+        (see :meth:`~petsc_contact.problem.PeriodicProblem.rounding_floor`); the tolerance
+        actually used is reported in :class:`SolveInfo`.
         """
         petsc = self.petsc
         counts = {"objgrad": 0}
@@ -182,6 +186,9 @@ class BoundSolver:
             if monitor is not None:
                 tao.setMonitor(lambda t: monitor(*t.getSolutionStatus()[:3]))
             gatol, grtol, _ = tao.getTolerances()
+            if gatol < gatol_floor:
+                gatol = gatol_floor
+                tao.setTolerances(gatol=gatol)
             h0, p0 = self.hessian_op.applications, self._pc_count()
             start = time.perf_counter()
             tao.solve(self.x)

@@ -120,6 +120,8 @@ class PolonskyKeer:
                 rnorm0 = rnorm
             tao.setIterationNumber(it)
             tao.monitor(its=it, f=f, res=rnorm, cnorm=0.0, step=0.0)
+            if tao.getConvergedReason() != 0:  # a monitor stopped the solve
+                break
             if rnorm <= gatol or rnorm <= grtol * rnorm0:
                 if since_refresh > 0:  # confirm on an exactly evaluated gradient
                     f, since_refresh = evaluate(), 0

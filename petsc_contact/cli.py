@@ -182,6 +182,24 @@ def build_parser() -> argparse.ArgumentParser:
     _run_arguments(ens)
     ens.add_argument("--seeds", type=_seed_list, required=True, metavar="K1,K2,...|A-B",
                      help="the seeds (a list, or a range A-B inclusive)")
+    cmp_ = sub.add_parser("compare", help="error against wall time for several solvers",
+                          description="One periodic scene solved by each solver from first "
+                                      "touch; errors against a tightly converged reference "
+                                      "at every iteration; a table (stdout and OUT.csv), "
+                                      "OUT.h5 and a plot OUT.png.")
+    _surface_arguments(cmp_)
+    cmp_.add_argument("--length", type=float, default=1.0, metavar="L")
+    cmp_.add_argument("--modulus", type=float, default=1.0, metavar="ESTAR")
+    cmp_.add_argument("--pressure", type=float, required=True, metavar="P",
+                      help="nominal pressure p0 (units of E*)")
+    cmp_.add_argument("--solvers", type=lambda t: [v for v in t.split(",") if v],
+                      default=None, metavar="S1,S2,...",
+                      help="TAO types, 'cg' (default solver), 'pk' (Polonsky-Keer) or "
+                           "options files (default: cg,pk,tron,bnls,bntr,bqnls,blmvm,bncg,gpcg)")
+    cmp_.add_argument("--time-limit", type=float, default=120.0, metavar="S",
+                      help="stop a solver after S seconds of wall time (default 120)")
+    cmp_.add_argument("--output", required=True, metavar="OUT.h5")
+    cmp_.add_argument("--quiet", action="store_true", help="no table on standard output")
     exp = sub.add_parser("experiment", help="K(p) from a measured p(s) table (paper Eq. 7)",
                          description="Interfacial stiffness from a squeeze test of an elastic "
                                      "block of thickness d and effective modulus E' (paper "
@@ -516,6 +534,49 @@ def _write_ensemble(args: argparse.Namespace, files: list[str], stats: Any, h5py
     os.replace(partial, args.output)
 
 
+def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
+    """``petsc-contact compare``: every solver on one scene, error against time."""
+    from . import _petsc
+    from .compare import DEFAULT_SOLVERS, compare, solver_options, table_rows, write_compare
+    from .fft import make_fft
+    from .grid import Grid
+    from .output import check_writable, load_heights
+    from .problem import PeriodicProblem
+    from .surface import rms_of
+
+    args.pressures = [args.pressure]
+    _check_numbers(args)
+    solvers = args.solvers or list(DEFAULT_SOLVERS)
+    for name in solvers:
+        solver_options(name)  # unknown options files fail here, before any work
+    generated = _generated(args)
+    full = None if generated else load_heights(args.heights)
+    check_writable(args.output)
+    petsc = _petsc.init(petsc_args)
+    n = args.grid if generated else int(full.shape[0])
+    grid = Grid(n, args.length)
+    fft = make_fft(grid)
+    heights = _surface(args, full, grid, fft)
+    problem = PeriodicProblem(grid, fft, heights, args.modulus)
+    reference, trajectories = compare(petsc, problem, args.pressure, solvers, args.time_limit)
+    if grid.comm.rank != 0:
+        return 0
+    attrs = {"command_line": " ".join(["petsc-contact", *argv]),
+             "parameters": {k: v for k, v in vars(args).items() if k != "quiet"},
+             "rms_height": rms_of(grid, fft, heights), "pressure": args.pressure}
+    csv, png = write_compare(args.output, reference, trajectories, attrs)
+    if not args.quiet:
+        print(f"# reference: mean gap {reference['mean_gap']:.10e}, natural residual "
+              f"{reference['natural_residual']:.1e} (tolerance {reference['tolerance']:.0e})")
+        print(f"{'solver':>16} {'converged':>9} {'its':>6} {'time_s':>8} {'gap_err':>9} "
+              f"{'p_err':>9} {'residual':>9} {'compl':>9}  reason")
+        for name, reason, ok, its, t, eg, ep, r, c in table_rows(trajectories):
+            print(f"{name:>16} {str(ok):>9} {its:>6d} {t:>8.3f} {eg:>9.1e} {ep:>9.1e} "
+                  f"{r:>9.1e} {c:>9.1e}  {reason}")
+        print(f"# wrote {args.output}, {csv} and {png}")
+    return 0 if all(t.converged for t in trajectories) else EXIT_NOT_CONVERGED
+
+
 def run_experiment(args: argparse.Namespace) -> int:
     """``petsc-contact experiment``: Eq. 7 on a measured ``p(s)`` table."""
     from .output import check_writable
@@ -571,6 +632,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return run_ensemble(args, argv, petsc_args)
         if args.command == "experiment":
             return run_experiment(args)
+        if args.command == "compare":
+            return run_compare(args, argv, petsc_args)
         return run(args, argv, petsc_args)
     except (InputError, ValueError, OSError) as exc:
         _error(str(exc))

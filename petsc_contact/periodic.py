@@ -112,15 +112,7 @@ def sweep(petsc: Any, problem: PeriodicProblem, pressures: Sequence[float],
             verdict = verify(info, obs, ell, history[0] if history else np.inf, grtol)
             if verdict == "ok":
                 x = x_new
-            scalars = {"nominal_pressure": p0, **obs,
-                       "iterations": info.iterations, "solve_time": info.solve_time,
-                       "converged": verdict == "ok", "verification": verdict,
-                       "tao_type": info.tao_type, "tao_reason": info.reason,
-                       "tao_reason_code": info.reason_code,
-                       "objective_gradient_evaluations": info.objective_gradient_evaluations,
-                       "hessian_applications": info.hessian_applications,
-                       "preconditioner_applications": info.preconditioner_applications,
-                       "gradient_norm": info.gradient_norm, "tolerance": info.tolerance}
+            scalars = {"nominal_pressure": p0, **obs, **info.scalars(verdict)}
             if stiffness:
                 k, its = (periodic_stiffness_exact(petsc, grid, problem.stiffness,
                                                    problem.compliance, contact)

@@ -225,14 +225,7 @@ class PunchSolver:
         k_int = interfacial_stiffness(k_tot, self.k_flat)
         scalars = {**obs, "total_stiffness": k_tot, "interfacial_stiffness": k_int / area,
                    "flat_punch_stiffness": self.k_flat, "stiffness_iterations": k_its,
-                   "iterations": info.iterations, "solve_time": info.solve_time,
-                   "converged": verdict == "ok", "verification": verdict,
-                   "tao_type": info.tao_type, "tao_reason": info.reason,
-                   "tao_reason_code": info.reason_code,
-                   "objective_gradient_evaluations": info.objective_gradient_evaluations,
-                   "hessian_applications": info.hessian_applications,
-                   "preconditioner_applications": info.preconditioner_applications,
-                   "gradient_norm": info.gradient_norm, "tolerance": info.tolerance}
+                   **info.scalars(verdict)}
         return Step(scalars, gap if fields else None, pressure if fields else None,
                     state=self.x.reshape(pb.grid.local_shape) * pb.pressure_scale)
 

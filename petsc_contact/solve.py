@@ -54,6 +54,17 @@ class SolveInfo:
     solve_time: float
     tolerance: float
 
+    def scalars(self, verdict: str) -> dict[str, Any]:
+        """The per-step output columns of this report, with the package's verdict."""
+        return {"iterations": self.iterations, "solve_time": self.solve_time,
+                "converged": verdict == "ok", "verification": verdict,
+                "tao_type": self.tao_type, "tao_reason": self.reason,
+                "tao_reason_code": self.reason_code,
+                "objective_gradient_evaluations": self.objective_gradient_evaluations,
+                "hessian_applications": self.hessian_applications,
+                "preconditioner_applications": self.preconditioner_applications,
+                "gradient_norm": self.gradient_norm, "tolerance": self.tolerance}
+
 
 def _reason_names(petsc: Any) -> dict[int, str]:
     reasons = petsc.TAO.Reason
@@ -141,6 +152,8 @@ class BoundSolver:
         """Run TAO from ``x0`` (local flat array); return the local solution and TAO's report.
 
         ``upper`` is an optional local array of upper bounds (default: none).
+        ``monitor(iteration, f, gnorm)`` is called every iteration (the iterate is
+        :attr:`x`); returning ``True`` stops the solve with ``DIVERGED_USER``.
         ``gatol_floor`` raises TAO's absolute tolerance to what double precision can resolve
         (see :meth:`~petsc_contact.problem.PeriodicProblem.rounding_floor`); the tolerance
         actually used is reported in :class:`SolveInfo`.
@@ -184,7 +197,11 @@ class BoundSolver:
             if self.pc is not None and hasattr(context, "set_preconditioner"):
                 context.set_preconditioner(self.pc)
             if monitor is not None:
-                tao.setMonitor(lambda t: monitor(*t.getSolutionStatus()[:3]))
+                def tao_monitor(t: Any) -> None:
+                    if monitor(*t.getSolutionStatus()[:3]):  # True: stop this solve
+                        t.setConvergedReason(petsc.TAO.Reason.DIVERGED_USER)
+
+                tao.setMonitor(tao_monitor)
             gatol, grtol, _ = tao.getTolerances()
             if gatol < gatol_floor:
                 gatol = gatol_floor

@@ -1,0 +1,96 @@
+"""Stability matrix: every solver on stiff and extreme periodic scenes (issue 5).
+
+usage: .venv/bin/python benchmarks/stability.py [--grid 128] [--solvers cg pk tron ...]
+       [--time-limit 20] [--markdown docs/stability.md]
+For each scene and solver: converged or not (the package's own verification), TAO's reason,
+iterations, wall time and the pressure error reached against a reference solved at 1e-12.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+from mpi4py import MPI
+
+from petsc_contact import _petsc
+from petsc_contact.compare import DEFAULT_SOLVERS, compare
+from petsc_contact.fft import make_fft
+from petsc_contact.grid import Grid
+from petsc_contact.problem import PeriodicProblem
+from petsc_contact.surface import self_affine
+
+
+def rough(n: int, hurst: float = 0.7, slope: float = 0.1, seed: int = 1) -> np.ndarray:
+    grid = Grid(n, 1.0, MPI.COMM_SELF)
+    return self_affine(grid, make_fft(grid), hurst=hurst, rolloff_ratio=2,
+                       cutoff_ratio=n / 4, seed=seed, rms_slope=slope)
+
+
+def scenes(n: int) -> list[tuple[str, np.ndarray, float, float, float]]:
+    """(name, heights, length, modulus, p0/E*) of each scene."""
+    x = (np.arange(n) + 0.5) / n - 0.5
+    sine = np.repeat(0.01 * np.cos(2 * np.pi * x)[:, None], n, axis=1)
+    cap = -(x[:, None] ** 2 + x[None, :] ** 2) / 2.0
+    h = rough(n)
+    p_full = -np.min(np.fft.irfft2(0.5 * np.hypot(*np.meshgrid(
+        np.fft.fftfreq(n) * n, np.fft.rfftfreq(n) * n, indexing="ij")) * 2 * np.pi
+        * np.fft.rfft2(h), s=h.shape))
+    out = [(f"rough p0={p:g}", h, 1.0, 1.0, p) for p in (1e-7, 1e-5, 1e-3, 1e-2, 5e-2)]
+    out += [("rough near full contact (0.95 p_full)", h, 1.0, 1.0, 0.95 * p_full),
+            ("rough beyond full contact (2 p_full)", h, 1.0, 1.0, 2 * p_full)]
+    out += [(f"H={hh:g}", rough(n, hurst=hh), 1.0, 1.0, 1e-2) for hh in (0.1, 0.95)]
+    out += [(f"slope={s:g}", rough(n, slope=s), 1.0, 1.0, s * 1e-1) for s in (0.01, 1.0)]
+    out += [("flat", np.zeros((n, n)), 1.0, 1.0, 1e-3),
+            ("single sine, 30% of p*", sine, 1.0, 1.0, 0.3 * np.pi * 0.01),
+            ("single asperity (sphere cap)", cap, 1.0, 1.0, 1e-6),
+            ("heights + 1e6 h_rms", h + 1e6 * h.std(), 1.0, 1.0, 1e-2),
+            ("E* = 1e-6 (p scaled)", h, 1.0, 1e-6, 1e-8),
+            ("E* = 1e9 (p scaled)", h, 1.0, 1e9, 1e7),
+            ("L = 1e-6 (h scaled)", h * 1e-6, 1e-6, 1.0, 1e-2),
+            ("L = 1e3 (h scaled)", h * 1e3, 1e3, 1.0, 1e-2)]
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--grid", type=int, default=128)
+    ap.add_argument("--grids", type=int, nargs="*", default=[32, 1024],
+                    help="extra grid sizes for the rough p0 = 1e-3 scene")
+    ap.add_argument("--solvers", nargs="+", default=list(DEFAULT_SOLVERS))
+    ap.add_argument("--time-limit", type=float, default=20.0)
+    ap.add_argument("--markdown", default=None, help="also write the table here")
+    args = ap.parse_args()
+    petsc = _petsc.init([])
+    cases = scenes(args.grid)
+    cases += [(f"grid {n}, p0=1e-3", rough(n), 1.0, 1.0, 1e-3) for n in args.grids]
+    lines = ["| scene | " + " | ".join(args.solvers) + " |",
+             "| --- |" + " --- |" * len(args.solvers)]
+    start = time.perf_counter()
+    for name, h, length, modulus, p0 in cases:
+        grid = Grid(h.shape[0], length)
+        problem = PeriodicProblem(grid, make_fft(grid), h, modulus)
+        try:
+            _, trajs = compare(petsc, problem, p0, args.solvers, args.time_limit)
+            cells = []
+            for t in trajs:
+                err = t.pressure_error[-1] if t.pressure_error else float("nan")
+                mark = "ok" if t.converged else "**FAIL**"
+                cells.append(f"{mark} {t.iterations} its, {t.solve_time:.2g} s, "
+                             f"err {err:.0e}" + ("" if t.converged else f" ({t.reason})"))
+        except RuntimeError as exc:
+            cells = [f"reference failed: {exc}"] * len(args.solvers)
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+        print(lines[-1], flush=True)
+    print(f"# {time.perf_counter() - start:.0f} s")
+    if args.markdown:
+        with open(args.markdown, "w") as f:
+            f.write(f"Stability matrix, {args.grid}^2 unless stated, time limit "
+                    f"{args.time_limit:g} s per solver (`benchmarks/stability.py`). Each cell: "
+                    "verdict, TAO iterations, wall time, relative pressure error against a "
+                    "reference solved at 1e-12.\n\n" + "\n".join(lines) + "\n")
+
+
+if __name__ == "__main__":
+    main()

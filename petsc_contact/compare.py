@@ -1,0 +1,207 @@
+"""Solver comparison on one periodic scene: error against wall time for each TAO type.
+
+Every solver is measured with the same errors, computed by the package from the iterate at
+each TAO iteration (never TAO's own gnorm, which means different things for different types):
+
+- ``mean_gap_error``: ``|u_bar - u_bar_ref| / u_bar_ref`` (over ``h_rms`` at full contact);
+- ``pressure_error``: ``||p - p_ref||_2 / ||p_ref||_2`` (``p = K(g + h) + p0``);
+- ``natural_residual``: ``rms(min(k g, p)) / p0``, zero exactly at the solution (KKT);
+- ``complementarity``: ``sum(p+ g) / (sum(p+) h_rms)``, as Tamaas reports it (``h_rms``
+  replaced by the problem's length scale for a flat surface).
+
+The reference is the default solver at ``REFERENCE_GATOL`` (or the rounding floor); its own
+natural residual is stored, so the reference's accuracy is stated next to every error.
+The time axis excludes the cost of these measurements (one FFT per iteration).
+
+Solvers are named by TAO type (``tron``, ``bncg``, ...), ``cg`` (the default, a
+Fourier-preconditioned constrained CG), ``pk`` (Polonsky-Keer, unpreconditioned), or a path
+to a PETSc options file (``options/bqnls.opts``).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+
+from . import _petsc
+from .observables import natural_residual
+from .problem import PeriodicProblem
+from .solve import BoundSolver
+
+REFERENCE_GATOL = 1e-12
+DEFAULT_SOLVERS = ("cg", "pk", "tron", "bnls", "bntr", "bqnls", "blmvm", "bncg", "gpcg")
+ALIASES = {
+    "cg": ["-tao_type", "python", "-tao_python_type", "petsc_contact.cg.PreconditionedCG"],
+    "pk": ["-tao_type", "python", "-tao_python_type", "petsc_contact.cg.PolonskyKeer"],
+}
+
+
+def solver_options(name: str) -> list[str]:
+    """PETSc options that select a solver given by alias, TAO type or options file."""
+    if name in ALIASES:
+        return list(ALIASES[name])
+    if name.endswith(".opts") or os.sep in name:
+        if not os.path.isfile(name):
+            raise OSError(f"options file '{name}' does not exist")
+        return ["-options_file", name]
+    return ["-tao_type", name]
+
+
+@dataclass
+class Trajectory:
+    """Errors of one solver along its iterations (and its final TAO report)."""
+
+    name: str
+    time: list[float] = field(default_factory=list)
+    iteration: list[int] = field(default_factory=list)
+    mean_gap_error: list[float] = field(default_factory=list)
+    pressure_error: list[float] = field(default_factory=list)
+    natural_residual: list[float] = field(default_factory=list)
+    complementarity: list[float] = field(default_factory=list)
+    reason: str = ""
+    solve_time: float = float("nan")
+    iterations: int = 0
+    converged: bool = False
+    verification: str = ""
+
+
+def compare(petsc: Any, problem: PeriodicProblem, pressure: float, solvers: Sequence[str],
+            time_limit: float = 120.0, extra_options: Sequence[str] = ()
+            ) -> tuple[dict[str, Any], list[Trajectory]]:
+    """Run each solver from first touch and record its error against time.
+
+    Returns
+    -------
+    reference, trajectories
+        ``reference`` holds the reference solution's scalars (``mean_gap``,
+        ``natural_residual``, ``tolerance``, ``iterations``); one :class:`Trajectory` per
+        solver, in order.
+    """
+    from .periodic import sweep
+
+    grid = problem.grid
+    ell = problem.scale_length
+    with _petsc.scoped_options(["-tao_gatol", str(REFERENCE_GATOL)]):
+        (ref_step,) = sweep(petsc, problem, [pressure], fields=True)
+    if not ref_step.converged:
+        raise RuntimeError(f"reference solve failed: {ref_step.scalars['verification']}")
+    p_ref, u_ref = ref_step.pressure, ref_step.scalars["mean_gap"]
+    u_scale = u_ref if u_ref > 0 else ell
+    (p_ref_norm,) = np.sqrt(grid.sum(np.vdot(p_ref, p_ref)))
+    reference = {"mean_gap": u_ref, "natural_residual": ref_step.scalars["kkt_residual"],
+                 "tolerance": ref_step.scalars["tolerance"],
+                 "iterations": ref_step.scalars["iterations"]}
+    x0 = problem.initial_gap().reshape(-1) / ell
+    out = []
+    for name in solvers:
+        opts = solver_options(name) + list(extra_options)
+        traj = Trajectory(name)
+        with _petsc.scoped_options(opts):
+            problem.set_pressure(pressure)
+            problem.start(x0)
+            with BoundSolver(petsc, grid, problem.hessian, problem.preconditioner) as solver:
+                spent = [0.0]
+                start = time.perf_counter()
+
+                def monitor(it: int, f: float, gnorm: float) -> bool:
+                    t_in = time.perf_counter()
+                    gap = solver.x.array_r.reshape(grid.local_shape) * ell
+                    p = problem.pressure(gap)
+                    r = natural_residual(gap, p, problem.pixel_stiffness)
+                    pp = np.maximum(p, 0.0)
+                    g_sum, dp2, r2, pg, p_sum = grid.sum(
+                        gap.sum(), np.vdot(p - p_ref, p - p_ref), np.vdot(r, r),
+                        np.vdot(pp, gap), pp.sum())
+                    traj.iteration.append(int(it))
+                    traj.time.append(t_in - start - spent[0])
+                    traj.mean_gap_error.append(abs(g_sum / grid.size - u_ref) / u_scale)
+                    traj.pressure_error.append(float(np.sqrt(dp2)) / p_ref_norm)
+                    traj.natural_residual.append(float(np.sqrt(r2 / grid.size)) / pressure)
+                    traj.complementarity.append(pg / (p_sum * ell) if p_sum > 0 else 0.0)
+                    spent[0] += time.perf_counter() - t_in
+                    return traj.time[-1] > time_limit
+
+                _, info = solver.solve(problem.objective_gradient, x0, monitor=monitor,
+                                       gatol_floor=problem.rounding_floor(pressure))
+        traj.reason = info.reason if traj.time and traj.time[-1] <= time_limit \
+            else f"{info.reason} (time limit {time_limit:g} s)"
+        traj.solve_time = info.solve_time - spent[0]
+        traj.iterations = info.iterations
+        final_ok = bool(traj.natural_residual) and \
+            traj.natural_residual[-1] <= 10 * max(info.tolerance, 1e-300)
+        traj.converged = info.reason_code > 0 and final_ok
+        traj.verification = "ok" if traj.converged else (
+            f"TAO: {info.reason}" if info.reason_code <= 0 else
+            f"natural residual {traj.natural_residual[-1]:.1e} > 10 x {info.tolerance:.0e}")
+        out.append(traj)
+    return reference, out
+
+
+def write_compare(path: str, reference: dict[str, Any], trajectories: Sequence[Trajectory],
+                  attributes: dict[str, Any]) -> tuple[str, str]:
+    """HDF5 (one group per solver), a CSV table and a PNG of error against time.
+
+    Returns the CSV and PNG paths (next to ``path``).
+    """
+    import json
+
+    import h5py
+
+    stem = path[:-3] if path.endswith(".h5") else path
+    with h5py.File(path + ".partial", "w") as f:
+        for k, v in attributes.items():
+            f.attrs[k] = json.dumps(v) if isinstance(v, (dict, list, tuple)) else v
+        for k, v in reference.items():
+            f.attrs[f"reference_{k}"] = v
+        for t in trajectories:
+            g = f.create_group(t.name.replace("/", "_"))
+            for k in ("time", "iteration", "mean_gap_error", "pressure_error",
+                      "natural_residual", "complementarity"):
+                g[k] = np.asarray(getattr(t, k))
+            for k in ("reason", "solve_time", "iterations", "converged", "verification"):
+                g.attrs[k] = getattr(t, k)
+    os.replace(path + ".partial", path)
+    csv = stem + ".csv"
+    with open(csv, "w") as f:
+        f.write("solver,reason,converged,iterations,time_s,mean_gap_error,pressure_error,"
+                "natural_residual,complementarity\n")
+        for row in table_rows(trajectories):
+            f.write(",".join(str(v) for v in row) + "\n")
+    png = stem + ".png"
+    plot_compare(png, trajectories, reference)
+    return csv, png
+
+
+def table_rows(trajectories: Sequence[Trajectory]) -> list[tuple[Any, ...]]:
+    """One row per solver: name, reason, converged, iterations, time, final errors."""
+    rows = []
+    for t in trajectories:
+        last = (lambda v: v[-1] if v else float("nan"))
+        rows.append((t.name, t.reason, t.converged, t.iterations, round(t.solve_time, 4),
+                     last(t.mean_gap_error), last(t.pressure_error),
+                     last(t.natural_residual), last(t.complementarity)))
+    return rows
+
+
+def plot_compare(path: str, trajectories: Sequence[Trajectory], reference: dict[str, Any]
+                 ) -> None:
+    """Pressure error and natural residual against wall time, log-log, one line per solver."""
+    from .plot import _finish, _pyplot
+
+    plt = _pyplot()
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
+    for t in trajectories:
+        tm = np.maximum(np.asarray(t.time), 1e-4)
+        style = "-" if t.converged else ":"
+        ax1.loglog(tm, np.maximum(t.pressure_error, 1e-17), style, label=t.name)
+        ax2.loglog(tm, np.maximum(t.natural_residual, 1e-17), style, label=t.name)
+    ax1.axhline(reference["natural_residual"], color="gray", lw=0.8)
+    ax1.set(xlabel="wall time (s)", ylabel=r"$\|p - p_\mathrm{ref}\| / \|p_\mathrm{ref}\|$",
+            title="pressure error (dotted: not converged)")
+    ax2.set(xlabel="wall time (s)", ylabel=r"rms$(\min(k g, p))/p_0$", title="natural residual")
+    ax2.legend(fontsize=8)
+    _finish(fig, (ax1, ax2), path)

@@ -1,0 +1,44 @@
+"""The solver comparison: common errors along each run, table, files, time limit."""
+
+import csv
+
+import h5py
+import numpy as np
+
+from conftest import ROOT, cli
+
+
+def test_compare_command(tmp_path):
+    out = tmp_path / "cmp.h5"
+    r = cli("compare", "--grid", "64", "--hurst", "0.7", "--rms-slope", "0.1", "--seed", "2",
+            "--pressure", "3e-3", "--solvers", f"cg,pk,tron,{ROOT / 'options' / 'bnls.opts'}",
+            "--output", str(out))
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert r.stdout.count("CONVERGED_GATOL") == 4
+    rows = list(csv.DictReader(open(tmp_path / "cmp.csv")))
+    assert [row["solver"] for row in rows][:3] == ["cg", "pk", "tron"]
+    assert (tmp_path / "cmp.png").stat().st_size > 1000
+    with h5py.File(out) as f:
+        assert f.attrs["reference_natural_residual"] < 1e-11
+        for name in ("cg", "pk", "tron"):
+            g = f[name]
+            t = g["time"][:]
+            assert np.all(np.diff(t) >= 0) and g.attrs["converged"]
+            # every solver ends at the reference within its own tolerance (1e-8 p0 rms)
+            assert g["mean_gap_error"][-1] < 1e-7
+            assert g["pressure_error"][-1] < 1e-6
+            assert g["natural_residual"][-1] < 1e-7
+            assert g["natural_residual"][0] > 1e-3  # the run starts far away
+
+
+def test_compare_time_limit_and_bad_solver(tmp_path):
+    out = tmp_path / "cmp.h5"
+    r = cli("compare", "--grid", "64", "--hurst", "0.7", "--rms-slope", "0.1", "--pressure",
+            "3e-3", "--solvers", "bncg", "--time-limit", "0", "--output", str(out))
+    assert r.returncode == 1, r.stderr
+    assert "time limit" in r.stdout
+    with h5py.File(out) as f:
+        assert not f["bncg"].attrs["converged"]
+    r = cli("compare", "--grid", "64", "--hurst", "0.7", "--rms-slope", "0.1", "--pressure",
+            "3e-3", "--solvers", "no/such.opts", "--output", str(out))
+    assert r.returncode == 2 and "does not exist" in r.stderr

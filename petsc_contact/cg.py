@@ -97,6 +97,10 @@ class PolonskyKeer:
         def evaluate() -> float:
             return tao.computeObjectiveGradient(x, g_vec)
 
+        context = (self.preconditioner.getPythonContext()
+                   if hasattr(self.preconditioner, "getPythonContext") else self.preconditioner)
+        adapt = getattr(context, "adapt", None)
+        global_size = x.getSize()
         f = evaluate()
         free = np.empty(xa.shape, dtype=bool)
         free_old = np.zeros_like(free)
@@ -141,6 +145,11 @@ class PolonskyKeer:
                 z[...] = r
             np.not_equal(free, free_old, out=work)
             changed, rz = allsum(np.count_nonzero(work), np.dot(r, z))
+            if changed and adapt is not None and adapt(  # the preconditioner follows the set
+                    int(global_size - allsum(np.count_nonzero(free))[0])):
+                self.preconditioner.apply(r_vec, z_vec)
+                z *= free
+                (rz,) = allsum(np.dot(r, z))
             beta = rz / rz_old if changed == 0 else 0.0
             rz_old = rz
             free_old[...] = free

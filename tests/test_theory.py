@@ -93,3 +93,19 @@ def test_block_correction_recovers_interfacial_stiffness():
     assert np.allclose(k[1:-1], p[1:-1] / u0, rtol=1e-3)
     with pytest.raises(ValueError):
         theory.block_corrected_stiffness(p[:2], s[:2], e_block, d)
+
+
+def test_hertz_regime_against_the_punch_solver():
+    """K ~ p^(1/3): theory.hertz_stiffness is dF/dδ = 2 E* a of a sphere per apparent area,
+    which the punch solver reproduces (1% on 128^2, see test_punch.test_hertz)."""
+    from petsc_contact.punch import punch_contact
+
+    p = np.array([1e-4, 8e-4])
+    k = theory.hertz_stiffness(p, 2.0, 1.0, 1.0)
+    assert k[1] / k[0] == pytest.approx(2.0, rel=1e-12)  # (8)^(1/3)
+    n = 128
+    x = (np.arange(n) + 0.5) / n - 0.5
+    heights = -(x[:, None] ** 2 + x[None, :] ** 2) / 2.0
+    (step,) = punch_contact(heights, 1.0, 2.0, forces=[0.02])
+    assert step.scalars["total_stiffness"] == pytest.approx(
+        float(theory.hertz_stiffness(0.02, 2.0, 1.0, 1.0)), rel=0.01)

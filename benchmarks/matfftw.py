@@ -88,6 +88,12 @@ def main() -> None:
     t_petsc = comm.allreduce(best_of(petsc_round_trip), op=MPI.MAX)
     t_scatter = comm.allreduce(best_of(scatter_only), op=MPI.MAX)
     t_pkg = comm.allreduce(best_of(package_round_trip), op=MPI.MAX)
+    lib.MatDestroy.argtypes = lib.VecDestroy.argtypes = [ctypes.POINTER(vp)]
+    for v in (x, y, z):
+        lib.VecDestroy(ctypes.byref(v))
+    lib.MatDestroy(ctypes.byref(mat))
+    vin.destroy()
+    vout.destroy()
     if comm.rank == 0:
         print(f"n = {n}, ranks = {comm.size}: MATFFTW round trip {t_petsc * 1e3:.1f} ms "
               f"(of which the two scatters {t_scatter * 1e3:.1f} ms); package backend "

@@ -38,7 +38,7 @@ print(json.dumps({"geometry": geometry, "n": n, "solver": solver, "peak_GiB": pe
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grids", type=int, nargs="+", default=[1024, 2048, 4096])
-    ap.add_argument("--punch-grids", type=int, nargs="+", default=[512, 1024, 2048])
+    ap.add_argument("--punch-grids", type=int, nargs="*", default=[512, 1024, 2048])
     ap.add_argument("--solvers", nargs="+", default=["cg", "tron", "bqnls"])
     args = ap.parse_args()
     cases = [("periodic", n, s) for n in args.grids for s in args.solvers]

@@ -124,6 +124,9 @@ def _run_arguments(p: argparse.ArgumentParser, defaults: dict[str, Any] | None =
                            help="rigid approaches beyond first touch (length units), in order")
         loads.add_argument("--forces", type=_float_list, metavar="F1,F2,...",
                            help="total forces (E* x length^2), in order (load control)")
+        loads.add_argument("--sweep", type=_sweep_spec, metavar="N[,DMIN,DMAX]",
+                           help="N log-spaced approaches from DMIN to DMAX (default: 0.01 and "
+                                "3 times the rms recess of the punch face)")
         p.add_argument("--footprint", choices=("square", "disk"), default="square",
                        help="punch outline: the whole square, or the inscribed disk")
         p.add_argument("--flat-stiffness", choices=("grid", "analytic"), default="grid",
@@ -246,6 +249,8 @@ def _check_numbers(args: argparse.Namespace) -> None:
         v = getattr(args, name)
         if not (np.isfinite(v) and v > 0):
             raise InputError(f"--{name} must be positive and finite, got {v}")
+    if getattr(args, "sweep", None) is not None:
+        return
     name = next((n for n in ("pressures", "approaches", "forces")
                  if getattr(args, n, None) is not None), None)
     if name is None:
@@ -440,6 +445,11 @@ def _punch_plan(petsc: Any, args: argparse.Namespace, grid: Any, heights: np.nda
     solver = PunchSolver(petsc, problem, args.flat_stiffness,
                          1.0 if args.footprint == "disk" else PHARR_BETA)
     by_force = args.forces is not None
+    if args.sweep is not None:
+        n, lo, hi = (args.sweep + [0.01 * problem.scale_length, 3 * problem.scale_length])[:3] \
+            if len(args.sweep) == 1 else args.sweep
+        args.approaches = [float(d) for d in np.geomspace(lo, hi, int(n))]
+        args.sweep = None  # resolved: the file records the approaches themselves
 
     def steps(loads: list[float], start: np.ndarray | None, fields: bool) -> Iterator[Any]:
         if start is not None:

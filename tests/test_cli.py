@@ -157,6 +157,11 @@ def test_punch_run_schema(tmp_path):
     assert r.returncode == 0, r.stderr
     with h5py.File(loads) as f:
         assert np.allclose(f["force"][:], [1e-5, 1e-4], rtol=1e-6)
+    r = cli(*PUNCH, "--sweep", "4", "--output", str(out), "--quiet")
+    assert r.returncode == 0, r.stderr
+    with h5py.File(out) as f:
+        d = f["approach"][:]
+        assert d.shape == (4,) and np.allclose(d[1:] / d[:-1], (300.0) ** (1 / 3))
     r = cli(*PUNCH, "--approaches", "1e-3", "--forces", "1e-3", "--output", str(out))
     assert r.returncode == 2 and "not allowed with" in r.stderr
     r = cli(*PUNCH, "--approaches", "-1e-3", "--output", str(out))

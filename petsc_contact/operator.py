@@ -111,6 +111,7 @@ class PaddedOperator(ShellInterface):
         self._centre = float(kernel_rows(slice(0, 1))[0, 0])
         self.exchange = RowExchange(grid.comm, grid.n, self.padded.n)
         self.applications = 0
+        self.fft.real[...] = 0.0  # the padding stays zero: applications write only the block
 
     def with_spectrum(self, spectrum: np.ndarray) -> "PaddedOperator":
         """Another operator on the same padded FFT with the given (normalised) spectrum."""
@@ -126,9 +127,7 @@ class PaddedOperator(ShellInterface):
         """``out <- P^T C P x``: pad, circular convolution, keep the footprint block."""
         self.applications += 1
         n = self.grid.n
-        real = self.fft.real
-        real[...] = 0.0
-        self.exchange.to_padded(x.reshape(self.grid.local_shape), real[:, :n])
+        self.exchange.to_padded(x.reshape(self.grid.local_shape), self.fft.real[:, :n])
         self.fft.forward()
         self.fft.spectrum *= self.spectrum
         self.fft.backward()
@@ -159,13 +158,15 @@ class RowExchange:
         self.send = [overlap(mine_f, block_rows(m, size, q)) * n for q in range(size)]
         self.recv = [overlap(block_rows(n, size, q), mine_p) * n for q in range(size)]
         self.rows_in = sum(self.recv) // n  # footprint rows present in my padded slab
+        self._padded_rows = np.empty((self.rows_in, n))  # reused by every exchange
+        self._footprint_rows = np.empty((mine_f.stop - mine_f.start, n))
 
     def to_padded(self, footprint: np.ndarray, padded: np.ndarray) -> None:
         """Write my footprint rows into the padded slabs (``padded`` is my ``[:, :n]`` view)."""
         if self.comm.size == 1:
             padded[:footprint.shape[0]] = footprint
             return
-        buf = np.empty((self.rows_in, footprint.shape[1]))
+        buf = self._padded_rows
         self.comm.Alltoallv([np.ascontiguousarray(footprint), self.send], [buf, self.recv])
         padded[:self.rows_in] = buf
 
@@ -174,10 +175,10 @@ class RowExchange:
         if self.comm.size == 1:
             footprint[...] = padded[:footprint.shape[0]]
             return
-        buf = np.ascontiguousarray(padded[:self.rows_in])
-        out = np.empty_like(footprint)
-        self.comm.Alltoallv([buf, self.recv], [out, self.send])
-        footprint[...] = out
+        buf = self._padded_rows
+        buf[...] = padded[:self.rows_in]
+        self.comm.Alltoallv([buf, self.recv], [self._footprint_rows, self.send])
+        footprint[...] = self._footprint_rows
 
 
 def shell_matrix(petsc: Any, op: FourierOperator) -> Any:

@@ -44,33 +44,29 @@ class MeanModePreconditioner(FourierOperator):
     """
 
     hessian_diagonal = 1.0
+    base_mean_mode = mean_mode = 0.0
 
     def set_kernel(self, kernel: np.ndarray, hessian_diagonal: float) -> None:
         """New scaled kernel (its ``q = 0`` entry is the fixed one) and Hessian diagonal."""
         self.kernel = kernel
         self.hessian_diagonal = hessian_diagonal
-        self.__dict__.pop("base_mean_mode", None)
-        self.__dict__.pop("mean_mode", None)
+        rows, cols = self.fft.spectral_index
+        mine = float(kernel[0, 0]) if rows.start == 0 and cols.start == 0 else -np.inf
+        self.base_mean_mode = self.mean_mode = self.grid.max(mine)  # known on every rank
 
     def adapt(self, bound_count: int) -> bool:
         """Set the ``q = 0`` entry for ``bound_count`` variables at their bound.
 
         Returns whether the operator changed (the same on every rank).
         """
-        base = self.__dict__.setdefault("base_mean_mode", self._mean_mode_entry())
-        value = max(base, 1.0 / (max(bound_count, 1) * self.hessian_diagonal))
-        changed = value != self.__dict__.get("mean_mode", base)
+        value = max(self.base_mean_mode,
+                    1.0 / (max(bound_count, 1) * self.hessian_diagonal))
+        changed = value != self.mean_mode
         self.mean_mode = value
         rows, cols = self.fft.spectral_index
         if rows.start == 0 and cols.start == 0:  # this rank holds q = 0
             self.kernel[0, 0] = value
         return changed
-
-    def _mean_mode_entry(self) -> float:
-        """The kernel's current ``q = 0`` entry, known on every rank."""
-        rows, cols = self.fft.spectral_index
-        mine = float(self.kernel[0, 0]) if rows.start == 0 and cols.start == 0 else -np.inf
-        return self.grid.max(mine)
 
 
 class PeriodicProblem:

@@ -107,6 +107,9 @@ class PunchProblem:
         self.preconditioner = self.inverse.with_spectrum(self.inverse.spectrum * self._scale)
         self.pressure_scale = self.modulus * self.scale_length / a
         self.approach = np.nan
+        self._u = np.empty(grid.local_shape)  # objective buffer, reused every evaluation
+        self._recess_flat = self.recess.reshape(-1)
+        self._footprint_flat = self.footprint.reshape(-1).astype(float)
 
     @property
     def upper_bound(self) -> np.ndarray:
@@ -128,11 +131,16 @@ class PunchProblem:
         """Scaled ``W``; ``grad <- g / (l sqrt(n^2))`` (``g`` zeroed off the footprint)."""
         grid = self.grid
         c = 1.0 / (self.scale_length * np.sqrt(grid.size))
-        p = x.reshape(grid.local_shape) * self.pressure_scale
-        u = self.compliance.apply_array(p, np.empty(grid.local_shape))
-        g = np.where(self.footprint, u + self.recess - self.approach, 0.0)
-        grad[...] = (g * c).reshape(-1)
-        (w,) = grid.sum(np.vdot(x, (0.5 * u + self.recess - self.approach).reshape(-1)))
+        u = self._u
+        np.multiply(x.reshape(grid.local_shape), self.pressure_scale, out=u)  # p
+        self.compliance.apply_array(u, u)  # u = G p (the FFT works on its own buffers)
+        u += self.recess
+        u -= self.approach  # u + s - δ: the gap on the footprint
+        # W/a^2 = x.(u_el/2 + s - δ) = (x.g + x.s - δ sum x) / 2 with g = u_el + s - δ
+        (w,) = grid.sum(0.5 * (np.vdot(x, u.reshape(-1)) + np.vdot(x, self._recess_flat)
+                               - self.approach * x.sum()))
+        np.multiply(u.reshape(-1), self._footprint_flat, out=grad)
+        grad *= c
         return c * float(w)
 
     def flat_stiffness_on_grid(self, petsc: Any) -> float:

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from .grid import Grid
-from .operator import ShellInterface
+from .operator import ShellInterface, shell_matrix
 
 STIFFNESS_RTOL = 1e-10
 
@@ -32,12 +32,14 @@ class Restricted(ShellInterface):
         self.op = op
         self.grid = op.grid
         self.mask = mask.reshape(-1)
+        self._masked = np.empty(self.mask.shape)  # reused by every application
         self.applications = 0
 
     def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
         self.applications += 1
         out = out.reshape(-1)
-        self.op.apply_array(np.where(self.mask, x.reshape(-1), 0.0), out)
+        np.multiply(x.reshape(-1), self.mask, out=self._masked)
+        self.op.apply_array(self._masked, out)
         np.copyto(out, x.reshape(-1), where=~self.mask)
         return out
 
@@ -59,8 +61,6 @@ def restricted_solve(petsc: Any, grid: Grid, op: ShellInterface, pc: ShellInterf
     RuntimeError
         If CG does not converge (the stiffness would be wrong, not approximate).
     """
-    from .operator import shell_matrix
-
     a_ctx, m_ctx = Restricted(op, mask), Restricted(pc, mask)
     mat = shell_matrix(petsc, a_ctx)
     ksp = petsc.KSP().create(comm=grid.comm)

@@ -1,8 +1,10 @@
 """Speed of petsc-contact's solvers against Tamaas and ContactMechanics on the same surface.
 
-usage: .venv/bin/python benchmarks/speed.py [--grid 512 2048] [--types python tron]
-Prints per solver and load: iterations, FFT round trips, wall time, time per round trip over
-one measured FFT round trip (the "ratio"), and the peers' times in the same run: Tamaas
+usage: .venv/bin/python benchmarks/speed.py [--grid 512 2048] [--types python tron] [--repeat 3]
+Prints per solver and load: iterations, FFT round trips, wall time (median of --repeat solves:
+single timings vary by 30% on a shared 2-core machine), time per round trip over one
+measured FFT round trip (the "ratio"; forward + spectral multiply + backward, median of 5
+batches of 20), and the peers' times in the same run: Tamaas
 PolonskyKeerRey (tolerance 1e-8) and ContactMechanics's Polonsky-Keer CG (penetration
 tolerance 1e-8 h_rms), cold-started like ours, if their venv exists
 (python3 -m venv benchmarks/peers/.venv &&
@@ -32,19 +34,19 @@ PEERS = os.path.join(HERE, "peers")
 
 
 def fft_round_trip(grid: Grid) -> float:
-    """One FFT round trip (forward, kernel multiply, backward): best of 5 batches of 20."""
+    """One FFT round trip (forward, kernel multiply, backward): median of 5 batches of 20."""
     fft = make_fft(grid)
-    fft.real[...] = np.random.default_rng(0).standard_normal(grid.local_shape)
-    fft.forward(), fft.backward()
-    best = np.inf
+    x = np.random.default_rng(0).standard_normal(grid.local_shape)
+    kernel = np.ones_like(fft.spectrum)
+    out = np.empty_like(x)
+    fft.convolve(x, kernel, out)
+    times = []
     for _ in range(5):
         start = time.perf_counter()
         for _ in range(20):
-            fft.forward()
-            fft.spectrum *= 1.0
-            fft.backward()
-        best = min(best, (time.perf_counter() - start) / 20)
-    return best
+            fft.convolve(x, kernel, out)
+        times.append((time.perf_counter() - start) / 20)
+    return float(np.median(times))
 
 
 def peer(script: str, path: str, pressures: list[float]) -> dict[float, dict]:
@@ -67,6 +69,7 @@ def main() -> None:
     ap.add_argument("--full-fraction", type=float, default=None,
                     help="also run at this fraction of the full-contact pressure -min(K h)")
     ap.add_argument("--no-peers", action="store_true", help="skip Tamaas and ContactMechanics")
+    ap.add_argument("--repeat", type=int, default=3, help="solves per case; the median is shown")
     args = ap.parse_args()
     for n in args.grid:
         grid = Grid(n, 1.0)
@@ -92,7 +95,9 @@ def main() -> None:
               f" {'mean_gap':>14} {'/tamaas':>8} {'/cm':>8}")
         for t in args.types:
             for p0 in pressures:
-                (s,) = periodic_contact(h, 1.0, 1.0, [p0], options=["-tao_type", t])
+                runs = [periodic_contact(h, 1.0, 1.0, [p0], options=["-tao_type", t])[0]
+                        for _ in range(args.repeat)]
+                s = sorted(runs, key=lambda run: run.scalars["solve_time"])[len(runs) // 2]
                 d = s.scalars
                 ffts = (d["objective_gradient_evaluations"] + d["hessian_applications"]
                         + d["preconditioner_applications"])

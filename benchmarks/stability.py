@@ -1,7 +1,8 @@
 """Stability matrix: every solver on stiff and extreme periodic scenes (issue 5).
 
 usage: .venv/bin/python benchmarks/stability.py [--grid 128] [--solvers cg pk tron ...]
-       [--time-limit 20] [--markdown docs/stability.md]
+       [--time-limit 20] [--markdown docs/stability.md] [--grids 32 1024] [--no-scenes]
+       [--append]
 For each scene and solver: converged or not (the package's own verification), TAO's reason,
 iterations, wall time and the pressure error reached against a reference solved at 1e-12.
 """
@@ -61,9 +62,13 @@ def main() -> None:
     ap.add_argument("--solvers", nargs="+", default=list(DEFAULT_SOLVERS))
     ap.add_argument("--time-limit", type=float, default=20.0)
     ap.add_argument("--markdown", default=None, help="also write the table here")
+    ap.add_argument("--append", action="store_true",
+                    help="append the table to --markdown instead of replacing the file")
+    ap.add_argument("--scenes", action=argparse.BooleanOptionalAction, default=True,
+                    help="run the scenes at --grid (--no-scenes: only the --grids rows)")
     args = ap.parse_args()
     petsc = _petsc.init([])
-    cases = scenes(args.grid)
+    cases = scenes(args.grid) if args.scenes else []
     cases += [(f"grid {n}, p0=1e-3", rough(n), 1.0, 1.0, 1e-3) for n in args.grids]
     lines = ["| scene | " + " | ".join(args.solvers) + " |",
              "| --- |" + " --- |" * len(args.solvers)]
@@ -85,8 +90,9 @@ def main() -> None:
         print(lines[-1], flush=True)
     print(f"# {time.perf_counter() - start:.0f} s")
     if args.markdown:
-        with open(args.markdown, "w") as f:
-            f.write(f"Stability matrix, {args.grid}^2 unless stated, time limit "
+        where = f"{args.grid}^2 unless stated" if args.scenes else "large grids"
+        with open(args.markdown, "a" if args.append else "w") as f:
+            f.write(f"{chr(10) if args.append else ''}Stability matrix, {where}, time limit "
                     f"{args.time_limit:g} s per solver (`benchmarks/stability.py`). Each cell: "
                     "verdict, TAO iterations, wall time, relative pressure error against a "
                     "reference solved at 1e-12.\n\n" + "\n".join(lines) + "\n")

@@ -13,6 +13,11 @@ Quasi-Newton types of the BQNK family (``bqnls``, ``bqnkls``, ``bqnktr``, ``bqnk
 the Fourier compliance as the initial inverse Hessian ``J0`` of their LMVM matrix.
 petsc4py 3.18 does not wrap ``TaoGetLMVMMatrix``/``MatLMVMSetJ0PC``, so this goes through
 ctypes on the same ``libpetsc`` that petsc4py uses; ``-petsc_contact_no_j0`` turns it off.
+
+Newton types whose KSP solves on the free variables (``tron``, ``bnls``, ``bntr``, ``bntl``)
+get the Fourier preconditioner as the Hessian's preconditioning matrix with ``PCMAT``: TAO
+restricts it to the free set like the Hessian, so the KSP is preconditioned by
+``P_F K^-1 P_F``.  ``-petsc_contact_no_ksp_pc`` (or any ``-tao_*pc_type``) turns it off.
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ BOUND_TYPES = ("tron", "bqnls", "blmvm", "bncg", "gpcg", "bnls", "bntr", "bntl",
                "bqnkls", "bqnktr", "bqnktl", "bqpip", "python")
 J0_TYPES = ("bqnls", "bqnkls", "bqnktr", "bqnktl")
 KSP_TYPES = ("tron", "gpcg", "bnls", "bntr", "bntl", "bqpip")
+KSP_PC_TYPES = ("tron", "bnls", "bntr", "bntl")  # preconditioned through the Hessian's Pmat
 DEFAULT_TYPE = "python"
 DEFAULT_PYTHON_TYPE = "petsc_contact.cg.PreconditionedCG"
 DEFAULT_GATOL = 1e-8
@@ -137,6 +143,10 @@ class BoundSolver:
         self.upper = self.x.duplicate()
         self.upper.set(petsc.INFINITY)
         self.pc = None
+        self.pmat = None
+        if preconditioner is not None and self.tao_type in KSP_PC_TYPES and \
+                not petsc.Options().getBool("petsc_contact_no_ksp_pc", False):
+            self.pmat = shell_matrix(petsc, preconditioner)
         use_j0 = not petsc.Options().getBool("petsc_contact_no_j0", False)
         wants_pc = (self.tao_type in J0_TYPES and use_j0) or self.tao_type == "python"
         if preconditioner is not None and wants_pc:
@@ -183,13 +193,14 @@ class BoundSolver:
             if self.tao_type == "python":
                 tao.setPythonType(DEFAULT_PYTHON_TYPE)
             tao.setObjectiveGradient(tao_objgrad, None)
-            tao.setHessian(tao_hessian, self.hessian, self.hessian)
+            tao.setHessian(tao_hessian, self.hessian,
+                           self.hessian if self.pmat is None else self.pmat)
             tao.setVariableBounds(self.lower, self.upper)
             tao.setTolerances(gatol=DEFAULT_GATOL, grtol=0.0, gttol=0.0)
             tao.setMaximumIterations(DEFAULT_MAX_IT)
             tao.setMaximumFunctionEvaluations(10 * DEFAULT_MAX_IT)
             if self.tao_type in KSP_TYPES:
-                tao.getKSP().getPC().setType("none")
+                tao.getKSP().getPC().setType("none" if self.pmat is None else "mat")
             tao.setFromOptions()
             if self.pc is not None and self.tao_type in J0_TYPES:
                 attach_lmvm_j0(tao, self.pc)
@@ -235,7 +246,7 @@ class BoundSolver:
 
     def close(self) -> None:
         """Destroy the PETSc objects (needed for a clean exit, DESIGN.md section 9)."""
-        for obj in (self.pc, self.hessian, self.x, self.lower, self.upper):
+        for obj in (self.pc, self.pmat, self.hessian, self.x, self.lower, self.upper):
             if obj is not None:
                 obj.destroy()
-        self.pc = None
+        self.pc = self.pmat = None

@@ -143,6 +143,22 @@ def test_cross_solver_agreement(rough):
         assert abs(s["area_fraction"] - ref["area_fraction"]) * 128**2 <= 2, t
 
 
+@pytest.mark.parametrize("tao_type", ["tron", "bnls"])
+def test_fourier_ksp_preconditioner(rough, tao_type):
+    """The Newton types' KSP preconditioned by the restricted Fourier compliance (PCMAT)
+    reaches the unpreconditioned solution with far fewer Hessian applications (measured at
+    128^2: about 5x fewer; asserted: 2x)."""
+    steps = {}
+    for name, extra in (("fourier", []), ("none", ["-petsc_contact_no_ksp_pc"])):
+        (steps[name],) = periodic_contact(rough, 1.0, 1.0, [2e-3],
+                                          options=["-tao_type", tao_type, *extra])
+        assert steps[name].converged, steps[name].scalars["verification"]
+    fourier, none = steps["fourier"].scalars, steps["none"].scalars
+    assert fourier["preconditioner_applications"] > 0 == none["preconditioner_applications"]
+    assert 2 * fourier["hessian_applications"] < none["hessian_applications"]
+    assert fourier["mean_gap"] == pytest.approx(none["mean_gap"], rel=1e-6)
+
+
 @pytest.mark.parametrize("solver", ["default", "tron"])
 def test_single_asperity_and_huge_load(rough, solver):
     steps = periodic_contact(rough, 1.0, 1.0, [1e-7, 1e-6, 10.0], options=SOLVERS[solver])

@@ -1,0 +1,131 @@
+"""Strong scaling of a periodic load step, and a projection to many ranks (issue 6).
+
+usage: mpiexec -n P .venv/bin/python benchmarks/scaling.py [--grid 2048 4096] [--pressure 1e-3]
+       [--bandwidth 1.0] [--latency 2e-6] [--project 8192]
+Run it with P = 1 and P = 2 (as root: OMPI_ALLOW_RUN_AS_ROOT=1
+OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1).  Rank 0 prints, per grid: the load step's iterations,
+wall time and time per FFT round trip; for P > 1 the round trip's parts: mpi4py-fft's two
+global transposes (timed alone) and the local transforms; and the bytes each rank sends per
+round trip, read from the MPI datatypes mpi4py-fft hands to Alltoallw.
+
+The projection scales the measured per-rank work: local FFT time ~ n^2 log n / P, transpose
+volume per rank ``V(P) = 2 * 16 n (n/2+1) (P-1) / P^2`` bytes (both transposes of the half
+spectrum), sent at ``--bandwidth`` GB/s per rank with ``--latency`` s per message
+(``P - 1`` messages per transpose), plus ``--allreduces`` latency-bound reductions per round
+trip.  Those two network numbers are assumptions about the cluster, not measurements here.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+from mpi4py import MPI
+
+from petsc_contact import periodic_contact
+from petsc_contact.fft import make_fft
+from petsc_contact.grid import Grid
+from petsc_contact.surface import self_affine
+
+
+def median_time(fn, repeats: int = 5, batch: int = 10) -> float:
+    """Median over ``repeats`` batches of the time of one call (ranks synchronised)."""
+    times = []
+    for _ in range(repeats):
+        MPI.COMM_WORLD.Barrier()
+        start = time.perf_counter()
+        for _ in range(batch):
+            fn()
+        MPI.COMM_WORLD.Barrier()
+        times.append((time.perf_counter() - start) / batch)
+    return float(np.median(times))
+
+
+def transpose_bytes(fft) -> int:
+    """Bytes this rank sends to other ranks in one forward transpose (from the MPI datatypes)."""
+    transfer = fft._pfft.transfer[0]
+    me = MPI.COMM_WORLD.rank
+    return sum(t.Get_size() for q, t in enumerate(transfer._subtypesA) if q != me)
+
+
+def measure(n: int, p0: float) -> dict[str, float]:
+    comm = MPI.COMM_WORLD
+    grid = Grid(n, 1.0, comm)
+    fft = make_fft(grid)
+    h = self_affine(grid, fft, hurst=0.7, rolloff_ratio=2, cutoff_ratio=64, seed=1,
+                    rms_slope=0.1)
+    x = np.random.default_rng(comm.rank).standard_normal(grid.local_shape)
+    out = np.empty_like(x)
+    kernel = np.ones_like(fft.spectrum)
+    result = {"round_trip": median_time(lambda: fft.convolve(x, kernel, out))}
+    if comm.size > 1:
+        transfer = fft._pfft.transfer[0]
+        a = np.zeros(transfer.subshapeA, dtype=transfer.dtype)
+        b = np.zeros(transfer.subshapeB, dtype=transfer.dtype)
+        result["transposes"] = 2 * median_time(lambda: transfer.forward(a, b))
+        result["bytes"] = 2 * comm.allreduce(transpose_bytes(fft), op=MPI.MAX)
+    (step,) = periodic_contact(h, 1.0, 1.0, [p0], comm=comm)
+    s = step.scalars
+    ffts = (s["objective_gradient_evaluations"] + s["hessian_applications"]
+            + s["preconditioner_applications"])
+    result.update(iterations=s["iterations"], time=s["solve_time"], ffts=ffts,
+                  per_fft=s["solve_time"] / ffts, converged=float(step.converged))
+    return result
+
+
+def project(n: int, local_1: float, ranks: list[int], bandwidth: float, latency: float,
+            allreduces: int) -> list[tuple[int, float, float, float]]:
+    """(P, local FFT time, communication time, efficiency) per round trip at grid ``n``.
+
+    ``local_1`` is the measured local-transform time of one round trip on one rank of the
+    measured grid, already rescaled to ``n``.
+    """
+    rows = []
+    for p in ranks:
+        local = local_1 / p
+        volume = 2 * 16 * n * (n // 2 + 1) * (p - 1) / p**2
+        comm = volume / (bandwidth * 1e9) + 2 * (p - 1) * latency + allreduces * latency * np.log2(p)
+        rows.append((p, local, comm, local / (local + comm)))
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--grid", type=int, nargs="+", default=[2048])
+    ap.add_argument("--pressure", type=float, default=1e-3)
+    ap.add_argument("--bandwidth", type=float, default=1.0,
+                    help="assumed network bandwidth per rank, GB/s (projection only)")
+    ap.add_argument("--latency", type=float, default=2e-6,
+                    help="assumed latency per message, s (projection only)")
+    ap.add_argument("--allreduces", type=int, default=3,
+                    help="latency-bound reductions per FFT round trip (the CG does 5-8 "
+                         "per iteration of ~2.8 round trips)")
+    ap.add_argument("--project", type=int, default=8192, help="grid of the projection")
+    args = ap.parse_args()
+    comm = MPI.COMM_WORLD
+    for n in args.grid:
+        r = measure(n, args.pressure)
+        if comm.rank:
+            continue
+        print(f"n = {n}, ranks = {comm.size}: {r['iterations']} iterations, "
+              f"{r['time']:.2f} s, {r['ffts']} round trips, {r['per_fft'] * 1e3:.1f} ms per "
+              f"round trip in the solve, FFT round trip alone {r['round_trip'] * 1e3:.1f} ms"
+              + ("" if r["converged"] else "  NOT CONVERGED"))
+        if comm.size > 1:
+            local = r["round_trip"] - r["transposes"]
+            print(f"  transposes {r['transposes'] * 1e3:.1f} ms ({r['bytes'] / 1e6:.1f} MB sent "
+                  f"per rank per round trip, {r['bytes'] / r['transposes'] / 1e9:.2f} GB/s), "
+                  f"local transforms {local * 1e3:.1f} ms")
+            m = args.project
+            local_1 = local * comm.size * (m / n) ** 2 * np.log2(m) / np.log2(n)
+            print(f"  projection to {m}^2 (bandwidth {args.bandwidth} GB/s per rank, "
+                  f"latency {args.latency:g} s), per round trip:")
+            print("      P   local_ms    comm_ms  efficiency")
+            for p, loc, com, eff in project(m, local_1, [16, 32, 64, 128, 256],
+                                            args.bandwidth, args.latency, args.allreduces):
+                print(f"  {p:5d} {loc * 1e3:10.2f} {com * 1e3:10.2f} {eff:11.2f}")
+
+
+if __name__ == "__main__":
+    main()

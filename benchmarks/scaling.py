@@ -65,7 +65,8 @@ def measure(n: int, p0: float) -> dict[str, float]:
         b = np.zeros(transfer.subshapeB, dtype=transfer.dtype)
         result["transposes"] = 2 * median_time(lambda: transfer.forward(a, b))
         result["bytes"] = 2 * comm.allreduce(transpose_bytes(fft), op=MPI.MAX)
-    (step,) = periodic_contact(h, 1.0, 1.0, [p0], comm=comm)
+    heights = np.concatenate(comm.allgather(h))  # periodic_contact takes the whole map
+    (step,) = periodic_contact(heights, 1.0, 1.0, [p0], comm=comm)
     s = step.scalars
     ffts = (s["objective_gradient_evaluations"] + s["hessian_applications"]
             + s["preconditioner_applications"])

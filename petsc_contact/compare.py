@@ -85,7 +85,8 @@ def compare(petsc: Any, problem: PeriodicProblem, pressure: float, solvers: Sequ
 
     grid = problem.grid
     ell = problem.scale_length
-    with _petsc.scoped_options(["-tao_gatol", str(REFERENCE_GATOL)]):
+    gatol = max(REFERENCE_GATOL, problem.stiffness_rounding_floor(pressure))
+    with _petsc.scoped_options(["-tao_gatol", str(gatol)]):
         (ref_step,) = sweep(petsc, problem, [pressure], fields=True)
     if not ref_step.converged:
         raise RuntimeError(f"reference solve failed: {ref_step.scalars['verification']}")

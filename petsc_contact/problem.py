@@ -173,6 +173,20 @@ class PeriodicProblem:
         """Nominal pressure at which contact becomes complete, ``-min(K h)`` (DESIGN.md 7)."""
         return -self._min_kh
 
+    def stiffness_rounding_floor(self, p0: float) -> float:
+        """The rms pressure residual (units of ``p0``) below which a tight solve stagnates.
+
+        The largest stiffness entries (``E* |q|/2``, so ``~ k``, the pixel stiffness, which
+        grows like ``n``) act on gaps of size ``h_rms``: the pressure is rounded at
+        ``~ eps k h_rms``.  Measured at ``p0 = 1e-3 E*`` on the stability surface
+        (``L/lambda_1 = n/4``): after 250 iterations the residual stood at 5e-13, 9e-13,
+        2e-12 and 5e-12 for n = 256 ... 2048, which is 3 to 7.5 times ``eps k h_rms / p0``;
+        this returns 30 times that.  Used for the reference solves of
+        :func:`~petsc_contact.compare.compare`, which at ``1e-12`` ran to the iteration
+        limit from 2048^2 on.
+        """
+        return 30 * np.finfo(float).eps * self.pixel_stiffness * self.h_rms / p0
+
     def rounding_floor(self, p0: float) -> float:
         """The smallest rms pressure residual (in units of ``p0``) double precision resolves.
 

@@ -161,7 +161,10 @@ def build_parser() -> argparse.ArgumentParser:
         prog="petsc-contact",
         description="Non-adhesive contact of rough elastic solids with PETSc/TAO. "
                     "Options with one dash (-tao_type bncg, -tao_monitor, -options_file F, "
-                    "-log_view, ...) are passed to PETSc.",
+                    "-log_view, ...) are passed to PETSc. The package's own PETSc options: "
+                    "-petsc_contact_no_j0 (no Fourier initial Hessian for the BQNK types), "
+                    "-petsc_contact_no_ksp_pc (no Fourier KSP preconditioner for tron, bnls, "
+                    "bntr, bntl).",
         epilog="Exit status: 0 converged, 1 a step did not converge, 2 bad input, "
                "130 interrupted.")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")

@@ -31,8 +31,11 @@ conjugate gradient in the spirit of Polonsky & Keer (Wear 231, 206 (1999)).
 
 :class:`PreconditionedCG` applies a preconditioner restricted to ``F`` (``z = P_F M P_F r``);
 the package gives it the Fourier compliance, the inverse of the periodic stiffness, which
-makes the iteration count almost independent of the grid.  :class:`PolonskyKeer` is the
-unpreconditioned method (``M = I``).
+makes the iteration count almost independent of the grid.  A preconditioner whose context
+has ``adapt(bound_count, free)`` is told every new free set before it is applied; when that
+returns ``True`` the operator depends on the set (the package's exact Schur form for small
+contact sets, :mod:`petsc_contact.schur`) and the recurrence restarts.
+:class:`PolonskyKeer` is the unpreconditioned method (``M = I``).
 
 Convergence follows TAO's tolerances on the projected gradient ``r = P_F g``:
 ``||r|| <= gatol`` or ``||r|| <= grtol ||r_0||`` (reason ``CONVERGED_GATOL``/``GRTOL``);
@@ -150,23 +153,21 @@ class PolonskyKeer:
                 tao.setConvergedReason(reasons.DIVERGED_MAXITS)
                 break
             it += 1
-            # preconditioned residual z = P_F M r, then the direction d <- z + beta d, kept in
-            # z's buffer and swapped with d's (one memory pass; no copy after a restart)
+            # the preconditioner follows a changed set; preconditioned residual z = P_F M r,
+            # then the direction d <- z + beta d, kept in z's buffer and swapped with d's
+            # (one memory pass; no copy after a restart)
+            np.not_equal(free, free_old, out=work)
+            changed, n_free = allsum(np.count_nonzero(work), np.count_nonzero(free))
+            bound_count = int(global_size - n_free)
+            exact = bool(changed) and adapt is not None and adapt(bound_count, free)
             if self.preconditioner is not None:
                 self.preconditioner.apply(r_vec, z_vec)
                 z *= free
             else:
                 z[...] = r
-            np.not_equal(free, free_old, out=work)
-            changed, rz, n_free = allsum(np.count_nonzero(work), np.dot(r, z),
-                                         np.count_nonzero(free))
-            bound_count = int(global_size - n_free)
+            (rz,) = allsum(np.dot(r, z))
             restart = changed > 0
-            if changed and adapt is not None and adapt(bound_count):  # PC follows the set
-                self.preconditioner.apply(r_vec, z_vec)
-                z *= free
-                (rz,) = allsum(np.dot(r, z))
-            if changed and rz_old > 0:
+            if changed and rz_old > 0 and not exact:
                 np.greater(free, free_old, out=work)
                 (joined,) = allsum(np.count_nonzero(work))
                 restart = joined > 0 and changed > CONTINUE_FRACTION * bound_count
@@ -202,7 +203,7 @@ class PolonskyKeer:
             blas.daxpy(d, xa, a=alpha)
             np.less(xa, lower, out=work)
             (clipped,) = allsum(np.count_nonzero(work))
-            limit = max(GROWTH * bound_count, min_limit)
+            limit = int(max(GROWTH * bound_count, min_limit))
             if clipped > limit:
                 fraction = self._growth_fraction(xa, alpha * d, lower, work, limit, allsum)
                 blas.daxpy(d, xa, a=(fraction - 1.0) * alpha)
@@ -230,11 +231,14 @@ class PolonskyKeer:
         at the fraction ``1 - (x - lower)/step``.  Those that started on it (fraction 0, a
         preconditioned direction may point into the bound) are clipped at any fraction and
         do not count.  The fraction is found by bisection on the global count, so it is
-        the same on every rank.
+        the same on every rank, over each rank's ``limit`` smallest fractions only (the
+        global ``limit`` smallest are among them, and so is the answer).
         """
         lo = lower[below] if np.ndim(lower) else lower
         reach = 1.0 - (x[below] - lo) / step[below]
         reach = reach[reach > 1e-9]  # below: rounding of a start on the bound
+        if reach.size > limit:
+            reach = np.partition(reach, limit - 1)[:limit]
         low, high = 0.0, 1.0
         for _ in range(40):
             mid = 0.5 * (low + high)

@@ -361,6 +361,7 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
     else:
         plan = _periodic_plan(petsc, args, grid, fft, heights)
     attributes = _attributes(args, argv, petsc, realised)
+    attributes["fft_backend"] = plan.fft_backend
     done, state = read_resume(args.output, attributes["parameters"]) if args.resume else (0, None)
     total = len(plan.loads)
     if done:
@@ -418,6 +419,7 @@ class Plan:
     columns: tuple[tuple[str, str, str], ...]
     intro: str
     close: Callable[[], None] = lambda: None
+    fft_backend: str = ""  # class name of the operator's FFT backend (fft module)
 
 
 def _periodic_plan(petsc: Any, args: argparse.Namespace, grid: Any, fft: Any,
@@ -437,7 +439,7 @@ def _periodic_plan(petsc: Any, args: argparse.Namespace, grid: Any, fft: Any,
         return sweep(petsc, problem, loads, fields, stiffness=args.stiffness, start=start)
 
     return Plan(list(args.pressures), steps, PERIODIC_COLUMNS,
-                f", full contact at p0 = {p_full:.4g}")
+                f", full contact at p0 = {p_full:.4g}", fft_backend=type(fft).__name__)
 
 
 def _punch_plan(petsc: Any, args: argparse.Namespace, grid: Any, heights: np.ndarray) -> Plan:
@@ -464,7 +466,7 @@ def _punch_plan(petsc: Any, args: argparse.Namespace, grid: Any, heights: np.nda
              f"{solver.k_flat_analytic:.6g})")
     return Plan(list(args.forces if by_force else args.approaches), steps,
                 PUNCH_COLUMNS + (("p0", "nominal_pressure", "{:>10.3e}"),), intro,
-                solver.close)
+                solver.close, type(problem.compliance.fft).__name__)
 
 
 def _finished_rows(path: str, steps: int) -> list[dict[str, Any]]:

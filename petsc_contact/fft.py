@@ -1,10 +1,21 @@
 """Real-to-complex 2-D FFTs on the row-slab layout, planned once and reused.
 
-One interface, two backends chosen by the communicator size:
+One interface, three backends chosen by the communicator size:
 
 - one rank: FFTW through Debian's ``pyfftw``, measured plan, one thread per core
   (fastest measured here: 512^2 round trip 0.52 ms vs 1.5 ms scipy, 8.7 ms numpy);
-- several ranks: the slab-decomposed parallel FFT of Debian's ``mpi4py-fft`` (FFTW underneath).
+- several ranks: FFTW's own MPI transforms (``libfftw3_mpi``, the library PETSc's MATFFTW
+  uses, called through ctypes) with the spectrum in transposed order, which skips one global
+  transpose per direction and keeps every local transform contiguous (2048^2 on 2 ranks:
+  27-43 ms per round trip against 64-92 ms for mpi4py-fft in the same runs);
+- several ranks whose row slabs are not FFTW's (FFTW gives every rank ``ceil(n/P)`` rows but
+  the last; :func:`~petsc_contact.grid.block_rows` spreads the remainder, e.g. 22/21/21 rows
+  for n = 64 on 3 ranks), or without ``libfftw3_mpi``: the slab-decomposed parallel FFT of
+  Debian's ``mpi4py-fft`` (FFTW underneath).
+
+A backend's ``transposed`` attribute says how its spectrum block is stored: ``False`` for
+(rows ``qx``, columns ``qy``), ``True`` for (``qy``, ``qx``).  Spectral multipliers built
+with :func:`wavevectors` follow it; ``spectral_index`` is always (``qx`` range, ``qy`` range).
 
 Each backend owns three buffers: ``real`` (input of :meth:`forward`, never modified by
 either transform), ``spectrum`` (its output, the local block of the ``n x (n//2+1)`` half
@@ -19,7 +30,9 @@ application (24 -> 19 ms per round trip at 2048^2 here); otherwise it copies.
 
 from __future__ import annotations
 
+import ctypes
 import os
+from typing import Any
 
 import numpy as np
 
@@ -41,6 +54,7 @@ class SerialFFT:
 
         n = grid.n
         threads = threads or default_threads()
+        self.threads = threads
         self.real = pyfftw.empty_aligned((n, n), dtype="float64")
         self.spectrum = pyfftw.empty_aligned((n, n // 2 + 1), dtype="complex128")
         self.result = pyfftw.empty_aligned((n, n), dtype="float64")
@@ -51,6 +65,8 @@ class SerialFFT:
                                      flags=(PLANNER_EFFORT, "FFTW_DESTROY_INPUT"),
                                      threads=threads)
         self.spectral_index = (slice(0, n), slice(0, n // 2 + 1))
+
+    transposed = False
 
     def forward(self) -> None:
         """``spectrum <- FFT(real)``."""
@@ -103,6 +119,8 @@ class SlabFFT:
         self.result = np.empty_like(self.real)
         self.spectral_index = tuple(self._pfft.local_slice(True))
 
+    transposed = False
+
     def forward(self) -> None:
         self._pfft.forward(self.real, self.spectrum, normalize=False)
 
@@ -118,12 +136,169 @@ class SlabFFT:
         out.reshape(self.result.shape)[...] = self.result
 
 
-def make_fft(grid: Grid) -> SerialFFT | SlabFFT:
-    """The FFT backend for this grid's communicator."""
-    return SerialFFT(grid) if grid.comm.size == 1 else SlabFFT(grid)
+_FFTW_MPI_TRANSPOSED_IN = 1 << 29  # fftw3-mpi.h
+_FFTW_MPI_TRANSPOSED_OUT = 1 << 30
+_FFTW_MEASURE = 0
 
 
-def wavevectors(grid: Grid, fft: SerialFFT | SlabFFT) -> tuple[np.ndarray, np.ndarray]:
+class _FFTWMPILibrary:
+    """``libfftw3_mpi`` through ctypes, initialised once per process (``None`` if absent)."""
+
+    _lib: Any = None
+
+    @classmethod
+    def get(cls) -> Any:
+        if cls._lib is None:
+            try:
+                lib = ctypes.CDLL("libfftw3_mpi.so.3")
+            except OSError:
+                cls._lib = False
+                return None
+            size_t = ctypes.c_ssize_t
+            lib.fftw_mpi_local_size_many_transposed.restype = size_t
+            lib.fftw_mpi_local_size_many_transposed.argtypes = [
+                ctypes.c_int, ctypes.POINTER(size_t), size_t, size_t, size_t, ctypes.c_void_p,
+                *[ctypes.POINTER(size_t)] * 4]
+            for name in ("fftw_mpi_plan_many_dft_r2c", "fftw_mpi_plan_many_dft_c2r"):
+                fn = getattr(lib, name)
+                fn.restype = ctypes.c_void_p
+                fn.argtypes = [ctypes.c_int, ctypes.POINTER(size_t), size_t, size_t, size_t,
+                               ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p,
+                               ctypes.c_uint]
+            lib.fftw_execute.argtypes = [ctypes.c_void_p]
+            lib.fftw_mpi_init()
+            cls._lib = lib
+        return cls._lib or None
+
+
+class _FFTWMPIPlans:
+    """FFTW-MPI's in-place buffer and its two transposed-order plans for one grid and comm.
+
+    Made once per communicator and grid size and kept for the life of the process:
+    destroying an FFTW-MPI plan after mpi4py-fft had planned in the same process crashed
+    in ``fftw_destroy_plan`` in 8 of 16 runs here.  Every user runs forward, multiply and
+    backward within one call, so the buffer can be shared.
+    """
+
+    _made: dict[tuple[int, int], "_FFTWMPIPlans | None"] = {}
+
+    def __init__(self, grid: Grid, lib: Any, block0: int, block1: int, local: list[int],
+                 alloc: int) -> None:
+        from mpi4py import MPI
+
+        n, m = grid.n, grid.n // 2 + 1
+        rows, _, n_cols, col_start = local
+        self.lib = lib
+        self._buffer = _aligned(2 * alloc, np.float64)
+        self.padded = self._buffer[:rows * 2 * m].reshape(rows, 2 * m)[:, :n]
+        self.spectrum = self._buffer.view(np.complex128)[:n_cols * n].reshape(n_cols, n)
+        self.spectral_index = (slice(0, n), slice(col_start, col_start + n_cols))
+        dims = (ctypes.c_ssize_t * 2)(n, n)
+        comm = ctypes.c_void_p(MPI._handleof(grid.comm))
+        data = self._buffer.ctypes.data
+        self.forward = lib.fftw_mpi_plan_many_dft_r2c(
+            2, dims, 1, block0, block1, data, data, comm, _FFTW_MEASURE | _FFTW_MPI_TRANSPOSED_OUT)
+        self.backward = lib.fftw_mpi_plan_many_dft_c2r(
+            2, dims, 1, block1, block0, data, data, comm, _FFTW_MEASURE | _FFTW_MPI_TRANSPOSED_IN)
+        self.ok = bool(self.forward and self.backward)
+
+    @classmethod
+    def get(cls, grid: Grid) -> "_FFTWMPIPlans | None":
+        """The plans for ``grid``; ``None`` without FFTW-MPI or if its rows are not the grid's."""
+        from mpi4py import MPI
+
+        key = (MPI._handleof(grid.comm), grid.n)
+        if key not in cls._made:
+            cls._made[key] = cls._make(grid)
+        return cls._made[key]
+
+    @classmethod
+    def _make(cls, grid: Grid) -> "_FFTWMPIPlans | None":
+        from mpi4py import MPI
+
+        lib = _FFTWMPILibrary.get()
+        if lib is None:
+            return None
+        n, m = grid.n, grid.n // 2 + 1
+        block0 = block1 = 0  # FFTW_MPI_DEFAULT_BLOCK: ceil(n/P) rows, ceil(m/P) columns
+        local = [ctypes.c_ssize_t() for _ in range(4)]
+        alloc = lib.fftw_mpi_local_size_many_transposed(
+            2, (ctypes.c_ssize_t * 2)(n, m), 1, block0, block1, MPI._handleof(grid.comm),
+            *map(ctypes.byref, local))
+        rows, row_start = local[0].value, local[1].value
+        if not grid.comm.allreduce(grid.rows == slice(row_start, row_start + rows),
+                                   op=MPI.LAND):
+            return None
+        plans = cls(grid, lib, block0, block1, [v.value for v in local], max(alloc, 1))
+        return plans if grid.comm.allreduce(plans.ok, op=MPI.LAND) else None
+
+
+class FFTWMPI:
+    """FFTW-MPI slab transforms with the spectrum in transposed order (``transposed = True``).
+
+    Real space: this rank's rows of the grid, ``ceil(n/P)`` per rank (FFTW's distribution).
+    Fourier space: this rank's ``qy`` columns of the half spectrum, each holding all ``n``
+    values of ``qx`` contiguously.  FFTW's real arrays are padded to ``2 (n//2 + 1)`` per
+    row, so ``real`` and ``result`` are this object's own dense arrays, copied in and out;
+    the plans and ``spectrum`` are shared by all objects of the same grid
+    (:class:`_FFTWMPIPlans`).  Use :meth:`create`, which returns ``None`` when FFTW-MPI
+    cannot serve the grid.
+    """
+
+    transposed = True
+
+    def __init__(self, plans: _FFTWMPIPlans) -> None:
+        self._plans = plans
+        self._execute = plans.lib.fftw_execute
+        self.spectrum = plans.spectrum
+        self.spectral_index = plans.spectral_index
+        self.real = np.zeros(plans.padded.shape)
+        self.result = np.zeros(plans.padded.shape)
+
+    @classmethod
+    def create(cls, grid: Grid) -> "FFTWMPI | None":
+        """The backend for ``grid``, or ``None`` without FFTW-MPI or if its rows differ."""
+        plans = _FFTWMPIPlans.get(grid)
+        return cls(plans) if plans is not None else None
+
+    def forward(self) -> None:
+        """``spectrum <- FFT(real)`` (``real`` is kept)."""
+        self._plans.padded[...] = self.real
+        self._execute(self._plans.forward)
+
+    def backward(self) -> None:
+        """``result <- IFFT(spectrum)`` without the ``1/n^2``; destroys ``spectrum``."""
+        self._execute(self._plans.backward)
+        self.result[...] = self._plans.padded
+
+    def convolve(self, x: np.ndarray, multiplier: np.ndarray, out: np.ndarray) -> None:
+        """``out <- IFFT(multiplier * FFT(x))`` (unnormalised), through FFTW's padded rows."""
+        plans = self._plans
+        plans.padded[...] = x.reshape(self.real.shape)
+        self._execute(plans.forward)
+        self.spectrum *= multiplier
+        self._execute(plans.backward)
+        out.reshape(self.result.shape)[...] = plans.padded
+
+
+def _aligned(size: int, dtype: Any) -> np.ndarray:
+    """A zeroed 1-D array of ``size`` items whose data is 64-byte aligned (SIMD-friendly)."""
+    raw = np.zeros(size * np.dtype(dtype).itemsize + 64, dtype=np.uint8)
+    offset = -raw.ctypes.data % 64
+    return raw[offset:offset + size * np.dtype(dtype).itemsize].view(dtype)
+
+
+FFT = SerialFFT | SlabFFT | FFTWMPI
+
+
+def make_fft(grid: Grid) -> FFT:
+    """The FFT backend for this grid's communicator (see the module docstring)."""
+    if grid.comm.size == 1:
+        return SerialFFT(grid)
+    return FFTWMPI.create(grid) or SlabFFT(grid)
+
+
+def wavevectors(grid: Grid, fft: FFT) -> tuple[np.ndarray, np.ndarray]:
     """Local components ``(qx, qy)`` of the half-spectrum block, broadcastable to its shape.
 
     ``q = 2 pi (i, j) / L`` with ``i`` in numpy's ``fftfreq`` order (DESIGN.md section 1).
@@ -132,20 +307,20 @@ def wavevectors(grid: Grid, fft: SerialFFT | SlabFFT) -> tuple[np.ndarray, np.nd
     q0 = 2 * np.pi / grid.length
     qx = q0 * (np.fft.fftfreq(grid.n) * grid.n)[rows]
     qy = q0 * np.arange(grid.n // 2 + 1)[cols]
-    return qx[:, None], qy[None, :]
+    return (qx[None, :], qy[:, None]) if fft.transposed else (qx[:, None], qy[None, :])
 
 
-def wavevector_magnitude(grid: Grid, fft: SerialFFT | SlabFFT) -> np.ndarray:
+def wavevector_magnitude(grid: Grid, fft: FFT) -> np.ndarray:
     """``|q|`` on the local half-spectrum block."""
     qx, qy = wavevectors(grid, fft)
     return np.sqrt(qx**2 + qy**2)
 
 
-def half_spectrum_weights(grid: Grid, fft: SerialFFT | SlabFFT) -> np.ndarray:
+def half_spectrum_weights(grid: Grid, fft: FFT) -> np.ndarray:
     """Multiplicity of each half-spectrum column in the full spectrum (1 or 2).
 
     ``sum(w * |F|^2)`` over all ranks equals the full-spectrum sum (Parseval).
     """
     cols = np.arange(grid.n // 2 + 1)[fft.spectral_index[1]]
     w = np.where((cols == 0) | ((grid.n % 2 == 0) & (cols == grid.n // 2)), 1.0, 2.0)
-    return w[None, :]
+    return w[:, None] if fft.transposed else w[None, :]

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .fft import SerialFFT, SlabFFT, half_spectrum_weights, make_fft
+from .fft import FFT, half_spectrum_weights, make_fft
 from .grid import Grid, block_rows
 
 
@@ -60,7 +60,7 @@ class FourierOperator(ShellInterface):
         2.3x faster than complex by real (which it casts chunk by chunk).
     """
 
-    def __init__(self, grid: Grid, fft: SerialFFT | SlabFFT, kernel: np.ndarray) -> None:
+    def __init__(self, grid: Grid, fft: FFT, kernel: np.ndarray) -> None:
         self.grid = grid
         self.fft = fft
         self.kernel = np.ascontiguousarray(kernel / grid.size, dtype=complex)
@@ -98,7 +98,7 @@ class PaddedOperator(ShellInterface):
     rows move with one ``Alltoallv`` each way (:class:`RowExchange`).
     """
 
-    def __init__(self, grid: Grid, kernel_rows: Any, fft: SerialFFT | SlabFFT | None = None
+    def __init__(self, grid: Grid, kernel_rows: Any, fft: FFT | None = None
                  ) -> None:
         self.grid = grid
         self.padded = Grid(2 * grid.n, 2 * grid.length, grid.comm)

@@ -15,10 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .fft import SerialFFT, SlabFFT, half_spectrum_weights, wavevector_magnitude
+from .fft import FFT, half_spectrum_weights, wavevector_magnitude
 from .grid import Grid
-
-FFT = SerialFFT | SlabFFT
 
 
 def psd_shape(q: np.ndarray, q0: float, qr: float, q1: float, hurst: float) -> np.ndarray:

@@ -119,10 +119,14 @@ def test_help_documents_options():
         assert opt in r.stdout
 
 
-@pytest.mark.parametrize("ranks, solver", [(2, []), (3, []), (2, ["-tao_type", "bqnls"])])
+@pytest.mark.parametrize("ranks, solver", [(2, []), (3, []),
+                                           (2, ["-tao_type", "bqnls", "-tao_gatol", "1e-7"])])
 def test_mpi_matches_serial(tmp_path, ranks, solver):
     """Same surface for any rank count; mean gap to 1e-8, area to two pixels (n = 64).
-    BQNLS's line search uses the objective values, so it also checks those under MPI."""
+    BQNLS's line search uses the objective values, so it also checks those under MPI; at
+    the default 1e-8 its More-Thuente search ends in DIVERGED_LS_FAILURE in some runs (which
+    runs depends on FFTW's measured plan: 9 of 12 serial runs for seed 3, 0 of 8 for seed 4,
+    old and new code alike), never at 1e-7 (16 of 16)."""
     args = ["periodic", *GEN, "--pressures", "1e-3,1e-2", *solver]
     serial, par = tmp_path / "s.h5", tmp_path / "p.h5"
     r = cli(*args, "--output", str(serial))
@@ -133,6 +137,10 @@ def test_mpi_matches_serial(tmp_path, ranks, solver):
         hs, hp = s["heights"][:], p["heights"][:]  # same noise; FFTs differ only in rounding
         assert np.abs(hp - hs).max() <= 1e-12 * np.abs(hs).max()
         assert p.attrs["mpi_size"] == ranks
+        # FFTW-MPI where its row split is the grid's (32 rows each), mpi4py-fft otherwise
+        # (64 rows: FFTW would split 22/22/20, the grid splits 22/21/21)
+        assert s.attrs["fft_backend"] == "SerialFFT"
+        assert p.attrs["fft_backend"] == ("FFTWMPI" if ranks == 2 else "SlabFFT")
         assert np.allclose(p["mean_gap"][:], s["mean_gap"][:], rtol=1e-8, atol=0)
         assert np.all(np.abs(p["area_fraction"][:] - s["area_fraction"][:]) * 64**2 <= 2)
 
@@ -187,6 +195,7 @@ def test_mpi_punch_matches_serial(tmp_path, ranks):
     r = cli(*args, "--output", str(par), mpi=ranks)
     assert r.returncode == 0, r.stdout + r.stderr
     with h5py.File(serial) as s, h5py.File(par) as p:
+        assert p.attrs["fft_backend"] == ("FFTWMPI" if ranks == 2 else "SlabFFT")
         assert np.allclose(p["force"][:], s["force"][:], rtol=1e-8, atol=0)
         assert np.allclose(p["total_stiffness"][:], s["total_stiffness"][:], rtol=1e-8)
         assert np.all(np.abs(p["area_fraction"][:] - s["area_fraction"][:]) * 32**2 <= 2)

@@ -1,0 +1,49 @@
+"""The Schur form of the preconditioner: the exact inverse of the Hessian on a free set."""
+
+import numpy as np
+
+from petsc_contact.fft import make_fft
+from petsc_contact.grid import Grid
+from petsc_contact.problem import PeriodicProblem, schur_limit
+from petsc_contact.surface import self_affine
+
+
+def problem(n=48, p0=1e-3):
+    grid = Grid(n, 1.3)
+    h = self_affine(grid, make_fft(grid), hurst=0.7, rolloff_ratio=2, cutoff_ratio=8, seed=5,
+                    rms_slope=0.2)
+    pb = PeriodicProblem(grid, make_fft(grid), h, 2.0)
+    pb.set_pressure(p0)
+    return grid, pb
+
+
+def test_schur_inverts_the_free_block():
+    """``z = M r`` solves ``H_FF z_F = r_F`` with ``z_B = 0`` for a scattered bound set (a
+    clustered patch and isolated pixels), to the rounding of a dense solve and two FFTs."""
+    grid, pb = problem()
+    rng = np.random.default_rng(0)
+    bound = np.zeros(grid.local_shape, dtype=bool)
+    bound[10:16, 20:27] = True
+    bound.flat[rng.choice(grid.size, 40, replace=False)] = True
+    free = ~bound.reshape(-1)
+    pre = pb.preconditioner
+    assert pre.adapt(int(bound.sum()), free)
+    r = rng.standard_normal(grid.size) * free
+    z = pre.apply_array(r, np.empty_like(r))
+    hz = pb.hessian.apply_array(z, np.empty_like(z))
+    scale = np.abs(r).max()
+    assert np.abs(z[~free]).max() <= 1e-12 * np.abs(z).max()
+    assert np.abs((hz - r)[free]).max() <= 1e-10 * scale
+    # the reactions on B balance the free residual (H annihilates constants)
+    assert abs(hz.sum()) <= 1e-10 * scale * grid.size
+
+
+def test_large_bound_sets_keep_the_fourier_form():
+    """Beyond the Schur limit only the ``q = 0`` entry follows the contact count."""
+    grid, pb = problem()
+    pre = pb.preconditioner
+    free = np.ones(grid.size, dtype=bool)
+    free[: pre.schur_max + 1] = False
+    assert not pre.adapt(pre.schur_max + 1, free)
+    assert pre.schur is None and pre.mean_mode >= pre.base_mean_mode > 0
+    assert schur_limit(512) < schur_limit(2048) <= 4096

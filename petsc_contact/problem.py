@@ -61,6 +61,7 @@ class MeanModePreconditioner(FourierOperator):
     schur_max = 0  # the Schur form's largest bound set (set by the problem)
     schur: ContactSchur | None = None
     _quarter: np.ndarray | None = None  # G's quarter, computed when the Schur form is first used
+    _spread: np.ndarray | None = None  # work fields of the Schur form
 
     def set_kernel(self, kernel: np.ndarray, hessian_diagonal: float) -> None:
         """New scaled kernel (its ``q = 0`` entry is the fixed one) and Hessian diagonal."""
@@ -88,7 +89,7 @@ class MeanModePreconditioner(FourierOperator):
             self.schur = ContactSchur(self.grid, self._quarter,
                                       ~free.reshape(self.grid.local_shape))
             return True
-        self.schur = None
+        self.schur = self._spread = None
         self._set_mean_mode(max(self.base_mean_mode,
                                 1.0 / (max(bound_count, 1) * self.hessian_diagonal)))
         return False
@@ -104,9 +105,12 @@ class MeanModePreconditioner(FourierOperator):
         super().apply_array(x, out)
         if self.schur is not None:
             reactions, shift = self.schur.solve(out, float(self.grid.sum(x.sum())[0]))
-            spread = np.zeros(out.size)
+            if self._spread is None:  # two work fields, kept while the Schur form is used
+                self._spread = np.zeros((2, out.size))
+            spread, response = self._spread
+            spread[...] = 0.0
             spread[self.schur.local] = reactions
-            out += super().apply_array(spread, np.empty(out.size)).reshape(out.shape)
+            out += super().apply_array(spread, response).reshape(out.shape)
             out += shift
         return out
 

@@ -107,11 +107,11 @@ class MeanModePreconditioner(FourierOperator):
             reactions, shift = self.schur.solve(out, float(self.grid.sum(x.sum())[0]))
             if self._spread is None:  # two work fields, kept while the Schur form is used
                 self._spread = np.zeros((2, out.size))
-            spread, response = self._spread
-            spread[...] = 0.0
+            spread, response = self._spread  # spread is zero between applications
             spread[self.schur.local] = reactions
             out += super().apply_array(spread, response).reshape(out.shape)
             out += shift
+            spread[self.schur.local] = 0.0
         return out
 
 

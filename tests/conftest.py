@@ -15,7 +15,12 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def cli(*args: str, mpi: int = 0, timeout: float = 300) -> subprocess.CompletedProcess:
     """Run ``petsc-contact ARGS`` (under ``mpiexec -n mpi`` if ``mpi``) with this interpreter."""
-    cmd = [sys.executable, "-m", "petsc_contact.cli", *args]
+    return python("-m", "petsc_contact.cli", *args, mpi=mpi, timeout=timeout)
+
+
+def python(*args: str, mpi: int = 0, timeout: float = 300) -> subprocess.CompletedProcess:
+    """Run this interpreter with ``ARGS`` (under ``mpiexec -n mpi`` if ``mpi``), as root too."""
+    cmd = [sys.executable, *args]
     if mpi:
         cmd = [shutil.which("mpiexec") or "mpiexec", "--oversubscribe", "-n", str(mpi), *cmd]
     env = dict(os.environ)

@@ -1,13 +1,8 @@
 """The parallel FFT backends against numpy's serial transform, under mpiexec."""
 
-import os
-import shutil
-import subprocess
-import sys
-
 import pytest
 
-from conftest import ROOT
+from conftest import python
 
 SCRIPT = r"""
 import sys
@@ -45,10 +40,5 @@ def test_parallel_fft_matches_numpy(ranks, n, backend):
     """FFTW-MPI (spectrum transposed) where FFTW's row split is the grid's; mpi4py-fft when
     it is not (n = 64 on 3 ranks: FFTW splits 22/22/20, the grid 22/21/21).  Rounding of a
     2-D FFT is ~eps log n relative to the largest coefficient."""
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               PYTHONPATH=str(ROOT))
-    cmd = [shutil.which("mpiexec") or "mpiexec", "--oversubscribe", "-n", str(ranks),
-           sys.executable, "-c", SCRIPT, str(n), backend]
-    r = subprocess.run(cmd, capture_output=True, text=True, timeout=120, env=env,
-                       stdin=subprocess.DEVNULL)
+    r = python("-c", SCRIPT, str(n), backend, mpi=ranks, timeout=120)
     assert r.returncode == 0, r.stdout + r.stderr

@@ -119,14 +119,19 @@ def test_help_documents_options():
         assert opt in r.stdout
 
 
-@pytest.mark.parametrize("ranks, solver", [(2, []), (3, []),
-                                           (2, ["-tao_type", "bqnls", "-tao_gatol", "1e-7"])])
-def test_mpi_matches_serial(tmp_path, ranks, solver):
-    """Same surface for any rank count; mean gap to 1e-8, area to two pixels (n = 64).
-    BQNLS's line search uses the objective values, so it also checks those under MPI; at
-    the default 1e-8 its More-Thuente search ends in DIVERGED_LS_FAILURE in some runs (which
-    runs depends on FFTW's measured plan: 9 of 12 serial runs for seed 3, 0 of 8 for seed 4,
-    old and new code alike), never at 1e-7 (16 of 16)."""
+@pytest.mark.parametrize("ranks, solver, rtol", [
+    (2, [], 1e-8), (3, [], 1e-8), (2, ["-tao_type", "bqnls", "-tao_gatol", "1e-7"], 1e-7)])
+def test_mpi_matches_serial(tmp_path, ranks, solver, rtol):
+    """Same surface for any rank count; mean gap to ``rtol``, area to two pixels (n = 64).
+
+    Serial and parallel runs take different paths to the tolerance, so they agree to the
+    mean-gap error that the gradient tolerance leaves. Against a run at gatol 1e-12: the
+    default solver (exact steps) is within 7e-10 serially and on 2 and 3 ranks, hence 1e-8;
+    BQNLS at gatol 1e-7 is within 1.2e-8 (12 runs), and pairs differ by up to 9e-9, hence 1e-7.
+    BQNLS's line search uses the objective values, so it also checks those under MPI; at the
+    default 1e-8 its More-Thuente search ends in DIVERGED_LS_FAILURE in some runs (which runs
+    depends on FFTW's measured plan: 9 of 12 serial runs for seed 3, 0 of 8 for seed 4, old
+    and new code alike), never at 1e-7 (16 of 16)."""
     args = ["periodic", *GEN, "--pressures", "1e-3,1e-2", *solver]
     serial, par = tmp_path / "s.h5", tmp_path / "p.h5"
     r = cli(*args, "--output", str(serial))
@@ -141,7 +146,7 @@ def test_mpi_matches_serial(tmp_path, ranks, solver):
         # (64 rows: FFTW would split 22/22/20, the grid splits 22/21/21)
         assert s.attrs["fft_backend"] == "SerialFFT"
         assert p.attrs["fft_backend"] == ("FFTWMPI" if ranks == 2 else "SlabFFT")
-        assert np.allclose(p["mean_gap"][:], s["mean_gap"][:], rtol=1e-8, atol=0)
+        assert np.allclose(p["mean_gap"][:], s["mean_gap"][:], rtol=rtol, atol=0)
         assert np.all(np.abs(p["area_fraction"][:] - s["area_fraction"][:]) * 64**2 <= 2)
 
 

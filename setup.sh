@@ -8,7 +8,7 @@ export DEBIAN_FRONTEND=noninteractive
 apt-get update -qq
 apt-get install -y -qq --no-install-recommends \
   python3-petsc4py python3-mpi4py python3-mpi4py-fft python3-pyfftw python3-numpy \
-  python3-scipy python3-h5py python3-matplotlib python3-pytest python3-venv python3-pip \
+  python3-scipy python3-h5py python3-matplotlib python3-numba python3-pytest python3-venv python3-pip \
   python3-setuptools openmpi-bin libfftw3-mpi3 >/dev/null
 [ -x .venv/bin/python ] || /usr/bin/python3 -m venv --system-site-packages .venv
 .venv/bin/pip install -q --no-build-isolation --no-deps -e . 2>&1 | grep -v -i "warning" || true

@@ -50,6 +50,8 @@ from typing import Any
 import numpy as np
 from scipy.linalg import blas
 
+from . import kernels
+
 REFRESH_EVERY = 50
 GROWTH = 8  # a step may put at most max(GROWTH m, MIN_GROWTH, EXPECTED_GROWTH m_e)
 MIN_GROWTH = 64  # new variables on the bound
@@ -103,7 +105,6 @@ class PolonskyKeer:
         xa, g, d, w = x.array, g_vec.array, d_vec.array, w_vec.array
         r, z = r_vec.array, z_vec.array
         lower, upper = _bound(lower_vec.array_r), _bound(upper_vec.array_r)
-        has_upper = bool(np.isfinite(upper).any())
 
         def allsum(*values: float) -> np.ndarray:
             v = np.array(values, dtype=float)
@@ -115,12 +116,14 @@ class PolonskyKeer:
         context = (self.preconditioner.getPythonContext()
                    if hasattr(self.preconditioner, "getPythonContext") else self.preconditioner)
         adapt = getattr(context, "adapt", None)
+        split = hessian.getPythonContext() if hessian.getType() == "python" else None
+        if not hasattr(split, "begin_mult"):  # a Hessian that can only multiply
+            split = None
         min_limit = max(MIN_GROWTH, EXPECTED_GROWTH * getattr(context, "expected_bound_count", 0))
         global_size = x.getSize()
         f = evaluate()
-        free = np.empty(xa.shape, dtype=bool)
-        free_old = np.zeros_like(free)
-        work = np.empty_like(free)
+        free = np.zeros(xa.shape, dtype=bool)
+        pending_changed = pending_joined = 0.0  # set changes not yet seen by a direction
         rz_old = 0.0
         rnorm0 = None
         since_refresh = 0
@@ -128,13 +131,9 @@ class PolonskyKeer:
         it = 0
         while True:
             # free set F = {x > lower} U {g < 0} (minus {x >= upper, g < 0}); r = P_F g
-            np.greater(xa, lower, out=free)
-            np.less(g, 0.0, out=work)
-            free |= work
-            if has_upper:
-                free &= ~((xa >= upper) & work)
-            np.multiply(g, free, out=r)
-            (rr,) = allsum(np.dot(r, r))
+            rr, changed, joined, n_free = allsum(*kernels.free_set(xa, g, lower, upper, free, r))
+            pending_changed += changed
+            pending_joined += joined
             rnorm = float(np.sqrt(rr))
             if rnorm0 is None:
                 rnorm0 = rnorm
@@ -156,67 +155,63 @@ class PolonskyKeer:
             # the preconditioner follows a changed set; preconditioned residual z = P_F M r,
             # then the direction d <- z + beta d, kept in z's buffer and swapped with d's
             # (one memory pass; no copy after a restart)
-            np.not_equal(free, free_old, out=work)
-            changed, n_free = allsum(np.count_nonzero(work), np.count_nonzero(free))
+            changed, joined = pending_changed, pending_joined
+            pending_changed = pending_joined = 0.0
             bound_count = int(global_size - n_free)
             exact = bool(changed) and adapt is not None and adapt(bound_count, free)
             if self.preconditioner is not None:
                 self.preconditioner.apply(r_vec, z_vec)
-                z *= free
+                (rz,) = allsum(kernels.restrict_dot(z, free, r))
             else:
                 z[...] = r
-            (rz,) = allsum(np.dot(r, z))
+                rz = rr
             restart = changed > 0
             if changed and rz_old > 0 and not exact:
-                np.greater(free, free_old, out=work)
-                (joined,) = allsum(np.count_nonzero(work))
                 restart = joined > 0 and changed > CONTINUE_FRACTION * bound_count
             if not rz > 0:  # rounding, or a preconditioner that is not positive definite
                 if since_refresh == 0:
                     tao.setConvergedReason(reasons.DIVERGED_USER)
                     break
                 f, since_refresh = evaluate(), 0  # re-evaluate, then test convergence again
-                free_old[...] = False
+                pending_changed = pending_joined = float(global_size)  # restart afresh
                 rz_old = 0.0
                 continue
             rd = rz  # r.d: r is orthogonal to the previous direction while F is unchanged
             if not restart:
-                if changed:
-                    d *= free
-                blas.daxpy(d, z, a=rz / rz_old)
-                if changed:
-                    (rd,) = allsum(np.dot(r, z))  # z's buffer holds the new direction
+                beta = rz / rz_old
+                if changed:  # z's buffer holds the new direction, with d restricted to F
+                    (rd,) = allsum(kernels.extend_direction(z, d, free, beta, r))
                     if not rd > 0:  # no longer a descent direction: restart
-                        blas.daxpy(d, z, a=-rz / rz_old)
+                        kernels.extend_direction(z, d, free, -beta, r)
                         rd = rz
+                else:
+                    blas.daxpy(d, z, a=beta)
             rz_old = rz
-            free_old[...] = free
             d_vec, z_vec, d, z = z_vec, d_vec, z, d
-            hessian.mult(d_vec, w_vec)
-            (dw,) = allsum(np.dot(d, w))
+            if split is not None:  # d.Hd now, Hd only if no variable is clipped
+                (dw,) = allsum(split.begin_mult(d))
+            else:
+                hessian.mult(d_vec, w_vec)
+                (dw,) = allsum(np.dot(d, w))
             alpha = -rd / dw if dw > 0 else -np.inf  # the exact step along -d
             if not np.isfinite(alpha):
                 alpha = -self._distance_to_bound(xa, -d, lower, upper, comm)
                 if not np.isfinite(alpha):
                     tao.setConvergedReason(reasons.DIVERGED_USER)
                     break
-            blas.daxpy(d, xa, a=alpha)
-            np.less(xa, lower, out=work)
-            (clipped,) = allsum(np.count_nonzero(work))
+            below, above = allsum(*kernels.advance(xa, d, alpha, lower, upper))
             limit = int(max(GROWTH * bound_count, min_limit))
-            if clipped > limit:
-                fraction = self._growth_fraction(xa, alpha * d, lower, work, limit, allsum)
+            if below > limit:
+                fraction = self._growth_fraction(xa, alpha * d, lower, xa < lower, limit, allsum)
                 blas.daxpy(d, xa, a=(fraction - 1.0) * alpha)
                 alpha *= fraction
-            if has_upper:
-                clipped += allsum(np.count_nonzero(xa > upper))[0]
-            if clipped or since_refresh >= REFRESH_EVERY:
-                np.maximum(xa, lower, out=xa)
-                if has_upper:
-                    np.minimum(xa, upper, out=xa)
+            if below or above or since_refresh >= REFRESH_EVERY:
+                kernels.clip(xa, lower, upper)
                 f, since_refresh = evaluate(), 0
             else:
                 f += alpha * rd + 0.5 * alpha * alpha * dw
+                if split is not None:
+                    split.end_mult(w)
                 blas.daxpy(w, g, a=alpha)
                 since_refresh += 1
         for v in (g_vec, d_vec, w_vec, r_vec, z_vec):

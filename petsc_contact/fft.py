@@ -22,10 +22,11 @@ either transform), ``spectrum`` (its output, the local block of the ``n x (n//2+
 spectrum) and ``result`` (output of :meth:`backward`).  Both transforms are unnormalised:
 ``backward(forward(x)) = n^2 x``.
 
-:meth:`convolve` is the hot path of every operator: one round trip with a spectral multiplier.
-The serial backend runs FFTW directly on the caller's arrays when they are as aligned as
-its plans (PETSc's Vec arrays are: 16 bytes), which saves two copies of the field per
-application (24 -> 19 ms per round trip at 2048^2 here); otherwise it copies.
+:meth:`forward_from` and :meth:`backward_into` are the hot path of every operator (one round
+trip with a spectral multiplier between them, :mod:`petsc_contact.operator`).  The serial
+backend runs FFTW directly on the caller's arrays when they are as aligned as its plans
+(PETSc's Vec arrays are: 16 bytes), which saves two copies of the field per application
+(24 -> 19 ms per round trip at 2048^2 here); otherwise it copies.
 """
 
 from __future__ import annotations
@@ -76,25 +77,30 @@ class SerialFFT:
         """``result <- IFFT(spectrum)`` without the ``1/n^2``; destroys ``spectrum``."""
         self._backward.execute()
 
-    def convolve(self, x: np.ndarray, multiplier: np.ndarray, out: np.ndarray) -> None:
-        """``out <- IFFT(multiplier * FFT(x))`` (unnormalised) for local arrays of the grid's size.
+    def forward_from(self, x: np.ndarray) -> None:
+        """``spectrum <- FFT(x)`` for a local array of the grid's size.
 
-        ``x`` is read in place and ``out`` written in place when both are contiguous and as
-        aligned as the plans; ``real`` and ``result`` are then left untouched.
+        ``x`` is read in place when it is contiguous and as aligned as the plan (PETSc's Vec
+        arrays are); ``real`` is then left untouched.
         """
-        src, dst = x.reshape(self.real.shape), out.reshape(self.result.shape)
-        direct_in = self._direct(src, self._forward.input_alignment)
-        direct_out = self._direct(dst, self._backward.output_alignment)
-        if not direct_in:
+        src = x.reshape(self.real.shape)
+        if self._direct(src, self._forward.input_alignment):
+            self._forward.update_arrays(src, self.spectrum)
+            self._forward.execute()
+            self._forward.update_arrays(self.real, self.spectrum)
+        else:
             self.real[...] = src
-        self._forward.update_arrays(src if direct_in else self.real, self.spectrum)
-        self._forward.execute()
-        self.spectrum *= multiplier
-        self._backward.update_arrays(self.spectrum, dst if direct_out else self.result)
-        self._backward.execute()
-        self._forward.update_arrays(self.real, self.spectrum)
-        self._backward.update_arrays(self.spectrum, self.result)
-        if not direct_out:
+            self._forward.execute()
+
+    def backward_into(self, out: np.ndarray) -> None:
+        """``out <- IFFT(spectrum)`` (unnormalised, destroys ``spectrum``), in place if aligned."""
+        dst = out.reshape(self.result.shape)
+        if self._direct(dst, self._backward.output_alignment):
+            self._backward.update_arrays(self.spectrum, dst)
+            self._backward.execute()
+            self._backward.update_arrays(self.spectrum, self.result)
+        else:
+            self._backward.execute()
             dst[...] = self.result
 
     @staticmethod
@@ -127,11 +133,13 @@ class SlabFFT:
     def backward(self) -> None:
         self._pfft.backward(self.spectrum, self.result, normalize=False)
 
-    def convolve(self, x: np.ndarray, multiplier: np.ndarray, out: np.ndarray) -> None:
-        """``out <- IFFT(multiplier * FFT(x))`` (unnormalised), through ``real``/``result``."""
+    def forward_from(self, x: np.ndarray) -> None:
+        """``spectrum <- FFT(x)`` for a local array of the slab's size (through ``real``)."""
         self.real[...] = x.reshape(self.real.shape)
         self.forward()
-        self.spectrum *= multiplier
+
+    def backward_into(self, out: np.ndarray) -> None:
+        """``out <- IFFT(spectrum)`` (unnormalised, through ``result``)."""
         self.backward()
         out.reshape(self.result.shape)[...] = self.result
 
@@ -271,14 +279,15 @@ class FFTWMPI:
         self._execute(self._plans.backward)
         self.result[...] = self._plans.padded
 
-    def convolve(self, x: np.ndarray, multiplier: np.ndarray, out: np.ndarray) -> None:
-        """``out <- IFFT(multiplier * FFT(x))`` (unnormalised), through FFTW's padded rows."""
-        plans = self._plans
-        plans.padded[...] = x.reshape(self.real.shape)
-        self._execute(plans.forward)
-        self.spectrum *= multiplier
-        self._execute(plans.backward)
-        out.reshape(self.result.shape)[...] = plans.padded
+    def forward_from(self, x: np.ndarray) -> None:
+        """``spectrum <- FFT(x)`` for a local array of the slab's size (through FFTW's rows)."""
+        self._plans.padded[...] = x.reshape(self.real.shape)
+        self._execute(self._plans.forward)
+
+    def backward_into(self, out: np.ndarray) -> None:
+        """``out <- IFFT(spectrum)`` (unnormalised, destroys ``spectrum``)."""
+        self._execute(self._plans.backward)
+        out.reshape(self.result.shape)[...] = self._plans.padded
 
 
 def _aligned(size: int, dtype: Any) -> np.ndarray:
@@ -324,3 +333,13 @@ def half_spectrum_weights(grid: Grid, fft: FFT) -> np.ndarray:
     cols = np.arange(grid.n // 2 + 1)[fft.spectral_index[1]]
     w = np.where((cols == 0) | ((grid.n % 2 == 0) & (cols == grid.n // 2)), 1.0, 2.0)
     return w[:, None] if fft.transposed else w[None, :]
+
+
+def single_entries(grid: Grid, fft: FFT) -> np.ndarray:
+    """Flat indices, in the local spectrum block, of the entries of multiplicity 1.
+
+    They are the columns ``qy = 0`` and ``qy = n/2`` (even ``n``) of the half spectrum; every
+    other entry stands for itself and its complex conjugate (:func:`half_spectrum_weights`).
+    """
+    weights = np.broadcast_to(half_spectrum_weights(grid, fft), fft.spectrum.shape)
+    return np.flatnonzero(weights == 1.0)

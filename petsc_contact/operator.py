@@ -14,8 +14,14 @@ from typing import Any
 
 import numpy as np
 
-from .fft import FFT, half_spectrum_weights, make_fft
+from . import kernels
+from .fft import FFT, half_spectrum_weights, make_fft, single_entries
 from .grid import Grid, block_rows
+
+
+def twice(values: np.ndarray) -> np.ndarray:
+    """A real spectral multiplier with each entry twice, in the layout of a spectrum's float view."""
+    return np.repeat(np.ascontiguousarray(np.real(values), dtype=float), 2, axis=-1)
 
 
 class ShellInterface:
@@ -47,7 +53,51 @@ class ShellInterface:
     applyTranspose = apply
 
 
-class FourierOperator(ShellInterface):
+class SpectralOperator(ShellInterface):
+    """An FFT round trip with a real multiplier, in two halves.
+
+    :meth:`begin_mult` transforms ``x``, multiplies its spectrum and returns this rank's
+    part of ``x.Ax`` (Parseval, in the same pass); :meth:`end_mult` transforms back.  The
+    constrained CG uses the halves to learn ``d.Hd`` for its step before deciding whether
+    it needs ``Hd`` at all (after a projection it evaluates the gradient afresh instead).
+    No other transform on the same FFT may run between the two.  Subclasses define
+    :meth:`_forward` and :meth:`_backward`, and hold :attr:`multiplier` (:func:`twice` of
+    the normalised spectrum) and :attr:`fft`.
+    """
+
+    fft: FFT
+    multiplier: np.ndarray
+    _single: np.ndarray
+
+    def begin_mult(self, x: np.ndarray) -> float:
+        """Transform and multiply ``x`` (local array); return this rank's part of ``x.Ax``."""
+        self.applications += 1
+        return self.transform(x)
+
+    def transform(self, x: np.ndarray) -> float:
+        """:meth:`begin_mult` without counting an application (for objective evaluations)."""
+        self._forward(x)
+        values = self.fft.spectrum.reshape(-1).view(np.float64)
+        return kernels.scale_spectrum(values, self.multiplier.reshape(-1), self._single)
+
+    def end_mult(self, out: np.ndarray) -> np.ndarray:
+        """``out <- A x`` for the ``x`` of the last :meth:`begin_mult`."""
+        self._backward(out)
+        return out
+
+    def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """``out <- A x`` for local arrays."""
+        self.begin_mult(x)
+        return self.end_mult(out)
+
+    def _forward(self, x: np.ndarray) -> None:
+        raise NotImplementedError
+
+    def _backward(self, out: np.ndarray) -> None:
+        raise NotImplementedError
+
+
+class FourierOperator(SpectralOperator):
     """Convolution with a real, even kernel given on the local half-spectrum block.
 
     Parameters
@@ -55,30 +105,50 @@ class FourierOperator(ShellInterface):
     grid, fft
         Layout and FFT backend.
     kernel
-        The multiplier on ``fft.spectrum``'s block (without FFT normalisation).  It is kept
-        as a complex array with zero imaginary part: numpy multiplies complex by complex
-        2.3x faster than complex by real (which it casts chunk by chunk).
+        The multiplier on ``fft.spectrum``'s block (without FFT normalisation).
     """
 
     def __init__(self, grid: Grid, fft: FFT, kernel: np.ndarray) -> None:
         self.grid = grid
         self.fft = fft
-        self.kernel = np.ascontiguousarray(kernel / grid.size, dtype=complex)
+        self.multiplier = twice(kernel / grid.size)
+        self._single = single_entries(grid, fft)
         self.applications = 0
 
-    def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
-        """``out <- K x`` for local arrays (any shape with the slab's size)."""
-        self.applications += 1
-        self.fft.convolve(x, self.kernel, out)
-        return out
+    @property
+    def kernel(self) -> np.ndarray:
+        """The normalised multiplier on the local spectrum block (a view: read only)."""
+        return self.multiplier[:, ::2]
+
+    @kernel.setter
+    def kernel(self, values: np.ndarray) -> None:
+        self.multiplier = twice(values)
+
+    def scaled(self, factor: float) -> "FourierOperator":
+        """Another operator on the same FFT with the multiplier times ``factor``."""
+        other = object.__new__(type(self))
+        other.__dict__.update(self.__dict__)
+        other.multiplier = self.multiplier * factor
+        other.applications = 0
+        return other
+
+    def set_entry(self, row: int, column: int, value: float) -> None:
+        """Set one entry of the normalised multiplier (local spectrum indices)."""
+        self.multiplier[row, 2 * column:2 * column + 2] = value
+
+    def _forward(self, x: np.ndarray) -> None:
+        self.fft.forward_from(x)
+
+    def _backward(self, out: np.ndarray) -> None:
+        self.fft.backward_into(out)
 
     def diagonal(self) -> float:
         """The (constant) diagonal entry of the circulant operator."""
         w = half_spectrum_weights(self.grid, self.fft)
-        return float(self.grid.sum((w * self.kernel.real).sum())[0])
+        return float(self.grid.sum((w * self.kernel).sum())[0])
 
 
-class PaddedOperator(ShellInterface):
+class PaddedOperator(SpectralOperator):
     """Free-boundary convolution of an ``n x n`` field by zero padding to ``2n x 2n``.
 
     Parameters
@@ -105,33 +175,39 @@ class PaddedOperator(ShellInterface):
         self.fft = fft if fft is not None else make_fft(self.padded)
         self.fft.real[...] = kernel_rows(self.padded.rows)
         self.fft.forward()
-        self.spectrum = np.ascontiguousarray(self.fft.spectrum.real / self.padded.size,
-                                             dtype=complex)  # see FourierOperator
+        self.multiplier = twice(self.fft.spectrum.real / self.padded.size)
+        self._single = single_entries(self.padded, self.fft)
         self._centre = float(kernel_rows(slice(0, 1))[0, 0])
         self.exchange = RowExchange(grid.comm, grid.n, self.padded.n)
         self.applications = 0
         self.fft.real[...] = 0.0  # the padding stays zero: applications write only the block
 
+    @property
+    def spectrum(self) -> np.ndarray:
+        """The normalised real spectrum of the padded kernel (a view: read only)."""
+        return self.multiplier[:, ::2]
+
     def with_spectrum(self, spectrum: np.ndarray) -> "PaddedOperator":
         """Another operator on the same padded FFT with the given (normalised) spectrum."""
         other = object.__new__(PaddedOperator)
         other.__dict__.update(self.__dict__)
-        other.spectrum = np.ascontiguousarray(spectrum, dtype=complex)
+        other.multiplier = twice(spectrum)
         w = half_spectrum_weights(self.padded, self.fft)
-        other._centre = float(self.grid.sum((w * other.spectrum.real).sum())[0])
+        other._centre = float(self.grid.sum((w * other.spectrum).sum())[0])
         other.applications = 0
         return other
 
-    def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
-        """``out <- P^T C P x``: pad, circular convolution, keep the footprint block."""
-        self.applications += 1
+    def _forward(self, x: np.ndarray) -> None:
+        """Pad ``x`` (``P x``) and transform it."""
         n = self.grid.n
         self.exchange.to_padded(x.reshape(self.grid.local_shape), self.fft.real[:, :n])
         self.fft.forward()
-        self.fft.spectrum *= self.spectrum
+
+    def _backward(self, out: np.ndarray) -> None:
+        """Transform back and keep the footprint block (``P^T``)."""
         self.fft.backward()
+        n = self.grid.n
         self.exchange.to_footprint(self.fft.result[:, :n], out.reshape(self.grid.local_shape))
-        return out
 
     def diagonal(self) -> float:
         """The constant diagonal entry (the kernel at zero offset)."""
@@ -180,7 +256,7 @@ class RowExchange:
         footprint[...] = self._footprint_rows
 
 
-def shell_matrix(petsc: Any, op: FourierOperator) -> Any:
+def shell_matrix(petsc: Any, op: ShellInterface) -> Any:
     """A PETSc Python ``Mat`` of the grid's row-slab layout whose ``mult`` is ``op``."""
     n_local = op.grid.local_shape[0] * op.grid.n
     mat = petsc.Mat().createPython(((n_local, op.grid.size), (n_local, op.grid.size)),

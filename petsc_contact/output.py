@@ -69,7 +69,7 @@ def file_digest(path: str) -> str:
 def versions(petsc: Any | None = None) -> dict[str, str]:
     """Versions of everything that shapes a result."""
     out = {"python": platform.python_version(), "platform": platform.platform()}
-    for mod in ("numpy", "scipy", "h5py", "mpi4py", "pyfftw", "mpi4py_fft", "petsc4py"):
+    for mod in ("numpy", "scipy", "h5py", "mpi4py", "pyfftw", "mpi4py_fft", "numba", "petsc4py"):
         try:
             out[mod] = str(__import__(mod).__version__)
         except Exception:  # noqa: BLE001 - a missing optional module is recorded as such

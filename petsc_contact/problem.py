@@ -20,9 +20,12 @@ The Hessian is ``s l K``.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy.special import erf
 
+from . import kernels
 from .fft import FFT, wavevector_magnitude
 from .greens import periodic_compliance, periodic_stiffness
 from .grid import Grid
@@ -63,13 +66,18 @@ class MeanModePreconditioner(FourierOperator):
     _quarter: np.ndarray | None = None  # G's quarter, computed when the Schur form is first used
     _spread: np.ndarray | None = None  # work fields of the Schur form
 
-    def set_kernel(self, kernel: np.ndarray, hessian_diagonal: float) -> None:
-        """New scaled kernel (its ``q = 0`` entry is the fixed one) and Hessian diagonal."""
-        self.kernel = kernel
+    def invert(self, hessian: FourierOperator, mean_mode: float, hessian_diagonal: float
+               ) -> None:
+        """Become the inverse of ``hessian`` (diagonal entry ``hessian_diagonal``), with
+        ``mean_mode`` (normalised) as its fixed ``q = 0`` entry.
+
+        Computed in place, with no copy of the kernel kept: ``G/(n^2 c) = 1/(n^2 K c/n^2)``.
+        """
+        with np.errstate(divide="ignore"):
+            np.divide(1.0 / self.grid.size ** 2, hessian.multiplier, out=self.multiplier)
+        self.base_mean_mode = mean_mode
+        self._set_mean_mode(mean_mode)
         self.hessian_diagonal = hessian_diagonal
-        rows, cols = self.fft.spectral_index
-        mine = float(kernel[0, 0].real) if rows.start == 0 and cols.start == 0 else -np.inf
-        self.base_mean_mode = self.mean_mode = self.grid.max(mine)  # known on every rank
         self.schur = self._quarter = None
 
     def adapt(self, bound_count: int, free: np.ndarray) -> bool:
@@ -98,7 +106,7 @@ class MeanModePreconditioner(FourierOperator):
         self.mean_mode = value
         rows, cols = self.fft.spectral_index
         if rows.start == 0 and cols.start == 0:  # this rank holds q = 0
-            self.kernel[0, 0] = value
+            self.set_entry(0, 0, value)
 
     def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
         """``out <- M x``; in the Schur form ``x`` must vanish on the bound set."""
@@ -151,13 +159,11 @@ class PeriodicProblem:
         q = wavevector_magnitude(grid, fft)
         q0 = 2 * np.pi / grid.length
         self.stiffness = FourierOperator(grid, fft, periodic_stiffness(q, modulus))
-        self.hessian = FourierOperator(grid, fft, periodic_stiffness(q, modulus))
-        self.compliance = FourierOperator(grid, fft, periodic_compliance(q, modulus, q0))
+        self.hessian = self.stiffness.scaled(1.0)
         self.preconditioner = MeanModePreconditioner(grid, fft,
                                                      periodic_compliance(q, modulus, q0))
         self.preconditioner.schur_max = schur_limit(grid.n)
-        self._base_hessian = self.hessian.kernel.copy()
-        self._base_preconditioner = self.preconditioner.kernel.copy()
+        self._mean_compliance = float(periodic_compliance(0.0, modulus, q0)) / grid.size
         self.pixel_stiffness = self.stiffness.diagonal()
         kh = self.stiffness.apply_array(self.heights, np.empty(grid.local_shape))
         self.elastic_pressure_rms = grid.rms(kh)  # rms(K h) ~ E* h'_rms / 2
@@ -172,9 +178,17 @@ class PeriodicProblem:
         self.nominal_pressure = float(p0)
         self._s = 1.0 / (np.sqrt(self.grid.size) * p0)
         c = self._s * self.scale_length
-        self.hessian.kernel = self._base_hessian * c
-        self.preconditioner.set_kernel(self._base_preconditioner / c, self.pixel_stiffness * c)
+        np.multiply(self.stiffness.multiplier, c, out=self.hessian.multiplier)
+        self.preconditioner.invert(self.hessian, self._mean_compliance / c,
+                                   self.pixel_stiffness * c)
         self.preconditioner.expected_bound_count = self.expected_contact_count(p0)
+
+    @functools.cached_property
+    def compliance(self) -> FourierOperator:
+        """The periodic compliance ``2/(E* q)`` (``q0`` at ``q = 0``), made when first used."""
+        q = wavevector_magnitude(self.grid, self.stiffness.fft)
+        return FourierOperator(self.grid, self.stiffness.fft,
+                               periodic_compliance(q, self.modulus, 2 * np.pi / self.grid.length))
 
     def expected_contact_count(self, p0: float) -> int:
         """Contact pixels at ``p0`` in Persson's theory, ``n^2 erf(p0 / (sqrt(2) sigma))``.
@@ -198,7 +212,6 @@ class PeriodicProblem:
         self._x_ref = np.array(x0, dtype=float).reshape(-1)
         p_ref = self.pressure(self._x_ref.reshape(self.grid.local_shape) * self.scale_length)
         self._sp_ref = (self._s * p_ref).reshape(-1)  # the scaled gradient at x_ref
-        self._k_scaled = self.stiffness.kernel * (self._s * self.scale_length)
 
     def objective_gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
         """Scaled objective relative to the reference, ``f(x) - f(x_ref)``; ``grad <- s p``.
@@ -207,18 +220,15 @@ class PeriodicProblem:
         ``p = p_ref + l K d``.  Evaluating the *difference* keeps its rounding error
         proportional to the decrease itself, so line searches still see progress when the
         pressure residual is ``1e-10 p0``; the absolute energy would drown it.
-        ``d`` is formed in the FFT's input buffer, which the real-to-complex transform keeps.
+        ``d`` is formed in the FFT's input buffer, which the real-to-complex transform keeps;
+        ``d.K d`` comes from its spectrum (Parseval), in the pass that multiplies it.
         """
-        fft = self.stiffness.fft
-        d = fft.real.reshape(-1)
+        d = self.stiffness.fft.real.reshape(-1)
         np.subtract(x, self._x_ref, out=d)
-        self.stiffness.applications += 1
-        fft.forward()
-        fft.spectrum *= self._k_scaled
-        fft.backward()
-        skd = fft.result.reshape(-1)  # s l K d
-        d_sp, d_skd = self.grid.sum(np.dot(d, self._sp_ref), np.dot(d, skd))
-        np.add(skd, self._sp_ref, out=grad)
+        d_skd = self.hessian.transform(d)  # the Hessian is s l K
+        self.hessian.end_mult(grad)  # s l K d
+        d_sp = kernels.add_dot(grad, self._sp_ref, d)
+        d_sp, d_skd = self.grid.sum(d_sp, d_skd)
         return float(d_sp + 0.5 * d_skd)
 
     def initial_gap(self) -> np.ndarray:

@@ -10,6 +10,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc_contact.fft import make_fft, wavevector_magnitude
 from petsc_contact.grid import Grid
+from petsc_contact.operator import FourierOperator
 
 n, expected = int(sys.argv[1]), sys.argv[2]
 grid = Grid(n, 2.0, MPI.COMM_WORLD)
@@ -29,8 +30,16 @@ assert np.allclose(q, np.pi * np.hypot(i, j))
 fft.backward()
 assert np.abs(fft.result / n**2 - full[grid.rows]).max() <= 1e-13
 out = np.empty(grid.local_shape)
-fft.convolve(full[grid.rows], np.ones_like(fft.spectrum), out)
+fft.forward_from(full[grid.rows])
+fft.backward_into(out)
 assert np.abs(out / n**2 - full[grid.rows]).max() <= 1e-13
+# an operator's quadratic form from its spectrum (Parseval with the half-spectrum
+# multiplicities of this layout) equals x.Kx in real space
+op = FourierOperator(grid, fft, wavevector_magnitude(grid, fft))
+x = full[grid.rows]
+quadratic = grid.sum(op.begin_mult(x))[0]
+op.end_mult(out)
+assert abs(quadratic / grid.sum(np.vdot(x, out))[0] - 1) <= 1e-13
 """
 
 

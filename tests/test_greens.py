@@ -46,3 +46,17 @@ def test_compliance_inverts_stiffness(op):
     u -= u.mean()
     back = comp.apply_array(op.apply_array(u, np.empty_like(u)), np.empty_like(u))
     assert np.allclose(back, u, atol=1e-12)
+
+
+@pytest.mark.parametrize("n", [64, 15])
+def test_quadratic_form_from_spectrum(n):
+    """``begin_mult`` returns ``x.Kx`` from the half spectrum (multiplicities 1 on the
+    ``qy = 0`` and, for even n, ``qy = n/2`` columns, 2 elsewhere); ``end_mult`` gives ``Kx``."""
+    grid = Grid(n, 2.5)
+    fft = make_fft(grid)
+    op = FourierOperator(grid, fft, periodic_stiffness(wavevector_magnitude(grid, fft), 3.0))
+    x = np.random.default_rng(n).standard_normal((n, n))
+    quadratic = op.begin_mult(x)
+    kx = op.end_mult(np.empty_like(x))
+    assert quadratic == pytest.approx(np.vdot(x, kx), rel=1e-12)
+    assert np.allclose(kx, op.apply_array(x, np.empty_like(x)), rtol=0, atol=1e-12)

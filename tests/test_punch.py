@@ -32,6 +32,8 @@ def test_padded_operator_against_direct_summation():
         v = rng.standard_normal((n, n))
         out = op.apply_array(v, np.empty((n, n)))
         assert np.allclose(out.ravel(), dense @ v.ravel(), rtol=0, atol=1e-13 * np.abs(out).max())
+        # the quadratic form from the padded spectrum (Parseval), as the CG uses it
+        assert op.begin_mult(v) == pytest.approx(v.ravel() @ dense @ v.ravel(), rel=1e-12)
     assert np.allclose(dense, dense.T, rtol=0, atol=1e-15 * dense.max())
     assert np.linalg.eigvalsh(dense).min() > 0
     u, w = rng.standard_normal((2, n, n))

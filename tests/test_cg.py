@@ -1,0 +1,56 @@
+"""The constrained CG as a TAO type on a Hessian that is not the package's (a plain AIJ Mat)."""
+
+import numpy as np
+import pytest
+
+
+@pytest.mark.parametrize("python_type", ["PolonskyKeer", "PreconditionedCG"])
+def test_bound_qp_with_aij_hessian(petsc, python_type):
+    """``min 1/2 x.Ax - b.x`` with ``0 <= x <= 0.3`` on a 1-D Laplacian (n = 200): the KKT
+    conditions hold to the tolerance, and the active set is that of a dense projected-gradient
+    reference (the problem is strictly convex, so the solution is unique)."""
+    n = 200
+    a = petsc.Mat().createAIJ((n, n), nnz=3, comm=petsc.COMM_SELF)
+    for i in range(n):
+        a.setValue(i, i, 2.0 + 0.01)
+        if i:
+            a.setValue(i, i - 1, -1.0)
+        if i < n - 1:
+            a.setValue(i, i + 1, -1.0)
+    a.assemble()
+    b = np.sin(np.linspace(0, 6 * np.pi, n)) * 0.05
+    bvec = petsc.Vec().createWithArray(b, comm=petsc.COMM_SELF)
+    lower, upper, x = (petsc.Vec().createSeq(n) for _ in range(3))
+    lower.set(0.0)
+    upper.set(0.3)
+    x.set(0.0)
+
+    def objgrad(tao, xv, gv):
+        a.mult(xv, gv)
+        gv.axpy(-1.0, bvec)
+        return 0.5 * xv.dot(gv) - 0.5 * xv.dot(bvec)
+
+    tao = petsc.TAO().create(comm=petsc.COMM_SELF)
+    tao.setType("python")
+    tao.setPythonType(f"petsc_contact.cg.{python_type}")
+    tao.setObjectiveGradient(objgrad, None)
+    tao.setHessian(lambda *args: None, a, a)
+    tao.setVariableBounds(lower, upper)
+    tao.setTolerances(gatol=1e-10, grtol=0.0, gttol=0.0)
+    tao.setMaximumIterations(2000)
+    tao.solve(x)
+    assert tao.getConvergedReason() > 0
+    xs = x.array.copy()
+    dense = np.diag(np.full(n, 2.01)) - np.eye(n, k=1) - np.eye(n, k=-1)
+    g = dense @ xs - b
+    assert xs.min() >= 0 and xs.max() <= 0.3
+    assert np.abs(g[(xs > 1e-12) & (xs < 0.3 - 1e-12)]).max() < 1e-9
+    assert g[xs <= 1e-12].min() > -1e-9 and g[xs >= 0.3 - 1e-12].max() < 1e-9
+    ref = np.zeros(n)
+    for _ in range(20000):  # projected gradient with step 1/L, L <= 4.01
+        ref = np.clip(ref - (dense @ ref - b) / 4.01, 0.0, 0.3)
+    assert np.abs(xs - ref).max() < 1e-7
+    assert np.count_nonzero(xs >= 0.3 - 1e-12) > 0 and np.count_nonzero(xs <= 1e-12) > 0
+    tao.destroy()
+    for v in (a, bvec, lower, upper, x):
+        v.destroy()

@@ -7,10 +7,14 @@ OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1), one ``--grid`` per ``mpiexec`` for P > 1: onc
 mpi4py-fft has planned in a process, FFTW-MPI fails to plan and the package falls back to
 mpi4py-fft (the printed backend shows it).  ``mpiexec`` binds each rank to one core, so P = 1 runs
 FFTW with one thread: the comparison is one core against two.  Rank 0 prints, per grid: the
-FFT backend, the load step's iterations, wall time and time per FFT round trip; for P > 1
+FFT backend, the load step's iterations, wall time and time per operator application
+(gradient evaluations, Hessian and preconditioner applications: each one FFT round trip,
+except a Hessian application of the CG's projected steps, which skips the inverse); for P > 1
 also mpi4py-fft's round trip, its two global transposes timed alone (the same volume FFTW-MPI
 sends), and the bytes each rank sends per round trip, read from the MPI datatypes
-mpi4py-fft hands to Alltoallw.
+mpi4py-fft hands to Alltoallw, and the time of a serial one-thread round trip of the whole
+grid when every rank runs one at the same time (compare with the P = 1 round trip alone:
+how the cores scale on FFTs when no distributed transform is involved).
 
 The projection scales the measured per-rank work: local FFT time ~ n^2 log n / P, transpose
 volume per rank ``V(P) = 2 * 16 n (n/2+1) (P-1) / P^2`` bytes (both transposes of the half
@@ -30,6 +34,7 @@ from mpi4py import MPI
 from petsc_contact import periodic_contact
 from petsc_contact.fft import SerialFFT, SlabFFT, make_fft
 from petsc_contact.grid import Grid
+from petsc_contact.operator import FourierOperator
 from petsc_contact.surface import self_affine
 
 
@@ -61,16 +66,23 @@ def measure(n: int, p0: float) -> dict[str, float]:
                     rms_slope=0.1)
     x = np.random.default_rng(comm.rank).standard_normal(grid.local_shape)
     out = np.empty_like(x)
-    kernel = np.ones_like(fft.spectrum)
-    result = {"round_trip": median_time(lambda: fft.convolve(x, kernel, out)),
+    op = FourierOperator(grid, fft, np.ones(fft.spectrum.shape))
+    result = {"round_trip": median_time(lambda: op.apply_array(x, out)),
               "backend": type(fft).__name__,
               "threads": fft.threads if isinstance(fft, SerialFFT) else 1}
     heights = np.concatenate(comm.allgather(h))  # periodic_contact takes the whole map
     (step,) = periodic_contact(heights, 1.0, 1.0, [p0], comm=comm)
     if comm.size > 1:  # after the solve: FFTW-MPI cannot plan once mpi4py-fft has planned
+        # every rank transforms the whole grid on its own core, all at once: how the cores
+        # scale on independent FFTs, with no distributed transform in between
+        whole = Grid(n, 1.0, MPI.COMM_SELF)
+        solo = FourierOperator(whole, SerialFFT(whole, threads=1), np.ones((n, n // 2 + 1)))
+        xs = np.random.default_rng(comm.rank).standard_normal((n, n))
+        result["concurrent_round_trip"] = median_time(lambda: solo.apply_array(xs, xs))
+        del solo, xs
         slab = SlabFFT(grid)  # mpi4py-fft: its round trip, and its transposes timed alone
-        slab_kernel = np.ones_like(slab.spectrum)
-        result["slab_round_trip"] = median_time(lambda: slab.convolve(x, slab_kernel, out))
+        slab_op = FourierOperator(grid, slab, np.ones(slab.spectrum.shape))
+        result["slab_round_trip"] = median_time(lambda: slab_op.apply_array(x, out))
         transfer = slab._pfft.transfer[0]
         a = np.zeros(transfer.subshapeA, dtype=transfer.dtype)
         b = np.zeros(transfer.subshapeB, dtype=transfer.dtype)
@@ -120,10 +132,12 @@ def main() -> None:
             continue
         print(f"n = {n}, ranks = {comm.size}, FFT {r['backend']} ({r['threads']} thread(s) "
               f"per rank): {r['iterations']} iterations, "
-              f"{r['time']:.2f} s, {r['ffts']} round trips, {r['per_fft'] * 1e3:.1f} ms per "
-              f"round trip in the solve, FFT round trip alone {r['round_trip'] * 1e3:.1f} ms"
+              f"{r['time']:.2f} s, {r['ffts']} operator applications, {r['per_fft'] * 1e3:.1f} ms "
+              f"per application in the solve, FFT round trip alone {r['round_trip'] * 1e3:.1f} ms"
               + ("" if r["converged"] else "  NOT CONVERGED"))
         if comm.size > 1:
+            print(f"  whole-grid serial round trips, one per rank, all at once: "
+                  f"{r['concurrent_round_trip'] * 1e3:.1f} ms each")
             local = r["round_trip"] - r["transposes"]
             print(f"  mpi4py-fft round trip {r['slab_round_trip'] * 1e3:.1f} ms; its transposes "
                   f"alone {r['transposes'] * 1e3:.1f} ms ({r['bytes'] / 1e6:.1f} MB sent "

@@ -27,7 +27,12 @@ conjugate gradient in the spirit of Polonsky & Keer (Wear 231, 206 (1999)).
   (2 million of 4 million pixels at ``p0 = 1e-3 E*``) and the surplus leaves it only slowly.
 - The gradient is updated by ``g += alpha H d`` while no variable is clipped, and
   re-evaluated through TAO's callback after a projection, periodically, and before
-  convergence is declared, so the reported residual is never an accumulated one.
+  convergence is declared, so the reported residual is never an accumulated one.  A Hessian
+  whose Python context has ``begin_mult(d) -> d.Hd`` (this rank's part) and
+  ``end_mult(out)`` (the package's FFT operators, :mod:`petsc_contact.operator`) is applied
+  in those two halves, and the second only when ``H d`` is used: a projected step needs
+  ``d.Hd`` but not ``H d``.  Any other Hessian is multiplied and dotted.
+- The element-wise work runs in fused single-pass loops (:mod:`petsc_contact.kernels`).
 
 :class:`PreconditionedCG` applies a preconditioner restricted to ``F`` (``z = P_F M P_F r``);
 the package gives it the Fourier compliance, the inverse of the periodic stiffness, which
@@ -202,7 +207,7 @@ class PolonskyKeer:
             below, above = allsum(*kernels.advance(xa, d, alpha, lower, upper))
             limit = int(max(GROWTH * bound_count, min_limit))
             if below > limit:
-                fraction = self._growth_fraction(xa, alpha * d, lower, xa < lower, limit, allsum)
+                fraction = self._growth_fraction(xa, d, alpha, lower, limit, allsum)
                 blas.daxpy(d, xa, a=(fraction - 1.0) * alpha)
                 alpha *= fraction
             if below or above or since_refresh >= REFRESH_EVERY:
@@ -218,19 +223,21 @@ class PolonskyKeer:
             v.destroy()
 
     @staticmethod
-    def _growth_fraction(x: np.ndarray, step: np.ndarray, lower: np.ndarray | float,
-                         below: np.ndarray, limit: int, allsum: Any) -> float:
-        """Fraction of ``step`` (just taken to ``x``) at which ``limit`` variables reach ``lower``.
+    def _growth_fraction(x: np.ndarray, d: np.ndarray, alpha: float,
+                         lower: np.ndarray | float, limit: int, allsum: Any) -> float:
+        """Fraction of the step ``alpha d`` (just taken to ``x``) at which ``limit`` variables
+        reach ``lower``.
 
-        ``below`` marks the variables that ended below their bound; a variable reaches it
-        at the fraction ``1 - (x - lower)/step``.  Those that started on it (fraction 0, a
+        A variable that ended below its bound reached it at the fraction
+        ``1 - (x - lower)/(alpha d)``.  Those that started on it (fraction 0, a
         preconditioned direction may point into the bound) are clipped at any fraction and
         do not count.  The fraction is found by bisection on the global count, so it is
         the same on every rank, over each rank's ``limit`` smallest fractions only (the
         global ``limit`` smallest are among them, and so is the answer).
         """
+        below = x < lower
         lo = lower[below] if np.ndim(lower) else lower
-        reach = 1.0 - (x[below] - lo) / step[below]
+        reach = 1.0 - (x[below] - lo) / (alpha * d[below])
         reach = reach[reach > 1e-9]  # below: rounding of a start on the bound
         if reach.size > limit:
             reach = np.partition(reach, limit - 1)[:limit]

@@ -185,7 +185,8 @@ class _FFTWMPIPlans:
     Made once per communicator and grid size and kept for the life of the process:
     destroying an FFTW-MPI plan after mpi4py-fft had planned in the same process crashed
     in ``fftw_destroy_plan`` in 8 of 16 runs here.  Every user runs forward, multiply and
-    backward within one call, so the buffer can be shared.
+    backward with no other transform in between (the CG's split Hessian application drops
+    the backward instead), so the buffer can be shared.
     """
 
     _made: dict[tuple[int, int], "_FFTWMPIPlans | None"] = {}

@@ -77,7 +77,8 @@ class SpectralOperator(ShellInterface):
     def transform(self, x: np.ndarray) -> float:
         """:meth:`begin_mult` without counting an application (for objective evaluations)."""
         self._forward(x)
-        values = self.fft.spectrum.reshape(-1).view(np.float64)
+        values = self.fft.spectrum.view(np.float64)
+        values.shape = (-1,)  # in place, never a copy: raises if the spectrum were strided
         return kernels.scale_spectrum(values, self.multiplier.reshape(-1), self._single)
 
     def end_mult(self, out: np.ndarray) -> np.ndarray:

@@ -71,7 +71,8 @@ class MeanModePreconditioner(FourierOperator):
         """Become the inverse of ``hessian`` (diagonal entry ``hessian_diagonal``), with
         ``mean_mode`` (normalised) as its fixed ``q = 0`` entry.
 
-        Computed in place, with no copy of the kernel kept: ``G/(n^2 c) = 1/(n^2 K c/n^2)``.
+        Computed in place, with no copy of the kernel kept: the normalised multipliers are
+        ``K c/N`` and ``G/(N c) = N^-2/(K c/N)``, with ``N = n^2`` and ``G = 1/K`` for ``q > 0``.
         """
         with np.errstate(divide="ignore"):
             np.divide(1.0 / self.grid.size ** 2, hessian.multiplier, out=self.multiplier)

@@ -1,0 +1,34 @@
+"""The serial FFT backend keeps FFTW's measured plans on disk between runs."""
+
+from conftest import python
+
+SCRIPT = r"""
+import pyfftw
+from petsc_contact.fft import SerialFFT, _Wisdom
+from petsc_contact.grid import Grid
+_Wisdom.load(pyfftw)
+before = pyfftw.export_wisdom()
+SerialFFT(Grid(96, 1.0), threads=1)
+print("measured" if pyfftw.export_wisdom() != before else "reused")
+"""
+
+
+def run() -> str:
+    r = python("-c", SCRIPT, timeout=120)
+    assert r.returncode == 0, r.stderr
+    return r.stdout.strip()
+
+
+def test_wisdom_reused_by_the_next_run(tmp_path, monkeypatch):
+    """The first process measures and writes the file; the next one plans from it without
+    measuring; an unreadable file is ignored and replaced; ``off`` writes nothing."""
+    path = tmp_path / "wisdom"
+    monkeypatch.setenv("PETSC_CONTACT_FFTW_WISDOM", str(path))
+    assert run() == "measured" and path.stat().st_size > 0
+    kept = path.read_bytes()
+    assert run() == "reused" and path.read_bytes() == kept
+    path.write_bytes(b"not wisdom")
+    assert run() == "measured" and path.read_bytes() != b"not wisdom"
+    monkeypatch.setenv("PETSC_CONTACT_FFTW_WISDOM", "off")
+    path.unlink()
+    assert run() == "measured" and not path.exists()

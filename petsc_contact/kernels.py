@@ -19,13 +19,17 @@ FAST = {"reassoc", "contract"}
 Bound = float | np.ndarray  # a bound the same everywhere, or one per entry
 
 
-def _at(bound, i):  # pragma: no cover - replaced by the overload inside compiled code
+def _at(bound, i):  # type: ignore[no-untyped-def]  # compiled code uses the overload
     raise NotImplementedError
 
 
 @overload(_at)
 def _at_impl(bound, i):  # type: ignore[no-untyped-def]
-    """``bound[i]`` for an array bound, ``bound`` for a float one."""
+    """``bound[i]`` for an array bound, ``bound`` for a float one (chosen when compiling).
+
+    Left unannotated: with annotations, numba 0.56 rejected the overload ("Typing and
+    implementation arguments differ in argument names").
+    """
     if isinstance(bound, types.Array):
         return lambda bound, i: bound[i]
     return lambda bound, i: bound

@@ -91,6 +91,25 @@ class SpectralOperator(ShellInterface):
         self.begin_mult(x)
         return self.end_mult(out)
 
+    @property
+    def spectrum(self) -> np.ndarray:
+        """The normalised real multiplier on the local spectrum block (a view: read only)."""
+        return self.multiplier[:, ::2]
+
+    def _with(self, multiplier: np.ndarray) -> Any:
+        """Another operator of this kind on the same FFT, with ``multiplier``."""
+        other = object.__new__(type(self))
+        other.__dict__.update(self.__dict__)
+        other.multiplier = multiplier
+        other.applications = 0
+        return other
+
+    def _weighted_sum(self, grid: Grid) -> float:
+        """The multiplier summed over the full spectrum of ``grid`` (the FFT's grid), all ranks:
+        the operator's diagonal entry."""
+        w = half_spectrum_weights(grid, self.fft)
+        return float(grid.sum((w * self.spectrum).sum())[0])
+
     def _forward(self, x: np.ndarray) -> None:
         raise NotImplementedError
 
@@ -116,22 +135,9 @@ class FourierOperator(SpectralOperator):
         self._single = single_entries(grid, fft)
         self.applications = 0
 
-    @property
-    def kernel(self) -> np.ndarray:
-        """The normalised multiplier on the local spectrum block (a view: read only)."""
-        return self.multiplier[:, ::2]
-
-    @kernel.setter
-    def kernel(self, values: np.ndarray) -> None:
-        self.multiplier = twice(values)
-
     def scaled(self, factor: float) -> "FourierOperator":
         """Another operator on the same FFT with the multiplier times ``factor``."""
-        other = object.__new__(type(self))
-        other.__dict__.update(self.__dict__)
-        other.multiplier = self.multiplier * factor
-        other.applications = 0
-        return other
+        return self._with(self.multiplier * factor)
 
     def set_entry(self, row: int, column: int, value: float) -> None:
         """Set one entry of the normalised multiplier (local spectrum indices)."""
@@ -145,8 +151,7 @@ class FourierOperator(SpectralOperator):
 
     def diagonal(self) -> float:
         """The (constant) diagonal entry of the circulant operator."""
-        w = half_spectrum_weights(self.grid, self.fft)
-        return float(self.grid.sum((w * self.kernel).sum())[0])
+        return self._weighted_sum(self.grid)
 
 
 class PaddedOperator(SpectralOperator):
@@ -183,19 +188,10 @@ class PaddedOperator(SpectralOperator):
         self.applications = 0
         self.fft.real[...] = 0.0  # the padding stays zero: applications write only the block
 
-    @property
-    def spectrum(self) -> np.ndarray:
-        """The normalised real spectrum of the padded kernel (a view: read only)."""
-        return self.multiplier[:, ::2]
-
     def with_spectrum(self, spectrum: np.ndarray) -> "PaddedOperator":
         """Another operator on the same padded FFT with the given (normalised) spectrum."""
-        other = object.__new__(PaddedOperator)
-        other.__dict__.update(self.__dict__)
-        other.multiplier = twice(spectrum)
-        w = half_spectrum_weights(self.padded, self.fft)
-        other._centre = float(self.grid.sum((w * other.spectrum).sum())[0])
-        other.applications = 0
+        other = self._with(twice(spectrum))
+        other._centre = other._weighted_sum(self.padded)
         return other
 
     def _forward(self, x: np.ndarray) -> None:

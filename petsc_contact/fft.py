@@ -333,13 +333,11 @@ class FFTWMPI:
 
     def forward(self) -> None:
         """``spectrum <- FFT(real)`` (``real`` is kept)."""
-        self._plans.padded[...] = self.real
-        self._execute(self._plans.forward)
+        self.forward_from(self.real)
 
     def backward(self) -> None:
         """``result <- IFFT(spectrum)`` without the ``1/n^2``; destroys ``spectrum``."""
-        self._execute(self._plans.backward)
-        self.result[...] = self._plans.padded
+        self.backward_into(self.result)
 
     def forward_from(self, x: np.ndarray) -> None:
         """``spectrum <- FFT(x)`` for a local array of the slab's size (through FFTW's rows)."""

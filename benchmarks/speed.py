@@ -8,11 +8,14 @@ measured FFT round trip (the "ratio"; forward + spectral multiply + backward, me
 batches of 20), the same ratio against the FFT time measured inside that solve ("in-solve":
 one over the share of the solve spent in FFTs, immune to the machine's drift between the
 FFT benchmark and the solve), and the peers' times in the same run: Tamaas
-PolonskyKeerRey (tolerance 1e-8) and ContactMechanics's Polonsky-Keer CG (penetration
-tolerance 1e-8 h_rms), cold-started like ours, if their venv exists
+PolonskyKeerRey (tolerance 1e-8) and ContactMechanics's two constrained CGs, Polonsky-Keer
+(penetration tolerance 1e-8 h_rms) and Bugnicourt (largest gap residual 1e-8 h_rms; run
+displacement controlled at Polonsky-Keer's offset for the load, see
+peers/run_contactmechanics.py), all cold-started like ours, if their venv exists
 (python3 -m venv benchmarks/peers/.venv &&
-benchmarks/peers/.venv/bin/pip install tamaas contactmechanics).  All three reach the same
-mean gap to 1e-8 (printed, so a mismatch shows).  Type "python" is the default solver.
+benchmarks/peers/.venv/bin/pip install tamaas contactmechanics).  All four reach the same
+mean gap to 1e-8 (printed, so a mismatch shows).  "/cm" is the ratio to the faster of
+ContactMechanics's two solvers for that load.  Type "python" is the default solver.
 """
 
 from __future__ import annotations
@@ -82,16 +85,25 @@ class FFTClock:
             setattr(SerialFFT, name, method)
 
 
-def peer(script: str, path: str, pressures: list[float]) -> dict[float, dict]:
-    """Run a peer's script in its own venv; results by pressure (empty without the venv)."""
+PEERS_RUN = {"tamaas": ("run_tamaas.py",), "cm": ("run_contactmechanics.py", "--bugnicourt")}
+
+
+def peer(script: str, path: str, pressures: list[float], *extra: str
+         ) -> dict[str, dict[float, dict]]:
+    """Run a peer's script in its own venv; results by solver and pressure (empty without
+    the venv)."""
     python = os.path.join(PEERS, ".venv", "bin", "python")
     if not os.path.exists(python):
         return {}
     out = subprocess.run([python, os.path.join(PEERS, script), path, "1", "1",
-                          ",".join(map(str, pressures)), "1e-8"],
+                          ",".join(map(str, pressures)), "1e-8", *extra],
                          capture_output=True, text=True, check=True).stdout
-    rows = [json.loads(line) for line in out.splitlines() if line.startswith("{")]
-    return {r["pressure"]: r for r in rows}
+    results: dict[str, dict[float, dict]] = {}
+    for line in out.splitlines():
+        if line.startswith("{"):
+            row = json.loads(line)
+            results.setdefault(row.get("solver", script), {})[row["pressure"]] = row
+    return results
 
 
 def main() -> None:
@@ -118,12 +130,14 @@ def main() -> None:
             path = os.path.join(tmp, "h.npy")
             np.save(path, h)
             peers = {} if args.no_peers else {
-                "tamaas": peer("run_tamaas.py", path, pressures),
-                "contactmechanics": peer("run_contactmechanics.py", path, pressures)}
+                f"{name}-{solver}" if name == "cm" else name: rows
+                for name, run in PEERS_RUN.items()
+                for solver, rows in peer(run[0], path, pressures, *run[1:]).items()}
         for name, rows in peers.items():
             for p0, r in rows.items():
+                flag = "" if r.get("converged", True) else "  NOT CONVERGED"
                 print(f"# {name:>16} p0 {p0:.0e}: {r['time']:8.3f} s, {r['iterations']} its, "
-                      f"mean gap {r['mean_gap']:.8e}")
+                      f"mean gap {r['mean_gap']:.8e}{flag}")
         print(f"{'solver':>8} {'p0':>7} {'its':>5} {'FFTs':>6} {'time_s':>8} {'ratio':>6}"
               f" {'in-solve':>8}"
               f" {'mean_gap':>14} {'/tamaas':>8} {'/cm':>8}")
@@ -140,8 +154,10 @@ def main() -> None:
                 ffts = transforms // 2  # round trips (a projected step skips one inverse)
                 ratio = d["solve_time"] / (ffts * rt)
                 in_solve = d["solve_time"] / fft_seconds
-                rel = [d["solve_time"] / peers.get(k, {}).get(p0, {}).get("time", np.nan)
-                       for k in ("tamaas", "contactmechanics")]
+                peer_time = {k: peers.get(k, {}).get(p0, {}).get("time", np.nan)
+                             for k in ("tamaas", "cm-polonsky-keer", "cm-bugnicourt")}
+                cm_best = np.fmin(peer_time["cm-polonsky-keer"], peer_time["cm-bugnicourt"])
+                rel = [d["solve_time"] / peer_time["tamaas"], d["solve_time"] / cm_best]
                 flag = "" if s.converged else "  NOT CONVERGED"
                 print(f"{t:>8} {p0:>7.0e} {d['iterations']:>5d} {ffts:>6d} "
                       f"{d['solve_time']:>8.3f} {ratio:>6.2f} {in_solve:>8.2f} "

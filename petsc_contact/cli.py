@@ -194,8 +194,10 @@ def build_parser() -> argparse.ArgumentParser:
                                       "at every iteration; a table (stdout and OUT.csv), "
                                       "OUT.h5 and a plot OUT.png.")
     _surface_arguments(cmp_)
-    cmp_.add_argument("--length", type=float, default=1.0, metavar="L")
-    cmp_.add_argument("--modulus", type=float, default=1.0, metavar="ESTAR")
+    cmp_.add_argument("--length", type=float, default=1.0, metavar="L",
+                      help="side of the periodic cell (default %(default)s)")
+    cmp_.add_argument("--modulus", type=float, default=1.0, metavar="ESTAR",
+                      help="contact modulus E* (default %(default)s)")
     cmp_.add_argument("--pressure", type=float, required=True, metavar="P",
                       help="nominal pressure p0 (units of E*)")
     cmp_.add_argument("--solvers", type=lambda t: [v for v in t.split(",") if v],

@@ -85,7 +85,7 @@ class FFTClock:
             setattr(SerialFFT, name, method)
 
 
-PEERS_RUN = {"tamaas": ("run_tamaas.py",), "cm": ("run_contactmechanics.py", "--bugnicourt")}
+PEER_RUNS = (("run_tamaas.py",), ("run_contactmechanics.py", "--bugnicourt"))
 
 
 def peer(script: str, path: str, pressures: list[float], *extra: str
@@ -102,7 +102,7 @@ def peer(script: str, path: str, pressures: list[float], *extra: str
     for line in out.splitlines():
         if line.startswith("{"):
             row = json.loads(line)
-            results.setdefault(row.get("solver", script), {})[row["pressure"]] = row
+            results.setdefault(row["solver"], {})[row["pressure"]] = row
     return results
 
 
@@ -129,10 +129,9 @@ def main() -> None:
         with tempfile.TemporaryDirectory() as tmp:
             path = os.path.join(tmp, "h.npy")
             np.save(path, h)
-            peers = {} if args.no_peers else {
-                f"{name}-{solver}" if name == "cm" else name: rows
-                for name, run in PEERS_RUN.items()
-                for solver, rows in peer(run[0], path, pressures, *run[1:]).items()}
+            peers = {}
+            for run in () if args.no_peers else PEER_RUNS:
+                peers.update(peer(run[0], path, pressures, *run[1:]))
         for name, rows in peers.items():
             for p0, r in rows.items():
                 flag = "" if r.get("converged", True) else "  NOT CONVERGED"

@@ -11,7 +11,8 @@ given the rigid offset Polonsky-Keer found for the load, so it solves the same p
 knowing one number of the answer.  Under load control instead (NuMPI's mean-value
 constraint) it stalled near 6e-7 h_rms at p0 = 1e-2 E* on a 512^2 surface and then diverged.
 Both start cold: from ContactMechanics's own initial guess, or a uniform pressure p0.
-Prints one JSON line per pressure and solver: solver, pressure, mean_gap, area_fraction,
+Prints one JSON line per pressure and solver: solver ("cm-polonsky-keer" or
+"cm-bugnicourt"), pressure, mean_gap, area_fraction,
 iterations, time, converged.
 """
 
@@ -65,9 +66,9 @@ def main() -> None:
     h_rms = float(np.sqrt(np.mean((h - h.mean()) ** 2)))
     for p0 in map(float, pressures.split(",")):
         res, *rest = polonsky_keer(substrate, h, size, p0, float(tol) * h_rms)
-        report("polonsky-keer", p0, res, *rest)
+        report("cm-polonsky-keer", p0, res, *rest)
         if "--bugnicourt" in sys.argv[6:]:
-            report("bugnicourt", p0,
+            report("cm-bugnicourt", p0,
                    *bugnicourt(substrate, h, size, p0, float(tol) * h_rms, res.offset))
 
 

@@ -1,7 +1,8 @@
 """Time Tamaas's PolonskyKeerRey on a saved surface (runs in benchmarks/peers/.venv).
 
 usage: .venv/bin/python run_tamaas.py SURFACE.npy LENGTH MODULUS P1,P2,... TOL
-Prints one JSON line per pressure: pressure, mean_gap, area_fraction, iterations, time.
+Prints one JSON line per pressure: solver ("tamaas"), pressure, mean_gap, area_fraction,
+iterations, time.
 """
 
 import json
@@ -30,7 +31,7 @@ def main() -> None:
         p = np.asarray(model.traction)
         u = np.asarray(model.displacement)
         gap = u - h - (u - h).min()
-        print(json.dumps({"pressure": p0, "mean_gap": float(gap.mean()),
+        print(json.dumps({"solver": "tamaas", "pressure": p0, "mean_gap": float(gap.mean()),
                           "area_fraction": float(np.count_nonzero(p > 0) / p.size),
                           "iterations": int(getattr(solver, "iterations", -1)),
                           "time": elapsed}), flush=True)

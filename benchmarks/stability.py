@@ -1,8 +1,8 @@
 """Stability matrix: every solver on stiff and extreme periodic scenes (issue 5).
 
 usage: .venv/bin/python benchmarks/stability.py [--grid 128] [--solvers cg pk tron ...]
-       [--time-limit 20] [--markdown docs/stability.md] [--grids 32 1024] [--no-scenes]
-       [--append]
+       [--time-limit 20] [--stall-iterations 1000] [--markdown docs/stability.md]
+       [--grids 32 1024] [--no-scenes] [--append]
 For each scene and solver: converged or not (the package's own verification), TAO's reason,
 iterations, wall time and the pressure error reached against a reference solved at 1e-12.
 """
@@ -61,6 +61,9 @@ def main() -> None:
                     help="extra grid sizes for the rough p0 = 1e-3 scene")
     ap.add_argument("--solvers", nargs="+", default=list(DEFAULT_SOLVERS))
     ap.add_argument("--time-limit", type=float, default=20.0)
+    ap.add_argument("--stall-iterations", type=int, default=1000,
+                    help="stop a solver whose natural residual has not fallen 10%% below its "
+                         "best for this many iterations (0: never)")
     ap.add_argument("--markdown", default=None, help="also write the table here")
     ap.add_argument("--append", action="store_true",
                     help="append the table to --markdown instead of replacing the file")
@@ -77,7 +80,8 @@ def main() -> None:
         grid = Grid(h.shape[0], length)
         problem = PeriodicProblem(grid, make_fft(grid), h, modulus)
         try:
-            _, trajs = compare(petsc, problem, p0, args.solvers, args.time_limit)
+            _, trajs = compare(petsc, problem, p0, args.solvers, args.time_limit,
+                               stall_iterations=args.stall_iterations)
             cells = []
             for t in trajs:
                 err = t.pressure_error[-1] if t.pressure_error else float("nan")
@@ -92,8 +96,11 @@ def main() -> None:
     if args.markdown:
         where = f"{args.grid}^2 unless stated" if args.scenes else "large grids"
         with open(args.markdown, "a" if args.append else "w") as f:
+            stall = (f", stopped after {args.stall_iterations} iterations without a 10% lower "
+                     "natural residual" if args.stall_iterations else "")
             f.write(f"{chr(10) if args.append else ''}Stability matrix, {where}, time limit "
-                    f"{args.time_limit:g} s per solver (`benchmarks/stability.py`). Each cell: "
+                    f"{args.time_limit:g} s per solver{stall} (`benchmarks/stability.py`). "
+                    "Each cell: "
                     "verdict, TAO iterations, wall time, relative pressure error against a "
                     "reference solved at 1e-12 (raised to 30 eps k h_rms / p0 where rounding needs "
                     "it).\n\n" + "\n".join(lines) + "\n")

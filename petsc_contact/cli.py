@@ -206,6 +206,9 @@ def build_parser() -> argparse.ArgumentParser:
                            "options files (default: cg,pk,tron,bnls,bntr,bqnls,blmvm,bncg,gpcg)")
     cmp_.add_argument("--time-limit", type=float, default=120.0, metavar="S",
                       help="stop a solver after S seconds of wall time (default 120)")
+    cmp_.add_argument("--stall-iterations", type=int, default=1000, metavar="N",
+                      help="stop a solver whose natural residual has not fallen 10%% below "
+                           "its best for N iterations (default 1000; 0: never)")
     cmp_.add_argument("--output", required=True, metavar="OUT.h5")
     cmp_.add_argument("--quiet", action="store_true", help="no table on standard output")
     exp = sub.add_parser("experiment", help="K(p) from a measured p(s) table (paper Eq. 7)",
@@ -563,6 +566,8 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
 
     args.pressures = [args.pressure]
     _check_numbers(args)
+    if not args.time_limit >= 0 or args.stall_iterations < 0:
+        raise InputError("--time-limit and --stall-iterations must not be negative")
     solvers = args.solvers or list(DEFAULT_SOLVERS)
     for name in solvers:
         solver_options(name)  # unknown options files fail here, before any work
@@ -575,7 +580,8 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
     fft = make_fft(grid)
     heights = _surface(args, full, grid, fft)
     problem = PeriodicProblem(grid, fft, heights, args.modulus)
-    reference, trajectories = compare(petsc, problem, args.pressure, solvers, args.time_limit)
+    reference, trajectories = compare(petsc, problem, args.pressure, solvers, args.time_limit,
+                                      stall_iterations=args.stall_iterations)
     if grid.comm.rank != 0:
         return 0
     attrs = {"command_line": " ".join(["petsc-contact", *argv]),

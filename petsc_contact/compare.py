@@ -33,6 +33,7 @@ from .problem import PeriodicProblem
 from .solve import BoundSolver
 
 REFERENCE_GATOL = 1e-12
+STALL_GAIN = 0.9  # a new low of the natural residual must be 10% below the best so far
 DEFAULT_SOLVERS = ("cg", "pk", "tron", "bnls", "bntr", "bqnls", "blmvm", "bncg", "gpcg")
 ALIASES = {
     "cg": ["-tao_type", "python", "-tao_python_type", "petsc_contact.cg.PreconditionedCG"],
@@ -70,9 +71,14 @@ class Trajectory:
 
 
 def compare(petsc: Any, problem: PeriodicProblem, pressure: float, solvers: Sequence[str],
-            time_limit: float = 120.0, extra_options: Sequence[str] = ()
-            ) -> tuple[dict[str, Any], list[Trajectory]]:
+            time_limit: float = 120.0, extra_options: Sequence[str] = (),
+            stall_iterations: int = 1000) -> tuple[dict[str, Any], list[Trajectory]]:
     """Run each solver from first touch and record its error against time.
+
+    A solver is stopped (``DIVERGED_USER``, with the cause in its reason) after
+    ``time_limit`` seconds, or once its natural residual has not fallen 10% below its best
+    for ``stall_iterations`` iterations (0: never): a solver stuck at its own floor (BQNLS's
+    line search at ``~1e-8 p0``) then does not spend the whole time limit there.
 
     Returns
     -------
@@ -106,6 +112,8 @@ def compare(petsc: Any, problem: PeriodicProblem, pressure: float, solvers: Sequ
             problem.start(x0)
             with BoundSolver(petsc, grid, problem.hessian, problem.preconditioner) as solver:
                 spent = [0.0]
+                best = [np.inf, 0]  # lowest natural residual so far, and its iteration
+                stop: list[str] = []
                 start = time.perf_counter()
 
                 def monitor(it: int, f: float, gnorm: float) -> bool:
@@ -123,13 +131,19 @@ def compare(petsc: Any, problem: PeriodicProblem, pressure: float, solvers: Sequ
                     traj.pressure_error.append(float(np.sqrt(dp2)) / p_ref_norm)
                     traj.natural_residual.append(float(np.sqrt(r2 / grid.size)) / pressure)
                     traj.complementarity.append(pg / (p_sum * ell) if p_sum > 0 else 0.0)
+                    if traj.natural_residual[-1] < STALL_GAIN * best[0]:
+                        best[:] = traj.natural_residual[-1], it
+                    if traj.time[-1] > time_limit:
+                        stop.append(f"time limit {time_limit:g} s")
+                    elif stall_iterations and it - best[1] >= stall_iterations:
+                        stop.append(f"stalled: natural residual not 10% below its best "
+                                    f"{best[0]:.1e} in {stall_iterations} iterations")
                     spent[0] += time.perf_counter() - t_in
-                    return traj.time[-1] > time_limit
+                    return bool(stop)
 
                 _, info = solver.solve(problem.objective_gradient, x0, monitor=monitor,
                                        gatol_floor=problem.rounding_floor(pressure))
-        traj.reason = info.reason if traj.time and traj.time[-1] <= time_limit \
-            else f"{info.reason} (time limit {time_limit:g} s)"
+        traj.reason = f"{info.reason} ({stop[0]})" if stop else info.reason
         traj.solve_time = info.solve_time - spent[0]
         traj.iterations = info.iterations
         final_ok = bool(traj.natural_residual) and \

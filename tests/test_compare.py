@@ -1,4 +1,4 @@
-"""The solver comparison: common errors along each run, table, files, time limit."""
+"""The solver comparison: common errors along each run, table, files, time and stall limits."""
 
 import csv
 
@@ -42,3 +42,21 @@ def test_compare_time_limit_and_bad_solver(tmp_path):
     r = cli("compare", "--grid", "64", "--hurst", "0.7", "--rms-slope", "0.1", "--pressure",
             "3e-3", "--solvers", "no/such.opts", "--output", str(out))
     assert r.returncode == 2 and "does not exist" in r.stderr
+
+
+def test_compare_stall_limit(tmp_path):
+    """A solver whose natural residual does not drop 10% below its best within the window
+    is stopped and reported as such; BNCG's residual is not monotone, so a one-iteration
+    window stops it long before it converges (about 100 iterations here)."""
+    out = tmp_path / "cmp.h5"
+    r = cli("compare", "--grid", "64", "--hurst", "0.7", "--rms-slope", "0.1", "--pressure",
+            "3e-3", "--solvers", "bncg", "--stall-iterations", "1", "--output", str(out))
+    assert r.returncode == 1, r.stderr
+    with h5py.File(out) as f:
+        bncg = f["bncg"]
+        assert not bncg.attrs["converged"] and "stalled" in bncg.attrs["reason"]
+        assert bncg.attrs["iterations"] < 50
+        assert bncg["natural_residual"][-1] > 1e-6  # stopped far from its tolerance
+    r = cli("compare", "--grid", "64", "--hurst", "0.7", "--rms-slope", "0.1", "--pressure",
+            "3e-3", "--stall-iterations", "-1", "--output", str(out))
+    assert r.returncode == 2 and "must not be negative" in r.stderr

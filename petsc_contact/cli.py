@@ -582,11 +582,10 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
     problem = PeriodicProblem(grid, fft, heights, args.modulus)
     reference, trajectories = compare(petsc, problem, args.pressure, solvers, args.time_limit,
                                       stall_iterations=args.stall_iterations)
+    realised = {"rms_height": rms_of(grid, fft, heights), "pressure": args.pressure}  # collective
     if grid.comm.rank != 0:
         return 0
-    attrs = {"command_line": " ".join(["petsc-contact", *argv]),
-             "parameters": {k: v for k, v in vars(args).items() if k != "quiet"},
-             "rms_height": rms_of(grid, fft, heights), "pressure": args.pressure}
+    attrs = _attributes(args, argv, petsc, realised)
     csv, png = write_compare(args.output, reference, trajectories, attrs)
     if not args.quiet:
         print(f"# reference: mean gap {reference['mean_gap']:.10e}, natural residual "

@@ -57,6 +57,7 @@ class Trajectory:
     """Errors of one solver along its iterations (and its final TAO report)."""
 
     name: str
+    options: list[str] = field(default_factory=list)  # the PETSc options that select it
     time: list[float] = field(default_factory=list)
     iteration: list[int] = field(default_factory=list)
     mean_gap_error: list[float] = field(default_factory=list)
@@ -106,7 +107,7 @@ def compare(petsc: Any, problem: PeriodicProblem, pressure: float, solvers: Sequ
     out = []
     for name in solvers:
         opts = solver_options(name) + list(extra_options)
-        traj = Trajectory(name)
+        traj = Trajectory(name, opts)
         with _petsc.scoped_options(opts):
             problem.set_pressure(pressure)
             problem.start(x0)
@@ -179,6 +180,10 @@ def write_compare(path: str, reference: dict[str, Any], trajectories: Sequence[T
                 g[k] = np.asarray(getattr(t, k))
             for k in ("reason", "solve_time", "iterations", "converged", "verification"):
                 g.attrs[k] = getattr(t, k)
+            g.attrs["petsc_options"] = " ".join(t.options)
+            if "-options_file" in t.options:  # what the file said when it ran
+                with open(t.options[t.options.index("-options_file") + 1]) as opts:
+                    g.attrs["options_file_text"] = opts.read()
     os.replace(path + ".partial", path)
     csv = stem + ".csv"
     with open(csv, "w") as f:

@@ -5,7 +5,9 @@ each TAO iteration (never TAO's own gnorm, which means different things for diff
 
 - ``mean_gap_error``: ``|u_bar - u_bar_ref| / u_bar_ref`` (over ``h_rms`` at full contact);
 - ``pressure_error``: ``||p - p_ref||_2 / ||p_ref||_2`` (``p = K(g + h) + p0``);
-- ``natural_residual``: ``rms(min(k g, p)) / p0``, zero exactly at the solution (KKT);
+- ``natural_residual``: ``rms(min(k g, p)) / p0``, zero exactly at the solution (KKT): the
+  projected-gradient norm ``||g - P(g - grad/(a^2 k))||`` (``P`` the projection on
+  ``g >= 0``, step ``1/k`` with ``k`` the pixel stiffness), in units of ``p0``;
 - ``complementarity``: ``sum(p+ g) / (sum(p+) h_rms)``, as Tamaas reports it (``h_rms``
   replaced by the problem's length scale for a flat surface).
 

@@ -583,8 +583,9 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
     reference, trajectories = compare(petsc, problem, args.pressure, solvers, args.time_limit,
                                       stall_iterations=args.stall_iterations)
     realised = {"rms_height": rms_of(grid, fft, heights), "pressure": args.pressure}  # collective
+    status = 0 if all(t.converged for t in trajectories) else EXIT_NOT_CONVERGED
     if grid.comm.rank != 0:
-        return 0
+        return status  # the same on every rank: the verdicts come from reduced residuals
     attrs = _attributes(args, argv, petsc, realised)
     csv, png = write_compare(args.output, reference, trajectories, attrs)
     if not args.quiet:
@@ -596,7 +597,7 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
             print(f"{name:>16} {str(ok):>9} {its:>6d} {t:>8.3f} {eg:>9.1e} {ep:>9.1e} "
                   f"{r:>9.1e} {c:>9.1e}  {reason}")
         print(f"# wrote {args.output}, {csv} and {png}")
-    return 0 if all(t.converged for t in trajectories) else EXIT_NOT_CONVERGED
+    return status
 
 
 def run_experiment(args: argparse.Namespace) -> int:

@@ -129,7 +129,8 @@ def compare(petsc: Any, problem: PeriodicProblem, pressure: float, solvers: Sequ
                         gap.sum(), np.vdot(p - p_ref, p - p_ref), np.vdot(r, r),
                         np.vdot(pp, gap), pp.sum())
                     traj.iteration.append(int(it))
-                    traj.time.append(t_in - start - spent[0])
+                    # the slowest rank's time, so that every rank stops at the same iteration
+                    traj.time.append(grid.max(t_in - start - spent[0]))
                     traj.mean_gap_error.append(abs(g_sum / grid.size - u_ref) / u_scale)
                     traj.pressure_error.append(float(np.sqrt(dp2)) / p_ref_norm)
                     traj.natural_residual.append(float(np.sqrt(r2 / grid.size)) / pressure)

@@ -41,10 +41,10 @@ def bugnicourt(substrate, h, size, p0, tol, offset):
     """Bugnicourt's CG on ContactMechanics's dual problem at the rigid ``offset``:
     (result, gap, contact mask, seconds)."""
     system = make_system(substrate=substrate, surface=Topography(h, size))
+    uniform = np.full(h.shape, p0 * size[0] * size[1] / h.size)  # pixel forces of p0
     start = time.perf_counter()
-    res = system.dual_minimize_proxy(offset, init_force=np.full(h.shape, p0 * size[0] * size[1]
-                                                                / h.size),
-                                     solver="ccg-without-restart", gtol=tol, maxiter=200000)
+    res = system.dual_minimize_proxy(offset, init_force=uniform, solver="ccg-without-restart",
+                                     gtol=tol, maxiter=200000)
     elapsed = time.perf_counter() - start
     force = res.x.reshape(h.shape)
     return res, substrate.evaluate_disp(-force) - h - offset, force > 0, elapsed
@@ -64,12 +64,12 @@ def main() -> None:
     size = (float(length),) * 2
     substrate = PeriodicFFTElasticHalfSpace((n, n), float(modulus), physical_sizes=size)
     h_rms = float(np.sqrt(np.mean((h - h.mean()) ** 2)))
+    tolerance = float(tol) * h_rms
     for p0 in map(float, pressures.split(",")):
-        res, *rest = polonsky_keer(substrate, h, size, p0, float(tol) * h_rms)
+        res, *rest = polonsky_keer(substrate, h, size, p0, tolerance)
         report("cm-polonsky-keer", p0, res, *rest)
         if "--bugnicourt" in sys.argv[6:]:
-            report("cm-bugnicourt", p0,
-                   *bugnicourt(substrate, h, size, p0, float(tol) * h_rms, res.offset))
+            report("cm-bugnicourt", p0, *bugnicourt(substrate, h, size, p0, tolerance, res.offset))
 
 
 if __name__ == "__main__":

@@ -26,6 +26,23 @@ def periodic_compliance(q: np.ndarray, modulus: float, q_zero: float) -> np.ndar
     return 2.0 / (modulus * np.where(q > 0, q, q_zero))
 
 
+def held_compliance(q: np.ndarray, modulus: float, interfacial_stiffness: float
+                    ) -> np.ndarray:
+    """Compliance ``1 / (E* |q|/2 + K)`` of the open surface of a contact of stiffness ``K``.
+
+    The contact spots hold the surface like a uniform layer of springs of stiffness ``K``
+    per area (the interfacial stiffness ``-dp0/du_bar``), in parallel with the half-space.
+    The homogenised picture is exact for the mean mode (``1/K`` at ``q = 0``: a uniform
+    pressure change moves the mean gap by ``dp0/K``) and becomes the free compliance
+    ``2/(E*|q|)`` at wavelengths much shorter than ``E*/K``.  Used only to precondition
+    problems restricted to the open pixels, where it is positive for any ``K > 0``.
+    """
+    if not (np.isfinite(interfacial_stiffness) and interfacial_stiffness > 0):
+        raise ValueError(f"interfacial stiffness must be positive and finite, "
+                         f"got {interfacial_stiffness}")
+    return 1.0 / (periodic_stiffness(q, modulus) + interfacial_stiffness)
+
+
 def _corner_primitive(xi: np.ndarray, eta: np.ndarray) -> np.ndarray:
     """``G(xi, eta) = int_0^xi int_0^eta dx dy / sqrt(x^2 + y^2)``, odd in each argument.
 

@@ -19,6 +19,7 @@ from typing import Any, Callable, Iterator, Sequence
 import numpy as np
 
 from . import _petsc
+from .continuation import ConvergedStep, LoadPath
 from .fft import make_fft
 from .grid import Grid
 from .observables import step_observables
@@ -71,7 +72,11 @@ def check_pressures(pressures: Sequence[float]) -> list[float]:
 def sweep(petsc: Any, problem: PeriodicProblem, pressures: Sequence[float],
           fields: bool = False, monitor: Callable[[int, float, float], None] | None = None,
           stiffness: bool = False, start: np.ndarray | None = None) -> Iterator[Step]:
-    """Solve the pressures in the given order, each warm-started from the last converged gap.
+    """Solve the pressures in the given order, each warm-started from the last converged steps.
+
+    Each step starts from the last converged gap, extrapolated along the load path, and its
+    preconditioner is held by the interfacial stiffness the path predicts
+    (:class:`~petsc_contact.continuation.LoadPath`; Persson's estimate for the first step).
 
     Parameters
     ----------
@@ -90,10 +95,11 @@ def sweep(petsc: Any, problem: PeriodicProblem, pressures: Sequence[float],
     grid = problem.grid
     ell = problem.scale_length
     x = (problem.initial_gap() if start is None else start).reshape(-1) / ell
+    path = LoadPath()
     with BoundSolver(petsc, grid, problem.hessian, problem.preconditioner) as solver:
         for p0 in check_pressures(pressures):
-            problem.set_pressure(p0)
-            problem.start(x)
+            problem.set_pressure(p0, path.stiffness_estimate(p0))
+            problem.start(path.start(p0, x))
             history: list[float] = []
 
             def record(it: int, f: float, gnorm: float) -> None:
@@ -101,8 +107,8 @@ def sweep(petsc: Any, problem: PeriodicProblem, pressures: Sequence[float],
                 if monitor is not None:
                     monitor(it, f, gnorm)
 
-            x_new, info = solver.solve(problem.objective_gradient, x, monitor=record,
-                                       gatol_floor=problem.rounding_floor(p0))
+            x_new, info = solver.solve(problem.objective_gradient, problem.start_point,
+                                       monitor=record, gatol_floor=problem.rounding_floor(p0))
             gap = x_new.reshape(grid.local_shape) * ell
             pressure = problem.pressure(gap)
             obs = step_observables(grid, gap, pressure, problem.heights, p0,
@@ -110,14 +116,17 @@ def sweep(petsc: Any, problem: PeriodicProblem, pressures: Sequence[float],
             contact = obs.pop("contact")
             grtol = petsc.Options().getReal("tao_grtol", 0.0)
             verdict = verify(info, obs, ell, history[0] if history else np.inf, grtol)
-            if verdict == "ok":
-                x = x_new
-            scalars = {"nominal_pressure": p0, **obs, **info.scalars(verdict)}
+            scalars = {"nominal_pressure": p0, **obs, **info.scalars(verdict),
+                       "preconditioner_stiffness": problem.interfacial_stiffness}
+            k = np.nan
             if stiffness:
-                k, its = (periodic_stiffness_exact(petsc, grid, problem.stiffness,
-                                                   problem.compliance, contact)
+                held = problem.held_compliance(problem.interfacial_stiffness)
+                k, its = (periodic_stiffness_exact(petsc, grid, problem.stiffness, held, contact)
                           if verdict == "ok" else (np.nan, 0))
                 scalars.update(stiffness=k, stiffness_iterations=its)
+            if verdict == "ok":
+                x = x_new
+                path.add(ConvergedStep(p0, obs["mean_gap"], x, k))
             yield Step(scalars, gap if fields else None, pressure if fields else None,
                        state=x.reshape(grid.local_shape) * ell)
 

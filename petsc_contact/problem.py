@@ -27,34 +27,38 @@ from scipy.special import erf
 
 from . import kernels
 from .fft import FFT, wavevector_magnitude
-from .greens import periodic_compliance, periodic_stiffness
+from .greens import held_compliance, periodic_compliance, periodic_stiffness
 from .grid import Grid
-from .operator import FourierOperator
+from .operator import FourierOperator, twice
 from .schur import ContactSchur, quarter
+from .theory import linear_stiffness
 
 ROUNDING_FACTOR = 100.0
 SCHUR_MAX = 4096  # the most bound variables for the Schur form (dense matrix: 134 MB)
 
 
 class MeanModePreconditioner(FourierOperator):
-    """The Fourier compliance, with its ``q = 0`` entry adapted to the contact set.
+    """The inverse of the Hessian held by the contact's interfacial stiffness, with its
+    ``q = 0`` entry adapted to the contact set.
 
-    ``K`` has no ``q = 0`` entry: the mean gap is held only by the contact pixels.  With
-    ``m`` isolated pixels at the bound, a uniform gap change meets a stiffness of at most
-    ``m k / n^2`` (``k`` the Hessian's diagonal).  The fixed entry ``2/(E* q0)`` leaves
-    this mode's preconditioned eigenvalue near ``0.8 m/n``, far below 1 for a few contact
-    pixels: cold single-asperity solves then took ``O(n)`` iterations (1156 at 2048^2).
-    The entry used is the larger of the two compliances, ``max(2/(E* q0), 1/(m k))``:
-    clustered contacts are softer than ``m k``, and there the fixed value measured better.
+    On the open pixels the contact spots hold the surface like a layer of springs of the
+    interfacial stiffness ``K_i`` (:func:`~petsc_contact.greens.held_compliance`), so the
+    multiplier is ``1/(E*|q|/2 + K_i)`` (scaled like the Hessian), with ``K_i`` an estimate
+    for the current load.  The free compliance ``2/(E*|q|)`` misses exactly that support:
+    at long wavelengths it over-predicts the response of the open surface, most of all for
+    the mean mode, which ``K`` alone does not hold at all.
+
+    With ``m`` isolated pixels at the bound a uniform gap change meets a stiffness of at
+    most ``m k / n^2`` (``k`` the Hessian's diagonal), so the ``q = 0`` entry used is the
+    larger of the two compliances, ``max(1/K_i, 1/(m k))``: a few contact pixels are softer
+    than any estimate of ``K_i`` from the continuum.
 
     With at most :attr:`schur_max` variables at the bound it is instead the exact inverse of
-    the Hessian on the free set (:class:`~petsc_contact.schur.ContactSchur`: two FFT round
-    trips and a dense solve of the contact pixels' bordered system per application), which
-    makes each CG step exact on the current contact set.  At 2048^2 it took a
-    single-asperity load (``p0 = 1e-6 E*``, 103 contact pixels) from 27 iterations to 5, and
-    ``p0 = 1e-5 E*`` from 75 to 8.  Its LU factorisation, once per contact set, took 0.16 s
-    for 2048 pixels and 1.04 s for 4096 here, against 25 ms per 2048^2 FFT round trip;
-    :func:`schur_limit` keeps it within about ten round trips.
+    the Hessian on the free set, built on the unsupported inverse ``1/K``
+    (:class:`~petsc_contact.schur.ContactSchur`: two FFT round trips and a dense solve of
+    the contact pixels' bordered system per application), which
+    makes each CG step exact on the current contact set; :func:`schur_limit` keeps its LU
+    factorisation, once per contact set, within about ten FFT round trips.
     Called by :class:`~petsc_contact.cg.PolonskyKeer` through :meth:`adapt`.
     """
 
@@ -65,21 +69,34 @@ class MeanModePreconditioner(FourierOperator):
     schur: ContactSchur | None = None
     _quarter: np.ndarray | None = None  # G's quarter, computed when the Schur form is first used
     _spread: np.ndarray | None = None  # work fields of the Schur form
+    support = 0.0  # the interfacial stiffness held by (normalised), set by invert
+    _filled = 0.0  # the support the multiplier holds now (0 in the Schur form)
+    _hessian: FourierOperator
 
-    def invert(self, hessian: FourierOperator, mean_mode: float, hessian_diagonal: float
+    def invert(self, hessian: FourierOperator, support: float, hessian_diagonal: float
                ) -> None:
-        """Become the inverse of ``hessian`` (diagonal entry ``hessian_diagonal``), with
-        ``mean_mode`` (normalised) as its fixed ``q = 0`` entry.
+        """Become the inverse of ``hessian + support`` (``hessian``'s diagonal entry is
+        ``hessian_diagonal``); ``support > 0`` is the interfacial stiffness in the Hessian's
+        normalised units.
 
-        Computed in place, with no copy of the kernel kept: the normalised multipliers are
-        ``K c/N`` and ``G/(N c) = N^-2/(K c/N)``, with ``N = n^2`` and ``G = 1/K`` for ``q > 0``.
+        Computed in place, with no copy of the kernel kept: with ``N = n^2`` the normalised
+        multipliers are ``c K/N`` for the Hessian, ``s = c K_i/N`` for the support and
+        ``N^-2/(c K/N + s)`` for the inverse, whose ``q = 0`` entry is ``1/(N c K_i)``.
         """
-        with np.errstate(divide="ignore"):
-            np.divide(1.0 / self.grid.size ** 2, hessian.multiplier, out=self.multiplier)
-        self.base_mean_mode = mean_mode
-        self._set_mean_mode(mean_mode)
+        self._hessian = hessian
+        self.support = support
+        self._fill(support)
+        self.base_mean_mode = 1.0 / (self.grid.size ** 2 * support)
+        self._set_mean_mode(self.base_mean_mode)
         self.hessian_diagonal = hessian_diagonal
         self.schur = self._quarter = None
+
+    def _fill(self, support: float) -> None:
+        """The multiplier ``N^-2/(c K/N + support)`` in place (``q = 0``: set separately)."""
+        np.add(self._hessian.multiplier, support, out=self.multiplier)
+        with np.errstate(divide="ignore"):
+            np.divide(1.0 / self.grid.size ** 2, self.multiplier, out=self.multiplier)
+        self._filled = support
 
     def adapt(self, bound_count: int, free: np.ndarray) -> bool:
         """Adapt to ``bound_count`` variables at their bound (``free``: this rank's free mask).
@@ -88,6 +105,8 @@ class MeanModePreconditioner(FourierOperator):
         on every rank); otherwise only its ``q = 0`` entry followed the count.
         """
         if 0 < bound_count <= self.schur_max:
+            if self._filled != 0.0:  # the Schur form needs the exact inverse, G = 1/K
+                self._fill(0.0)
             self._set_mean_mode(0.0)
             if self._quarter is None:
                 impulse = np.zeros(self.grid.local_shape)
@@ -99,6 +118,8 @@ class MeanModePreconditioner(FourierOperator):
                                       ~free.reshape(self.grid.local_shape))
             return True
         self.schur = self._spread = None
+        if self._filled != self.support:
+            self._fill(self.support)
         self._set_mean_mode(max(self.base_mean_mode,
                                 1.0 / (max(bound_count, 1) * self.hessian_diagonal)))
         return False
@@ -164,25 +185,46 @@ class PeriodicProblem:
         self.preconditioner = MeanModePreconditioner(grid, fft,
                                                      periodic_compliance(q, modulus, q0))
         self.preconditioner.schur_max = schur_limit(grid.n)
-        self._mean_compliance = float(periodic_compliance(0.0, modulus, q0)) / grid.size
         self.pixel_stiffness = self.stiffness.diagonal()
         kh = self.stiffness.apply_array(self.heights, np.empty(grid.local_shape))
         self.elastic_pressure_rms = grid.rms(kh)  # rms(K h) ~ E* h'_rms / 2
         self._min_kh = grid.min(float(kh.min()))
         self.nominal_pressure = np.nan
+        self.interfacial_stiffness = np.nan
         self._s = np.nan
+        self._held: FourierOperator | None = None
 
-    def set_pressure(self, p0: float) -> None:
-        """Set the nominal pressure ``p0 > 0`` and rescale the TAO-facing operators."""
+    def set_pressure(self, p0: float, interfacial_stiffness: float | None = None) -> None:
+        """Set the nominal pressure ``p0 > 0`` and rescale the TAO-facing operators.
+
+        ``interfacial_stiffness`` is an estimate of ``K = -dp0/du_bar`` at ``p0`` (per area)
+        that the preconditioner is held by (:class:`MeanModePreconditioner`); it changes
+        the path of the solver, never its answer.  Default: :meth:`stiffness_estimate`.
+        """
         if not np.isfinite(p0) or p0 <= 0:
             raise ValueError(f"nominal pressure must be positive and finite, got {p0}")
+        k_i = self.stiffness_estimate(p0) if interfacial_stiffness is None \
+            else float(interfacial_stiffness)
+        if not (np.isfinite(k_i) and k_i > 0):
+            raise ValueError(f"interfacial stiffness must be positive and finite, got {k_i}")
         self.nominal_pressure = float(p0)
+        self.interfacial_stiffness = k_i
         self._s = 1.0 / (np.sqrt(self.grid.size) * p0)
         c = self._s * self.scale_length
         np.multiply(self.stiffness.multiplier, c, out=self.hessian.multiplier)
-        self.preconditioner.invert(self.hessian, self._mean_compliance / c,
+        self.preconditioner.invert(self.hessian, c * k_i / self.grid.size,
                                    self.pixel_stiffness * c)
         self.preconditioner.expected_bound_count = self.expected_contact_count(p0)
+
+    def stiffness_estimate(self, p0: float) -> float:
+        """Persson's interfacial stiffness ``K = p0/u0``, ``u0 = gamma h_rms`` (paper Eq. 1).
+
+        The estimate the preconditioner uses when nothing better is known: within a factor
+        of two it served as well as the exact value (measured, ``docs/solvers.md``).
+        """
+        if self.h_rms <= 0:  # a flat surface: contact is complete at any load
+            return self.pixel_stiffness
+        return float(linear_stiffness(p0, self.h_rms))
 
     @functools.cached_property
     def compliance(self) -> FourierOperator:
@@ -190,6 +232,19 @@ class PeriodicProblem:
         q = wavevector_magnitude(self.grid, self.stiffness.fft)
         return FourierOperator(self.grid, self.stiffness.fft,
                                periodic_compliance(q, self.modulus, 2 * np.pi / self.grid.length))
+
+    def held_compliance(self, interfacial_stiffness: float) -> FourierOperator:
+        """The compliance held by ``interfacial_stiffness``, ``1/(E* q/2 + K_i)``
+        (:func:`~petsc_contact.greens.held_compliance`): the preconditioner of the exact
+        stiffness solve.  One operator, recomputed in place at each call.
+        """
+        q = wavevector_magnitude(self.grid, self.stiffness.fft)
+        kernel = held_compliance(q, self.modulus, interfacial_stiffness)
+        if self._held is None:
+            self._held = FourierOperator(self.grid, self.stiffness.fft, kernel)
+        else:
+            self._held.multiplier[...] = twice(kernel / self.grid.size)
+        return self._held
 
     def expected_contact_count(self, p0: float) -> int:
         """Contact pixels at ``p0`` in Persson's theory, ``n^2 erf(p0 / (sqrt(2) sigma))``.
@@ -209,10 +264,16 @@ class PeriodicProblem:
         return p
 
     def start(self, x0: np.ndarray) -> None:
-        """Take ``x0`` as the reference point of :meth:`objective_gradient` (one FFT)."""
-        self._x_ref = np.array(x0, dtype=float).reshape(-1)
+        """Take ``x0`` as the reference point of :meth:`objective_gradient` (one FFT) and
+        as :attr:`start_point`."""
+        self._x_ref = np.asarray(x0, dtype=float).reshape(-1)  # read only: no copy
         p_ref = self.pressure(self._x_ref.reshape(self.grid.local_shape) * self.scale_length)
         self._sp_ref = (self._s * p_ref).reshape(-1)  # the scaled gradient at x_ref
+
+    @property
+    def start_point(self) -> np.ndarray:
+        """The point given to :meth:`start` (flat local array, scaled gap)."""
+        return self._x_ref
 
     def objective_gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
         """Scaled objective relative to the reference, ``f(x) - f(x_ref)``; ``grad <- s p``.

@@ -1,7 +1,10 @@
 """Speed of petsc-contact's solvers against Tamaas and ContactMechanics on the same surface.
 
 usage: .venv/bin/python benchmarks/speed.py [--grid 512 2048] [--types python tron] [--repeat 3]
-Prints per solver and load: iterations, FFT round trips (transforms counted in the step,
+       [--surfaces easy paper]
+Surfaces (H = 0.7, rms slope 0.1, seed 1): "easy", L/lambda_r = 2 and L/lambda_1 = 64; "paper",
+the paper's bandwidth, L/lambda_r = 1 and roughness down to two pixels (L/lambda_1 = n/2).
+Prints per surface, solver and load: iterations, FFT round trips (transforms counted in the step,
 set-up included, halved: a projected CG step skips one inverse transform), wall time (median of --repeat solves:
 single timings vary by 30% on a shared 2-core machine), time per round trip over one
 measured FFT round trip (the "ratio"; forward + spectral multiply + backward, median of 5
@@ -115,17 +118,20 @@ def main() -> None:
                     help="also run at this fraction of the full-contact pressure -min(K h)")
     ap.add_argument("--no-peers", action="store_true", help="skip Tamaas and ContactMechanics")
     ap.add_argument("--repeat", type=int, default=3, help="solves per case; the median is shown")
+    ap.add_argument("--surfaces", nargs="+", choices=("easy", "paper"), default=["easy"])
     args = ap.parse_args()
-    for n in args.grid:
+    for n, surface in ((n, s) for s in args.surfaces for n in args.grid):
         grid = Grid(n, 1.0)
-        h = self_affine(grid, make_fft(grid), hurst=0.7, rolloff_ratio=2, cutoff_ratio=64,
-                        seed=1, rms_slope=0.1)
+        rolloff, cutoff = (2, 64) if surface == "easy" else (1, n // 2)
+        h = self_affine(grid, make_fft(grid), hurst=0.7, rolloff_ratio=rolloff,
+                        cutoff_ratio=cutoff, seed=1, rms_slope=0.1)
         pressures = list(args.pressures)
         if args.full_fraction:
             problem = PeriodicProblem(grid, make_fft(grid), h, 1.0)
             pressures.append(float(f"{args.full_fraction * problem.full_contact_pressure():.4g}"))
         rt = fft_round_trip(grid)
-        print(f"# n = {n}: FFT round trip {rt * 1e3:.3f} ms")
+        print(f"# n = {n}, {surface} surface (L/lambda_r = {rolloff}, L/lambda_1 = {cutoff}): "
+              f"FFT round trip {rt * 1e3:.3f} ms")
         with tempfile.TemporaryDirectory() as tmp:
             path = os.path.join(tmp, "h.npy")
             np.save(path, h)

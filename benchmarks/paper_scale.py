@@ -1,8 +1,9 @@
 """One paper-scale periodic load step with the default solver (issue 6): iterations, time, memory.
 
 usage: [mpiexec -n P] .venv/bin/python benchmarks/paper_scale.py [--grid 8192] [--pressure 1e-3]
-       [--profile]
-Surface: H = 0.7, rms slope 0.1, L/lambda_r = 2, L/lambda_1 = n/4, seed 1, generated
+       [--rolloff-ratio 2] [--cutoff-ratio N/4] [--profile]
+Surface: H = 0.7, rms slope 0.1, L/lambda_r = 2, L/lambda_1 = n/4 (the paper's own bandwidth:
+--rolloff-ratio 1 --cutoff-ratio N/2), seed 1, generated
 distributed over the ranks and gathered (``periodic_contact`` takes the whole map on every
 rank). The step starts from first touch. Rank 0 prints the surface's time (FFTW planning
 included), the load step's wall time (problem set-up and solve) and TAO's solve time, the
@@ -31,6 +32,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grid", type=int, default=8192)
     ap.add_argument("--pressure", type=float, default=1e-3, help="p0/E*")
+    ap.add_argument("--rolloff-ratio", type=float, default=2.0, help="L/lambda_r")
+    ap.add_argument("--cutoff-ratio", type=float, default=None, help="L/lambda_1 (default n/4)")
     ap.add_argument("--profile", action="store_true", help="cProfile rank 0's load step")
     args = ap.parse_args()
     comm = MPI.COMM_WORLD
@@ -38,8 +41,8 @@ def main() -> None:
     start = time.perf_counter()
     grid = Grid(n, 1.0, comm)
     fft = make_fft(grid)
-    local = self_affine(grid, fft, hurst=0.7, rolloff_ratio=2.0, cutoff_ratio=n / 4, seed=1,
-                        rms_slope=0.1)
+    local = self_affine(grid, fft, hurst=0.7, rolloff_ratio=args.rolloff_ratio,
+                        cutoff_ratio=args.cutoff_ratio or n / 4, seed=1, rms_slope=0.1)
     heights = np.empty((n, n))
     counts = [len(range(n)[s]) * n for s in comm.allgather(grid.rows)]
     comm.Allgatherv(np.ascontiguousarray(local), [heights, counts])

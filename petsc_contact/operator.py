@@ -139,6 +139,17 @@ class FourierOperator(SpectralOperator):
         """Another operator on the same FFT with the multiplier times ``factor``."""
         return self._with(self.multiplier * factor)
 
+    def set_inverse(self, op: "FourierOperator", support: float) -> None:
+        """Become the inverse of ``op + support I`` on the same grid, in place.
+
+        ``support`` is in ``op``'s normalised units (kernel over ``n^2``); with ``N = n^2``
+        the normalised multiplier is ``N^-2/(op.multiplier + support)``, so a zero entry
+        of ``op`` gives ``inf`` when ``support`` is 0 (the caller sets that entry).
+        """
+        np.add(op.multiplier, support, out=self.multiplier)
+        with np.errstate(divide="ignore"):
+            np.divide(1.0 / self.grid.size ** 2, self.multiplier, out=self.multiplier)
+
     def set_entry(self, row: int, column: int, value: float) -> None:
         """Set one entry of the normalised multiplier (local spectrum indices)."""
         self.multiplier[row, 2 * column:2 * column + 2] = value

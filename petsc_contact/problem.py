@@ -27,9 +27,9 @@ from scipy.special import erf
 
 from . import kernels
 from .fft import FFT, wavevector_magnitude
-from .greens import held_compliance, periodic_compliance, periodic_stiffness
+from .greens import periodic_compliance, periodic_stiffness
 from .grid import Grid
-from .operator import FourierOperator, twice
+from .operator import FourierOperator
 from .schur import ContactSchur, quarter
 from .theory import linear_stiffness
 
@@ -73,11 +73,11 @@ class MeanModePreconditioner(FourierOperator):
     _filled = 0.0  # the support the multiplier holds now (0 in the Schur form)
     _hessian: FourierOperator
 
-    def invert(self, hessian: FourierOperator, support: float, hessian_diagonal: float
-               ) -> None:
+    def invert(self, hessian: FourierOperator, support: float, hessian_diagonal: float,
+               mean_mode: float) -> None:
         """Become the inverse of ``hessian + support`` (``hessian``'s diagonal entry is
-        ``hessian_diagonal``); ``support > 0`` is the interfacial stiffness in the Hessian's
-        normalised units.
+        ``hessian_diagonal``), with ``mean_mode`` as its ``q = 0`` entry; ``support >= 0``
+        is the interfacial stiffness in the Hessian's normalised units.
 
         Computed in place, with no copy of the kernel kept: with ``N = n^2`` the normalised
         multipliers are ``c K/N`` for the Hessian, ``s = c K_i/N`` for the support and
@@ -86,16 +86,14 @@ class MeanModePreconditioner(FourierOperator):
         self._hessian = hessian
         self.support = support
         self._fill(support)
-        self.base_mean_mode = 1.0 / (self.grid.size ** 2 * support)
+        self.base_mean_mode = mean_mode
         self._set_mean_mode(self.base_mean_mode)
         self.hessian_diagonal = hessian_diagonal
         self.schur = self._quarter = None
 
     def _fill(self, support: float) -> None:
         """The multiplier ``N^-2/(c K/N + support)`` in place (``q = 0``: set separately)."""
-        np.add(self._hessian.multiplier, support, out=self.multiplier)
-        with np.errstate(divide="ignore"):
-            np.divide(1.0 / self.grid.size ** 2, self.multiplier, out=self.multiplier)
+        self.set_inverse(self._hessian, support)
         self._filled = support
 
     def adapt(self, bound_count: int, free: np.ndarray) -> bool:
@@ -199,28 +197,32 @@ class PeriodicProblem:
 
         ``interfacial_stiffness`` is an estimate of ``K = -dp0/du_bar`` at ``p0`` (per area)
         that the preconditioner is held by (:class:`MeanModePreconditioner`); it changes
-        the path of the solver, never its answer.  Default: :meth:`stiffness_estimate`.
+        the path of the solver, never its answer.  Default: :meth:`stiffness_estimate`;
+        ``0``: no support, the free compliance ``2/(E* q)`` with ``2/(E* q0)`` at ``q = 0``.
         """
         if not np.isfinite(p0) or p0 <= 0:
             raise ValueError(f"nominal pressure must be positive and finite, got {p0}")
         k_i = self.stiffness_estimate(p0) if interfacial_stiffness is None \
             else float(interfacial_stiffness)
-        if not (np.isfinite(k_i) and k_i > 0):
-            raise ValueError(f"interfacial stiffness must be positive and finite, got {k_i}")
+        if not (np.isfinite(k_i) and k_i >= 0):
+            raise ValueError(f"interfacial stiffness must be non-negative and finite, got {k_i}")
         self.nominal_pressure = float(p0)
         self.interfacial_stiffness = k_i
         self._s = 1.0 / (np.sqrt(self.grid.size) * p0)
         c = self._s * self.scale_length
         np.multiply(self.stiffness.multiplier, c, out=self.hessian.multiplier)
+        q0 = 2 * np.pi / self.grid.length
+        mean_compliance = 1.0 / k_i if k_i > 0 else periodic_compliance(0.0, self.modulus, q0)
         self.preconditioner.invert(self.hessian, c * k_i / self.grid.size,
-                                   self.pixel_stiffness * c)
+                                   self.pixel_stiffness * c,
+                                   float(mean_compliance) / (self.grid.size * c))
         self.preconditioner.expected_bound_count = self.expected_contact_count(p0)
 
     def stiffness_estimate(self, p0: float) -> float:
         """Persson's interfacial stiffness ``K = p0/u0``, ``u0 = gamma h_rms`` (paper Eq. 1).
 
         The estimate the preconditioner uses when nothing better is known: within a factor
-        of two it served as well as the exact value (measured, ``docs/solvers.md``).
+        of two it served as well as the exact value (measured, ``docs/performance.md``).
         """
         if self.h_rms <= 0:  # a flat surface: contact is complete at any load
             return self.pixel_stiffness
@@ -236,14 +238,14 @@ class PeriodicProblem:
     def held_compliance(self, interfacial_stiffness: float) -> FourierOperator:
         """The compliance held by ``interfacial_stiffness``, ``1/(E* q/2 + K_i)``
         (:func:`~petsc_contact.greens.held_compliance`): the preconditioner of the exact
-        stiffness solve.  One operator, recomputed in place at each call.
+        stiffness solve.  One operator, recomputed in place (no field-sized temporaries).
         """
-        q = wavevector_magnitude(self.grid, self.stiffness.fft)
-        kernel = held_compliance(q, self.modulus, interfacial_stiffness)
+        if not (np.isfinite(interfacial_stiffness) and interfacial_stiffness > 0):
+            raise ValueError(f"interfacial stiffness must be positive and finite, "
+                             f"got {interfacial_stiffness}")
         if self._held is None:
-            self._held = FourierOperator(self.grid, self.stiffness.fft, kernel)
-        else:
-            self._held.multiplier[...] = twice(kernel / self.grid.size)
+            self._held = self.stiffness.scaled(1.0)
+        self._held.set_inverse(self.stiffness, interfacial_stiffness / self.grid.size)
         return self._held
 
     def expected_contact_count(self, p0: float) -> int:

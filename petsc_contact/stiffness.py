@@ -22,7 +22,7 @@ import numpy as np
 from .grid import Grid
 from .operator import ShellInterface, shell_matrix
 
-STIFFNESS_RTOL = 1e-8  # K to 2e-10 relative of a 1e-12 solve (docs/solvers.md)
+STIFFNESS_RTOL = 1e-8  # K to 2e-10 relative of a 1e-12 solve (docs/performance.md)
 
 
 class Restricted(ShellInterface):

@@ -11,7 +11,7 @@ from mpi4py import MPI
 
 from petsc_contact import periodic_contact
 from petsc_contact.continuation import MAX_EXTRAPOLATION, ConvergedStep, LoadPath
-from petsc_contact.fft import make_fft
+from petsc_contact.fft import make_fft, wavevector_magnitude
 from petsc_contact.greens import held_compliance, periodic_compliance
 from petsc_contact.grid import Grid
 from petsc_contact.periodic import sweep
@@ -81,6 +81,28 @@ def test_held_compliance_limits():
             held_compliance(q, 2.0, bad)
 
 
+def test_held_operators_are_the_held_compliance():
+    """The stiffness solve's operator and the CG's preconditioner (scaled like the Hessian)
+    carry ``1/(E*|q|/2 + K)``; in the Schur form the preconditioner is the exact ``1/K``."""
+    grid = Grid(32, 2.0, MPI.COMM_SELF)
+    fft = make_fft(grid)
+    heights = self_affine(grid, fft, hurst=0.7, rolloff_ratio=1, cutoff_ratio=16, seed=1,
+                          rms_slope=0.1)
+    problem = PeriodicProblem(grid, fft, heights, 3.0)
+    q = wavevector_magnitude(grid, fft)
+    expected = held_compliance(q, 3.0, 0.7) / grid.size
+    np.testing.assert_allclose(problem.held_compliance(0.7).spectrum, expected, rtol=1e-12)
+    problem.set_pressure(1e-2, 0.7)
+    c = problem.hessian.spectrum[0, 1] / problem.stiffness.spectrum[0, 1]  # the Hessian's scale
+    pre = problem.preconditioner
+    np.testing.assert_allclose(pre.spectrum * c, expected, rtol=1e-12)
+    assert pre.adapt(1, np.arange(grid.size) > 0)  # one pixel at the bound: the Schur form
+    free = periodic_compliance(q, 3.0, 1.0) / grid.size
+    np.testing.assert_allclose((pre.spectrum * c)[q > 0], free[q > 0], rtol=1e-12)
+    assert not pre.adapt(pre.schur_max + 1, np.arange(grid.size) > pre.schur_max)
+    np.testing.assert_allclose((pre.spectrum * c)[q > 0], expected[q > 0], rtol=1e-12)
+
+
 @pytest.fixture(scope="module")
 def paper_band():
     """A 128^2 surface with roughness down to two pixels (L/lambda_1 = n/2)."""
@@ -105,10 +127,10 @@ def test_sweep_agrees_with_cold_solves(paper_band):
         assert w["preconditioner_stiffness"] > 0
 
 
-@pytest.mark.parametrize("factor", [1e-3, 1e3])
+@pytest.mark.parametrize("factor", [0.0, 1e-3, 1e3])
 def test_wrong_support_changes_the_path_not_the_answer(petsc, paper_band, factor):
-    """A preconditioner held by a stiffness 1000 times too soft or too stiff still converges
-    to the contact of Persson's estimate."""
+    """A preconditioner held by a stiffness 1000 times too soft or too stiff, or not held at
+    all (the free compliance), still converges to the contact of Persson's estimate."""
     grid = Grid(128, 1.0, MPI.COMM_SELF)
     problem = PeriodicProblem(grid, make_fft(grid), paper_band, 1.0)
     p0 = 3e-3

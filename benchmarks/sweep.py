@@ -1,7 +1,8 @@
 """A whole load sweep with the exact stiffness, this checkout against an earlier commit, in one run.
 
 usage: .venv/bin/python benchmarks/sweep.py [--grid 2048] [--hurst 0.7] [--rolloff-ratio 1]
-       [--baseline 2fc6848] [--sweep 12,1e-7,1e-1] [--repeat 1] [-- PETSc options]
+       [--baseline 2fc6848] [--sweep 12,1e-7,1e-1 | --pressures P1,...] [--repeat 1]
+       [-- PETSc options]
 Both runs are the command line a user types, ``petsc-contact periodic --grid N --hurst H
 --rms-slope 0.1 --rolloff-ratio R --cutoff-ratio N/2 --seed 1 --sweep ... --stiffness``
 (paper bandwidth: roughness down to two pixels), each in its own process: the baseline from a
@@ -55,12 +56,15 @@ def main() -> int:
     ap.add_argument("--rolloff-ratio", type=float, default=1.0, help="L/lambda_r")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--sweep", default="12,1e-7,1e-1", help="N,PMIN,PMAX as for the CLI")
+    ap.add_argument("--pressures", default=None,
+                    help="P1,... as for the CLI, instead of --sweep (one load: from first touch)")
     ap.add_argument("--baseline", default="2fc6848", help="commit to compare with")
     ap.add_argument("--repeat", type=int, default=1, help="runs of each, alternated")
     args, petsc = ap.parse_known_args()
     surface = ["--grid", str(args.grid), "--hurst", str(args.hurst), "--rms-slope", "0.1",
                "--rolloff-ratio", str(args.rolloff_ratio), "--cutoff-ratio",
-               str(args.grid // 2), "--seed", str(args.seed), "--sweep", args.sweep,
+               str(args.grid // 2), "--seed", str(args.seed),
+               *(["--pressures", args.pressures] if args.pressures else ["--sweep", args.sweep]),
                "--stiffness", *[a for a in petsc if a != "--"]]
     print("# petsc-contact periodic " + " ".join(surface))
     with tempfile.TemporaryDirectory() as tmp:
@@ -101,8 +105,8 @@ def report(runs: dict[str, list[dict]], baseline: str) -> int:
               f"{du:>10.1e} {dk:>8.1e}{flag}")
     for name in ("baseline", "this"):
         its = runs[name][0]["iterations"]
-        print(f"# {name}: iterations {int(its.sum())} in all, first step {its[0]}, median of "
-              f"the warm-started steps {np.median(its[1:]):g}")
+        warm = f", median of the warm-started steps {np.median(its[1:]):g}" if its.size > 1 else ""
+        print(f"# {name}: iterations {int(its.sum())} in all, first step {its[0]}{warm}")
     wall = {k: float(np.median([r["wall"] for r in v])) for k, v in runs.items()}
     solve = {k: float(np.median([r["solve_time"].sum() for r in v])) for k, v in runs.items()}
     memory = {k: max(r["memory"] for r in v) for k, v in runs.items()}

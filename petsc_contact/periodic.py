@@ -120,9 +120,10 @@ def sweep(petsc: Any, problem: PeriodicProblem, pressures: Sequence[float],
                        "preconditioner_stiffness": problem.interfacial_stiffness}
             k = np.nan
             if stiffness:
-                held = problem.held_compliance(problem.interfacial_stiffness)
-                k, its = (periodic_stiffness_exact(petsc, grid, problem.stiffness, held, contact)
-                          if verdict == "ok" else (np.nan, 0))
+                k, its = (periodic_stiffness_exact(
+                    petsc, grid, problem.stiffness,
+                    problem.held_compliance(problem.interfacial_stiffness), contact)
+                    if verdict == "ok" else (np.nan, 0))
                 scalars.update(stiffness=k, stiffness_iterations=its)
             if verdict == "ok":
                 x = x_new

@@ -181,6 +181,7 @@ class PeriodicProblem:
         self.preconditioner = MeanModePreconditioner(grid, fft,
                                                      periodic_compliance(q, modulus, q0))
         self.preconditioner.schur_max = schur_limit(grid.n)
+        self._free_mean_compliance = float(periodic_compliance(0.0, modulus, q0))
         self.pixel_stiffness = self.stiffness.diagonal()
         kh = self.stiffness.apply_array(self.heights, np.empty(grid.local_shape))
         self.elastic_pressure_rms = grid.rms(kh)  # rms(K h) ~ E* h'_rms / 2
@@ -209,11 +210,10 @@ class PeriodicProblem:
         self._s = 1.0 / (np.sqrt(self.grid.size) * p0)
         c = self._s * self.scale_length
         np.multiply(self.stiffness.multiplier, c, out=self.hessian.multiplier)
-        q0 = 2 * np.pi / self.grid.length
-        mean_compliance = 1.0 / k_i if k_i > 0 else periodic_compliance(0.0, self.modulus, q0)
+        mean_compliance = 1.0 / k_i if k_i > 0 else self._free_mean_compliance
         self.preconditioner.invert(self.hessian, c * k_i / self.grid.size,
                                    self.pixel_stiffness * c,
-                                   float(mean_compliance) / (self.grid.size * c))
+                                   mean_compliance / (self.grid.size * c))
         self.preconditioner.expected_bound_count = self.expected_contact_count(p0)
 
     def stiffness_estimate(self, p0: float) -> float:
@@ -258,8 +258,9 @@ class PeriodicProblem:
 
     def start(self, x0: np.ndarray) -> None:
         """Take ``x0`` as the reference point of :meth:`objective_gradient` (one FFT) and
-        as :attr:`start_point`."""
-        self._x_ref = np.asarray(x0, dtype=float).reshape(-1)  # read only: no copy
+        as :attr:`start_point`.  ``x0`` is kept, not copied: it must not change until the
+        next :meth:`start` (a field less at 8192^2 is 512 MB)."""
+        self._x_ref = np.asarray(x0, dtype=float).reshape(-1)
         p_ref = self.pressure(self._x_ref.reshape(self.grid.local_shape) * self.scale_length)
         self._sp_ref = (self._s * p_ref).reshape(-1)  # the scaled gradient at x_ref
 

@@ -1,4 +1,4 @@
-"""Coarse-to-fine starts for one load from first touch, against the default start (measured, not kept).
+"""Coarse-to-fine starts for one load from first touch against the default start (not kept).
 
 usage: .venv/bin/python benchmarks/cascade.py [--grid 1024] [--pressure 1e-3] [--levels 0 1 2]
 Surface: H = 0.7, rms slope 0.1, L/lambda_r = 1, L/lambda_1 = n/2 (paper bandwidth), seed 1.
@@ -31,8 +31,8 @@ def resample(field: np.ndarray, m: int) -> np.ndarray:
     k = min(n, m) // 2
     spectrum = np.fft.rfft2(field)
     out = np.zeros((m, m // 2 + 1), complex)
-    out[:k, :k + 1] = spectrum[:k, :k + 1]
-    out[-k:, :k + 1] = spectrum[-k:, :k + 1]
+    out[:k, : k + 1] = spectrum[:k, : k + 1]
+    out[-k:, : k + 1] = spectrum[-k:, : k + 1]
     return np.fft.irfft2(out, s=(m, m)) * (m / n) ** 2
 
 
@@ -46,8 +46,11 @@ def cascade(petsc, heights: np.ndarray, p0: float, levels: int) -> list[tuple[in
         m = n >> level
         grid = Grid(m, 1.0, MPI.COMM_SELF)
         problem = PeriodicProblem(grid, make_fft(grid), resample(heights, m), 1.0)
-        start = None if displacement is None else \
-            np.maximum(resample(displacement, m) - problem.heights, 0.0)
+        start = (
+            None
+            if displacement is None
+            else np.maximum(resample(displacement, m) - problem.heights, 0.0)
+        )
         (step,) = sweep(petsc, problem, [p0], start=start)
         if not step.converged:
             raise SystemExit(f"level {m}^2 did not converge: {step.scalars['verification']}")
@@ -64,14 +67,14 @@ def main() -> None:
     args = ap.parse_args()
     n = args.grid
     grid = Grid(n, 1.0, MPI.COMM_SELF)
-    heights = self_affine(grid, make_fft(grid), hurst=0.7, rolloff_ratio=1, cutoff_ratio=n / 2,
-                          seed=1, rms_slope=0.1)
+    heights = self_affine(
+        grid, make_fft(grid), hurst=0.7, rolloff_ratio=1, cutoff_ratio=n / 2, seed=1, rms_slope=0.1
+    )
     petsc = _petsc.init([])
     for levels in args.levels:
         rows = cascade(petsc, heights, args.pressure, levels)
         steps = ", ".join(f"{m}^2: {its} its {t:.2f} s" for m, its, t in rows)
-        print(f"levels {levels}: {steps}; total solve {sum(r[2] for r in rows):.2f} s",
-              flush=True)
+        print(f"levels {levels}: {steps}; total solve {sum(r[2] for r in rows):.2f} s", flush=True)
 
 
 if __name__ == "__main__":

@@ -44,13 +44,21 @@ def main() -> None:
     lib = ctypes.CDLL("libpetsc_real.so.3.18")
     int_t = ctypes.c_int64 if np.dtype(petsc.IntType).itemsize == 8 else ctypes.c_int32
     vp = ctypes.c_void_p
-    lib.MatCreateFFT.argtypes = [vp, int_t, ctypes.POINTER(int_t), ctypes.c_char_p,
-                                 ctypes.POINTER(vp)]
-    for name in ("VecScatterPetscToFFTW", "VecScatterFFTWToPetsc", "MatMult",
-                 "MatMultTranspose"):
+    lib.MatCreateFFT.argtypes = [
+        vp,
+        int_t,
+        ctypes.POINTER(int_t),
+        ctypes.c_char_p,
+        ctypes.POINTER(vp),
+    ]
+    for name in ("VecScatterPetscToFFTW", "VecScatterFFTWToPetsc", "MatMult", "MatMultTranspose"):
         getattr(lib, name).argtypes = [vp, vp, vp]
-    lib.MatCreateVecsFFTW.argtypes = [vp, ctypes.POINTER(vp), ctypes.POINTER(vp),
-                                      ctypes.POINTER(vp)]
+    lib.MatCreateVecsFFTW.argtypes = [
+        vp,
+        ctypes.POINTER(vp),
+        ctypes.POINTER(vp),
+        ctypes.POINTER(vp),
+    ]
     mat = vp()
     dims = (int_t * 2)(n, n)
     handle = MPI._handleof(comm)
@@ -95,9 +103,11 @@ def main() -> None:
     vin.destroy()
     vout.destroy()
     if comm.rank == 0:
-        print(f"n = {n}, ranks = {comm.size}: MATFFTW round trip {t_petsc * 1e3:.1f} ms "
-              f"(of which the two scatters {t_scatter * 1e3:.1f} ms); package backend "
-              f"({type(fft).__name__}) {t_pkg * 1e3:.1f} ms")
+        print(
+            f"n = {n}, ranks = {comm.size}: MATFFTW round trip {t_petsc * 1e3:.1f} ms "
+            f"(of which the two scatters {t_scatter * 1e3:.1f} ms); package backend "
+            f"({type(fft).__name__}) {t_pkg * 1e3:.1f} ms"
+        )
 
 
 if __name__ == "__main__":

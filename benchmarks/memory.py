@@ -44,16 +44,20 @@ def main() -> None:
     cases = [("periodic", n, s) for n in args.grids for s in args.solvers]
     cases += [("punch", n, "cg") for n in args.punch_grids]
     for geometry, n, solver in cases:
-        out = subprocess.run([sys.executable, "-c", CHILD, geometry, str(n), solver],
-                             capture_output=True, text=True)
-        line = [l for l in out.stdout.splitlines() if l.startswith("{")]
+        out = subprocess.run(
+            [sys.executable, "-c", CHILD, geometry, str(n), solver], capture_output=True, text=True
+        )
+        line = [text for text in out.stdout.splitlines() if text.startswith("{")]
         if not line:
             print(f"{geometry} {n} {solver}: failed: {out.stderr.strip().splitlines()[-1:]}")
             continue
         r = json.loads(line[0])
-        print(f"{geometry:>8} {n:>5} {solver:>6}: {r['bytes_per_point']:6.0f} B/point, "
-              f"peak {r['peak_GiB']:.2f} GiB, {r['iterations']} its, {r['time']:.1f} s, "
-              f"converged {r['converged']}", flush=True)
+        print(
+            f"{geometry:>8} {n:>5} {solver:>6}: {r['bytes_per_point']:6.0f} B/point, "
+            f"peak {r['peak_GiB']:.2f} GiB, {r['iterations']} its, {r['time']:.1f} s, "
+            f"converged {r['converged']}",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

@@ -41,8 +41,15 @@ def main() -> None:
     start = time.perf_counter()
     grid = Grid(n, 1.0, comm)
     fft = make_fft(grid)
-    local = self_affine(grid, fft, hurst=0.7, rolloff_ratio=args.rolloff_ratio,
-                        cutoff_ratio=args.cutoff_ratio or n / 4, seed=1, rms_slope=0.1)
+    local = self_affine(
+        grid,
+        fft,
+        hurst=0.7,
+        rolloff_ratio=args.rolloff_ratio,
+        cutoff_ratio=args.cutoff_ratio or n / 4,
+        seed=1,
+        rms_slope=0.1,
+    )
     heights = np.empty((n, n))
     counts = [len(range(n)[s]) * n for s in comm.allgather(grid.rows)]
     comm.Allgatherv(np.ascontiguousarray(local), [heights, counts])
@@ -60,13 +67,16 @@ def main() -> None:
     if comm.rank:
         return
     s = step.scalars
-    print(f"n = {n}, ranks = {comm.size}, FFT {type(fft).__name__}, p0/E* = {args.pressure:g}: "
-          f"surface {surface_time:.1f} s; load step {wall:.1f} s (solve {s['solve_time']:.1f} s), "
-          f"{s['iterations']} iterations, {s['objective_gradient_evaluations']} gradient "
-          f"evaluations, {s['hessian_applications']} Hessian and "
-          f"{s['preconditioner_applications']} preconditioner applications, "
-          f"{s['tao_reason']}; mean gap {s['mean_gap']:.8e}; peak memory {peak:.2f} GiB "
-          f"(sum over ranks)", flush=True)
+    print(
+        f"n = {n}, ranks = {comm.size}, FFT {type(fft).__name__}, p0/E* = {args.pressure:g}: "
+        f"surface {surface_time:.1f} s; load step {wall:.1f} s (solve {s['solve_time']:.1f} s), "
+        f"{s['iterations']} iterations, {s['objective_gradient_evaluations']} gradient "
+        f"evaluations, {s['hessian_applications']} Hessian and "
+        f"{s['preconditioner_applications']} preconditioner applications, "
+        f"{s['tao_reason']}; mean gap {s['mean_gap']:.8e}; peak memory {peak:.2f} GiB "
+        f"(sum over ranks)",
+        flush=True,
+    )
     if profile is not None:
         pstats.Stats(profile).sort_stats("tottime").print_stats(15)
 

@@ -62,14 +62,15 @@ def measure(n: int, p0: float) -> dict[str, float]:
     comm = MPI.COMM_WORLD
     grid = Grid(n, 1.0, comm)
     fft = make_fft(grid)
-    h = self_affine(grid, fft, hurst=0.7, rolloff_ratio=2, cutoff_ratio=64, seed=1,
-                    rms_slope=0.1)
+    h = self_affine(grid, fft, hurst=0.7, rolloff_ratio=2, cutoff_ratio=64, seed=1, rms_slope=0.1)
     x = np.random.default_rng(comm.rank).standard_normal(grid.local_shape)
     out = np.empty_like(x)
     op = FourierOperator(grid, fft, np.ones(fft.spectrum.shape))
-    result = {"round_trip": median_time(lambda: op.apply_array(x, out)),
-              "backend": type(fft).__name__,
-              "threads": fft.threads if isinstance(fft, SerialFFT) else 1}
+    result = {
+        "round_trip": median_time(lambda: op.apply_array(x, out)),
+        "backend": type(fft).__name__,
+        "threads": fft.threads if isinstance(fft, SerialFFT) else 1,
+    }
     heights = np.concatenate(comm.allgather(h))  # periodic_contact takes the whole map
     (step,) = periodic_contact(heights, 1.0, 1.0, [p0], comm=comm)
     if comm.size > 1:  # after the solve: FFTW-MPI cannot plan once mpi4py-fft has planned
@@ -89,15 +90,24 @@ def measure(n: int, p0: float) -> dict[str, float]:
         result["transposes"] = 2 * median_time(lambda: transfer.forward(a, b))
         result["bytes"] = 2 * comm.allreduce(transpose_bytes(slab), op=MPI.MAX)
     s = step.scalars
-    ffts = (s["objective_gradient_evaluations"] + s["hessian_applications"]
-            + s["preconditioner_applications"])
-    result.update(iterations=s["iterations"], time=s["solve_time"], ffts=ffts,
-                  per_fft=s["solve_time"] / ffts, converged=float(step.converged))
+    ffts = (
+        s["objective_gradient_evaluations"]
+        + s["hessian_applications"]
+        + s["preconditioner_applications"]
+    )
+    result.update(
+        iterations=s["iterations"],
+        time=s["solve_time"],
+        ffts=ffts,
+        per_fft=s["solve_time"] / ffts,
+        converged=float(step.converged),
+    )
     return result
 
 
-def project(n: int, local_1: float, ranks: list[int], bandwidth: float, latency: float,
-            allreduces: int) -> list[tuple[int, float, float, float]]:
+def project(
+    n: int, local_1: float, ranks: list[int], bandwidth: float, latency: float, allreduces: int
+) -> list[tuple[int, float, float, float]]:
     """(P, local FFT time, communication time, efficiency) per round trip at grid ``n``.
 
     ``local_1`` is the measured local-transform time of one round trip on one rank of the
@@ -107,7 +117,9 @@ def project(n: int, local_1: float, ranks: list[int], bandwidth: float, latency:
     for p in ranks:
         local = local_1 / p
         volume = 2 * 16 * n * (n // 2 + 1) * (p - 1) / p**2
-        comm = volume / (bandwidth * 1e9) + 2 * (p - 1) * latency + allreduces * latency * np.log2(p)
+        comm = (
+            volume / (bandwidth * 1e9) + 2 * (p - 1) * latency + allreduces * latency * np.log2(p)
+        )
         rows.append((p, local, comm, local / (local + comm)))
     return rows
 
@@ -116,13 +128,25 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grid", type=int, nargs="+", default=[2048])
     ap.add_argument("--pressure", type=float, default=1e-3)
-    ap.add_argument("--bandwidth", type=float, default=1.0,
-                    help="assumed network bandwidth per rank, GB/s (projection only)")
-    ap.add_argument("--latency", type=float, default=2e-6,
-                    help="assumed latency per message, s (projection only)")
-    ap.add_argument("--allreduces", type=int, default=3,
-                    help="latency-bound reductions per FFT round trip (the CG does 5-8 "
-                         "per iteration of ~2.8 round trips)")
+    ap.add_argument(
+        "--bandwidth",
+        type=float,
+        default=1.0,
+        help="assumed network bandwidth per rank, GB/s (projection only)",
+    )
+    ap.add_argument(
+        "--latency",
+        type=float,
+        default=2e-6,
+        help="assumed latency per message, s (projection only)",
+    )
+    ap.add_argument(
+        "--allreduces",
+        type=int,
+        default=3,
+        help="latency-bound reductions per FFT round trip (the CG does 5-8 "
+        "per iteration of ~2.8 round trips)",
+    )
     ap.add_argument("--project", type=int, default=8192, help="grid of the projection")
     args = ap.parse_args()
     comm = MPI.COMM_WORLD
@@ -130,26 +154,35 @@ def main() -> None:
         r = measure(n, args.pressure)
         if comm.rank:
             continue
-        print(f"n = {n}, ranks = {comm.size}, FFT {r['backend']} ({r['threads']} thread(s) "
-              f"per rank): {r['iterations']} iterations, "
-              f"{r['time']:.2f} s, {r['ffts']} operator applications, {r['per_fft'] * 1e3:.1f} ms "
-              f"per application in the solve, FFT round trip alone {r['round_trip'] * 1e3:.1f} ms"
-              + ("" if r["converged"] else "  NOT CONVERGED"))
+        print(
+            f"n = {n}, ranks = {comm.size}, FFT {r['backend']} ({r['threads']} thread(s) "
+            f"per rank): {r['iterations']} iterations, "
+            f"{r['time']:.2f} s, {r['ffts']} operator applications, {r['per_fft'] * 1e3:.1f} ms "
+            f"per application in the solve, FFT round trip alone {r['round_trip'] * 1e3:.1f} ms"
+            + ("" if r["converged"] else "  NOT CONVERGED")
+        )
         if comm.size > 1:
-            print(f"  whole-grid serial round trips, one per rank, all at once: "
-                  f"{r['concurrent_round_trip'] * 1e3:.1f} ms each")
+            print(
+                f"  whole-grid serial round trips, one per rank, all at once: "
+                f"{r['concurrent_round_trip'] * 1e3:.1f} ms each"
+            )
             local = r["round_trip"] - r["transposes"]
-            print(f"  mpi4py-fft round trip {r['slab_round_trip'] * 1e3:.1f} ms; its transposes "
-                  f"alone {r['transposes'] * 1e3:.1f} ms ({r['bytes'] / 1e6:.1f} MB sent "
-                  f"per rank per round trip, {r['bytes'] / r['transposes'] / 1e9:.2f} GB/s); "
-                  f"the {r['backend']} round trip less those: {local * 1e3:.1f} ms")
+            print(
+                f"  mpi4py-fft round trip {r['slab_round_trip'] * 1e3:.1f} ms; its transposes "
+                f"alone {r['transposes'] * 1e3:.1f} ms ({r['bytes'] / 1e6:.1f} MB sent "
+                f"per rank per round trip, {r['bytes'] / r['transposes'] / 1e9:.2f} GB/s); "
+                f"the {r['backend']} round trip less those: {local * 1e3:.1f} ms"
+            )
             m = args.project
             local_1 = local * comm.size * (m / n) ** 2 * np.log2(m) / np.log2(n)
-            print(f"  projection to {m}^2 (bandwidth {args.bandwidth} GB/s per rank, "
-                  f"latency {args.latency:g} s), per round trip:")
+            print(
+                f"  projection to {m}^2 (bandwidth {args.bandwidth} GB/s per rank, "
+                f"latency {args.latency:g} s), per round trip:"
+            )
             print("      P   local_ms    comm_ms  efficiency")
-            for p, loc, com, eff in project(m, local_1, [16, 32, 64, 128, 256],
-                                            args.bandwidth, args.latency, args.allreduces):
+            for p, loc, com, eff in project(
+                m, local_1, [16, 32, 64, 128, 256], args.bandwidth, args.latency, args.allreduces
+            ):
                 print(f"  {p:5d} {loc * 1e3:10.2f} {com * 1e3:10.2f} {eff:11.2f}")
 
 

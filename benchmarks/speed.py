@@ -4,21 +4,21 @@ usage: .venv/bin/python benchmarks/speed.py [--grid 512 2048] [--types python tr
        [--surfaces easy paper]
 Surfaces (H = 0.7, rms slope 0.1, seed 1): "easy", L/lambda_r = 2 and L/lambda_1 = 64; "paper",
 the paper's bandwidth, L/lambda_r = 1 and roughness down to two pixels (L/lambda_1 = n/2).
-Prints per surface, solver and load: iterations, FFT round trips (transforms counted in the step,
-set-up included, halved: a projected CG step skips one inverse transform), wall time (median of --repeat solves:
-single timings vary by 30% on a shared 2-core machine), time per round trip over one
-measured FFT round trip (the "ratio"; forward + spectral multiply + backward, median of 5
-batches of 20), the same ratio against the FFT time measured inside that solve ("in-solve":
-one over the share of the solve spent in FFTs, immune to the machine's drift between the
-FFT benchmark and the solve), and the peers' times in the same run: Tamaas
+Prints per surface, solver and load: iterations, FFT round trips (transforms counted in the
+step, set-up included, halved: a projected CG step skips one inverse transform), wall time
+(median of --repeat solves: single timings vary by 30% on a shared 2-core machine), time per
+round trip over one measured FFT round trip (the "ratio"; forward + spectral multiply +
+backward, median of 5 batches of 20), the same ratio against the FFT time measured inside that
+solve ("in-solve": one over the share of the solve spent in FFTs, immune to the machine's drift
+between the FFT benchmark and the solve), and the peers' times in the same run: Tamaas
 PolonskyKeerRey (tolerance 1e-8) and ContactMechanics's two constrained CGs, Polonsky-Keer
 (penetration tolerance 1e-8 h_rms) and Bugnicourt (largest gap residual 1e-8 h_rms; run
 displacement controlled at Polonsky-Keer's offset for the load, see
-peers/run_contactmechanics.py), all cold-started like ours, if their venv exists
-(python3 -m venv benchmarks/peers/.venv &&
-benchmarks/peers/.venv/bin/pip install tamaas contactmechanics).  All four reach the same
-mean gap to 1e-8 (printed, so a mismatch shows).  "/cm" is the ratio to the faster of
-ContactMechanics's two solvers for that load.  Type "python" is the default solver.
+peers/run_contactmechanics.py), all cold-started like ours, if their venv exists (python3 -m
+venv benchmarks/peers/.venv && benchmarks/peers/.venv/bin/pip install tamaas contactmechanics).
+All four reach the same mean gap to 1e-8 (printed, so a mismatch shows).  "/cm" is the ratio to
+the faster of ContactMechanics's two solvers for that load.  Type "python" is the default
+solver.
 """
 
 from __future__ import annotations
@@ -67,7 +67,7 @@ class FFTClock:
         self.transforms = 0
         self._saved: dict[str, object] = {}
 
-    def __enter__(self) -> "FFTClock":
+    def __enter__(self) -> FFTClock:
         for name in ("forward", "backward", "forward_from", "backward_into"):
             method = getattr(SerialFFT, name)
             self._saved[name] = method
@@ -91,16 +91,29 @@ class FFTClock:
 PEER_RUNS = (("run_tamaas.py",), ("run_contactmechanics.py", "--bugnicourt"))
 
 
-def peer(script: str, path: str, pressures: list[float], *extra: str
-         ) -> dict[str, dict[float, dict]]:
+def peer(
+    script: str, path: str, pressures: list[float], *extra: str
+) -> dict[str, dict[float, dict]]:
     """Run a peer's script in its own venv; results by solver and pressure (empty without
     the venv)."""
     python = os.path.join(PEERS, ".venv", "bin", "python")
     if not os.path.exists(python):
         return {}
-    out = subprocess.run([python, os.path.join(PEERS, script), path, "1", "1",
-                          ",".join(map(str, pressures)), "1e-8", *extra],
-                         capture_output=True, text=True, check=True).stdout
+    out = subprocess.run(
+        [
+            python,
+            os.path.join(PEERS, script),
+            path,
+            "1",
+            "1",
+            ",".join(map(str, pressures)),
+            "1e-8",
+            *extra,
+        ],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
     results: dict[str, dict[float, dict]] = {}
     for line in out.splitlines():
         if line.startswith("{"):
@@ -114,8 +127,12 @@ def main() -> None:
     ap.add_argument("--grid", type=int, nargs="+", default=[512])
     ap.add_argument("--types", nargs="+", default=["python", "tron"])
     ap.add_argument("--pressures", type=float, nargs="+", default=[1e-3, 1e-2])
-    ap.add_argument("--full-fraction", type=float, default=None,
-                    help="also run at this fraction of the full-contact pressure -min(K h)")
+    ap.add_argument(
+        "--full-fraction",
+        type=float,
+        default=None,
+        help="also run at this fraction of the full-contact pressure -min(K h)",
+    )
     ap.add_argument("--no-peers", action="store_true", help="skip Tamaas and ContactMechanics")
     ap.add_argument("--repeat", type=int, default=3, help="solves per case; the median is shown")
     ap.add_argument("--surfaces", nargs="+", choices=("easy", "paper"), default=["easy"])
@@ -123,15 +140,24 @@ def main() -> None:
     for n, surface in ((n, s) for s in args.surfaces for n in args.grid):
         grid = Grid(n, 1.0)
         rolloff, cutoff = (2, 64) if surface == "easy" else (1, n // 2)
-        h = self_affine(grid, make_fft(grid), hurst=0.7, rolloff_ratio=rolloff,
-                        cutoff_ratio=cutoff, seed=1, rms_slope=0.1)
+        h = self_affine(
+            grid,
+            make_fft(grid),
+            hurst=0.7,
+            rolloff_ratio=rolloff,
+            cutoff_ratio=cutoff,
+            seed=1,
+            rms_slope=0.1,
+        )
         pressures = list(args.pressures)
         if args.full_fraction:
             problem = PeriodicProblem(grid, make_fft(grid), h, 1.0)
             pressures.append(float(f"{args.full_fraction * problem.full_contact_pressure():.4g}"))
         rt = fft_round_trip(grid)
-        print(f"# n = {n}, {surface} surface (L/lambda_r = {rolloff}, L/lambda_1 = {cutoff}): "
-              f"FFT round trip {rt * 1e3:.3f} ms")
+        print(
+            f"# n = {n}, {surface} surface (L/lambda_r = {rolloff}, L/lambda_1 = {cutoff}): "
+            f"FFT round trip {rt * 1e3:.3f} ms"
+        )
         with tempfile.TemporaryDirectory() as tmp:
             path = os.path.join(tmp, "h.npy")
             np.save(path, h)
@@ -141,11 +167,15 @@ def main() -> None:
         for name, rows in peers.items():
             for p0, r in rows.items():
                 flag = "" if r.get("converged", True) else "  NOT CONVERGED"
-                print(f"# {name:>16} p0 {p0:.0e}: {r['time']:8.3f} s, {r['iterations']} its, "
-                      f"mean gap {r['mean_gap']:.8e}{flag}")
-        print(f"{'solver':>8} {'p0':>7} {'its':>5} {'FFTs':>6} {'time_s':>8} {'ratio':>6}"
-              f" {'in-solve':>8}"
-              f" {'mean_gap':>14} {'/tamaas':>8} {'/cm':>8}")
+                print(
+                    f"# {name:>16} p0 {p0:.0e}: {r['time']:8.3f} s, {r['iterations']} its, "
+                    f"mean gap {r['mean_gap']:.8e}{flag}"
+                )
+        print(
+            f"{'solver':>8} {'p0':>7} {'its':>5} {'FFTs':>6} {'time_s':>8} {'ratio':>6}"
+            f" {'in-solve':>8}"
+            f" {'mean_gap':>14} {'/tamaas':>8} {'/cm':>8}"
+        )
         for t in args.types:
             for p0 in pressures:
                 runs = []
@@ -153,21 +183,27 @@ def main() -> None:
                     with FFTClock() as clock:
                         (run,) = periodic_contact(h, 1.0, 1.0, [p0], options=["-tao_type", t])
                     runs.append((run, clock.seconds, clock.transforms))
-                s, fft_seconds, transforms = sorted(
-                    runs, key=lambda r: r[0].scalars["solve_time"])[len(runs) // 2]
+                s, fft_seconds, transforms = sorted(runs, key=lambda r: r[0].scalars["solve_time"])[
+                    len(runs) // 2
+                ]
                 d = s.scalars
                 ffts = transforms // 2  # round trips (a projected step skips one inverse)
                 ratio = d["solve_time"] / (ffts * rt)
                 in_solve = d["solve_time"] / fft_seconds
-                peer_time = {k: peers.get(k, {}).get(p0, {}).get("time", np.nan)
-                             for k in ("tamaas", "cm-polonsky-keer", "cm-bugnicourt")}
+                peer_time = {
+                    k: peers.get(k, {}).get(p0, {}).get("time", np.nan)
+                    for k in ("tamaas", "cm-polonsky-keer", "cm-bugnicourt")
+                }
                 cm_best = np.fmin(peer_time["cm-polonsky-keer"], peer_time["cm-bugnicourt"])
                 rel = [d["solve_time"] / peer_time["tamaas"], d["solve_time"] / cm_best]
                 flag = "" if s.converged else "  NOT CONVERGED"
-                print(f"{t:>8} {p0:>7.0e} {d['iterations']:>5d} {ffts:>6d} "
-                      f"{d['solve_time']:>8.3f} {ratio:>6.2f} {in_solve:>8.2f} "
-                      f"{d['mean_gap']:>14.8e} "
-                      f"{rel[0]:>8.3f} {rel[1]:>8.3f}{flag}", flush=True)
+                print(
+                    f"{t:>8} {p0:>7.0e} {d['iterations']:>5d} {ffts:>6d} "
+                    f"{d['solve_time']:>8.3f} {ratio:>6.2f} {in_solve:>8.2f} "
+                    f"{d['mean_gap']:>14.8e} "
+                    f"{rel[0]:>8.3f} {rel[1]:>8.3f}{flag}",
+                    flush=True,
+                )
 
 
 if __name__ == "__main__":

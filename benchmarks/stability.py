@@ -25,8 +25,15 @@ from petsc_contact.surface import self_affine
 
 def rough(n: int, hurst: float = 0.7, slope: float = 0.1, seed: int = 1) -> np.ndarray:
     grid = Grid(n, 1.0, MPI.COMM_SELF)
-    return self_affine(grid, make_fft(grid), hurst=hurst, rolloff_ratio=2,
-                       cutoff_ratio=n / 4, seed=seed, rms_slope=slope)
+    return self_affine(
+        grid,
+        make_fft(grid),
+        hurst=hurst,
+        rolloff_ratio=2,
+        cutoff_ratio=n / 4,
+        seed=seed,
+        rms_slope=slope,
+    )
 
 
 def scenes(n: int) -> list[tuple[str, np.ndarray, float, float, float]]:
@@ -35,59 +42,96 @@ def scenes(n: int) -> list[tuple[str, np.ndarray, float, float, float]]:
     sine = np.repeat(0.01 * np.cos(2 * np.pi * x)[:, None], n, axis=1)
     cap = -(x[:, None] ** 2 + x[None, :] ** 2) / 2.0
     h = rough(n)
-    p_full = -np.min(np.fft.irfft2(0.5 * np.hypot(*np.meshgrid(
-        np.fft.fftfreq(n) * n, np.fft.rfftfreq(n) * n, indexing="ij")) * 2 * np.pi
-        * np.fft.rfft2(h), s=h.shape))
+    p_full = -np.min(
+        np.fft.irfft2(
+            0.5
+            * np.hypot(*np.meshgrid(np.fft.fftfreq(n) * n, np.fft.rfftfreq(n) * n, indexing="ij"))
+            * 2
+            * np.pi
+            * np.fft.rfft2(h),
+            s=h.shape,
+        )
+    )
     out = [(f"rough p0={p:g}", h, 1.0, 1.0, p) for p in (1e-7, 1e-5, 1e-3, 1e-2, 5e-2)]
-    out += [("rough near full contact (0.95 p_full)", h, 1.0, 1.0, 0.95 * p_full),
-            ("rough beyond full contact (2 p_full)", h, 1.0, 1.0, 2 * p_full)]
+    out += [
+        ("rough near full contact (0.95 p_full)", h, 1.0, 1.0, 0.95 * p_full),
+        ("rough beyond full contact (2 p_full)", h, 1.0, 1.0, 2 * p_full),
+    ]
     out += [(f"H={hh:g}", rough(n, hurst=hh), 1.0, 1.0, 1e-2) for hh in (0.1, 0.95)]
     out += [(f"slope={s:g}", rough(n, slope=s), 1.0, 1.0, s * 1e-1) for s in (0.01, 1.0)]
-    out += [("flat", np.zeros((n, n)), 1.0, 1.0, 1e-3),
-            ("single sine, 30% of p*", sine, 1.0, 1.0, 0.3 * np.pi * 0.01),
-            ("single asperity (sphere cap)", cap, 1.0, 1.0, 1e-6),
-            ("heights + 1e6 h_rms", h + 1e6 * h.std(), 1.0, 1.0, 1e-2),
-            ("E* = 1e-6 (p scaled)", h, 1.0, 1e-6, 1e-8),
-            ("E* = 1e9 (p scaled)", h, 1.0, 1e9, 1e7),
-            ("L = 1e-6 (h scaled)", h * 1e-6, 1e-6, 1.0, 1e-2),
-            ("L = 1e3 (h scaled)", h * 1e3, 1e3, 1.0, 1e-2)]
+    out += [
+        ("flat", np.zeros((n, n)), 1.0, 1.0, 1e-3),
+        ("single sine, 30% of p*", sine, 1.0, 1.0, 0.3 * np.pi * 0.01),
+        ("single asperity (sphere cap)", cap, 1.0, 1.0, 1e-6),
+        ("heights + 1e6 h_rms", h + 1e6 * h.std(), 1.0, 1.0, 1e-2),
+        ("E* = 1e-6 (p scaled)", h, 1.0, 1e-6, 1e-8),
+        ("E* = 1e9 (p scaled)", h, 1.0, 1e9, 1e7),
+        ("L = 1e-6 (h scaled)", h * 1e-6, 1e-6, 1.0, 1e-2),
+        ("L = 1e3 (h scaled)", h * 1e3, 1e3, 1.0, 1e-2),
+    ]
     return out
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grid", type=int, default=128)
-    ap.add_argument("--grids", type=int, nargs="*", default=[32, 1024],
-                    help="extra grid sizes for the rough p0 = 1e-3 scene")
+    ap.add_argument(
+        "--grids",
+        type=int,
+        nargs="*",
+        default=[32, 1024],
+        help="extra grid sizes for the rough p0 = 1e-3 scene",
+    )
     ap.add_argument("--solvers", nargs="+", default=list(DEFAULT_SOLVERS))
     ap.add_argument("--time-limit", type=float, default=20.0)
-    ap.add_argument("--stall-iterations", type=int, default=1000,
-                    help="stop a solver whose natural residual has not fallen 10%% below its "
-                         "best for this many iterations (0: never)")
+    ap.add_argument(
+        "--stall-iterations",
+        type=int,
+        default=1000,
+        help="stop a solver whose natural residual has not fallen 10%% below its "
+        "best for this many iterations (0: never)",
+    )
     ap.add_argument("--markdown", default=None, help="also write the table here")
-    ap.add_argument("--append", action="store_true",
-                    help="append the table to --markdown instead of replacing the file")
-    ap.add_argument("--scenes", action=argparse.BooleanOptionalAction, default=True,
-                    help="run the scenes at --grid (--no-scenes: only the --grids rows)")
+    ap.add_argument(
+        "--append",
+        action="store_true",
+        help="append the table to --markdown instead of replacing the file",
+    )
+    ap.add_argument(
+        "--scenes",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="run the scenes at --grid (--no-scenes: only the --grids rows)",
+    )
     args = ap.parse_args()
     petsc = _petsc.init([])
     cases = scenes(args.grid) if args.scenes else []
     cases += [(f"grid {n}, p0=1e-3", rough(n), 1.0, 1.0, 1e-3) for n in args.grids]
-    lines = ["| scene | " + " | ".join(args.solvers) + " |",
-             "| --- |" + " --- |" * len(args.solvers)]
+    lines = [
+        "| scene | " + " | ".join(args.solvers) + " |",
+        "| --- |" + " --- |" * len(args.solvers),
+    ]
     start = time.perf_counter()
     for name, h, length, modulus, p0 in cases:
         grid = Grid(h.shape[0], length)
         problem = PeriodicProblem(grid, make_fft(grid), h, modulus)
         try:
-            _, trajs = compare(petsc, problem, p0, args.solvers, args.time_limit,
-                               stall_iterations=args.stall_iterations)
+            _, trajs = compare(
+                petsc,
+                problem,
+                p0,
+                args.solvers,
+                args.time_limit,
+                stall_iterations=args.stall_iterations,
+            )
             cells = []
             for t in trajs:
                 err = t.pressure_error[-1] if t.pressure_error else float("nan")
                 mark = "ok" if t.converged else "**FAIL**"
-                cells.append(f"{mark} {t.iterations} its, {t.solve_time:.2g} s, "
-                             f"err {err:.0e}" + ("" if t.converged else f" ({t.reason})"))
+                cells.append(
+                    f"{mark} {t.iterations} its, {t.solve_time:.2g} s, "
+                    f"err {err:.0e}" + ("" if t.converged else f" ({t.reason})")
+                )
         except RuntimeError as exc:
             cells = [f"reference failed: {exc}"] * len(args.solvers)
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
@@ -96,14 +140,20 @@ def main() -> None:
     if args.markdown:
         where = f"{args.grid}^2 unless stated" if args.scenes else "large grids"
         with open(args.markdown, "a" if args.append else "w") as f:
-            stall = (f", stopped after {args.stall_iterations} iterations without a 10% lower "
-                     "natural residual" if args.stall_iterations else "")
-            f.write(f"{chr(10) if args.append else ''}Stability matrix, {where}, time limit "
-                    f"{args.time_limit:g} s per solver{stall} (`benchmarks/stability.py`). "
-                    "Each cell: "
-                    "verdict, TAO iterations, wall time, relative pressure error against a "
-                    "reference solved at 1e-12 (raised to 30 eps k h_rms / p0 where rounding needs "
-                    "it).\n\n" + "\n".join(lines) + "\n")
+            stall = (
+                f", stopped after {args.stall_iterations} iterations without a 10% lower "
+                "natural residual"
+                if args.stall_iterations
+                else ""
+            )
+            f.write(
+                f"{chr(10) if args.append else ''}Stability matrix, {where}, time limit "
+                f"{args.time_limit:g} s per solver{stall} (`benchmarks/stability.py`). "
+                "Each cell: "
+                "verdict, TAO iterations, wall time, relative pressure error against a "
+                "reference solved at 1e-12 (raised to 30 eps k h_rms / p0 where rounding needs "
+                "it).\n\n" + "\n".join(lines) + "\n"
+            )
 
 
 if __name__ == "__main__":

@@ -32,8 +32,9 @@ def main() -> None:
     n = args.grid
     grid = Grid(n, 1.0, MPI.COMM_SELF)
     fft = make_fft(grid)
-    heights = self_affine(grid, fft, hurst=0.7, rolloff_ratio=1, cutoff_ratio=n / 2, seed=1,
-                          rms_slope=0.1)
+    heights = self_affine(
+        grid, fft, hurst=0.7, rolloff_ratio=1, cutoff_ratio=n / 2, seed=1, rms_slope=0.1
+    )
     petsc = _petsc.init([])
     problem = PeriodicProblem(grid, fft, heights, 1.0)
     x0 = problem.initial_gap().reshape(-1) / problem.scale_length
@@ -45,8 +46,11 @@ def main() -> None:
                 problem.start(x0)
                 x, info = solver.solve(problem.objective_gradient, problem.start_point)
                 flag = "" if info.reason_code > 0 else f"  {info.reason}"
-                print(f"{p0:>7.0e} {factor:>6g} {info.iterations:>5d} {info.solve_time:>8.2f} "
-                      f"{x.mean() * problem.scale_length:>16.10e}{flag}", flush=True)
+                print(
+                    f"{p0:>7.0e} {factor:>6g} {info.iterations:>5d} {info.solve_time:>8.2f} "
+                    f"{x.mean() * problem.scale_length:>16.10e}{flag}",
+                    flush=True,
+                )
 
 
 if __name__ == "__main__":

@@ -8,8 +8,9 @@ from petsc_contact import scenes, theory
 from petsc_contact.ensemble import power_law_fit
 
 
-def crossover_from_simulation(p: np.ndarray, k: np.ndarray, area: np.ndarray,
-                              points: int = 4) -> tuple[float, float]:
+def crossover_from_simulation(
+    p: np.ndarray, k: np.ndarray, area: np.ndarray, points: int = 4
+) -> tuple[float, float]:
     """Where the low-load power law meets K = p/u0 fitted at 1-10% contact area."""
     fit = power_law_fit(p, k, points)
     mid = (area > 0.01) & (area < 0.1) & np.isfinite(k)
@@ -24,8 +25,9 @@ def main() -> None:
     ap.add_argument("--rolloff-ratios", type=float, nargs="+", default=[1.0, 8.0])
     ap.add_argument("--cutoff-ratio", type=float, default=None, help="default grid/4")
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--pressures", type=float, nargs=3, default=[1e-7, 5e-2, 16],
-                    metavar=("PMIN", "PMAX", "N"))
+    ap.add_argument(
+        "--pressures", type=float, nargs=3, default=[1e-7, 5e-2, 16], metavar=("PMIN", "PMAX", "N")
+    )
     ap.add_argument("--punch-grid", type=int, default=None, help="default grid/2")
     ap.add_argument("--output", default="fig1")
     args = ap.parse_args()
@@ -43,16 +45,26 @@ def main() -> None:
         curve.update(h_rms=h_rms, pc_formula=pc_formula, pc_simulation=pc_sim, u0=u0)
         data[f"ratio{ratio:g}"] = curve
         summary[ratio] = (h_rms, pc_formula, pc_sim, u0)
-        print(f"# L/lambda_r = {ratio:g}: {int(curve['converged'].sum())}/{p.size} converged",
-              flush=True)
+        print(
+            f"# L/lambda_r = {ratio:g}: {int(curve['converged'].sum())}/{p.size} converged",
+            flush=True,
+        )
     n_punch = args.punch_grid or args.grid // 2
     hp, hp_rms = scenes.surface(n_punch, args.hurst, 1.0, n_punch / 4, args.seed)
     approaches = np.geomspace(1e-2, 3.0, 14) * hp_rms
     punch = scenes.punch_curve(hp, approaches)
     punch["h_rms"] = hp_rms
     data["punch"] = punch
-    scenes.save(f"{args.output}.h5", data, grid=args.grid, hurst=args.hurst,
-                cutoff_ratio=cutoff, seed=args.seed, punch_grid=n_punch, gamma=theory.GAMMA)
+    scenes.save(
+        f"{args.output}.h5",
+        data,
+        grid=args.grid,
+        hurst=args.hurst,
+        cutoff_ratio=cutoff,
+        seed=args.seed,
+        punch_grid=n_punch,
+        gamma=theory.GAMMA,
+    )
     import matplotlib
 
     matplotlib.use("Agg")
@@ -63,8 +75,9 @@ def main() -> None:
     for ratio in args.rolloff_ratios:
         d = data[f"ratio{ratio:g}"]
         hr = d["h_rms"]
-        line, = ax.loglog(p, d["stiffness"] * hr, "o", mfc="none",
-                          label=f"$L/\\lambda_r$ = {ratio:g} (exact)")
+        (line,) = ax.loglog(
+            p, d["stiffness"] * hr, "o", mfc="none", label=f"$L/\\lambda_r$ = {ratio:g} (exact)"
+        )
         ax.loglog(p, d["stiffness_sweep"] * hr, "x", color=line.get_color(), ms=4)
         ax.loglog(p, d["persson_stiffness"] * hr, "-", color=line.get_color(), lw=1)
         ax.axvline(d["pc_formula"], color=line.get_color(), ls=":", lw=1)
@@ -72,19 +85,30 @@ def main() -> None:
         inset.semilogy(d["persson_mean_gap"] / hr, p, "-", lw=1, color=line.get_color())
     ax.loglog(p, p / theory.GAMMA, "k--", lw=1, label=r"$K = p/(\gamma h_\mathrm{rms})$")
     ok = punch["converged"] & (punch["nominal_pressure"] > 0)
-    ax.loglog(punch["nominal_pressure"][ok], punch["interfacial_stiffness"][ok] * hp_rms, "s",
-              mfc="none", color="gray", label="punch (Eq. 2)")
-    ax.set(xlabel="$p_0/E^*$", ylabel=r"$K h_\mathrm{rms}/E^*$",
-           title=f"Fig. 1: H = {args.hurst}, {args.grid}$^2$ (lines: Persson; x: -dp/du)")
+    ax.loglog(
+        punch["nominal_pressure"][ok],
+        punch["interfacial_stiffness"][ok] * hp_rms,
+        "s",
+        mfc="none",
+        color="gray",
+        label="punch (Eq. 2)",
+    )
+    ax.set(
+        xlabel="$p_0/E^*$",
+        ylabel=r"$K h_\mathrm{rms}/E^*$",
+        title=f"Fig. 1: H = {args.hurst}, {args.grid}$^2$ (lines: Persson; x: -dp/du)",
+    )
     ax.legend(fontsize=7, loc="upper left")
     ax.grid(alpha=0.3, which="both")
     inset.set(xlabel=r"$\bar u/h_\mathrm{rms}$", ylabel="$p_0/E^*$")
     inset.tick_params(labelsize=6)
     fig.savefig(f"{args.output}.png", dpi=120)
     for ratio, (hr, pcf, pcs, u0) in summary.items():
-        print(f"L/lambda_r = {ratio:g}: q_r h_rms = {2 * np.pi * ratio * hr:.3g}, "
-              f"p_c/E* formula (P-oldEqno6) {pcf:.2e}, simulation crossover {pcs:.2e}, "
-              f"u0/h_rms = {u0 / hr:.3f}")
+        print(
+            f"L/lambda_r = {ratio:g}: q_r h_rms = {2 * np.pi * ratio * hr:.3g}, "
+            f"p_c/E* formula (P-oldEqno6) {pcf:.2e}, simulation crossover {pcs:.2e}, "
+            f"u0/h_rms = {u0 / hr:.3f}"
+        )
     print(f"wrote {args.output}.png and {args.output}.h5")
 
 

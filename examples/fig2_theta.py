@@ -13,9 +13,13 @@ def main() -> None:
     args = ap.parse_args()
     h = np.linspace(0.02, 1.0, 99)
     inv0, inv1 = theory.inverse_theta_parts(h)
-    scenes.save(f"{args.output}.h5", {"hurst": h, "inverse_theta0": inv0,
-                                      "inverse_theta1": inv1, "theta": theory.theta(h)},
-                gamma=theory.GAMMA, nayak_beta=theory.NAYAK_BETA, kappa0=theory.KAPPA0)
+    scenes.save(
+        f"{args.output}.h5",
+        {"hurst": h, "inverse_theta0": inv0, "inverse_theta1": inv1, "theta": theory.theta(h)},
+        gamma=theory.GAMMA,
+        nayak_beta=theory.NAYAK_BETA,
+        kappa0=theory.KAPPA0,
+    )
     import matplotlib
 
     matplotlib.use("Agg")

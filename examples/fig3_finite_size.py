@@ -15,8 +15,14 @@ def main() -> None:
     ap.add_argument("--cutoff-ratio", type=float, default=None, help="L/lambda_1 (default grid/4)")
     ap.add_argument("--hursts", type=float, nargs="+", default=[0.3, 0.5, 0.7])
     ap.add_argument("--seeds", type=int, default=4, help="surfaces per H")
-    ap.add_argument("--pressures", type=float, nargs=3, default=[1e-8, 1e-3, 16],
-                    metavar=("PMIN", "PMAX", "N"), help="log-spaced p0/E*")
+    ap.add_argument(
+        "--pressures",
+        type=float,
+        nargs=3,
+        default=[1e-8, 1e-3, 16],
+        metavar=("PMIN", "PMAX", "N"),
+        help="log-spaced p0/E*",
+    )
     ap.add_argument("--fit-points", type=int, default=4)
     ap.add_argument("--output", default="fig3")
     args = ap.parse_args()
@@ -24,12 +30,19 @@ def main() -> None:
     p = np.geomspace(args.pressures[0], args.pressures[1], int(args.pressures[2]))
     results = {}
     for h in args.hursts:
-        results[f"H{h}"] = scenes.ensemble_curves(args.grid, h, 1.0, cutoff,
-                                                  range(args.seeds), p,
-                                                  points=args.fit_points)
-    scenes.save(f"{args.output}.h5", {"nominal_pressure": p, **results}, grid=args.grid,
-                cutoff_ratio=cutoff, rolloff_ratio=1.0, rms_slope=0.1,
-                seeds=list(range(args.seeds)), fit_points=args.fit_points)
+        results[f"H{h}"] = scenes.ensemble_curves(
+            args.grid, h, 1.0, cutoff, range(args.seeds), p, points=args.fit_points
+        )
+    scenes.save(
+        f"{args.output}.h5",
+        {"nominal_pressure": p, **results},
+        grid=args.grid,
+        cutoff_ratio=cutoff,
+        rolloff_ratio=1.0,
+        rms_slope=0.1,
+        seeds=list(range(args.seeds)),
+        fit_points=args.fit_points,
+    )
     import matplotlib
 
     matplotlib.use("Agg")
@@ -41,19 +54,28 @@ def main() -> None:
         r = results[f"H{h}"]
         h_rms = r["h_rms"].mean()
         k = r["stiffness_mean"] * h_rms
-        line, = ax.loglog(p, k, "o", mfc="none", label=f"H = {h}")
-        low = np.sort(p[r["fitted"]])[:args.fit_points]
-        ax.loglog(low, r["prefactor"] * low ** r["alpha"] * h_rms, "-", color=line.get_color(),
-                  label=rf"$\alpha$ = {r['alpha']:.2f} $\pm$ {r['alpha_error']:.2f}")
+        (line,) = ax.loglog(p, k, "o", mfc="none", label=f"H = {h}")
+        low = np.sort(p[r["fitted"]])[: args.fit_points]
+        ax.loglog(
+            low,
+            r["prefactor"] * low ** r["alpha"] * h_rms,
+            "-",
+            color=line.get_color(),
+            label=rf"$\alpha$ = {r['alpha']:.2f} $\pm$ {r['alpha_error']:.2f}",
+        )
         paper = PAPER_ALPHA.get(h, float("nan"))
-        print(f"{h:>4} {r['alpha']:>9.3f} +- {r['alpha_error']:.3f} {paper:>12} "
-              f"{1 / (1 + h):>8.3f}")
-    ax.set(xlabel="$p_0/E^*$", ylabel=r"$K h_\mathrm{rms}/E^*$",
-           title=f"Fig. 3: L = $\\lambda_r$, {args.grid}$^2$, {args.seeds} seeds")
+        print(
+            f"{h:>4} {r['alpha']:>9.3f} +- {r['alpha_error']:.3f} {paper:>12} {1 / (1 + h):>8.3f}"
+        )
+    ax.set(
+        xlabel="$p_0/E^*$",
+        ylabel=r"$K h_\mathrm{rms}/E^*$",
+        title=f"Fig. 3: L = $\\lambda_r$, {args.grid}$^2$, {args.seeds} seeds",
+    )
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3, which="both")
     fig.savefig(f"{args.output}.png", dpi=120)
-    print(f"theta(H): " + ", ".join(f"{h}: {float(theory.theta(h)):.3f}" for h in args.hursts))
+    print("theta(H): " + ", ".join(f"{h}: {float(theory.theta(h)):.3f}" for h in args.hursts))
     print(f"wrote {args.output}.png and {args.output}.h5")
 
 

@@ -2,7 +2,6 @@
 
 import argparse
 
-import numpy as np
 from mpi4py import MPI
 
 from petsc_contact import scenes
@@ -25,9 +24,16 @@ def main() -> None:
     grid = Grid(args.grid, 1.0, MPI.COMM_SELF)
     q, c = radial_psd(grid, make_fft(grid), h)
     qi, ci = scenes.ideal_spectrum(1.0, args.hurst, args.rolloff_ratio, cutoff, h_rms)
-    scenes.save(f"{args.output}.h5", {"q": q, "psd": c, "q_prescribed": qi, "psd_prescribed": ci},
-                hurst=args.hurst, rolloff_ratio=args.rolloff_ratio, cutoff_ratio=cutoff,
-                seed=args.seed, grid=args.grid, h_rms=h_rms)
+    scenes.save(
+        f"{args.output}.h5",
+        {"q": q, "psd": c, "q_prescribed": qi, "psd_prescribed": ci},
+        hurst=args.hurst,
+        rolloff_ratio=args.rolloff_ratio,
+        cutoff_ratio=cutoff,
+        seed=args.seed,
+        grid=args.grid,
+        h_rms=h_rms,
+    )
     import matplotlib
 
     matplotlib.use("Agg")

@@ -19,8 +19,8 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 __version__ = "0.1.0"
 
-from .grid import Grid  # noqa: E402
-from .periodic import periodic_contact  # noqa: E402
-from .punch import punch_contact  # noqa: E402
+from .grid import Grid
+from .periodic import periodic_contact
+from .punch import punch_contact
 
 __all__ = ["Grid", "periodic_contact", "punch_contact", "__version__"]

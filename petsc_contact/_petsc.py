@@ -10,9 +10,9 @@ from __future__ import annotations
 import glob
 import os
 import sys
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from types import ModuleType
-from typing import Iterator, Sequence
 
 DEBIAN_PETSC_DIRS = ("/usr/lib/petscdir/petsc3.18/x86_64-linux-gnu-real",)
 
@@ -27,6 +27,7 @@ def _petsc_dirs() -> list[str]:
 def _make_importable() -> None:
     try:
         import petsc4py  # noqa: F401
+
         return
     except ImportError:
         pass

@@ -18,7 +18,8 @@ conjugate gradient in the spirit of Polonsky & Keer (Wear 231, 206 (1999)).
   old direction is restricted to the new ``F`` and the recurrence goes on (as Polonsky and
   Keer do when the contact set shrinks).
 - The step is the exact minimiser of the quadratic along the direction,
-  ``alpha = (r.d)/(d.Hd)`` (``r.d = r.z`` while ``F`` is unchanged), followed by the projection onto the bounds.  No objective
+  ``alpha = (r.d)/(d.Hd)`` (``r.d = r.z`` while ``F`` is unchanged), followed by the
+  projection onto the bounds.  No objective
   values and no line search are used, so there is no floor from rounding the energy.
 - A step that would put more than ``max(8 m, 64, m_e)`` new variables on their lower
   bound (``m`` already there; ``m_e`` the preconditioner context's ``expected_bound_count``,
@@ -56,6 +57,7 @@ import numpy as np
 from scipy.linalg import blas
 
 from . import kernels
+from .kernels import Bound
 
 REFRESH_EVERY = 50
 GROWTH = 8  # a step may put at most max(GROWTH m, MIN_GROWTH, EXPECTED_GROWTH m_e)
@@ -118,8 +120,11 @@ class PolonskyKeer:
         def evaluate() -> float:
             return tao.computeObjectiveGradient(x, g_vec)
 
-        context = (self.preconditioner.getPythonContext()
-                   if hasattr(self.preconditioner, "getPythonContext") else self.preconditioner)
+        context = (
+            self.preconditioner.getPythonContext()
+            if hasattr(self.preconditioner, "getPythonContext")
+            else self.preconditioner
+        )
         adapt = getattr(context, "adapt", None)
         split = hessian.getPythonContext() if hessian.getType() == "python" else None
         if not hasattr(split, "begin_mult"):  # a Hessian that can only multiply
@@ -150,8 +155,9 @@ class PolonskyKeer:
                 if since_refresh > 0:  # confirm on an exactly evaluated gradient
                     f, since_refresh = evaluate(), 0
                     continue
-                tao.setConvergedReason(reasons.CONVERGED_GATOL if rnorm <= gatol
-                                       else reasons.CONVERGED_GRTOL)
+                tao.setConvergedReason(
+                    reasons.CONVERGED_GATOL if rnorm <= gatol else reasons.CONVERGED_GRTOL
+                )
                 break
             if it >= max_it:
                 tao.setConvergedReason(reasons.DIVERGED_MAXITS)
@@ -223,8 +229,14 @@ class PolonskyKeer:
             v.destroy()
 
     @staticmethod
-    def _growth_fraction(x: np.ndarray, d: np.ndarray, alpha: float,
-                         lower: np.ndarray | float, limit: int, allsum: Any) -> float:
+    def _growth_fraction(
+        x: np.ndarray,
+        d: np.ndarray,
+        alpha: float,
+        lower: np.ndarray | float,
+        limit: int,
+        allsum: Any,
+    ) -> float:
         """Fraction of the step ``alpha d`` (just taken to ``x``) at which ``limit`` variables
         reach ``lower``.
 
@@ -236,7 +248,7 @@ class PolonskyKeer:
         global ``limit`` smallest are among them, and so is the answer).
         """
         below = x < lower
-        lo = lower[below] if np.ndim(lower) else lower
+        lo = lower[below] if isinstance(lower, np.ndarray) else lower
         reach = 1.0 - (x[below] - lo) / (alpha * d[below])
         reach = reach[reach > 1e-9]  # below: rounding of a start on the bound
         if reach.size > limit:
@@ -252,8 +264,9 @@ class PolonskyKeer:
         return high
 
     @staticmethod
-    def _distance_to_bound(x: np.ndarray, d: np.ndarray, lower: np.ndarray,
-                           upper: np.ndarray, comm: Any) -> float:
+    def _distance_to_bound(
+        x: np.ndarray, d: np.ndarray, lower: Bound, upper: Bound, comm: Any
+    ) -> float:
         """Largest step along ``d`` that stays feasible (``inf`` if no bound is ahead)."""
         with np.errstate(divide="ignore", invalid="ignore"):
             down = np.where(d < 0, (lower - x) / d, np.inf).min(initial=np.inf)

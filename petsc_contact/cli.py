@@ -14,8 +14,9 @@ import os
 import re
 import signal
 import sys
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any, Callable, Iterator, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -23,9 +24,17 @@ EXIT_NOT_CONVERGED = 1
 EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
 
-DEMO = {"grid": 512, "hurst": 0.7, "rms_slope": 0.1, "rolloff_ratio": 2.0,
-        "cutoff_ratio": 64.0, "seed": 1, "length": 1.0, "modulus": 1.0,
-        "pressures": "3e-5,1e-4,3e-4,1e-3,3e-3,1e-2,2e-2,3e-2"}
+DEMO = {
+    "grid": 512,
+    "hurst": 0.7,
+    "rms_slope": 0.1,
+    "rolloff_ratio": 2.0,
+    "cutoff_ratio": 64.0,
+    "seed": 1,
+    "length": 1.0,
+    "modulus": 1.0,
+    "pressures": "3e-5,1e-4,3e-4,1e-3,3e-3,1e-2,2e-2,3e-2",
+}
 
 _PETSC_OPTION = re.compile(r"^-[A-Za-z_]")
 _NUMBER = re.compile(r"^-?(\d|\.\d)")
@@ -49,14 +58,19 @@ def split_arguments(argv: Sequence[str]) -> tuple[list[str], list[str]]:
         tok = tokens[i]
         if tok != "-h" and _PETSC_OPTION.match(tok) and not tok.startswith("--"):
             petsc.append(tok)
-            if i + 1 < len(tokens) and (not tokens[i + 1].startswith("-")
-                                         or _NUMBER.match(tokens[i + 1])):
+            if i + 1 < len(tokens) and (
+                not tokens[i + 1].startswith("-") or _NUMBER.match(tokens[i + 1])
+            ):
                 petsc.append(tokens[i + 1])
                 i += 1
         else:
             ours.append(tok)
-            if tok.startswith("--") and "=" not in tok and i + 1 < len(tokens) \
-                    and _NUMBER.match(tokens[i + 1]):
+            if (
+                tok.startswith("--")
+                and "=" not in tok
+                and i + 1 < len(tokens)
+                and _NUMBER.match(tokens[i + 1])
+            ):
                 ours.append(tokens[i + 1])
                 i += 1
         i += 1
@@ -67,7 +81,9 @@ def _float_list(text: str) -> list[float]:
     try:
         return [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got '{text}'")
+        raise argparse.ArgumentTypeError(
+            f"expected comma-separated numbers, got '{text}'"
+        ) from None
 
 
 def _sweep_spec(text: str) -> list[float]:
@@ -87,7 +103,7 @@ def _seed_list(text: str) -> list[int]:
         else:
             seeds = [int(v) for v in text.split(",") if v.strip()]
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected K1,K2,... or A-B, got '{text}'")
+        raise argparse.ArgumentTypeError(f"expected K1,K2,... or A-B, got '{text}'") from None
     if not seeds or len(set(seeds)) != len(seeds):
         raise argparse.ArgumentTypeError(f"need distinct seeds, got '{text}'")
     return seeds
@@ -95,140 +111,276 @@ def _seed_list(text: str) -> list[int]:
 
 def _surface_arguments(p: argparse.ArgumentParser) -> None:
     s = p.add_argument_group("surface (a file, or a generated self-affine surface, paper Eq. 5)")
-    s.add_argument("--heights", metavar="FILE",
-                   help="height map: .npy, or a text/.csv matrix; square n x n, length units")
+    s.add_argument(
+        "--heights",
+        metavar="FILE",
+        help="height map: .npy, or a text/.csv matrix; square n x n, length units",
+    )
     s.add_argument("--grid", type=int, metavar="N", help="generate an N x N surface")
     s.add_argument("--hurst", type=float, metavar="H", help="Hurst exponent (0..1)")
     s.add_argument("--rms-slope", type=float, metavar="S", help="target rms slope h'_rms")
     s.add_argument("--rms-height", type=float, metavar="R", help="target rms height h_rms")
-    s.add_argument("--rolloff-ratio", type=float, metavar="L/lambda_r", default=1.0,
-                   help="system size over roll-off wavelength (default 1)")
-    s.add_argument("--cutoff-ratio", type=float, metavar="L/lambda_1",
-                   help="system size over short-wavelength cut-off (default N/2)")
+    s.add_argument(
+        "--rolloff-ratio",
+        type=float,
+        metavar="L/lambda_r",
+        default=1.0,
+        help="system size over roll-off wavelength (default 1)",
+    )
+    s.add_argument(
+        "--cutoff-ratio",
+        type=float,
+        metavar="L/lambda_1",
+        help="system size over short-wavelength cut-off (default N/2)",
+    )
     s.add_argument("--seed", type=int, default=0, metavar="K", help="random seed (default 0)")
-    s.add_argument("--exact-rms", action="store_true",
-                   help="rescale the realisation to hit the rms target exactly")
+    s.add_argument(
+        "--exact-rms",
+        action="store_true",
+        help="rescale the realisation to hit the rms target exactly",
+    )
 
 
-def _run_arguments(p: argparse.ArgumentParser, defaults: dict[str, Any] | None = None,
-                   punch: bool = False) -> None:
+def _run_arguments(
+    p: argparse.ArgumentParser, defaults: dict[str, Any] | None = None, punch: bool = False
+) -> None:
     d = defaults or {}
-    p.add_argument("--length", type=float, default=d.get("length", 1.0), metavar="L",
-                   help=("side Lp of the square punch footprint" if punch else
-                         "side of the periodic cell") + " (default %(default)s)")
-    p.add_argument("--modulus", type=float, default=d.get("modulus", 1.0), metavar="ESTAR",
-                   help="contact modulus E* (default %(default)s)")
+    p.add_argument(
+        "--length",
+        type=float,
+        default=d.get("length", 1.0),
+        metavar="L",
+        help=("side Lp of the square punch footprint" if punch else "side of the periodic cell")
+        + " (default %(default)s)",
+    )
+    p.add_argument(
+        "--modulus",
+        type=float,
+        default=d.get("modulus", 1.0),
+        metavar="ESTAR",
+        help="contact modulus E* (default %(default)s)",
+    )
     if punch:
         loads = p.add_mutually_exclusive_group(required=True)
-        loads.add_argument("--approaches", type=_float_list, metavar="D1,D2,...",
-                           help="rigid approaches beyond first touch (length units), in order")
-        loads.add_argument("--forces", type=_float_list, metavar="F1,F2,...",
-                           help="total forces (E* x length^2), in order (load control)")
-        loads.add_argument("--sweep", type=_sweep_spec, metavar="N[,DMIN,DMAX]",
-                           help="N log-spaced approaches from DMIN to DMAX (default: 0.01 and "
-                                "3 times the rms recess of the punch face)")
-        p.add_argument("--footprint", choices=("square", "disk"), default="square",
-                       help="punch outline: the whole square, or the inscribed disk")
-        p.add_argument("--flat-stiffness", choices=("grid", "analytic"), default="grid",
-                       help="flat-punch stiffness in Eq. 2: computed on the same grid "
-                            "(default) or beta x 2 E* sqrt(A/pi), beta = 1.012 (square) or 1 "
-                            "(disk)")
+        loads.add_argument(
+            "--approaches",
+            type=_float_list,
+            metavar="D1,D2,...",
+            help="rigid approaches beyond first touch (length units), in order",
+        )
+        loads.add_argument(
+            "--forces",
+            type=_float_list,
+            metavar="F1,F2,...",
+            help="total forces (E* x length^2), in order (load control)",
+        )
+        loads.add_argument(
+            "--sweep",
+            type=_sweep_spec,
+            metavar="N[,DMIN,DMAX]",
+            help="N log-spaced approaches from DMIN to DMAX (default: 0.01 and "
+            "3 times the rms recess of the punch face)",
+        )
+        p.add_argument(
+            "--footprint",
+            choices=("square", "disk"),
+            default="square",
+            help="punch outline: the whole square, or the inscribed disk",
+        )
+        p.add_argument(
+            "--flat-stiffness",
+            choices=("grid", "analytic"),
+            default="grid",
+            help="flat-punch stiffness in Eq. 2: computed on the same grid "
+            "(default) or beta x 2 E* sqrt(A/pi), beta = 1.012 (square) or 1 "
+            "(disk)",
+        )
     else:
         loads = p.add_mutually_exclusive_group(required="pressures" not in d)
-        loads.add_argument("--pressures", type=_float_list,
-                           default=_float_list(d["pressures"]) if "pressures" in d else None,
-                           metavar="P1,P2,...", help="nominal pressures p0 (units of E*), in order")
-        loads.add_argument("--sweep", type=_sweep_spec, metavar="N[,PMIN,PMAX]",
-                           help="N log-spaced pressures from PMIN to PMAX (default: 1e-4 and "
-                                "0.9 times the full-contact pressure -min(K h))")
-    p.add_argument("--stiffness", action="store_true",
-                   help="add the exact incremental stiffness per area (contact set held "
-                        "fixed) as the dataset 'stiffness'")
-    p.add_argument("--output", required="output" not in d, default=d.get("output"),
-                   metavar="OUT.h5", help="HDF5 results (written atomically)")
-    p.add_argument("--fields", action="store_true",
-                   help="store the gap and pressure fields of every step")
-    p.add_argument("--plot", metavar="PNG", default=d.get("plot"),
-                   help="write a PNG of the results against load")
+        loads.add_argument(
+            "--pressures",
+            type=_float_list,
+            default=_float_list(d["pressures"]) if "pressures" in d else None,
+            metavar="P1,P2,...",
+            help="nominal pressures p0 (units of E*), in order",
+        )
+        loads.add_argument(
+            "--sweep",
+            type=_sweep_spec,
+            metavar="N[,PMIN,PMAX]",
+            help="N log-spaced pressures from PMIN to PMAX (default: 1e-4 and "
+            "0.9 times the full-contact pressure -min(K h))",
+        )
+    p.add_argument(
+        "--stiffness",
+        action="store_true",
+        help="add the exact incremental stiffness per area (contact set held "
+        "fixed) as the dataset 'stiffness'",
+    )
+    p.add_argument(
+        "--output",
+        required="output" not in d,
+        default=d.get("output"),
+        metavar="OUT.h5",
+        help="HDF5 results (written atomically)",
+    )
+    p.add_argument(
+        "--fields", action="store_true", help="store the gap and pressure fields of every step"
+    )
+    p.add_argument(
+        "--plot",
+        metavar="PNG",
+        default=d.get("plot"),
+        help="write a PNG of the results against load",
+    )
     p.add_argument("--quiet", action="store_true", help="no table on standard output")
-    p.add_argument("--resume", action="store_true",
-                   help="continue an interrupted run from OUT.h5.partial (same options): "
-                        "finished steps are kept, not recomputed")
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue an interrupted run from OUT.h5.partial (same options): "
+        "finished steps are kept, not recomputed",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="petsc-contact",
         description="Non-adhesive contact of rough elastic solids with PETSc/TAO. "
-                    "Options with one dash (-tao_type bncg, -tao_monitor, -options_file F, "
-                    "-log_view, ...) are passed to PETSc. The package's own PETSc options: "
-                    "-petsc_contact_no_j0 (no Fourier initial Hessian for the BQNK types), "
-                    "-petsc_contact_no_ksp_pc (no Fourier KSP preconditioner for tron, bnls, "
-                    "bntr, bntl).",
-        epilog="Exit status: 0 converged, 1 a step did not converge, 2 bad input, "
-               "130 interrupted.")
+        "Options with one dash (-tao_type bncg, -tao_monitor, -options_file F, "
+        "-log_view, ...) are passed to PETSc. The package's own PETSc options: "
+        "-petsc_contact_no_j0 (no Fourier initial Hessian for the BQNK types), "
+        "-petsc_contact_no_ksp_pc (no Fourier KSP preconditioner for tron, bnls, "
+        "bntr, bntl).",
+        epilog="Exit status: 0 converged, 1 a step did not converge, 2 bad input, 130 interrupted.",
+    )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    per = sub.add_parser("periodic", help="periodic, load-controlled contact of a rough surface",
-                         description="Hard-wall contact of a rigid rough surface on a periodic "
-                                     "elastic half-space, one TAO solve per nominal pressure.")
+    per = sub.add_parser(
+        "periodic",
+        help="periodic, load-controlled contact of a rough surface",
+        description="Hard-wall contact of a rigid rough surface on a periodic "
+        "elastic half-space, one TAO solve per nominal pressure.",
+    )
     _surface_arguments(per)
     _run_arguments(per)
-    pun = sub.add_parser("punch", help="rigid rough square punch on a free half-space",
-                         description="A rigid punch with a rough face pressed into a "
-                                     "non-periodic elastic half-space (Hockney padding), "
-                                     "displacement (--approaches) or load (--forces) "
-                                     "controlled.")
+    pun = sub.add_parser(
+        "punch",
+        help="rigid rough square punch on a free half-space",
+        description="A rigid punch with a rough face pressed into a "
+        "non-periodic elastic half-space (Hockney padding), "
+        "displacement (--approaches) or load (--forces) "
+        "controlled.",
+    )
     _surface_arguments(pun)
     _run_arguments(pun, punch=True)
-    ens = sub.add_parser("ensemble", help="periodic sweeps over many seeds, with statistics",
-                         description="The periodic scene for each seed (one resumable file "
-                                     "OUT_seedK.h5 per seed), then mean, std and standard "
-                                     "error over seeds of every per-step quantity in OUT.h5.")
+    ens = sub.add_parser(
+        "ensemble",
+        help="periodic sweeps over many seeds, with statistics",
+        description="The periodic scene for each seed (one resumable file "
+        "OUT_seedK.h5 per seed), then mean, std and standard "
+        "error over seeds of every per-step quantity in OUT.h5.",
+    )
     _surface_arguments(ens)
     _run_arguments(ens)
-    ens.add_argument("--seeds", type=_seed_list, required=True, metavar="K1,K2,...|A-B",
-                     help="the seeds (a list, or a range A-B inclusive)")
-    cmp_ = sub.add_parser("compare", help="error against wall time for several solvers",
-                          description="One periodic scene solved by each solver from first "
-                                      "touch; errors against a tightly converged reference "
-                                      "at every iteration; a table (stdout and OUT.csv), "
-                                      "OUT.h5 and a plot OUT.png.")
+    ens.add_argument(
+        "--seeds",
+        type=_seed_list,
+        required=True,
+        metavar="K1,K2,...|A-B",
+        help="the seeds (a list, or a range A-B inclusive)",
+    )
+    cmp_ = sub.add_parser(
+        "compare",
+        help="error against wall time for several solvers",
+        description="One periodic scene solved by each solver from first "
+        "touch; errors against a tightly converged reference "
+        "at every iteration; a table (stdout and OUT.csv), "
+        "OUT.h5 and a plot OUT.png.",
+    )
     _surface_arguments(cmp_)
-    cmp_.add_argument("--length", type=float, default=1.0, metavar="L",
-                      help="side of the periodic cell (default %(default)s)")
-    cmp_.add_argument("--modulus", type=float, default=1.0, metavar="ESTAR",
-                      help="contact modulus E* (default %(default)s)")
-    cmp_.add_argument("--pressure", type=float, required=True, metavar="P",
-                      help="nominal pressure p0 (units of E*)")
-    cmp_.add_argument("--solvers", type=lambda t: [v for v in t.split(",") if v],
-                      default=None, metavar="S1,S2,...",
-                      help="TAO types, 'cg' (default solver), 'pk' (Polonsky-Keer) or "
-                           "options files (default: cg,pk,tron,bnls,bntr,bqnls,blmvm,bncg,gpcg)")
-    cmp_.add_argument("--time-limit", type=float, default=120.0, metavar="S",
-                      help="stop a solver after S seconds of wall time (default 120)")
-    cmp_.add_argument("--stall-iterations", type=int, default=1000, metavar="N",
-                      help="stop a solver whose natural residual has not fallen 10%% below "
-                           "its best for N iterations (default 1000; 0: never)")
+    cmp_.add_argument(
+        "--length",
+        type=float,
+        default=1.0,
+        metavar="L",
+        help="side of the periodic cell (default %(default)s)",
+    )
+    cmp_.add_argument(
+        "--modulus",
+        type=float,
+        default=1.0,
+        metavar="ESTAR",
+        help="contact modulus E* (default %(default)s)",
+    )
+    cmp_.add_argument(
+        "--pressure",
+        type=float,
+        required=True,
+        metavar="P",
+        help="nominal pressure p0 (units of E*)",
+    )
+    cmp_.add_argument(
+        "--solvers",
+        type=lambda t: [v for v in t.split(",") if v],
+        default=None,
+        metavar="S1,S2,...",
+        help="TAO types, 'cg' (default solver), 'pk' (Polonsky-Keer) or "
+        "options files (default: cg,pk,tron,bnls,bntr,bqnls,blmvm,bncg,gpcg)",
+    )
+    cmp_.add_argument(
+        "--time-limit",
+        type=float,
+        default=120.0,
+        metavar="S",
+        help="stop a solver after S seconds of wall time (default 120)",
+    )
+    cmp_.add_argument(
+        "--stall-iterations",
+        type=int,
+        default=1000,
+        metavar="N",
+        help="stop a solver whose natural residual has not fallen 10%% below "
+        "its best for N iterations (default 1000; 0: never)",
+    )
     cmp_.add_argument("--output", required=True, metavar="OUT.h5")
     cmp_.add_argument("--quiet", action="store_true", help="no table on standard output")
-    exp = sub.add_parser("experiment", help="K(p) from a measured p(s) table (paper Eq. 7)",
-                         description="Interfacial stiffness from a squeeze test of an elastic "
-                                     "block of thickness d and effective modulus E' (paper "
-                                     "section III): K* = dp/ds, K = K*/(1 - K* d/E').")
-    exp.add_argument("--table", required=True, metavar="FILE.csv",
-                     help="two columns: nominal pressure p, displacement s of the block's "
-                          "top (header lines starting with # are skipped)")
-    exp.add_argument("--modulus", type=float, required=True, metavar="EPRIME",
-                     help="effective Young's modulus E' of the block (pressure units)")
-    exp.add_argument("--thickness", type=float, required=True, metavar="D",
-                     help="block thickness d (length units of s)")
+    exp = sub.add_parser(
+        "experiment",
+        help="K(p) from a measured p(s) table (paper Eq. 7)",
+        description="Interfacial stiffness from a squeeze test of an elastic "
+        "block of thickness d and effective modulus E' (paper "
+        "section III): K* = dp/ds, K = K*/(1 - K* d/E').",
+    )
+    exp.add_argument(
+        "--table",
+        required=True,
+        metavar="FILE.csv",
+        help="two columns: nominal pressure p, displacement s of the block's "
+        "top (header lines starting with # are skipped)",
+    )
+    exp.add_argument(
+        "--modulus",
+        type=float,
+        required=True,
+        metavar="EPRIME",
+        help="effective Young's modulus E' of the block (pressure units)",
+    )
+    exp.add_argument(
+        "--thickness",
+        type=float,
+        required=True,
+        metavar="D",
+        help="block thickness d (length units of s)",
+    )
     exp.add_argument("--output", required=True, metavar="OUT.h5")
     exp.add_argument("--plot", metavar="PNG", help="K and K* against p")
     exp.add_argument("--quiet", action="store_true", help="no table on standard output")
-    demo = sub.add_parser("demo", help="the default scene (periodic 512^2, H=0.7, slope 0.1)",
-                          description="The default scene: periodic 512 x 512 self-affine "
-                                      "surface, H = 0.7, rms slope 0.1, L/lambda_r = 2, "
-                                      "L/lambda_1 = 64, loads from first contact to ~50% area.")
+    demo = sub.add_parser(
+        "demo",
+        help="the default scene (periodic 512^2, H=0.7, slope 0.1)",
+        description="The default scene: periodic 512 x 512 self-affine "
+        "surface, H = 0.7, rms slope 0.1, L/lambda_r = 2, "
+        "L/lambda_1 = 64, loads from first contact to ~50% area.",
+    )
     _surface_arguments(demo)
     _run_arguments(demo, {**DEMO, "output": "demo.h5", "plot": "demo.png"})
     demo.set_defaults(**{k: v for k, v in DEMO.items() if k != "pressures"})
@@ -237,30 +389,39 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _generated(args: argparse.Namespace) -> bool:
     if args.heights is not None:
-        given = [o for o in ("grid", "hurst", "rms_slope", "rms_height") if
-                 getattr(args, o) is not None and args.command != "demo"]
+        given = [
+            o
+            for o in ("grid", "hurst", "rms_slope", "rms_height")
+            if getattr(args, o) is not None and args.command != "demo"
+        ]
         if given:
-            raise InputError("--heights excludes the surface generation options "
-                             f"(--{given[0].replace('_', '-')})")
+            raise InputError(
+                "--heights excludes the surface generation options "
+                f"(--{given[0].replace('_', '-')})"
+            )
         return False
     missing = [o for o in ("grid", "hurst") if getattr(args, o) is None]
     if missing:
-        raise InputError("give --heights FILE, or --grid N --hurst H and --rms-slope or "
-                         "--rms-height to generate a surface")
+        raise InputError(
+            "give --heights FILE, or --grid N --hurst H and --rms-slope or "
+            "--rms-height to generate a surface"
+        )
     if (args.rms_slope is None) == (args.rms_height is None):
         raise InputError("give exactly one of --rms-slope and --rms-height")
     return True
 
 
 def _check_numbers(args: argparse.Namespace) -> None:
-    for name in ("length", "modulus"):
-        v = getattr(args, name)
+    for option in ("length", "modulus"):
+        v = getattr(args, option)
         if not (np.isfinite(v) and v > 0):
-            raise InputError(f"--{name} must be positive and finite, got {v}")
+            raise InputError(f"--{option} must be positive and finite, got {v}")
     if getattr(args, "sweep", None) is not None:
         return
-    name = next((n for n in ("pressures", "approaches", "forces")
-                 if getattr(args, n, None) is not None), None)
+    name = next(
+        (n for n in ("pressures", "approaches", "forces") if getattr(args, n, None) is not None),
+        None,
+    )
     if name is None:
         return
     values = getattr(args, name)
@@ -271,48 +432,75 @@ def _check_numbers(args: argparse.Namespace) -> None:
             raise InputError(f"--{name} must be positive and finite, got {v}")
 
 
-def _attributes(args: argparse.Namespace, argv: Sequence[str], petsc: Any,
-                realised: dict[str, float]) -> dict[str, Any]:
+def _attributes(
+    args: argparse.Namespace, argv: Sequence[str], petsc: Any, realised: dict[str, float]
+) -> dict[str, Any]:
     from .output import file_digest, petsc_options, versions
 
     params = {k: v for k, v in vars(args).items() if k not in ("quiet",)}
     attrs: dict[str, Any] = {
-        "geometry": "punch" if args.command == "punch" else "periodic", "command_line": " ".join(["petsc-contact", *argv]),
-        "parameters": params, "petsc_options": petsc_options(petsc),
-        "versions": versions(petsc), "mpi_size": petsc.COMM_WORLD.getSize(),
-        "length": args.length, "modulus": args.modulus, "units": (
+        "geometry": "punch" if args.command == "punch" else "periodic",
+        "command_line": " ".join(["petsc-contact", *argv]),
+        "parameters": params,
+        "petsc_options": petsc_options(petsc),
+        "versions": versions(petsc),
+        "mpi_size": petsc.COMM_WORLD.getSize(),
+        "length": args.length,
+        "modulus": args.modulus,
+        "units": (
             "SI-free: lengths in the unit of --length and the heights, pressures and "
-            "stiffness per area in the unit of --modulus"), **realised}
+            "stiffness per area in the unit of --modulus"
+        ),
+        **realised,
+    }
     if args.heights is not None:
         attrs["heights_file"] = os.path.abspath(args.heights)
         attrs["heights_sha256"] = file_digest(args.heights)
     else:
-        attrs.update(seed=args.seed, hurst=args.hurst, rolloff_ratio=args.rolloff_ratio,
-                     cutoff_ratio=args.cutoff_ratio, grid=args.grid)
+        attrs.update(
+            seed=args.seed,
+            hurst=args.hurst,
+            rolloff_ratio=args.rolloff_ratio,
+            cutoff_ratio=args.cutoff_ratio,
+            grid=args.grid,
+        )
     return attrs
 
 
 PERIODIC_COLUMNS = (("p0", "nominal_pressure", "{:>11.4e}"), ("mean_gap", "mean_gap", "{:>12.6e}"))
-PUNCH_COLUMNS = (("approach", "approach", "{:>11.4e}"), ("force", "force", "{:>12.6e}"),
-                 ("K_tot", "total_stiffness", "{:>10.4e}"))
+PUNCH_COLUMNS = (
+    ("approach", "approach", "{:>11.4e}"),
+    ("force", "force", "{:>12.6e}"),
+    ("K_tot", "total_stiffness", "{:>10.4e}"),
+)
 
 
 def _header(columns: tuple[tuple[str, str, str], ...]) -> str:
     widths = [len(fmt.format(0.0)) for _, _, fmt in columns]
-    head = " ".join(f"{title:>{w}}" for (title, _, _), w in zip(columns, widths))
+    head = " ".join(f"{title:>{w}}" for (title, _, _), w in zip(columns, widths, strict=True))
     return f"{'step':>7} {head} {'area':>9} {'its':>6} {'time_s':>8} {'kkt':>9}  tao_reason"
 
 
-def _row(i: int, total: int, s: dict[str, Any], columns: tuple[tuple[str, str, str], ...]
-         ) -> str:
+def _row(i: int, total: int, s: dict[str, Any], columns: tuple[tuple[str, str, str], ...]) -> str:
     flag = "" if s["converged"] else "   <-- NOT CONVERGED: " + s["verification"]
     values = " ".join(fmt.format(s[key]) for _, key, fmt in columns)
-    return (f"{f'{i + 1}/{total}':>7} {values} {s['area_fraction']:>9.5f} {s['iterations']:>6d} "
-            f"{s['solve_time']:>8.3f} {s['kkt_residual']:>9.1e}  {s['tao_reason']}{flag}")
+    return (
+        f"{f'{i + 1}/{total}':>7} {values} {s['area_fraction']:>9.5f} {s['iterations']:>6d} "
+        f"{s['solve_time']:>8.3f} {s['kkt_residual']:>9.1e}  {s['tao_reason']}{flag}"
+    )
 
 
-def _surface(args: argparse.Namespace, full: np.ndarray | None, grid: Any, fft: Any
-             ) -> np.ndarray:
+def _scene(args: argparse.Namespace, full: np.ndarray | None) -> tuple[Any, Any, np.ndarray]:
+    """The grid, its FFT and this rank's slab of the heights (read, or generated)."""
+    from .fft import make_fft
+    from .grid import Grid
+
+    grid = Grid(args.grid if full is None else int(full.shape[0]), args.length)
+    fft = make_fft(grid)
+    return grid, fft, _surface(args, full, grid, fft)
+
+
+def _surface(args: argparse.Namespace, full: np.ndarray | None, grid: Any, fft: Any) -> np.ndarray:
     """This rank's slab of the heights: read, or generated (paper Eq. 5)."""
     from .output import check_finite
     from .surface import self_affine
@@ -320,9 +508,17 @@ def _surface(args: argparse.Namespace, full: np.ndarray | None, grid: Any, fft: 
     if full is None:
         cutoff = args.cutoff_ratio if args.cutoff_ratio is not None else grid.n / 2
         args.cutoff_ratio = cutoff
-        return self_affine(grid, fft, hurst=args.hurst, rolloff_ratio=args.rolloff_ratio,
-                           cutoff_ratio=cutoff, seed=args.seed, rms_height=args.rms_height,
-                           rms_slope=args.rms_slope, exact=args.exact_rms)
+        return self_affine(
+            grid,
+            fft,
+            hurst=args.hurst,
+            rolloff_ratio=args.rolloff_ratio,
+            cutoff_ratio=cutoff,
+            seed=args.seed,
+            rms_height=args.rms_height,
+            rms_slope=args.rms_slope,
+            exact=args.exact_rms,
+        )
     heights = grid.scatter(full)
     check_finite(grid, heights)
     return heights
@@ -340,24 +536,20 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
     from .output import StepWriter, check_writable, load_heights, read_resume
 
     _check_numbers(args)
-    generated = _generated(args)
-    full = None if generated else load_heights(args.heights)
+    full = None if _generated(args) else load_heights(args.heights)
     check_writable(args.output)
     if args.plot:
         check_writable(args.plot)
     petsc = _petsc.init(petsc_args)
-    from .fft import make_fft
-    from .grid import Grid
     from .solve import check_tao_type
     from .surface import rms_of
 
     check_tao_type(petsc)
-    n = args.grid if generated else int(full.shape[0])
-    grid = Grid(n, args.length)
-    fft = make_fft(grid)
-    heights = _surface(args, full, grid, fft)
-    realised = {"rms_height": rms_of(grid, fft, heights),
-                "rms_slope": rms_of(grid, fft, heights, slope=True)}
+    grid, fft, heights = _scene(args, full)
+    realised = {
+        "rms_height": rms_of(grid, fft, heights),
+        "rms_slope": rms_of(grid, fft, heights, slope=True),
+    }
     punch = args.command == "punch"
     root = grid.comm.rank == 0
     fields = ("gap", "pressure") if args.fields else ()
@@ -379,15 +571,21 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
     table: list[dict[str, Any]] = _finished_rows(args.output, done) if done and root else []
     try:
         if root and not args.quiet:
-            print(f"# {args.command} {n}x{n}, L = {args.length:g}, E* = {args.modulus:g}, "
-                  f"h_rms = {realised['rms_height']:.4g}, h'_rms = {realised['rms_slope']:.4g}"
-                  f"{plan.intro}", flush=True)
+            print(
+                f"# {args.command} {grid.n}x{grid.n}, L = {args.length:g}, E* = {args.modulus:g}, "
+                f"h_rms = {realised['rms_height']:.4g}, h'_rms = {realised['rms_slope']:.4g}"
+                f"{plan.intro}",
+                flush=True,
+            )
             print(_header(plan.columns), flush=True)
         for i, step in enumerate(plan.steps(plan.loads[done:], start, bool(fields)), done):
             if punch and args.stiffness:
                 step.scalars["stiffness"] = step.scalars["interfacial_stiffness"]
-            writer.append(step.scalars, {"gap": step.gap, "pressure": step.pressure}
-                          if fields else None, state=step.state)
+            writer.append(
+                step.scalars,
+                {"gap": step.gap, "pressure": step.pressure} if fields else None,
+                state=step.state,
+            )
             table.append(step.scalars)
             if root and not args.quiet:
                 print(_row(i, total, step.scalars, plan.columns), flush=True)
@@ -407,9 +605,12 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
     failed = [s for s in table if not s["converged"]]
     if failed and root:
         load = plan.columns[0]
-        print(f"petsc-contact: error: {len(failed)} of {len(table)} load steps did NOT converge "
-              f"(first: {load[0]} = {failed[0][load[1]]:g}, {failed[0]['verification']}); "
-              f"they are flagged converged = False in {args.output}", file=sys.stderr)
+        print(
+            f"petsc-contact: error: {len(failed)} of {len(table)} load steps did NOT converge "
+            f"(first: {load[0]} = {failed[0][load[1]]:g}, {failed[0]['verification']}); "
+            f"they are flagged converged = False in {args.output}",
+            file=sys.stderr,
+        )
     if root and not args.quiet:
         print(f"# wrote {args.output}" + (f" and {args.plot}" if args.plot else ""))
     return EXIT_NOT_CONVERGED if failed else 0
@@ -427,24 +628,31 @@ class Plan:
     fft_backend: str = ""  # class name of the operator's FFT backend (fft module)
 
 
-def _periodic_plan(petsc: Any, args: argparse.Namespace, grid: Any, fft: Any,
-                   heights: np.ndarray) -> Plan:
+def _periodic_plan(
+    petsc: Any, args: argparse.Namespace, grid: Any, fft: Any, heights: np.ndarray
+) -> Plan:
     from .periodic import sweep
     from .problem import PeriodicProblem
 
     problem = PeriodicProblem(grid, fft, heights, args.modulus)
     p_full = problem.full_contact_pressure()
     if args.sweep is not None:
-        n, lo, hi = (args.sweep + [1e-4 * p_full, 0.9 * p_full])[:3] if len(args.sweep) == 1 \
-            else args.sweep
+        n, lo, hi = (
+            (args.sweep + [1e-4 * p_full, 0.9 * p_full])[:3] if len(args.sweep) == 1 else args.sweep
+        )
         args.pressures = [float(p) for p in np.geomspace(lo, hi, int(n))]
         args.sweep = None  # resolved: the file records the pressures themselves
 
     def steps(loads: list[float], start: np.ndarray | None, fields: bool) -> Iterator[Any]:
         return sweep(petsc, problem, loads, fields, stiffness=args.stiffness, start=start)
 
-    return Plan(list(args.pressures), steps, PERIODIC_COLUMNS,
-                f", full contact at p0 = {p_full:.4g}", fft_backend=type(fft).__name__)
+    return Plan(
+        list(args.pressures),
+        steps,
+        PERIODIC_COLUMNS,
+        f", full contact at p0 = {p_full:.4g}",
+        fft_backend=type(fft).__name__,
+    )
 
 
 def _punch_plan(petsc: Any, args: argparse.Namespace, grid: Any, heights: np.ndarray) -> Plan:
@@ -452,12 +660,16 @@ def _punch_plan(petsc: Any, args: argparse.Namespace, grid: Any, heights: np.nda
 
     mask = grid.scatter(_disk(grid.n)) > 0 if args.footprint == "disk" else None
     problem = PunchProblem(grid, heights, args.modulus, mask)
-    solver = PunchSolver(petsc, problem, args.flat_stiffness,
-                         1.0 if args.footprint == "disk" else PHARR_BETA)
+    solver = PunchSolver(
+        petsc, problem, args.flat_stiffness, 1.0 if args.footprint == "disk" else PHARR_BETA
+    )
     by_force = args.forces is not None
     if args.sweep is not None:
-        n, lo, hi = (args.sweep + [0.01 * problem.scale_length, 3 * problem.scale_length])[:3] \
-            if len(args.sweep) == 1 else args.sweep
+        n, lo, hi = (
+            (args.sweep + [0.01 * problem.scale_length, 3 * problem.scale_length])[:3]
+            if len(args.sweep) == 1
+            else args.sweep
+        )
         args.approaches = [float(d) for d in np.geomspace(lo, hi, int(n))]
         args.sweep = None  # resolved: the file records the approaches themselves
 
@@ -467,11 +679,18 @@ def _punch_plan(petsc: Any, args: argparse.Namespace, grid: Any, heights: np.nda
         for v in loads:
             yield solver.at_force(v, fields) if by_force else solver.at_approach(v, fields)
 
-    intro = (f", K_flat = {solver.k_flat:.6g} ({args.flat_stiffness}; analytic "
-             f"{solver.k_flat_analytic:.6g})")
-    return Plan(list(args.forces if by_force else args.approaches), steps,
-                PUNCH_COLUMNS + (("p0", "nominal_pressure", "{:>10.3e}"),), intro,
-                solver.close, type(problem.compliance.fft).__name__)
+    intro = (
+        f", K_flat = {solver.k_flat:.6g} ({args.flat_stiffness}; analytic "
+        f"{solver.k_flat_analytic:.6g})"
+    )
+    return Plan(
+        list(args.forces if by_force else args.approaches),
+        steps,
+        PUNCH_COLUMNS + (("p0", "nominal_pressure", "{:>10.3e}"),),
+        intro,
+        solver.close,
+        type(problem.compliance.fft).__name__,
+    )
 
 
 def _finished_rows(path: str, steps: int) -> list[dict[str, Any]]:
@@ -495,11 +714,12 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
     from .output import check_writable
 
     if args.heights is not None:
-        raise InputError("ensemble needs a generated surface (--grid, --hurst, ...), "
-                         "not --heights")
+        raise InputError("ensemble needs a generated surface (--grid, --hurst, ...), not --heights")
     if args.pressures is None and len(args.sweep) == 1:
-        raise InputError("ensemble needs the same pressures for every seed: give "
-                         "--pressures or --sweep N,PMIN,PMAX")
+        raise InputError(
+            "ensemble needs the same pressures for every seed: give "
+            "--pressures or --sweep N,PMIN,PMAX"
+        )
     check_writable(args.output)
     stem = args.output[:-3] if args.output.endswith(".h5") else args.output
     files, status = [], 0
@@ -508,8 +728,9 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
         files.append(path)
         if args.resume and os.path.exists(path):
             continue  # finished earlier: nothing recomputed
-        one = argparse.Namespace(**{**vars(args), "seed": seed, "output": path,
-                                    "command": "periodic", "plot": None})
+        one = argparse.Namespace(
+            **{**vars(args), "seed": seed, "output": path, "command": "periodic", "plot": None}
+        )
         del one.seeds
         code = run(one, argv, petsc_args)
         if code == EXIT_INTERRUPTED:
@@ -524,8 +745,15 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
     return status
 
 
-ENSEMBLE_QUANTITIES = ("mean_gap", "area_fraction", "stiffness", "elastic_energy",
-                       "max_pressure", "iterations", "solve_time")
+ENSEMBLE_QUANTITIES = (
+    "mean_gap",
+    "area_fraction",
+    "stiffness",
+    "elastic_energy",
+    "max_pressure",
+    "iterations",
+    "solve_time",
+)
 
 
 def _write_ensemble(args: argparse.Namespace, files: list[str], stats: Any, h5py: Any) -> None:
@@ -540,8 +768,9 @@ def _write_ensemble(args: argparse.Namespace, files: list[str], stats: Any, h5py
     partial = args.output + ".partial"
     with h5py.File(partial, "w") as out:
         out.attrs["geometry"] = "periodic ensemble"
-        out.attrs["parameters"] = json.dumps({k: v for k, v in vars(args).items()
-                                              if k not in ("quiet",)})
+        out.attrs["parameters"] = json.dumps(
+            {k: v for k, v in vars(args).items() if k not in ("quiet",)}
+        )
         out.attrs["seed_files"] = json.dumps([os.path.abspath(p) for p in files])
         out["seeds"] = np.array(args.seeds)
         out["nominal_pressure"] = pressure
@@ -557,9 +786,14 @@ def _write_ensemble(args: argparse.Namespace, files: list[str], stats: Any, h5py
 def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
     """``petsc-contact compare``: every solver on one scene, error against time."""
     from . import _petsc
-    from .compare import DEFAULT_SOLVERS, compare, solver_options, table_rows, write_compare
-    from .fft import make_fft
-    from .grid import Grid
+    from .compare import (
+        DEFAULT_SOLVERS,
+        Trajectory,
+        compare,
+        solver_options,
+        table_rows,
+        write_compare,
+    )
     from .output import check_writable, load_heights
     from .problem import PeriodicProblem
     from .surface import rms_of
@@ -571,31 +805,49 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
     solvers = args.solvers or list(DEFAULT_SOLVERS)
     for name in solvers:
         solver_options(name)  # unknown options files fail here, before any work
-    generated = _generated(args)
-    full = None if generated else load_heights(args.heights)
+    full = None if _generated(args) else load_heights(args.heights)
     check_writable(args.output)
     petsc = _petsc.init(petsc_args)
-    n = args.grid if generated else int(full.shape[0])
-    grid = Grid(n, args.length)
-    fft = make_fft(grid)
-    heights = _surface(args, full, grid, fft)
+    grid, fft, heights = _scene(args, full)
     problem = PeriodicProblem(grid, fft, heights, args.modulus)
-    reference, trajectories = compare(petsc, problem, args.pressure, solvers, args.time_limit,
-                                      stall_iterations=args.stall_iterations)
+    show = grid.comm.rank == 0 and not args.quiet
+    if show:
+        print(
+            f"{'solver':>16} {'converged':>9} {'its':>6} {'time_s':>8} {'gap_err':>9} "
+            f"{'p_err':>9} {'residual':>9} {'compl':>9}  reason",
+            flush=True,
+        )
+
+    def report(trajectory: Trajectory) -> None:
+        if show:
+            (row,) = table_rows([trajectory])
+            name, reason, ok, its, t, eg, ep, r, c = row
+            print(
+                f"{name:>16} {str(ok):>9} {its:>6d} {t:>8.3f} {eg:>9.1e} {ep:>9.1e} "
+                f"{r:>9.1e} {c:>9.1e}  {reason}",
+                flush=True,
+            )
+
+    reference, trajectories = compare(
+        petsc,
+        problem,
+        args.pressure,
+        solvers,
+        args.time_limit,
+        stall_iterations=args.stall_iterations,
+        report=report,
+    )
     realised = {"rms_height": rms_of(grid, fft, heights), "pressure": args.pressure}  # collective
     status = 0 if all(t.converged for t in trajectories) else EXIT_NOT_CONVERGED
     if grid.comm.rank != 0:
         return status  # the same on every rank: the verdicts come from reduced residuals
     attrs = _attributes(args, argv, petsc, realised)
     csv, png = write_compare(args.output, reference, trajectories, attrs)
-    if not args.quiet:
-        print(f"# reference: mean gap {reference['mean_gap']:.10e}, natural residual "
-              f"{reference['natural_residual']:.1e} (tolerance {reference['tolerance']:.0e})")
-        print(f"{'solver':>16} {'converged':>9} {'its':>6} {'time_s':>8} {'gap_err':>9} "
-              f"{'p_err':>9} {'residual':>9} {'compl':>9}  reason")
-        for name, reason, ok, its, t, eg, ep, r, c in table_rows(trajectories):
-            print(f"{name:>16} {str(ok):>9} {its:>6d} {t:>8.3f} {eg:>9.1e} {ep:>9.1e} "
-                  f"{r:>9.1e} {c:>9.1e}  {reason}")
+    if show:
+        print(
+            f"# reference: mean gap {reference['mean_gap']:.10e}, natural residual "
+            f"{reference['natural_residual']:.1e} (tolerance {reference['tolerance']:.0e})"
+        )
         print(f"# wrote {args.output}, {csv} and {png}")
     return status
 
@@ -626,13 +878,17 @@ def run_experiment(args: argparse.Namespace) -> int:
     with h5py.File(partial, "w") as f:
         f["pressure"], f["displacement"] = p, disp
         f["measured_stiffness"], f["stiffness"] = k_star, k
-        f.attrs.update(geometry="experiment", block_modulus=args.modulus,
-                       thickness=args.thickness, table=os.path.abspath(args.table),
-                       formula="K* = dp/ds (2nd-order differences), K = K*/(1 - K* d/E')")
+        f.attrs.update(
+            geometry="experiment",
+            block_modulus=args.modulus,
+            thickness=args.thickness,
+            table=os.path.abspath(args.table),
+            formula="K* = dp/ds (2nd-order differences), K = K*/(1 - K* d/E')",
+        )
     os.replace(partial, args.output)
     if not args.quiet:
         print(f"{'p':>12} {'s':>12} {'K*':>12} {'K':>12}")
-        for row in zip(p, disp, k_star, k):
+        for row in zip(p, disp, k_star, k, strict=True):
             print(" ".join(f"{v:>12.5g}" for v in row))
     if args.plot:
         from .plot import plot_experiment
@@ -663,7 +919,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         return EXIT_INTERRUPTED
-    except Exception as exc:  # noqa: BLE001 - PETSc errors become one line, not a traceback
+    except Exception as exc:
         if type(exc).__name__ == "Error" and "petsc4py" in type(exc).__module__:
             _error(f"PETSc error: {exc}")
             return EXIT_BAD_INPUT

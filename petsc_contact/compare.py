@@ -24,15 +24,17 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
 from . import _petsc
 from .observables import natural_residual
+from .periodic import VERIFY_FACTOR, sweep
 from .problem import PeriodicProblem
-from .solve import BoundSolver
+from .solve import BoundSolver, SolveInfo
 
 REFERENCE_GATOL = 1e-12
 STALL_GAIN = 0.9  # a new low of the natural residual must be 10% below the best so far
@@ -73,15 +75,137 @@ class Trajectory:
     verification: str = ""
 
 
-def compare(petsc: Any, problem: PeriodicProblem, pressure: float, solvers: Sequence[str],
-            time_limit: float = 120.0, extra_options: Sequence[str] = (),
-            stall_iterations: int = 1000) -> tuple[dict[str, Any], list[Trajectory]]:
+@dataclass
+class Reference:
+    """The tight solve every trajectory is measured against."""
+
+    pressure: np.ndarray  # local slab
+    mean_gap: float
+    natural_residual: float
+    tolerance: float
+    iterations: int
+
+    def scalars(self) -> dict[str, Any]:
+        """What is stored with the comparison (``reference_*`` attributes)."""
+        return {
+            "mean_gap": self.mean_gap,
+            "natural_residual": self.natural_residual,
+            "tolerance": self.tolerance,
+            "iterations": self.iterations,
+        }
+
+
+def reference_solve(petsc: Any, problem: PeriodicProblem, pressure: float) -> Reference:
+    """The default solver at ``REFERENCE_GATOL`` (or the rounding floor); raises if it fails."""
+    gatol = max(REFERENCE_GATOL, problem.stiffness_rounding_floor(pressure))
+    with _petsc.scoped_options(["-tao_gatol", str(gatol)]):
+        (step,) = sweep(petsc, problem, [pressure], fields=True)
+    if not step.converged or step.pressure is None:
+        raise RuntimeError(f"reference solve failed: {step.scalars['verification']}")
+    s = step.scalars
+    return Reference(
+        step.pressure, s["mean_gap"], s["kkt_residual"], s["tolerance"], s["iterations"]
+    )
+
+
+class _Recorder:
+    """The TAO monitor of one trajectory: measures the iterate, decides when to stop.
+
+    The time spent measuring is kept apart (:attr:`spent`) so that the time axis is the
+    solver's own.
+    """
+
+    def __init__(
+        self,
+        problem: PeriodicProblem,
+        reference: Reference,
+        nominal_pressure: float,
+        traj: Trajectory,
+        solver: BoundSolver,
+        time_limit: float,
+        stall_iterations: int,
+    ) -> None:
+        self.problem, self.reference, self.p0 = problem, reference, nominal_pressure
+        self.traj, self.solver = traj, solver
+        self.time_limit, self.stall_iterations = time_limit, stall_iterations
+        grid = problem.grid
+        self.u_scale = reference.mean_gap if reference.mean_gap > 0 else problem.scale_length
+        (self.p_ref_norm,) = np.sqrt(grid.sum(np.vdot(reference.pressure, reference.pressure)))
+        self.spent = 0.0
+        self.best = (np.inf, 0)  # lowest natural residual so far, and its iteration
+        self.stop: list[str] = []
+        self.start = time.perf_counter()
+
+    def __call__(self, it: int, f: float, gnorm: float) -> bool:
+        t_in = time.perf_counter()
+        problem, grid, traj = self.problem, self.problem.grid, self.traj
+        gap = self.solver.x.array_r.reshape(grid.local_shape) * problem.scale_length
+        p = problem.pressure(gap)
+        r = natural_residual(gap, p, problem.pixel_stiffness)
+        pp = np.maximum(p, 0.0)
+        dp = p - self.reference.pressure
+        g_sum, dp2, r2, pg, p_sum = grid.sum(
+            gap.sum(), np.vdot(dp, dp), np.vdot(r, r), np.vdot(pp, gap), pp.sum()
+        )
+        traj.iteration.append(int(it))
+        # the slowest rank's time, so that every rank stops at the same iteration
+        traj.time.append(grid.max(t_in - self.start - self.spent))
+        traj.mean_gap_error.append(abs(g_sum / grid.size - self.reference.mean_gap) / self.u_scale)
+        traj.pressure_error.append(float(np.sqrt(dp2)) / self.p_ref_norm)
+        traj.natural_residual.append(float(np.sqrt(r2 / grid.size)) / self.p0)
+        traj.complementarity.append(pg / (p_sum * problem.scale_length) if p_sum > 0 else 0.0)
+        self._check_stop(it)
+        self.spent += time.perf_counter() - t_in
+        return bool(self.stop)
+
+    def _check_stop(self, it: int) -> None:
+        residual = self.traj.natural_residual[-1]
+        if residual < STALL_GAIN * self.best[0]:
+            self.best = (residual, it)
+        if self.traj.time[-1] > self.time_limit:
+            self.stop.append(f"time limit {self.time_limit:g} s")
+        elif self.stall_iterations and it - self.best[1] >= self.stall_iterations:
+            self.stop.append(
+                f"stalled: natural residual not 10% below its best "
+                f"{self.best[0]:.1e} in {self.stall_iterations} iterations"
+            )
+
+
+def _conclude(traj: Trajectory, info: SolveInfo, recorder: _Recorder) -> None:
+    """Fill in the final report; converged only if TAO says so *and* the residual agrees."""
+    traj.reason = f"{info.reason} ({recorder.stop[0]})" if recorder.stop else info.reason
+    traj.solve_time = info.solve_time - recorder.spent
+    traj.iterations = info.iterations
+    final = traj.natural_residual[-1] if traj.natural_residual else np.inf
+    limit = VERIFY_FACTOR * max(info.tolerance, 1e-300)
+    traj.converged = info.reason_code > 0 and final <= limit
+    if traj.converged:
+        traj.verification = "ok"
+    elif info.reason_code <= 0:
+        traj.verification = f"TAO: {info.reason}"
+    else:
+        traj.verification = (
+            f"natural residual {final:.1e} > {VERIFY_FACTOR:g} x {info.tolerance:.0e}"
+        )
+
+
+def compare(
+    petsc: Any,
+    problem: PeriodicProblem,
+    pressure: float,
+    solvers: Sequence[str],
+    time_limit: float = 120.0,
+    extra_options: Sequence[str] = (),
+    stall_iterations: int = 1000,
+    report: Callable[[Trajectory], None] | None = None,
+) -> tuple[dict[str, Any], list[Trajectory]]:
     """Run each solver from first touch and record its error against time.
 
     A solver is stopped (``DIVERGED_USER``, with the cause in its reason) after
     ``time_limit`` seconds, or once its natural residual has not fallen 10% below its best
     for ``stall_iterations`` iterations (0: never): a solver stuck at its own floor (BQNLS's
     line search at ``~1e-8 p0``) then does not spend the whole time limit there.
+    ``report(trajectory)`` is called as each solver finishes.
 
     Returns
     -------
@@ -90,22 +214,8 @@ def compare(petsc: Any, problem: PeriodicProblem, pressure: float, solvers: Sequ
         ``natural_residual``, ``tolerance``, ``iterations``); one :class:`Trajectory` per
         solver, in order.
     """
-    from .periodic import sweep
-
-    grid = problem.grid
-    ell = problem.scale_length
-    gatol = max(REFERENCE_GATOL, problem.stiffness_rounding_floor(pressure))
-    with _petsc.scoped_options(["-tao_gatol", str(gatol)]):
-        (ref_step,) = sweep(petsc, problem, [pressure], fields=True)
-    if not ref_step.converged:
-        raise RuntimeError(f"reference solve failed: {ref_step.scalars['verification']}")
-    p_ref, u_ref = ref_step.pressure, ref_step.scalars["mean_gap"]
-    u_scale = u_ref if u_ref > 0 else ell
-    (p_ref_norm,) = np.sqrt(grid.sum(np.vdot(p_ref, p_ref)))
-    reference = {"mean_gap": u_ref, "natural_residual": ref_step.scalars["kkt_residual"],
-                 "tolerance": ref_step.scalars["tolerance"],
-                 "iterations": ref_step.scalars["iterations"]}
-    x0 = problem.initial_gap().reshape(-1) / ell
+    reference = reference_solve(petsc, problem, pressure)
+    x0 = problem.initial_gap().reshape(-1) / problem.scale_length
     out = []
     for name in solvers:
         opts = solver_options(name) + list(extra_options)
@@ -113,55 +223,35 @@ def compare(petsc: Any, problem: PeriodicProblem, pressure: float, solvers: Sequ
         with _petsc.scoped_options(opts):
             problem.set_pressure(pressure)
             problem.start(x0)
-            with BoundSolver(petsc, grid, problem.hessian, problem.preconditioner) as solver:
-                spent = [0.0]
-                best = [np.inf, 0]  # lowest natural residual so far, and its iteration
-                stop: list[str] = []
-                start = time.perf_counter()
-
-                def monitor(it: int, f: float, gnorm: float) -> bool:
-                    t_in = time.perf_counter()
-                    gap = solver.x.array_r.reshape(grid.local_shape) * ell
-                    p = problem.pressure(gap)
-                    r = natural_residual(gap, p, problem.pixel_stiffness)
-                    pp = np.maximum(p, 0.0)
-                    g_sum, dp2, r2, pg, p_sum = grid.sum(
-                        gap.sum(), np.vdot(p - p_ref, p - p_ref), np.vdot(r, r),
-                        np.vdot(pp, gap), pp.sum())
-                    traj.iteration.append(int(it))
-                    # the slowest rank's time, so that every rank stops at the same iteration
-                    traj.time.append(grid.max(t_in - start - spent[0]))
-                    traj.mean_gap_error.append(abs(g_sum / grid.size - u_ref) / u_scale)
-                    traj.pressure_error.append(float(np.sqrt(dp2)) / p_ref_norm)
-                    traj.natural_residual.append(float(np.sqrt(r2 / grid.size)) / pressure)
-                    traj.complementarity.append(pg / (p_sum * ell) if p_sum > 0 else 0.0)
-                    if traj.natural_residual[-1] < STALL_GAIN * best[0]:
-                        best[:] = traj.natural_residual[-1], it
-                    if traj.time[-1] > time_limit:
-                        stop.append(f"time limit {time_limit:g} s")
-                    elif stall_iterations and it - best[1] >= stall_iterations:
-                        stop.append(f"stalled: natural residual not 10% below its best "
-                                    f"{best[0]:.1e} in {stall_iterations} iterations")
-                    spent[0] += time.perf_counter() - t_in
-                    return bool(stop)
-
-                _, info = solver.solve(problem.objective_gradient, x0, monitor=monitor,
-                                       gatol_floor=problem.rounding_floor(pressure))
-        traj.reason = f"{info.reason} ({stop[0]})" if stop else info.reason
-        traj.solve_time = info.solve_time - spent[0]
-        traj.iterations = info.iterations
-        final_ok = bool(traj.natural_residual) and \
-            traj.natural_residual[-1] <= 10 * max(info.tolerance, 1e-300)
-        traj.converged = info.reason_code > 0 and final_ok
-        traj.verification = "ok" if traj.converged else (
-            f"TAO: {info.reason}" if info.reason_code <= 0 else
-            f"natural residual {traj.natural_residual[-1]:.1e} > 10 x {info.tolerance:.0e}")
+            with BoundSolver(petsc, problem.grid, problem.hessian, problem.preconditioner) as s:
+                recorder = _Recorder(
+                    problem,
+                    reference,
+                    pressure,
+                    traj,
+                    s,
+                    time_limit,
+                    stall_iterations,
+                )
+                _, info = s.solve(
+                    problem.objective_gradient,
+                    x0,
+                    monitor=recorder,
+                    gatol_floor=problem.rounding_floor(pressure),
+                )
+        _conclude(traj, info, recorder)
         out.append(traj)
-    return reference, out
+        if report is not None:
+            report(traj)
+    return reference.scalars(), out
 
 
-def write_compare(path: str, reference: dict[str, Any], trajectories: Sequence[Trajectory],
-                  attributes: dict[str, Any]) -> tuple[str, str]:
+def write_compare(
+    path: str,
+    reference: dict[str, Any],
+    trajectories: Sequence[Trajectory],
+    attributes: dict[str, Any],
+) -> tuple[str, str]:
     """HDF5 (one group per solver), a CSV table and a PNG of error against time.
 
     Returns the CSV and PNG paths (next to ``path``).
@@ -178,8 +268,14 @@ def write_compare(path: str, reference: dict[str, Any], trajectories: Sequence[T
             f.attrs[f"reference_{k}"] = v
         for t in trajectories:
             g = f.create_group(t.name.replace("/", "_"))
-            for k in ("time", "iteration", "mean_gap_error", "pressure_error",
-                      "natural_residual", "complementarity"):
+            for k in (
+                "time",
+                "iteration",
+                "mean_gap_error",
+                "pressure_error",
+                "natural_residual",
+                "complementarity",
+            ):
                 g[k] = np.asarray(getattr(t, k))
             for k in ("reason", "solve_time", "iterations", "converged", "verification"):
                 g.attrs[k] = getattr(t, k)
@@ -190,8 +286,10 @@ def write_compare(path: str, reference: dict[str, Any], trajectories: Sequence[T
     os.replace(path + ".partial", path)
     csv = stem + ".csv"
     with open(csv, "w") as f:
-        f.write("solver,reason,converged,iterations,time_s,mean_gap_error,pressure_error,"
-                "natural_residual,complementarity\n")
+        f.write(
+            "solver,reason,converged,iterations,time_s,mean_gap_error,pressure_error,"
+            "natural_residual,complementarity\n"
+        )
         for row in table_rows(trajectories):
             f.write(",".join(str(v) for v in row) + "\n")
     png = stem + ".png"
@@ -201,17 +299,29 @@ def write_compare(path: str, reference: dict[str, Any], trajectories: Sequence[T
 
 def table_rows(trajectories: Sequence[Trajectory]) -> list[tuple[Any, ...]]:
     """One row per solver: name, reason, converged, iterations, time, final errors."""
+
+    def last(v: Sequence[float]) -> float:
+        return v[-1] if v else float("nan")
+
     rows = []
     for t in trajectories:
-        last = (lambda v: v[-1] if v else float("nan"))
-        rows.append((t.name, t.reason, t.converged, t.iterations, round(t.solve_time, 4),
-                     last(t.mean_gap_error), last(t.pressure_error),
-                     last(t.natural_residual), last(t.complementarity)))
+        rows.append(
+            (
+                t.name,
+                t.reason,
+                t.converged,
+                t.iterations,
+                round(t.solve_time, 4),
+                last(t.mean_gap_error),
+                last(t.pressure_error),
+                last(t.natural_residual),
+                last(t.complementarity),
+            )
+        )
     return rows
 
 
-def plot_compare(path: str, trajectories: Sequence[Trajectory], reference: dict[str, Any]
-                 ) -> None:
+def plot_compare(path: str, trajectories: Sequence[Trajectory], reference: dict[str, Any]) -> None:
     """Pressure error and natural residual against wall time, log-log, one line per solver."""
     from .plot import _finish, _pyplot
 
@@ -223,8 +333,11 @@ def plot_compare(path: str, trajectories: Sequence[Trajectory], reference: dict[
         ax1.loglog(tm, np.maximum(t.pressure_error, 1e-17), style, label=t.name)
         ax2.loglog(tm, np.maximum(t.natural_residual, 1e-17), style, label=t.name)
     ax1.axhline(reference["natural_residual"], color="gray", lw=0.8)
-    ax1.set(xlabel="wall time (s)", ylabel=r"$\|p - p_\mathrm{ref}\| / \|p_\mathrm{ref}\|$",
-            title="pressure error (dotted: not converged)")
+    ax1.set(
+        xlabel="wall time (s)",
+        ylabel=r"$\|p - p_\mathrm{ref}\| / \|p_\mathrm{ref}\|$",
+        title="pressure error (dotted: not converged)",
+    )
     ax2.set(xlabel="wall time (s)", ylabel=r"rms$(\min(k g, p))/p_0$", title="natural residual")
     ax2.legend(fontsize=8)
     _finish(fig, (ax1, ax2), path)

@@ -62,5 +62,9 @@ def ensemble_statistics(values: np.ndarray) -> dict[str, np.ndarray]:
         std = np.sqrt((dev * dev).sum(axis=0) / (count - 1))
         sem = std / np.sqrt(count)
     mean = np.where(count > 0, mean, np.nan)
-    return {"mean": mean, "std": np.where(count > 1, std, np.nan),
-            "sem": np.where(count > 1, sem, np.nan), "count": count}
+    return {
+        "mean": mean,
+        "std": np.where(count > 1, std, np.nan),
+        "sem": np.where(count > 1, sem, np.nan),
+        "count": count,
+    }

@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from .grid import Grid
+from .grid import Grid, fft_order
 
 PLANNER_EFFORT = "FFTW_MEASURE"
 WISDOM_VARIABLE = "PETSC_CONTACT_FFTW_WISDOM"  # a file for FFTW's wisdom, or "off"
@@ -69,8 +69,7 @@ class _Wisdom:
             return None
         if value:
             return value
-        cache = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"),
-                                                                  ".cache")
+        cache = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
         return os.path.join(cache, "petsc-contact", f"fftw-wisdom-{platform.node()}")
 
     @classmethod
@@ -118,12 +117,17 @@ class SerialFFT:
         self.real = pyfftw.empty_aligned((n, n), dtype="float64")
         self.spectrum = pyfftw.empty_aligned((n, n // 2 + 1), dtype="complex128")
         self.result = pyfftw.empty_aligned((n, n), dtype="float64")
-        self._forward = pyfftw.FFTW(self.real, self.spectrum, axes=(0, 1),
-                                    flags=(PLANNER_EFFORT,), threads=threads)
-        self._backward = pyfftw.FFTW(self.spectrum, self.result, axes=(0, 1),
-                                     direction="FFTW_BACKWARD",
-                                     flags=(PLANNER_EFFORT, "FFTW_DESTROY_INPUT"),
-                                     threads=threads)
+        self._forward = pyfftw.FFTW(
+            self.real, self.spectrum, axes=(0, 1), flags=(PLANNER_EFFORT,), threads=threads
+        )
+        self._backward = pyfftw.FFTW(
+            self.spectrum,
+            self.result,
+            axes=(0, 1),
+            direction="FFTW_BACKWARD",
+            flags=(PLANNER_EFFORT, "FFTW_DESTROY_INPUT"),
+            threads=threads,
+        )
         if pyfftw.export_wisdom() != known:  # new plans were measured
             _Wisdom.save(pyfftw)
         self.spectral_index = (slice(0, n), slice(0, n // 2 + 1))
@@ -175,8 +179,14 @@ class SlabFFT:
     def __init__(self, grid: Grid) -> None:
         from mpi4py_fft import PFFT
 
-        self._pfft = PFFT(grid.comm, (grid.n, grid.n), axes=(0, 1), dtype=np.float64,
-                          grid=(-1,), planner_effort=PLANNER_EFFORT)
+        self._pfft = PFFT(
+            grid.comm,
+            (grid.n, grid.n),
+            axes=(0, 1),
+            dtype=np.float64,
+            grid=(-1,),
+            planner_effort=PLANNER_EFFORT,
+        )
         if self._pfft.local_slice(False)[0] != grid.rows:
             raise RuntimeError("mpi4py-fft row distribution differs from the grid's")
         # mpi4py-fft's backward transform works in forward.input_array, so ``real`` is a
@@ -226,14 +236,28 @@ class _FFTWMPILibrary:
             size_t = ctypes.c_ssize_t
             lib.fftw_mpi_local_size_many_transposed.restype = size_t
             lib.fftw_mpi_local_size_many_transposed.argtypes = [
-                ctypes.c_int, ctypes.POINTER(size_t), size_t, size_t, size_t, ctypes.c_void_p,
-                *[ctypes.POINTER(size_t)] * 4]
+                ctypes.c_int,
+                ctypes.POINTER(size_t),
+                size_t,
+                size_t,
+                size_t,
+                ctypes.c_void_p,
+                *[ctypes.POINTER(size_t)] * 4,
+            ]
             for name in ("fftw_mpi_plan_many_dft_r2c", "fftw_mpi_plan_many_dft_c2r"):
                 fn = getattr(lib, name)
                 fn.restype = ctypes.c_void_p
-                fn.argtypes = [ctypes.c_int, ctypes.POINTER(size_t), size_t, size_t, size_t,
-                               ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p,
-                               ctypes.c_uint]
+                fn.argtypes = [
+                    ctypes.c_int,
+                    ctypes.POINTER(size_t),
+                    size_t,
+                    size_t,
+                    size_t,
+                    ctypes.c_void_p,
+                    ctypes.c_void_p,
+                    ctypes.c_void_p,
+                    ctypes.c_uint,
+                ]
             lib.fftw_execute.argtypes = [ctypes.c_void_p]
             lib.fftw_mpi_init()
             cls._lib = lib
@@ -250,30 +274,33 @@ class _FFTWMPIPlans:
     the backward instead), so the buffer can be shared.
     """
 
-    _made: dict[tuple[int, int], "_FFTWMPIPlans | None"] = {}
+    _made: dict[tuple[int, int], _FFTWMPIPlans | None] = {}
 
-    def __init__(self, grid: Grid, lib: Any, block0: int, block1: int, local: list[int],
-                 alloc: int) -> None:
+    def __init__(
+        self, grid: Grid, lib: Any, block0: int, block1: int, local: list[int], alloc: int
+    ) -> None:
         from mpi4py import MPI
 
         n, m = grid.n, grid.n // 2 + 1
         rows, _, n_cols, col_start = local
         self.lib = lib
         self._buffer = _aligned(2 * alloc, np.float64)
-        self.padded = self._buffer[:rows * 2 * m].reshape(rows, 2 * m)[:, :n]
-        self.spectrum = self._buffer.view(np.complex128)[:n_cols * n].reshape(n_cols, n)
+        self.padded = self._buffer[: rows * 2 * m].reshape(rows, 2 * m)[:, :n]
+        self.spectrum = self._buffer.view(np.complex128)[: n_cols * n].reshape(n_cols, n)
         self.spectral_index = (slice(0, n), slice(col_start, col_start + n_cols))
         dims = (ctypes.c_ssize_t * 2)(n, n)
         comm = ctypes.c_void_p(MPI._handleof(grid.comm))
         data = self._buffer.ctypes.data
         self.forward = lib.fftw_mpi_plan_many_dft_r2c(
-            2, dims, 1, block0, block1, data, data, comm, _FFTW_MEASURE | _FFTW_MPI_TRANSPOSED_OUT)
+            2, dims, 1, block0, block1, data, data, comm, _FFTW_MEASURE | _FFTW_MPI_TRANSPOSED_OUT
+        )
         self.backward = lib.fftw_mpi_plan_many_dft_c2r(
-            2, dims, 1, block1, block0, data, data, comm, _FFTW_MEASURE | _FFTW_MPI_TRANSPOSED_IN)
+            2, dims, 1, block1, block0, data, data, comm, _FFTW_MEASURE | _FFTW_MPI_TRANSPOSED_IN
+        )
         self.ok = bool(self.forward and self.backward)
 
     @classmethod
-    def get(cls, grid: Grid) -> "_FFTWMPIPlans | None":
+    def get(cls, grid: Grid) -> _FFTWMPIPlans | None:
         """The plans for ``grid``; ``None`` without FFTW-MPI or if its rows are not the grid's."""
         from mpi4py import MPI
 
@@ -283,7 +310,7 @@ class _FFTWMPIPlans:
         return cls._made[key]
 
     @classmethod
-    def _make(cls, grid: Grid) -> "_FFTWMPIPlans | None":
+    def _make(cls, grid: Grid) -> _FFTWMPIPlans | None:
         from mpi4py import MPI
 
         lib = _FFTWMPILibrary.get()
@@ -293,11 +320,16 @@ class _FFTWMPIPlans:
         block0 = block1 = 0  # FFTW_MPI_DEFAULT_BLOCK: ceil(n/P) rows, ceil(m/P) columns
         local = [ctypes.c_ssize_t() for _ in range(4)]
         alloc = lib.fftw_mpi_local_size_many_transposed(
-            2, (ctypes.c_ssize_t * 2)(n, m), 1, block0, block1, MPI._handleof(grid.comm),
-            *map(ctypes.byref, local))
+            2,
+            (ctypes.c_ssize_t * 2)(n, m),
+            1,
+            block0,
+            block1,
+            MPI._handleof(grid.comm),
+            *map(ctypes.byref, local),
+        )
         rows, row_start = local[0].value, local[1].value
-        if not grid.comm.allreduce(grid.rows == slice(row_start, row_start + rows),
-                                   op=MPI.LAND):
+        if not grid.comm.allreduce(grid.rows == slice(row_start, row_start + rows), op=MPI.LAND):
             return None
         plans = cls(grid, lib, block0, block1, [v.value for v in local], max(alloc, 1))
         return plans if grid.comm.allreduce(plans.ok, op=MPI.LAND) else None
@@ -326,7 +358,7 @@ class FFTWMPI:
         self.result = np.zeros(plans.padded.shape)
 
     @classmethod
-    def create(cls, grid: Grid) -> "FFTWMPI | None":
+    def create(cls, grid: Grid) -> FFTWMPI | None:
         """The backend for ``grid``, or ``None`` without FFTW-MPI or if its rows differ."""
         plans = _FFTWMPIPlans.get(grid)
         return cls(plans) if plans is not None else None
@@ -354,7 +386,7 @@ def _aligned(size: int, dtype: Any) -> np.ndarray:
     """A zeroed 1-D array of ``size`` items whose data is 64-byte aligned (SIMD-friendly)."""
     raw = np.zeros(size * np.dtype(dtype).itemsize + 64, dtype=np.uint8)
     offset = -raw.ctypes.data % 64
-    return raw[offset:offset + size * np.dtype(dtype).itemsize].view(dtype)
+    return raw[offset : offset + size * np.dtype(dtype).itemsize].view(dtype)
 
 
 FFT = SerialFFT | SlabFFT | FFTWMPI
@@ -370,11 +402,11 @@ def make_fft(grid: Grid) -> FFT:
 def wavevectors(grid: Grid, fft: FFT) -> tuple[np.ndarray, np.ndarray]:
     """Local components ``(qx, qy)`` of the half-spectrum block, broadcastable to its shape.
 
-    ``q = 2 pi (i, j) / L`` with ``i`` in numpy's ``fftfreq`` order (DESIGN.md section 1).
+    ``q = 2 pi (i, j) / L`` with ``i`` in numpy's FFT order (:func:`~petsc_contact.grid.fft_order`).
     """
     rows, cols = fft.spectral_index
-    q0 = 2 * np.pi / grid.length
-    qx = q0 * (np.fft.fftfreq(grid.n) * grid.n)[rows]
+    q0 = grid.q0
+    qx = q0 * fft_order(grid.n)[rows]
     qy = q0 * np.arange(grid.n // 2 + 1)[cols]
     return (qx[None, :], qy[:, None]) if fft.transposed else (qx[:, None], qy[None, :])
 

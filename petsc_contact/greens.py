@@ -10,13 +10,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from .grid import fft_order
+from .validation import positive
+
 
 def periodic_stiffness(q: np.ndarray, modulus: float) -> np.ndarray:
     """Stiffness kernel ``E* |q| / 2`` (pressure per displacement), 0 at ``q = 0``."""
     return 0.5 * modulus * np.asarray(q, dtype=float)
 
 
-def periodic_compliance(q: np.ndarray, modulus: float, q_zero: float) -> np.ndarray:
+def periodic_compliance(q: np.ndarray | float, modulus: float, q_zero: float) -> np.ndarray:
     """Compliance kernel ``2 / (E* |q|)``, with ``|q| = q_zero`` used at ``q = 0``.
 
     The ``q = 0`` value is a convention (the stiffness is singular there); it is only used
@@ -26,8 +29,7 @@ def periodic_compliance(q: np.ndarray, modulus: float, q_zero: float) -> np.ndar
     return 2.0 / (modulus * np.where(q > 0, q, q_zero))
 
 
-def held_compliance(q: np.ndarray, modulus: float, interfacial_stiffness: float
-                    ) -> np.ndarray:
+def held_compliance(q: np.ndarray, modulus: float, interfacial_stiffness: float) -> np.ndarray:
     """Compliance ``1 / (E* |q|/2 + K)`` of the open surface of a contact of stiffness ``K``.
 
     The contact spots hold the surface like a uniform layer of springs of stiffness ``K``
@@ -37,9 +39,7 @@ def held_compliance(q: np.ndarray, modulus: float, interfacial_stiffness: float
     ``2/(E*|q|)`` at wavelengths much shorter than ``E*/K``.  Used only to precondition
     problems restricted to the open pixels, where it is positive for any ``K > 0``.
     """
-    if not (np.isfinite(interfacial_stiffness) and interfacial_stiffness > 0):
-        raise ValueError(f"interfacial stiffness must be positive and finite, "
-                         f"got {interfacial_stiffness}")
+    positive("interfacial stiffness", interfacial_stiffness)
     return 1.0 / (periodic_stiffness(q, modulus) + interfacial_stiffness)
 
 
@@ -54,8 +54,9 @@ def _corner_primitive(xi: np.ndarray, eta: np.ndarray) -> np.ndarray:
     return np.sign(xi) * np.sign(eta) * g
 
 
-def love_pixel_displacement(x: np.ndarray, y: np.ndarray, pixel: float,
-                            modulus: float) -> np.ndarray:
+def love_pixel_displacement(
+    x: np.ndarray, y: np.ndarray, pixel: float, modulus: float
+) -> np.ndarray:
     """Normal surface displacement at ``(x, y)`` under unit pressure on one square pixel.
 
     The pixel ``[-a/2, a/2]^2`` (``a = pixel``) carries a uniform unit pressure on an
@@ -68,13 +69,16 @@ def love_pixel_displacement(x: np.ndarray, y: np.ndarray, pixel: float,
     centre ``u = 4 a asinh(1) / (pi E*)``.
     """
     h = 0.5 * pixel
-    total = (_corner_primitive(x + h, y + h) - _corner_primitive(x + h, y - h)
-             - _corner_primitive(x - h, y + h) + _corner_primitive(x - h, y - h))
+    total = (
+        _corner_primitive(x + h, y + h)
+        - _corner_primitive(x + h, y - h)
+        - _corner_primitive(x - h, y + h)
+        + _corner_primitive(x - h, y - h)
+    )
     return total / (np.pi * modulus)
 
 
-def hockney_kernel(n: int, pixel: float, modulus: float, rows: slice = slice(None)
-                   ) -> np.ndarray:
+def hockney_kernel(n: int, pixel: float, modulus: float, rows: slice = slice(None)) -> np.ndarray:
     """The pixel influence function on the ``2n x 2n`` zero-padding grid (Hockney 1970).
 
     Entry ``[i, j]`` is the displacement at offset ``(i, j) * pixel`` with offsets taken
@@ -84,5 +88,5 @@ def hockney_kernel(n: int, pixel: float, modulus: float, rows: slice = slice(Non
     no offset between two footprint pixels exceeds ``n - 1``.  ``rows`` selects the rows
     to evaluate (a rank's slab).
     """
-    offsets = np.fft.fftfreq(2 * n) * 2 * n * pixel
+    offsets = fft_order(2 * n) * pixel
     return love_pixel_displacement(offsets[rows, None], offsets[None, :], pixel, modulus)

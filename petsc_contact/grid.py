@@ -14,12 +14,24 @@ from dataclasses import dataclass, field
 import numpy as np
 from mpi4py import MPI
 
+from .validation import positive
+
 
 def block_rows(n: int, size: int, rank: int) -> slice:
     """Rows owned by ``rank`` when ``n`` rows are split over ``size`` ranks."""
     base, extra = divmod(n, size)
     start = rank * base + min(rank, extra)
     return slice(start, start + base + (rank < extra))
+
+
+def fft_order(n: int) -> np.ndarray:
+    """The integer wavenumbers (or offsets) ``0, 1, ..., -1`` in numpy's FFT order."""
+    return np.fft.fftfreq(n, 1.0 / n)
+
+
+def fundamental_wavevector(length: float) -> float:
+    """``q0 = 2 pi / L``, the longest wavelength a periodic cell of side ``L`` holds."""
+    return 2 * np.pi / length
 
 
 @dataclass(frozen=True)
@@ -38,18 +50,22 @@ class Grid:
 
     n: int
     length: float
-    comm: MPI.Comm = field(default_factory=lambda: MPI.COMM_WORLD, compare=False)
+    comm: MPI.Intracomm = field(default_factory=lambda: MPI.COMM_WORLD, compare=False)
 
     def __post_init__(self) -> None:
         if self.n < 2:
             raise ValueError(f"grid needs at least 2 pixels per side, got {self.n}")
-        if not np.isfinite(self.length) or self.length <= 0:
-            raise ValueError(f"length must be positive and finite, got {self.length}")
+        positive("length", self.length)
 
     @property
     def pixel(self) -> float:
         """Pixel size ``a = L/n``."""
         return self.length / self.n
+
+    @property
+    def q0(self) -> float:
+        """The fundamental wavevector ``2 pi / L``: the spacing of the periodic spectrum."""
+        return fundamental_wavevector(self.length)
 
     @property
     def size(self) -> int:
@@ -99,6 +115,9 @@ class Grid:
             return np.array(local, copy=True)
         counts = self.comm.gather(local.size, root=0)
         full = np.empty((self.n, self.n)) if self.comm.rank == 0 else None
-        self.comm.Gatherv(np.ascontiguousarray(local, dtype=float),
-                          [full, counts] if self.comm.rank == 0 else None, root=0)
+        self.comm.Gatherv(
+            np.ascontiguousarray(local, dtype=float),
+            [full, counts] if self.comm.rank == 0 else None,
+            root=0,
+        )
         return full

@@ -19,12 +19,12 @@ FAST = {"reassoc", "contract"}
 Bound = float | np.ndarray  # a bound the same everywhere, or one per entry
 
 
-def _at(bound, i):  # type: ignore[no-untyped-def]  # compiled code uses the overload
+def _at(bound, i):  # compiled code uses the overload
     raise NotImplementedError
 
 
 @overload(_at)
-def _at_impl(bound, i):  # type: ignore[no-untyped-def]
+def _at_impl(bound, i):
     """``bound[i]`` for an array bound, ``bound`` for a float one (chosen when compiling).
 
     Left unannotated: with annotations, numba 0.56 rejected the overload ("Typing and
@@ -36,8 +36,9 @@ def _at_impl(bound, i):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, fastmath=FAST, nogil=True)
-def free_set(x: np.ndarray, g: np.ndarray, lower: Bound, upper: Bound, free: np.ndarray,
-             r: np.ndarray) -> tuple[float, int, int, int]:
+def free_set(
+    x: np.ndarray, g: np.ndarray, lower: Bound, upper: Bound, free: np.ndarray, r: np.ndarray
+) -> tuple[float, int, int, int]:
     """Update the free set and the projected gradient.
 
     ``free <- (x > lower | g < 0) & ~(x >= upper & g < 0)`` and ``r <- g`` on it, ``0``
@@ -74,8 +75,9 @@ def restrict_dot(z: np.ndarray, free: np.ndarray, r: np.ndarray) -> float:
 
 
 @njit(cache=True, fastmath=FAST, nogil=True)
-def extend_direction(z: np.ndarray, d: np.ndarray, free: np.ndarray, beta: float,
-                     r: np.ndarray) -> float:
+def extend_direction(
+    z: np.ndarray, d: np.ndarray, free: np.ndarray, beta: float, r: np.ndarray
+) -> float:
     """``z <- z + beta d`` with ``d`` restricted to the free set; returns ``r.z``."""
     rz = 0.0
     for i in range(z.size):
@@ -86,9 +88,10 @@ def extend_direction(z: np.ndarray, d: np.ndarray, free: np.ndarray, beta: float
 
 
 @njit(cache=True, fastmath=FAST, nogil=True)
-def advance(x: np.ndarray, d: np.ndarray, alpha: float, lower: Bound, upper: Bound
-            ) -> tuple[int, int]:
-    """``x <- x + alpha d``; returns how many entries fell below ``lower`` and rose above ``upper``."""
+def advance(
+    x: np.ndarray, d: np.ndarray, alpha: float, lower: Bound, upper: Bound
+) -> tuple[int, int]:
+    """``x <- x + alpha d``; how many entries fell below ``lower`` and rose above ``upper``."""
     below = 0
     above = 0
     for i in range(x.size):

@@ -21,14 +21,19 @@ def contact_mask(gap: np.ndarray, pressure: np.ndarray, pixel_stiffness: float) 
     return pressure > pixel_stiffness * gap
 
 
-def natural_residual(gap: np.ndarray, pressure: np.ndarray, pixel_stiffness: float
-                     ) -> np.ndarray:
+def natural_residual(gap: np.ndarray, pressure: np.ndarray, pixel_stiffness: float) -> np.ndarray:
     """``min(k g, p)``: zero exactly where ``g >= 0, p >= 0, g p = 0`` (pressure units)."""
     return np.minimum(pixel_stiffness * gap, pressure)
 
 
-def step_observables(grid: Grid, gap: np.ndarray, pressure: np.ndarray, heights: np.ndarray,
-                     nominal_pressure: float, pixel_stiffness: float) -> dict[str, Any]:
+def step_observables(
+    grid: Grid,
+    gap: np.ndarray,
+    pressure: np.ndarray,
+    heights: np.ndarray,
+    nominal_pressure: float,
+    pixel_stiffness: float,
+) -> dict[str, Any]:
     """Scalars of one load step (same on every rank).
 
     Returns
@@ -46,9 +51,16 @@ def step_observables(grid: Grid, gap: np.ndarray, pressure: np.ndarray, heights:
     p_plus = np.maximum(pressure, 0.0)
     p_contact = np.where(contact, p_plus, 0.0)
     r = natural_residual(gap, pressure, pixel_stiffness)
-    sums = grid.sum(gap.sum(), np.count_nonzero(contact), p_contact.sum(),
-                    np.vdot(gap + heights, pressure - nominal_pressure),
-                    np.vdot(p_plus, gap), p_plus.sum(), np.vdot(r, r), np.vdot(heights, heights))
+    sums = grid.sum(
+        gap.sum(),
+        np.count_nonzero(contact),
+        p_contact.sum(),
+        np.vdot(gap + heights, pressure - nominal_pressure),
+        np.vdot(p_plus, gap),
+        p_plus.sum(),
+        np.vdot(r, r),
+        np.vdot(heights, heights),
+    )
     g_sum, n_contact, pc_sum, work, pg, p_sum, r2, h2 = sums
     n = grid.size
     h_rms = np.sqrt(h2 / n)

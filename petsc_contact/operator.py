@@ -20,7 +20,7 @@ from .grid import Grid, block_rows
 
 
 def twice(values: np.ndarray) -> np.ndarray:
-    """A real spectral multiplier with each entry twice, in the layout of a spectrum's float view."""
+    """A real spectral multiplier with each entry twice, laid out as a spectrum's float view."""
     return np.repeat(np.ascontiguousarray(np.real(values), dtype=float), 2, axis=-1)
 
 
@@ -31,6 +31,7 @@ class ShellInterface:
     """
 
     applications: int
+    grid: Grid
 
     def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
         raise NotImplementedError
@@ -135,11 +136,11 @@ class FourierOperator(SpectralOperator):
         self._single = single_entries(grid, fft)
         self.applications = 0
 
-    def scaled(self, factor: float) -> "FourierOperator":
+    def scaled(self, factor: float) -> FourierOperator:
         """Another operator on the same FFT with the multiplier times ``factor``."""
         return self._with(self.multiplier * factor)
 
-    def set_inverse(self, op: "FourierOperator", support: float) -> None:
+    def set_inverse(self, op: FourierOperator, support: float) -> None:
         """Become the inverse of ``op + support I`` on the same grid, in place.
 
         ``support`` is in ``op``'s normalised units (kernel over ``n^2``); with ``N = n^2``
@@ -148,11 +149,11 @@ class FourierOperator(SpectralOperator):
         """
         np.add(op.multiplier, support, out=self.multiplier)
         with np.errstate(divide="ignore"):
-            np.divide(1.0 / self.grid.size ** 2, self.multiplier, out=self.multiplier)
+            np.divide(1.0 / self.grid.size**2, self.multiplier, out=self.multiplier)
 
     def set_entry(self, row: int, column: int, value: float) -> None:
         """Set one entry of the normalised multiplier (local spectrum indices)."""
-        self.multiplier[row, 2 * column:2 * column + 2] = value
+        self.multiplier[row, 2 * column : 2 * column + 2] = value
 
     def _forward(self, x: np.ndarray) -> None:
         self.fft.forward_from(x)
@@ -185,8 +186,7 @@ class PaddedOperator(SpectralOperator):
     rows move with one ``Alltoallv`` each way (:class:`RowExchange`).
     """
 
-    def __init__(self, grid: Grid, kernel_rows: Any, fft: FFT | None = None
-                 ) -> None:
+    def __init__(self, grid: Grid, kernel_rows: Any, fft: FFT | None = None) -> None:
         self.grid = grid
         self.padded = Grid(2 * grid.n, 2 * grid.length, grid.comm)
         self.fft = fft if fft is not None else make_fft(self.padded)
@@ -199,7 +199,7 @@ class PaddedOperator(SpectralOperator):
         self.applications = 0
         self.fft.real[...] = 0.0  # the padding stays zero: applications write only the block
 
-    def with_spectrum(self, spectrum: np.ndarray) -> "PaddedOperator":
+    def with_spectrum(self, spectrum: np.ndarray) -> PaddedOperator:
         """Another operator on the same padded FFT with the given (normalised) spectrum."""
         other = self._with(twice(spectrum))
         other._centre = other._weighted_sum(self.padded)
@@ -247,19 +247,19 @@ class RowExchange:
     def to_padded(self, footprint: np.ndarray, padded: np.ndarray) -> None:
         """Write my footprint rows into the padded slabs (``padded`` is my ``[:, :n]`` view)."""
         if self.comm.size == 1:
-            padded[:footprint.shape[0]] = footprint
+            padded[: footprint.shape[0]] = footprint
             return
         buf = self._padded_rows
         self.comm.Alltoallv([np.ascontiguousarray(footprint), self.send], [buf, self.recv])
-        padded[:self.rows_in] = buf
+        padded[: self.rows_in] = buf
 
     def to_footprint(self, padded: np.ndarray, footprint: np.ndarray) -> None:
         """Read my footprint rows back from the padded slabs."""
         if self.comm.size == 1:
-            footprint[...] = padded[:footprint.shape[0]]
+            footprint[...] = padded[: footprint.shape[0]]
             return
         buf = self._padded_rows
-        buf[...] = padded[:self.rows_in]
+        buf[...] = padded[: self.rows_in]
         self.comm.Alltoallv([buf, self.recv], [self._footprint_rows, self.send])
         footprint[...] = self._footprint_rows
 
@@ -267,8 +267,9 @@ class RowExchange:
 def shell_matrix(petsc: Any, op: ShellInterface) -> Any:
     """A PETSc Python ``Mat`` of the grid's row-slab layout whose ``mult`` is ``op``."""
     n_local = op.grid.local_shape[0] * op.grid.n
-    mat = petsc.Mat().createPython(((n_local, op.grid.size), (n_local, op.grid.size)),
-                                   context=op, comm=op.grid.comm)
+    mat = petsc.Mat().createPython(
+        ((n_local, op.grid.size), (n_local, op.grid.size)), context=op, comm=op.grid.comm
+    )
     mat.setOption(petsc.Mat.Option.SYMMETRIC, True)
     mat.setUp()
     return mat

@@ -37,7 +37,7 @@ def load_heights(path: str) -> np.ndarray:
             h = np.load(path, mmap_mode="r", allow_pickle=False)
         else:
             h = np.loadtxt(path, delimiter="," if path.endswith(".csv") else None, ndmin=2)
-    except Exception as exc:  # noqa: BLE001 - any reader failure is one user-facing message
+    except Exception as exc:
         raise OSError(f"cannot read heights from '{path}': {exc}") from None
     if h.ndim != 2:
         raise ValueError(f"heights must be a 2-D array, '{path}' has shape {h.shape}")
@@ -72,7 +72,7 @@ def versions(petsc: Any | None = None) -> dict[str, str]:
     for mod in ("numpy", "scipy", "h5py", "mpi4py", "pyfftw", "mpi4py_fft", "numba", "petsc4py"):
         try:
             out[mod] = str(__import__(mod).__version__)
-        except Exception:  # noqa: BLE001 - a missing optional module is recorded as such
+        except Exception:
             out[mod] = "not available"
     try:
         out["petsc_contact"] = metadata.version("petsc-contact")
@@ -119,50 +119,72 @@ class StepWriter:
         Names of per-step 2-D fields to store (e.g. ``("gap", "pressure")``), or empty.
     """
 
-    def __init__(self, path: str, grid: Grid, attributes: dict[str, Any],
-                 heights: np.ndarray, fields: tuple[str, ...] = ()) -> None:
+    def __init__(
+        self,
+        path: str,
+        grid: Grid,
+        attributes: dict[str, Any],
+        heights: np.ndarray | None,
+        fields: tuple[str, ...] = (),
+        *,
+        resume: bool = False,
+    ) -> None:
         self.path = path
         self.partial = path + ".partial"
         self.grid = grid
         self.fields = fields
         self.root = grid.comm.rank == 0
-        self.steps = 0
-        full = grid.gather(heights)
-        self.file = None
-        if self.root:
-            import h5py
-
-            self.file = h5py.File(self.partial, "w")
-            for key, value in attributes.items():
-                self.file.attrs[key] = (json.dumps(value) if isinstance(value, (dict, list, tuple))
-                                        else ("" if value is None else value))
-            self.file.attrs["created"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
-            self.file.attrs["complete"] = False
-            self.file.create_dataset("heights", data=full)
-            for name in fields:
-                self.file.create_dataset(name, shape=(0, grid.n, grid.n),
-                                         maxshape=(None, grid.n, grid.n),
-                                         chunks=(1, min(grid.n, 256), min(grid.n, 256)))
-            self.file.flush()
+        self.file: Any = None
+        if resume:
+            self.steps = grid.comm.bcast(self._open_partial() if self.root else 0, root=0)
+        else:
+            self.steps = 0
+            full = grid.gather(heights) if heights is not None else None
+            if self.root:
+                self._create(attributes, full)
 
     @classmethod
-    def reopen(cls, path: str, grid: Grid, fields: tuple[str, ...] = ()) -> "StepWriter":
+    def reopen(cls, path: str, grid: Grid, fields: tuple[str, ...] = ()) -> StepWriter:
         """Continue writing an interrupted run's ``path + '.partial'`` (see :func:`read_resume`)."""
-        self = object.__new__(cls)
-        self.path, self.partial, self.grid, self.fields = path, path + ".partial", grid, fields
-        self.root = grid.comm.rank == 0
-        self.file = None
-        steps = 0
-        if self.root:
-            import h5py
+        return cls(path, grid, {}, None, fields, resume=True)
 
-            self.file = h5py.File(self.partial, "a")
-            steps = int(self.file["converged"].shape[0]) if "converged" in self.file else 0
-        self.steps = grid.comm.bcast(steps, root=0)
-        return self
+    def _create(self, attributes: dict[str, Any], heights: np.ndarray | None) -> None:
+        import h5py
 
-    def append(self, scalars: dict[str, Any], fields: dict[str, np.ndarray] | None = None,
-               state: np.ndarray | None = None) -> None:
+        n = self.grid.n
+        f = self.file = h5py.File(self.partial, "w")
+        for key, value in attributes.items():
+            f.attrs[key] = (
+                json.dumps(value)
+                if isinstance(value, (dict, list, tuple))
+                else ("" if value is None else value)
+            )
+        f.attrs["created"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+        f.attrs["complete"] = False
+        if heights is not None:
+            f.create_dataset("heights", data=heights)
+        for name in self.fields:
+            f.create_dataset(
+                name,
+                shape=(0, n, n),
+                maxshape=(None, n, n),
+                chunks=(1, min(n, 256), min(n, 256)),
+            )
+        f.flush()
+
+    def _open_partial(self) -> int:
+        """Open the ``.partial`` file for appending; the number of steps it holds."""
+        import h5py
+
+        self.file = h5py.File(self.partial, "a")
+        return int(self.file["converged"].shape[0]) if "converged" in self.file else 0
+
+    def append(
+        self,
+        scalars: dict[str, Any],
+        fields: dict[str, np.ndarray] | None = None,
+        state: np.ndarray | None = None,
+    ) -> None:
         """Add one load step: scalars (numbers, bools or strings) and the requested fields.
 
         ``state`` (local slab) is the solution a resumed run restarts from; it is kept in
@@ -207,8 +229,10 @@ class StepWriter:
         if self.root and self.file is not None:
             self.file.close()
             self.file = None
-            print(f"petsc-contact: interrupted; {self.steps} finished step(s) kept in "
-                  f"{self.partial}", file=sys.stderr)
+            print(
+                f"petsc-contact: interrupted; {self.steps} finished step(s) kept in {self.partial}",
+                file=sys.stderr,
+            )
 
 
 def read_resume(path: str, parameters: dict[str, Any]) -> tuple[int, np.ndarray | None]:
@@ -226,14 +250,16 @@ def read_resume(path: str, parameters: dict[str, Any]) -> tuple[int, np.ndarray 
     ignore = ("resume", "quiet")
     mine = {k: v for k, v in parameters.items() if k not in ignore}
     with h5py.File(partial, "r") as f:
-        theirs = {k: v for k, v in json.loads(f.attrs["parameters"]).items()
-                  if k not in ignore}
+        theirs = {k: v for k, v in json.loads(f.attrs["parameters"]).items() if k not in ignore}
         mine = json.loads(json.dumps(mine))
-        changed = sorted(k for k in set(mine) | set(theirs)
-                         if not _same(mine.get(k), theirs.get(k)))
+        changed = sorted(
+            k for k in set(mine) | set(theirs) if not _same(mine.get(k), theirs.get(k))
+        )
         if changed:
-            raise ValueError(f"cannot resume '{partial}': it was run with different "
-                             f"parameters ({', '.join(changed)})")
+            raise ValueError(
+                f"cannot resume '{partial}': it was run with different "
+                f"parameters ({', '.join(changed)})"
+            )
         steps = int(f["converged"].shape[0]) if "converged" in f else 0
         state = f["resume_state"][...] if "resume_state" in f else None
     return steps, state
@@ -242,7 +268,7 @@ def read_resume(path: str, parameters: dict[str, Any]) -> tuple[int, np.ndarray 
 def _same(a: Any, b: Any) -> bool:
     """Equal parameters; floats to 1e-9 relative (derived loads carry FFT rounding)."""
     if isinstance(a, list) and isinstance(b, list):
-        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
     if isinstance(a, float) or isinstance(b, float):
         try:
             return bool(np.isclose(float(a), float(b), rtol=1e-9, atol=0.0))

@@ -13,8 +13,9 @@ is within ten times the tolerance TAO was asked for.
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any, Callable, Iterator, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -25,8 +26,9 @@ from .grid import Grid
 from .observables import step_observables
 from .output import check_finite
 from .problem import PeriodicProblem
-from .solve import BoundSolver, SolveInfo
+from .solve import BoundSolver, Monitor, SolveInfo
 from .stiffness import periodic_stiffness_exact
+from .validation import positive
 
 VERIFY_FACTOR = 10.0
 
@@ -45,8 +47,9 @@ class Step:
         return bool(self.scalars["converged"])
 
 
-def verify(info: SolveInfo, obs: dict[str, float], scale_length: float, gnorm0: float,
-           grtol: float) -> str:
+def verify(
+    info: SolveInfo, obs: dict[str, float], scale_length: float, gnorm0: float, grtol: float
+) -> str:
     """``'ok'`` or the reason a TAO answer cannot be used."""
     if info.reason_code <= 0:
         return f"TAO did not converge ({info.reason})"
@@ -63,15 +66,31 @@ def check_pressures(pressures: Sequence[float]) -> list[float]:
     out = [float(p) for p in pressures]
     if not out:
         raise ValueError("give at least one nominal pressure")
-    bad = [p for p in out if not (np.isfinite(p) and p > 0)]
-    if bad:
-        raise ValueError(f"nominal pressures must be positive and finite, got {bad[0]}")
+    for p in out:
+        positive("nominal pressures", p)
     return out
 
 
-def sweep(petsc: Any, problem: PeriodicProblem, pressures: Sequence[float],
-          fields: bool = False, monitor: Callable[[int, float, float], None] | None = None,
-          stiffness: bool = False, start: np.ndarray | None = None) -> Iterator[Step]:
+def _recording(history: list[float], monitor: Monitor | None) -> Monitor:
+    """A TAO monitor that appends the gradient norm to ``history``, then calls ``monitor``."""
+
+    def record(it: int, f: float, gnorm: float) -> None:
+        history.append(gnorm)
+        if monitor is not None:
+            monitor(it, f, gnorm)
+
+    return record
+
+
+def sweep(
+    petsc: Any,
+    problem: PeriodicProblem,
+    pressures: Sequence[float],
+    fields: bool = False,
+    monitor: Monitor | None = None,
+    stiffness: bool = False,
+    start: np.ndarray | None = None,
+) -> Iterator[Step]:
     """Solve the pressures in the given order, each warm-started from the last converged steps.
 
     Each step starts from the last converged gap, extrapolated along the load path, and its
@@ -101,41 +120,61 @@ def sweep(petsc: Any, problem: PeriodicProblem, pressures: Sequence[float],
             problem.set_pressure(p0, path.stiffness_estimate(p0))
             problem.start(path.start(p0, x))
             history: list[float] = []
-
-            def record(it: int, f: float, gnorm: float) -> None:
-                history.append(gnorm)
-                if monitor is not None:
-                    monitor(it, f, gnorm)
-
-            x_new, info = solver.solve(problem.objective_gradient, problem.start_point,
-                                       monitor=record, gatol_floor=problem.rounding_floor(p0))
+            x_new, info = solver.solve(
+                problem.objective_gradient,
+                problem.start_point,
+                monitor=_recording(history, monitor),
+                gatol_floor=problem.rounding_floor(p0),
+            )
             gap = x_new.reshape(grid.local_shape) * ell
             pressure = problem.pressure(gap)
-            obs = step_observables(grid, gap, pressure, problem.heights, p0,
-                                   problem.pixel_stiffness)
+            obs = step_observables(
+                grid, gap, pressure, problem.heights, p0, problem.pixel_stiffness
+            )
             contact = obs.pop("contact")
             grtol = petsc.Options().getReal("tao_grtol", 0.0)
             verdict = verify(info, obs, ell, history[0] if history else np.inf, grtol)
-            scalars = {"nominal_pressure": p0, **obs, **info.scalars(verdict),
-                       "preconditioner_stiffness": problem.interfacial_stiffness}
+            scalars = {
+                "nominal_pressure": p0,
+                **obs,
+                **info.scalars(verdict),
+                "preconditioner_stiffness": problem.interfacial_stiffness,
+            }
             k = np.nan
             if stiffness:
-                k, its = (periodic_stiffness_exact(
-                    petsc, grid, problem.stiffness,
-                    problem.held_compliance(problem.interfacial_stiffness), contact)
-                    if verdict == "ok" else (np.nan, 0))
+                k, its = (
+                    periodic_stiffness_exact(
+                        petsc,
+                        grid,
+                        problem.stiffness,
+                        problem.held_compliance(problem.interfacial_stiffness),
+                        contact,
+                    )
+                    if verdict == "ok"
+                    else (np.nan, 0)
+                )
                 scalars.update(stiffness=k, stiffness_iterations=its)
             if verdict == "ok":
                 x = x_new
                 path.add(ConvergedStep(p0, obs["mean_gap"], x, k))
-            yield Step(scalars, gap if fields else None, pressure if fields else None,
-                       state=x.reshape(grid.local_shape) * ell)
+            yield Step(
+                scalars,
+                gap if fields else None,
+                pressure if fields else None,
+                state=x.reshape(grid.local_shape) * ell,
+            )
 
 
-def periodic_contact(heights: np.ndarray, length: float, modulus: float,
-                     pressures: Sequence[float], options: Sequence[str] | None = None,
-                     fields: bool = False, comm: Any = None, stiffness: bool = False
-                     ) -> list[Step]:
+def periodic_contact(
+    heights: np.ndarray,
+    length: float,
+    modulus: float,
+    pressures: Sequence[float],
+    options: Sequence[str] | None = None,
+    fields: bool = False,
+    comm: Any = None,
+    stiffness: bool = False,
+) -> list[Step]:
     """Solve the periodic contact of ``heights`` for each nominal pressure.
 
     Parameters

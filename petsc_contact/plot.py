@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -48,8 +49,7 @@ def plot_punch(path: str, steps: Sequence[dict[str, Any]]) -> None:
     _finish(fig, (ax1, ax2), path)
 
 
-def plot_experiment(path: str, pressure: np.ndarray, k_star: np.ndarray, k: np.ndarray
-                    ) -> None:
+def plot_experiment(path: str, pressure: np.ndarray, k_star: np.ndarray, k: np.ndarray) -> None:
     """``K`` (Eq. 7) and the measured ``K* = dp/ds`` against pressure, log-log."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(5, 3.8), constrained_layout=True)

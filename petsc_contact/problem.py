@@ -30,6 +30,7 @@ from .grid import Grid
 from .operator import FourierOperator
 from .schur import ContactSchur, quarter
 from .theory import linear_stiffness
+from .validation import non_negative, positive
 
 ROUNDING_FACTOR = 100.0
 SCHUR_MAX = 4096  # the most bound variables for the Schur form (dense matrix: 134 MB)
@@ -71,8 +72,9 @@ class MeanModePreconditioner(FourierOperator):
     _filled = 0.0  # the support the multiplier holds now (0 in the Schur form)
     _hessian: FourierOperator
 
-    def invert(self, hessian: FourierOperator, support: float, hessian_diagonal: float,
-               mean_mode: float) -> None:
+    def invert(
+        self, hessian: FourierOperator, support: float, hessian_diagonal: float, mean_mode: float
+    ) -> None:
         """Become the inverse of ``hessian + support`` (``hessian``'s diagonal entry is
         ``hessian_diagonal``), with ``mean_mode`` as its ``q = 0`` entry; ``support >= 0``
         is the interfacial stiffness in the Hessian's normalised units.
@@ -110,14 +112,16 @@ class MeanModePreconditioner(FourierOperator):
                     impulse[0, 0] = 1.0
                 column = FourierOperator.apply_array(self, impulse, np.empty_like(impulse))
                 self._quarter = quarter(self.grid, column)
-            self.schur = ContactSchur(self.grid, self._quarter,
-                                      ~free.reshape(self.grid.local_shape))
+            self.schur = ContactSchur(
+                self.grid, self._quarter, ~free.reshape(self.grid.local_shape)
+            )
             return True
         self.schur = self._spread = None
         if self._filled != self.support:
             self._fill(self.support)
-        self._set_mean_mode(max(self.base_mean_mode,
-                                1.0 / (max(bound_count, 1) * self.hessian_diagonal)))
+        self._set_mean_mode(
+            max(self.base_mean_mode, 1.0 / (max(bound_count, 1) * self.hessian_diagonal))
+        )
         return False
 
     def _set_mean_mode(self, value: float) -> None:
@@ -165,21 +169,18 @@ class PeriodicProblem:
         Contact modulus ``E*``.
     """
 
-    def __init__(self, grid: Grid, fft: FFT, heights: np.ndarray,
-                 modulus: float) -> None:
-        if not np.isfinite(modulus) or modulus <= 0:
-            raise ValueError(f"modulus must be positive and finite, got {modulus}")
+    def __init__(self, grid: Grid, fft: FFT, heights: np.ndarray, modulus: float) -> None:
+        positive("modulus", modulus)
         self.grid = grid
         self.modulus = float(modulus)
         self.heights = np.ascontiguousarray(heights - grid.mean(heights), dtype=float)
         self.h_rms = grid.rms(self.heights)
         self.scale_length = self.h_rms if self.h_rms > 0 else grid.length
         q = wavevector_magnitude(grid, fft)
-        q0 = 2 * np.pi / grid.length
+        q0 = grid.q0
         self.stiffness = FourierOperator(grid, fft, periodic_stiffness(q, modulus))
         self.hessian = self.stiffness.scaled(1.0)
-        self.preconditioner = MeanModePreconditioner(grid, fft,
-                                                     periodic_compliance(q, modulus, q0))
+        self.preconditioner = MeanModePreconditioner(grid, fft, periodic_compliance(q, modulus, q0))
         self.preconditioner.schur_max = schur_limit(grid.n)
         self._free_mean_compliance = float(periodic_compliance(0.0, modulus, q0))
         self.pixel_stiffness = self.stiffness.diagonal()
@@ -199,21 +200,25 @@ class PeriodicProblem:
         the path of the solver, never its answer.  Default: :meth:`stiffness_estimate`;
         ``0``: no support, the free compliance ``2/(E* q)`` with ``2/(E* q0)`` at ``q = 0``.
         """
-        if not np.isfinite(p0) or p0 <= 0:
-            raise ValueError(f"nominal pressure must be positive and finite, got {p0}")
-        k_i = self.stiffness_estimate(p0) if interfacial_stiffness is None \
+        positive("nominal pressure", p0)
+        k_i = (
+            self.stiffness_estimate(p0)
+            if interfacial_stiffness is None
             else float(interfacial_stiffness)
-        if not (np.isfinite(k_i) and k_i >= 0):
-            raise ValueError(f"interfacial stiffness must be non-negative and finite, got {k_i}")
+        )
+        non_negative("interfacial stiffness", k_i)
         self.nominal_pressure = float(p0)
         self.interfacial_stiffness = k_i
         self._s = 1.0 / (np.sqrt(self.grid.size) * p0)
         c = self._s * self.scale_length
         np.multiply(self.stiffness.multiplier, c, out=self.hessian.multiplier)
         mean_compliance = 1.0 / k_i if k_i > 0 else self._free_mean_compliance
-        self.preconditioner.invert(self.hessian, c * k_i / self.grid.size,
-                                   self.pixel_stiffness * c,
-                                   mean_compliance / (self.grid.size * c))
+        self.preconditioner.invert(
+            self.hessian,
+            c * k_i / self.grid.size,
+            self.pixel_stiffness * c,
+            mean_compliance / (self.grid.size * c),
+        )
         self.preconditioner.expected_bound_count = self.expected_contact_count(p0)
 
     def stiffness_estimate(self, p0: float) -> float:
@@ -231,9 +236,7 @@ class PeriodicProblem:
         (:func:`~petsc_contact.greens.held_compliance`): the preconditioner of the exact
         stiffness solve.  One operator, recomputed in place (no field-sized temporaries).
         """
-        if not (np.isfinite(interfacial_stiffness) and interfacial_stiffness > 0):
-            raise ValueError(f"interfacial stiffness must be positive and finite, "
-                             f"got {interfacial_stiffness}")
+        positive("interfacial stiffness", interfacial_stiffness)
         if self._held is None:
             self._held = self.stiffness.scaled(1.0)
         self._held.set_inverse(self.stiffness, interfacial_stiffness / self.grid.size)
@@ -307,7 +310,7 @@ class PeriodicProblem:
         :func:`~petsc_contact.compare.compare`, which at ``1e-12`` ran to the iteration
         limit from 2048^2 on.
         """
-        return 30 * np.finfo(float).eps * self.pixel_stiffness * self.h_rms / p0
+        return float(30 * np.finfo(float).eps * self.pixel_stiffness * self.h_rms / p0)
 
     def rounding_floor(self, p0: float) -> float:
         """The smallest rms pressure residual (in units of ``p0``) double precision resolves.
@@ -317,4 +320,4 @@ class PeriodicProblem:
         for the ``log n`` growth and the sum over pixels.  It matters only at the tiniest
         loads: ``1e-8`` at ``p0 ~ 2e-7 E*`` for ``h'_rms = 0.1``.
         """
-        return ROUNDING_FACTOR * np.finfo(float).eps * self.elastic_pressure_rms / p0
+        return float(ROUNDING_FACTOR * np.finfo(float).eps * self.elastic_pressure_rms / p0)

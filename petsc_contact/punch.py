@@ -27,18 +27,20 @@ iteration on ``δ`` that uses the exact ``dF/dδ``; ``F(δ)`` is increasing and 
 
 from __future__ import annotations
 
-from typing import Any, Callable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
+from typing import Any
 
 import numpy as np
 
 from . import _petsc
 from .greens import hockney_kernel
 from .grid import Grid
-from .output import check_finite
 from .operator import PaddedOperator
-from .periodic import Step, VERIFY_FACTOR
-from .solve import BoundSolver, SolveInfo
+from .output import check_finite
+from .periodic import VERIFY_FACTOR, Step
+from .solve import BoundSolver, Monitor, SolveInfo
 from .stiffness import punch_stiffness_exact
+from .validation import non_negative, positive
 
 PHARR_BETA = 1.012
 FORCE_RTOL = 1e-6
@@ -77,14 +79,17 @@ class PunchProblem:
         (default: the whole square); pressure is held at zero elsewhere.
     """
 
-    def __init__(self, grid: Grid, heights: np.ndarray, modulus: float,
-                 footprint: np.ndarray | None = None) -> None:
-        if not np.isfinite(modulus) or modulus <= 0:
-            raise ValueError(f"modulus must be positive and finite, got {modulus}")
+    def __init__(
+        self, grid: Grid, heights: np.ndarray, modulus: float, footprint: np.ndarray | None = None
+    ) -> None:
+        positive("modulus", modulus)
         self.grid = grid
         self.modulus = float(modulus)
-        self.footprint = (np.ones(grid.local_shape, dtype=bool) if footprint is None
-                          else np.asarray(footprint, dtype=bool).reshape(grid.local_shape))
+        self.footprint = (
+            np.ones(grid.local_shape, dtype=bool)
+            if footprint is None
+            else np.asarray(footprint, dtype=bool).reshape(grid.local_shape)
+        )
         self.footprint_pixels = int(grid.sum(np.count_nonzero(self.footprint))[0])
         if self.footprint_pixels == 0:
             raise ValueError("the punch footprint is empty")
@@ -97,10 +102,12 @@ class PunchProblem:
         self.scale_length = rms if rms > 0 else grid.pixel
         n, a = grid.n, grid.pixel
         self.compliance = PaddedOperator(
-            grid, lambda rows: hockney_kernel(n, a, self.modulus, rows))
+            grid, lambda rows: hockney_kernel(n, a, self.modulus, rows)
+        )
         padded_size = self.compliance.padded.size
         self.inverse = self.compliance.with_spectrum(
-            1.0 / (self.compliance.spectrum * padded_size ** 2))
+            1.0 / (self.compliance.spectrum * padded_size**2)
+        )
         self.pixel_stiffness = 1.0 / self.compliance.diagonal()
         self._scale = a * np.sqrt(grid.size) / self.modulus  # H = G / _scale
         self.hessian = self.compliance.with_spectrum(self.compliance.spectrum / self._scale)
@@ -118,8 +125,7 @@ class PunchProblem:
 
     def set_approach(self, delta: float) -> None:
         """Prescribe the rigid approach ``δ`` (beyond first touch; ``δ >= 0``)."""
-        if not np.isfinite(delta) or delta < 0:
-            raise ValueError(f"approach must be non-negative and finite, got {delta}")
+        non_negative("approach", delta)
         self.approach = float(delta)
 
     def gap(self, pressure: np.ndarray) -> np.ndarray:
@@ -137,32 +143,39 @@ class PunchProblem:
         u += self.recess
         u -= self.approach  # u + s - δ: the gap on the footprint
         # W/a^2 = x.(u_el/2 + s - δ) = (x.g + x.s - δ sum x) / 2 with g = u_el + s - δ
-        (w,) = grid.sum(0.5 * (np.vdot(x, u.reshape(-1)) + np.vdot(x, self._recess_flat)
-                               - self.approach * x.sum()))
+        (w,) = grid.sum(
+            0.5
+            * (np.vdot(x, u.reshape(-1)) + np.vdot(x, self._recess_flat) - self.approach * x.sum())
+        )
         np.multiply(u.reshape(-1), self._footprint_flat, out=grad)
         grad *= c
         return c * float(w)
 
     def flat_stiffness_on_grid(self, petsc: Any) -> float:
         """``dF/dδ`` of the flat punch of the same footprint, on the same grid."""
-        k, _ = punch_stiffness_exact(petsc, self.grid, self.compliance, self.inverse,
-                                     self.footprint)
+        k, _ = punch_stiffness_exact(
+            petsc, self.grid, self.compliance, self.inverse, self.footprint
+        )
         return k
 
 
-def punch_observables(problem: PunchProblem, pressure: np.ndarray, gap: np.ndarray
-                      ) -> dict[str, float]:
+def punch_observables(
+    problem: PunchProblem, pressure: np.ndarray, gap: np.ndarray
+) -> dict[str, Any]:
     """Scalars of one punch step (same on every rank); see the module docstring."""
     grid, fp = problem.grid, problem.footprint
     k = problem.pixel_stiffness
     contact = fp & (pressure > k * gap)
     r = np.where(fp, np.minimum(gap, pressure / k), 0.0)
-    p_sum, n_contact, pg, r2 = grid.sum(pressure.sum(), np.count_nonzero(contact),
-                                        np.vdot(pressure, np.maximum(gap, 0.0)),
-                                        np.vdot(r, r))
+    p_sum, n_contact, pg, r2 = grid.sum(
+        pressure.sum(),
+        np.count_nonzero(contact),
+        np.vdot(pressure, np.maximum(gap, 0.0)),
+        np.vdot(r, r),
+    )
     ell = problem.scale_length
-    area = grid.length ** 2
-    force = grid.pixel ** 2 * p_sum
+    area = grid.length**2
+    force = grid.pixel**2 * p_sum
     return {
         "approach": problem.approach,
         "force": force,
@@ -181,23 +194,27 @@ def verify_punch(info: SolveInfo, obs: dict[str, Any]) -> str:
     if info.reason_code <= 0:
         return f"TAO did not converge ({info.reason})"
     if not obs["kkt_residual"] <= VERIFY_FACTOR * info.tolerance:
-        return (f"KKT residual {obs['kkt_residual']:.2e} > {VERIFY_FACTOR:g} x tolerance "
-                f"{info.tolerance:.1e}")
+        return (
+            f"KKT residual {obs['kkt_residual']:.2e} > {VERIFY_FACTOR:g} x tolerance "
+            f"{info.tolerance:.1e}"
+        )
     return "ok"
 
 
 class PunchSolver:
     """Displacement- and load-controlled solves of one :class:`PunchProblem` (warm-started)."""
 
-    def __init__(self, petsc: Any, problem: PunchProblem, flat: str = "grid",
-                 beta: float = PHARR_BETA) -> None:
+    def __init__(
+        self, petsc: Any, problem: PunchProblem, flat: str = "grid", beta: float = PHARR_BETA
+    ) -> None:
         if flat not in ("grid", "analytic"):
             raise ValueError(f"flat-punch stiffness must be 'grid' or 'analytic', got {flat}")
         self.petsc = petsc
         self.problem = problem
         grid = problem.grid
         self.k_flat_analytic = flat_punch_stiffness(
-            problem.modulus, problem.footprint_pixels * grid.pixel ** 2, beta)
+            problem.modulus, problem.footprint_pixels * grid.pixel**2, beta
+        )
         self.k_flat_grid = problem.flat_stiffness_on_grid(petsc) if flat == "grid" else np.nan
         self.flat = flat
         self.k_flat = self.k_flat_grid if flat == "grid" else self.k_flat_analytic
@@ -207,54 +224,76 @@ class PunchSolver:
     def close(self) -> None:
         self.solver.close()
 
-    def __enter__(self) -> "PunchSolver":
+    def __enter__(self) -> PunchSolver:
         return self
 
     def __exit__(self, *exc: object) -> None:
         self.close()
 
-    def at_approach(self, delta: float, fields: bool = False,
-                    monitor: Callable[[int, float, float], None] | None = None) -> Step:
+    def at_approach(
+        self,
+        delta: float,
+        fields: bool = False,
+        monitor: Monitor | None = None,
+    ) -> Step:
         """Solve at approach ``δ`` from the last converged pressure."""
         pb = self.problem
         pb.set_approach(delta)
-        x_new, info = self.solver.solve(pb.objective_gradient, self.x, monitor=monitor,
-                                        upper=pb.upper_bound)
+        x_new, info = self.solver.solve(
+            pb.objective_gradient, self.x, monitor=monitor, upper=pb.upper_bound
+        )
         pressure = x_new.reshape(pb.grid.local_shape) * pb.pressure_scale
         gap = pb.gap(pressure)
         obs = punch_observables(pb, pressure, gap)
         contact = obs.pop("contact")
         verdict = verify_punch(info, obs)
-        k_tot, k_its = (punch_stiffness_exact(self.petsc, pb.grid, pb.compliance, pb.inverse,
-                                              contact) if verdict == "ok" else (np.nan, 0))
+        k_tot, k_its = (
+            punch_stiffness_exact(self.petsc, pb.grid, pb.compliance, pb.inverse, contact)
+            if verdict == "ok"
+            else (np.nan, 0)
+        )
         if verdict == "ok":
             self.x = x_new
-        area = pb.grid.length ** 2
+        area = pb.grid.length**2
         k_int = interfacial_stiffness(k_tot, self.k_flat)
-        scalars = {**obs, "total_stiffness": k_tot, "interfacial_stiffness": k_int / area,
-                   "flat_punch_stiffness": self.k_flat, "stiffness_iterations": k_its,
-                   **info.scalars(verdict)}
-        return Step(scalars, gap if fields else None, pressure if fields else None,
-                    state=self.x.reshape(pb.grid.local_shape) * pb.pressure_scale)
+        scalars = {
+            **obs,
+            "total_stiffness": k_tot,
+            "interfacial_stiffness": k_int / area,
+            "flat_punch_stiffness": self.k_flat,
+            "stiffness_iterations": k_its,
+            **info.scalars(verdict),
+        }
+        return Step(
+            scalars,
+            gap if fields else None,
+            pressure if fields else None,
+            state=self.x.reshape(pb.grid.local_shape) * pb.pressure_scale,
+        )
 
     def restart_from(self, pressure: np.ndarray) -> None:
         """Start the next solve from this local pressure slab (a resumed run's state)."""
         self.x = (np.asarray(pressure, dtype=float) / self.problem.pressure_scale).reshape(-1)
 
-    def at_force(self, force: float, fields: bool = False, rtol: float = FORCE_RTOL,
-                 monitor: Callable[[int, float, float], None] | None = None) -> Step:
+    def at_force(
+        self,
+        force: float,
+        fields: bool = False,
+        rtol: float = FORCE_RTOL,
+        monitor: Monitor | None = None,
+    ) -> Step:
         """Find ``δ`` with ``F(δ) = force`` (relative tolerance ``rtol``) and solve there.
 
         Safeguarded Newton on the increasing, convex ``F(δ)`` with the exact ``dF/dδ``,
         bracketed from below by ``force / K_flat`` (a rough punch is never stiffer than
-        the flat one; the 1% of β is within the bracket's slack).  The step's scalars add ``target_force`` and ``newton_iterations``.
+        the flat one; the 1% of β is within the bracket's slack).  The step's scalars add
+        ``target_force`` and ``newton_iterations``.
         """
-        if not np.isfinite(force) or force <= 0:
-            raise ValueError(f"force must be positive and finite, got {force}")
+        positive("force", force)
         lo, hi = 0.0, np.inf
         delta = force / self.k_flat_analytic
         total_its, total_time = 0, 0.0
-        for newton in range(1, MAX_NEWTON + 1):
+        for newton in range(1, MAX_NEWTON + 1):  # noqa: B007 - reported after the loop
             step = self.at_approach(delta, fields, monitor)
             s = step.scalars
             total_its += s["iterations"]
@@ -270,23 +309,35 @@ class PunchSolver:
                 hi = delta
             guess = delta + (force - f) / k if k > 0 else np.inf
             if not lo < guess < hi:
-                guess = 2 * lo + self.problem.scale_length if not np.isfinite(hi) \
-                    else 0.5 * (lo + hi)
+                guess = (
+                    2 * lo + self.problem.scale_length if not np.isfinite(hi) else 0.5 * (lo + hi)
+                )
             delta = guess
         else:
             s["converged"] = False
             s["verification"] = f"force not reached in {MAX_NEWTON} Newton steps"
-        s.update(target_force=force, newton_iterations=newton, iterations=total_its,
-                 solve_time=total_time)
+        s.update(
+            target_force=force,
+            newton_iterations=newton,
+            iterations=total_its,
+            solve_time=total_time,
+        )
         return step
 
 
-def punch_contact(heights: np.ndarray, length: float, modulus: float,
-                  approaches: Sequence[float] | None = None,
-                  forces: Sequence[float] | None = None,
-                  options: Sequence[str] | None = None, fields: bool = False,
-                  footprint: np.ndarray | None = None, flat: str = "grid",
-                  beta: float = PHARR_BETA, comm: Any = None) -> list[Step]:
+def punch_contact(
+    heights: np.ndarray,
+    length: float,
+    modulus: float,
+    approaches: Sequence[float] | None = None,
+    forces: Sequence[float] | None = None,
+    options: Sequence[str] | None = None,
+    fields: bool = False,
+    footprint: np.ndarray | None = None,
+    flat: str = "grid",
+    beta: float = PHARR_BETA,
+    comm: Any = None,
+) -> list[Step]:
     """Press a rigid punch with face ``heights`` into a free elastic half-space.
 
     Parameters
@@ -313,22 +364,43 @@ def punch_contact(heights: np.ndarray, length: float, modulus: float,
     -------
     list of Step
     """
-    return list(punch_steps(heights, length, modulus, approaches, forces, options, fields,
-                            footprint, flat, beta, comm))
+    return list(
+        punch_steps(
+            heights,
+            length,
+            modulus,
+            approaches,
+            forces,
+            options,
+            fields,
+            footprint,
+            flat,
+            beta,
+            comm,
+        )
+    )
 
 
-def punch_steps(heights: np.ndarray, length: float, modulus: float,
-                approaches: Sequence[float] | None, forces: Sequence[float] | None,
-                options: Sequence[str] | None = None, fields: bool = False,
-                footprint: np.ndarray | None = None, flat: str = "grid",
-                beta: float = PHARR_BETA, comm: Any = None, monitor: Callable[[int, float, float], None] | None = None
-                ) -> Iterator[Step]:
+def punch_steps(
+    heights: np.ndarray,
+    length: float,
+    modulus: float,
+    approaches: Sequence[float] | None,
+    forces: Sequence[float] | None,
+    options: Sequence[str] | None = None,
+    fields: bool = False,
+    footprint: np.ndarray | None = None,
+    flat: str = "grid",
+    beta: float = PHARR_BETA,
+    comm: Any = None,
+    monitor: Monitor | None = None,
+) -> Iterator[Step]:
     """Generator form of :func:`punch_contact` (steps are yielded as they finish)."""
     from mpi4py import MPI
 
     if (approaches is None) == (forces is None):
         raise ValueError("give either approaches or forces")
-    values = [float(v) for v in (approaches if approaches is not None else forces)]
+    values = [float(v) for v in (approaches if approaches is not None else forces or [])]
     if not values:
         raise ValueError("give at least one approach or force")
     with _petsc.scoped_options(options) as petsc:

@@ -8,20 +8,28 @@ from __future__ import annotations
 
 import json
 import os
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
 from .fft import make_fft
-from .grid import Grid
+from .grid import Grid, fundamental_wavevector
 from .periodic import periodic_contact
 from .punch import punch_contact
 from .stiffness import sweep_stiffness
 from .surface import psd_shape, rms_of, self_affine
 
 
-def surface(n: int, hurst: float, rolloff_ratio: float, cutoff_ratio: float, seed: int,
-            rms_slope: float = 0.1, length: float = 1.0) -> tuple[np.ndarray, float]:
+def surface(
+    n: int,
+    hurst: float,
+    rolloff_ratio: float,
+    cutoff_ratio: float,
+    seed: int,
+    rms_slope: float = 0.1,
+    length: float = 1.0,
+) -> tuple[np.ndarray, float]:
     """A full ``n x n`` self-affine surface (paper Eq. 5) and its realised ``h_rms``.
 
     Generated on one rank (``COMM_SELF``), so a figure script can run under any launcher.
@@ -30,38 +38,60 @@ def surface(n: int, hurst: float, rolloff_ratio: float, cutoff_ratio: float, see
 
     grid = Grid(n, length, MPI.COMM_SELF)
     fft = make_fft(grid)
-    h = self_affine(grid, fft, hurst=hurst, rolloff_ratio=rolloff_ratio,
-                    cutoff_ratio=cutoff_ratio, seed=seed, rms_slope=rms_slope)
+    h = self_affine(
+        grid,
+        fft,
+        hurst=hurst,
+        rolloff_ratio=rolloff_ratio,
+        cutoff_ratio=cutoff_ratio,
+        seed=seed,
+        rms_slope=rms_slope,
+    )
     return h, rms_of(grid, fft, h)
 
 
-def stiffness_curve(heights: np.ndarray, pressures: Sequence[float], length: float = 1.0,
-                    modulus: float = 1.0, options: Sequence[str] | None = None
-                    ) -> dict[str, np.ndarray]:
+def stiffness_curve(
+    heights: np.ndarray,
+    pressures: Sequence[float],
+    length: float = 1.0,
+    modulus: float = 1.0,
+    options: Sequence[str] | None = None,
+) -> dict[str, np.ndarray]:
     """Periodic sweep with both stiffnesses: exact (contact set fixed) and ``-p dln p/du``.
 
     Steps that did not converge are ``nan`` (and counted in ``converged``).
     """
-    steps = periodic_contact(heights, length, modulus, pressures, options=options,
-                             stiffness=True)
+    steps = periodic_contact(heights, length, modulus, pressures, options=options, stiffness=True)
     ok = np.array([s.converged for s in steps])
-    col = {k: np.array([s.scalars[k] for s in steps], dtype=float)
-           for k in ("nominal_pressure", "mean_gap", "area_fraction", "stiffness")}
+    col = {
+        k: np.array([s.scalars[k] for s in steps], dtype=float)
+        for k in ("nominal_pressure", "mean_gap", "area_fraction", "stiffness")
+    }
     for k in ("mean_gap", "area_fraction", "stiffness"):
         col[k][~ok] = np.nan
     col["converged"] = ok
     good = ok & np.isfinite(col["mean_gap"])
     col["stiffness_sweep"] = np.full(ok.size, np.nan)
     if good.sum() >= 3:
-        col["stiffness_sweep"][good] = sweep_stiffness(col["nominal_pressure"][good],
-                                                       col["mean_gap"][good])
+        col["stiffness_sweep"][good] = sweep_stiffness(
+            col["nominal_pressure"][good], col["mean_gap"][good]
+        )
     return col
 
 
-def ensemble_curves(n: int, hurst: float, rolloff_ratio: float, cutoff_ratio: float,
-                    seeds: Sequence[int], pressures: Sequence[float], rms_slope: float = 0.1,
-                    options: Sequence[str] | None = None, points: int = 4,
-                    min_contact_pixels: int = 16, progress: bool = True) -> dict[str, Any]:
+def ensemble_curves(
+    n: int,
+    hurst: float,
+    rolloff_ratio: float,
+    cutoff_ratio: float,
+    seeds: Sequence[int],
+    pressures: Sequence[float],
+    rms_slope: float = 0.1,
+    options: Sequence[str] | None = None,
+    points: int = 4,
+    min_contact_pixels: int = 16,
+    progress: bool = True,
+) -> dict[str, Any]:
     """Stiffness curves of several seeds, their mean, and power-law fits of the lowest points.
 
     Returns arrays ``seeds x pressures`` (``mean_gap``, ``stiffness``, ...), the realised
@@ -78,9 +108,11 @@ def ensemble_curves(n: int, hurst: float, rolloff_ratio: float, cutoff_ratio: fl
         rows.append(stiffness_curve(h, pressures, options=options))
         h_rms.append(rms)
         if progress:
-            print(f"#   H = {hurst}, L/lambda_r = {rolloff_ratio}, L/lambda_1 = {cutoff_ratio}, "
-                  f"seed {seed}: {int(rows[-1]['converged'].sum())}/{len(pressures)} converged",
-                  flush=True)
+            print(
+                f"#   H = {hurst}, L/lambda_r = {rolloff_ratio}, L/lambda_1 = {cutoff_ratio}, "
+                f"seed {seed}: {int(rows[-1]['converged'].sum())}/{len(pressures)} converged",
+                flush=True,
+            )
     out: dict[str, Any] = {k: np.array([r[k] for r in rows]) for k in rows[0]}
     out["h_rms"] = np.array(h_rms)
     p = np.asarray(pressures, dtype=float)
@@ -88,34 +120,52 @@ def ensemble_curves(n: int, hurst: float, rolloff_ratio: float, cutoff_ratio: fl
     resolved = np.all(out["area_fraction"] * n * n >= min_contact_pixels, axis=0)
     out["fitted"] = resolved
     fit = power_law_fit(p[resolved], mean_k[resolved], points)
-    alphas = np.array([power_law_fit(p[resolved], k[resolved], points).alpha
-                       for k in out["stiffness"]])
+    alphas = np.array(
+        [power_law_fit(p[resolved], k[resolved], points).alpha for k in out["stiffness"]]
+    )
     spread = alphas.std(ddof=1) / np.sqrt(alphas.size) if alphas.size > 1 else 0.0
-    out.update(stiffness_mean=mean_k, alpha=fit.alpha, alphas=alphas,
-               alpha_error=float(np.hypot(np.nan_to_num(fit.alpha_error), spread)),
-               prefactor=fit.prefactor)
+    out.update(
+        stiffness_mean=mean_k,
+        alpha=fit.alpha,
+        alphas=alphas,
+        alpha_error=float(np.hypot(np.nan_to_num(fit.alpha_error), spread)),
+        prefactor=fit.prefactor,
+    )
     return out
 
 
-def punch_curve(heights: np.ndarray, approaches: Sequence[float], length: float = 1.0,
-                modulus: float = 1.0) -> dict[str, np.ndarray]:
+def punch_curve(
+    heights: np.ndarray, approaches: Sequence[float], length: float = 1.0, modulus: float = 1.0
+) -> dict[str, np.ndarray]:
     """Rigid rough punch: force, ``F/Lp^2`` and the interfacial stiffness (Eq. 2) per step."""
     steps = punch_contact(heights, length, modulus, approaches=approaches)
-    keys = ("approach", "force", "nominal_pressure", "area_fraction", "total_stiffness",
-            "interfacial_stiffness")
+    keys = (
+        "approach",
+        "force",
+        "nominal_pressure",
+        "area_fraction",
+        "total_stiffness",
+        "interfacial_stiffness",
+    )
     col = {k: np.array([s.scalars[k] for s in steps], dtype=float) for k in keys}
     col["converged"] = np.array([s.converged for s in steps])
     return col
 
 
-def ideal_spectrum(length: float, hurst: float, rolloff_ratio: float, cutoff_ratio: float,
-                   h_rms: float, points: int = 4000) -> tuple[np.ndarray, np.ndarray]:
+def ideal_spectrum(
+    length: float,
+    hurst: float,
+    rolloff_ratio: float,
+    cutoff_ratio: float,
+    h_rms: float,
+    points: int = 4000,
+) -> tuple[np.ndarray, np.ndarray]:
     """Eq. 5 on a fine log grid from ``q0`` to ``q1``, normalised to ``h_rms``
     (``h_rms^2 = 2 pi int q C dq``): the continuous spectrum Persson theory needs."""
-    q0 = 2 * np.pi / length
+    q0 = fundamental_wavevector(length)
     q = np.geomspace(q0, cutoff_ratio * q0, points)
     c = psd_shape(q, q0, rolloff_ratio * q0, cutoff_ratio * q0 * (1 + 1e-12), hurst)
-    return q, c * h_rms ** 2 / (2 * np.pi * np.trapz(q * c, q))
+    return q, c * h_rms**2 / (2 * np.pi * np.trapz(q * c, q))
 
 
 def save(path: str, data: dict[str, Any], **attributes: Any) -> None:

@@ -45,8 +45,7 @@ class ContactSchur:
         rows, cols = np.divmod(self.local, n)
         rows = rows + grid.rows.start
         both = _allgather(np.stack([rows, cols], axis=1), grid.comm)
-        self.offset = (0 if grid.comm.size == 1
-                       else int(grid.comm.exscan(len(self.local)) or 0))
+        self.offset = 0 if grid.comm.size == 1 else int(grid.comm.exscan(len(self.local)) or 0)
         di, dj = (_fold(both[:, k][:, None] - both[:, k][None, :], n) for k in (0, 1))
         m = len(both)
         system = np.zeros((m + 1, m + 1))
@@ -58,10 +57,10 @@ class ContactSchur:
     def solve(self, g_r: np.ndarray, r_sum: float) -> tuple[np.ndarray, float]:
         """``(lambda on this rank's bound pixels, c)`` for ``G r`` (local slab) and ``sum(r)``."""
         rhs = np.empty(self.size + 1)
-        rhs[:self.size] = -_allgather(g_r.reshape(-1)[self.local], self.grid.comm)
+        rhs[: self.size] = -_allgather(g_r.reshape(-1)[self.local], self.grid.comm)
         rhs[self.size] = -r_sum
         sol = lu_solve(self._lu, rhs, check_finite=False)
-        return sol[self.offset:self.offset + len(self.local)], float(sol[self.size])
+        return sol[self.offset : self.offset + len(self.local)], float(sol[self.size])
 
 
 def quarter(grid: Grid, column: np.ndarray) -> np.ndarray:
@@ -71,7 +70,7 @@ def quarter(grid: Grid, column: np.ndarray) -> np.ndarray:
     ``(0, 0)``; by periodicity and evenness ``G(i, j) = G(min(i, n - i), min(j, n - j))``.
     """
     half = grid.n // 2 + 1
-    mine = column[:max(0, min(grid.rows.stop, half) - grid.rows.start), :half]
+    mine = column[: max(0, min(grid.rows.stop, half) - grid.rows.start), :half]
     return _allgather(np.ascontiguousarray(mine), grid.comm)
 
 

@@ -24,16 +24,30 @@ from __future__ import annotations
 
 import ctypes
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from .grid import Grid
-from .operator import FourierOperator, shell_matrix
+from .operator import SpectralOperator, shell_matrix
 
-BOUND_TYPES = ("tron", "bqnls", "blmvm", "bncg", "gpcg", "bnls", "bntr", "bntl",
-               "bqnkls", "bqnktr", "bqnktl", "bqpip", "python")
+BOUND_TYPES = (
+    "tron",
+    "bqnls",
+    "blmvm",
+    "bncg",
+    "gpcg",
+    "bnls",
+    "bntr",
+    "bntl",
+    "bqnkls",
+    "bqnktr",
+    "bqnktl",
+    "bqpip",
+    "python",
+)
 J0_TYPES = ("bqnls", "bqnkls", "bqnktr", "bqnktl")
 KSP_TYPES = ("tron", "gpcg", "bnls", "bntr", "bntl", "bqpip")
 KSP_PC_TYPES = ("tron", "bnls", "bntr", "bntl")  # preconditioned through the Hessian's Pmat
@@ -43,6 +57,14 @@ DEFAULT_GATOL = 1e-8
 DEFAULT_MAX_IT = 5000
 
 ObjGrad = Callable[[np.ndarray, np.ndarray], float]
+Monitor = Callable[[int, float, float], object]  # (iteration, f, gnorm); truthy stops the solve
+
+
+@runtime_checkable
+class TakesPreconditioner(Protocol):
+    """A Python TAO type that is given the Fourier preconditioner (a ``PC``) before it runs."""
+
+    def set_preconditioner(self, pc: Any) -> None: ...
 
 
 @dataclass
@@ -62,14 +84,20 @@ class SolveInfo:
 
     def scalars(self, verdict: str) -> dict[str, Any]:
         """The per-step output columns of this report, with the package's verdict."""
-        return {"iterations": self.iterations, "solve_time": self.solve_time,
-                "converged": verdict == "ok", "verification": verdict,
-                "tao_type": self.tao_type, "tao_reason": self.reason,
-                "tao_reason_code": self.reason_code,
-                "objective_gradient_evaluations": self.objective_gradient_evaluations,
-                "hessian_applications": self.hessian_applications,
-                "preconditioner_applications": self.preconditioner_applications,
-                "gradient_norm": self.gradient_norm, "tolerance": self.tolerance}
+        return {
+            "iterations": self.iterations,
+            "solve_time": self.solve_time,
+            "converged": verdict == "ok",
+            "verification": verdict,
+            "tao_type": self.tao_type,
+            "tao_reason": self.reason,
+            "tao_reason_code": self.reason_code,
+            "objective_gradient_evaluations": self.objective_gradient_evaluations,
+            "hessian_applications": self.hessian_applications,
+            "preconditioner_applications": self.preconditioner_applications,
+            "gradient_norm": self.gradient_norm,
+            "tolerance": self.tolerance,
+        }
 
 
 def _reason_names(petsc: Any) -> dict[int, str]:
@@ -110,8 +138,9 @@ def check_tao_type(petsc: Any) -> str:
     """Raise ``ValueError`` unless ``-tao_type`` names a bound-constrained TAO type."""
     t = requested_type(petsc)
     if t not in BOUND_TYPES:
-        raise ValueError(f"unknown or unbounded TAO type '{t}'; choose one of: "
-                         + ", ".join(BOUND_TYPES))
+        raise ValueError(
+            f"unknown or unbounded TAO type '{t}'; choose one of: " + ", ".join(BOUND_TYPES)
+        )
     return t
 
 
@@ -130,8 +159,13 @@ class BoundSolver:
         Fourier operator approximating the inverse Hessian (LMVM ``J0``), or ``None``.
     """
 
-    def __init__(self, petsc: Any, grid: Grid, hessian: FourierOperator,
-                 preconditioner: FourierOperator | None) -> None:
+    def __init__(
+        self,
+        petsc: Any,
+        grid: Grid,
+        hessian: SpectralOperator,
+        preconditioner: SpectralOperator | None,
+    ) -> None:
         self.petsc = petsc
         self.grid = grid
         self.hessian_op = hessian
@@ -144,8 +178,11 @@ class BoundSolver:
         self.upper.set(petsc.INFINITY)
         self.pc = None
         self.pmat = None
-        if preconditioner is not None and self.tao_type in KSP_PC_TYPES and \
-                not petsc.Options().getBool("petsc_contact_no_ksp_pc", False):
+        if (
+            preconditioner is not None
+            and self.tao_type in KSP_PC_TYPES
+            and not petsc.Options().getBool("petsc_contact_no_ksp_pc", False)
+        ):
             self.pmat = shell_matrix(petsc, preconditioner)
         use_j0 = not petsc.Options().getBool("petsc_contact_no_j0", False)
         wants_pc = (self.tao_type in J0_TYPES and use_j0) or self.tao_type == "python"
@@ -155,10 +192,15 @@ class BoundSolver:
             self.pc.setUp()
         self._reasons = _reason_names(petsc)
 
-    def solve(self, objgrad: ObjGrad, x0: np.ndarray, lower: float = 0.0,
-              monitor: Callable[[int, float, float], None] | None = None,
-              upper: np.ndarray | None = None, gatol_floor: float = 0.0
-              ) -> tuple[np.ndarray, SolveInfo]:
+    def solve(
+        self,
+        objgrad: ObjGrad,
+        x0: np.ndarray,
+        lower: float = 0.0,
+        monitor: Monitor | None = None,
+        upper: np.ndarray | None = None,
+        gatol_floor: float = 0.0,
+    ) -> tuple[np.ndarray, SolveInfo]:
         """Run TAO from ``x0`` (local flat array); return the local solution and TAO's report.
 
         ``upper`` is an optional local array of upper bounds (default: none).
@@ -193,8 +235,9 @@ class BoundSolver:
             if self.tao_type == "python":
                 tao.setPythonType(DEFAULT_PYTHON_TYPE)
             tao.setObjectiveGradient(tao_objgrad, None)
-            tao.setHessian(tao_hessian, self.hessian,
-                           self.hessian if self.pmat is None else self.pmat)
+            tao.setHessian(
+                tao_hessian, self.hessian, self.hessian if self.pmat is None else self.pmat
+            )
             tao.setVariableBounds(self.lower, self.upper)
             tao.setTolerances(gatol=DEFAULT_GATOL, grtol=0.0, gttol=0.0)
             tao.setMaximumIterations(DEFAULT_MAX_IT)
@@ -205,9 +248,10 @@ class BoundSolver:
             if self.pc is not None and self.tao_type in J0_TYPES:
                 attach_lmvm_j0(tao, self.pc)
             context = tao.getPythonContext() if self.tao_type == "python" else None
-            if self.pc is not None and hasattr(context, "set_preconditioner"):
+            if self.pc is not None and isinstance(context, TakesPreconditioner):
                 context.set_preconditioner(self.pc)
             if monitor is not None:
+
                 def tao_monitor(t: Any) -> None:
                     if monitor(*t.getSolutionStatus()[:3]):  # True: stop this solve
                         t.setConvergedReason(petsc.TAO.Reason.DIVERGED_USER)
@@ -224,13 +268,17 @@ class BoundSolver:
             its, _, gnorm, _, _, code = tao.getSolutionStatus()
             code = int(code)
             info = SolveInfo(
-                tao_type=_type_name(tao, context), reason=self._reasons.get(code, str(code)),
-                reason_code=code, iterations=int(its),
+                tao_type=_type_name(tao, context),
+                reason=self._reasons.get(code, str(code)),
+                reason_code=code,
+                iterations=int(its),
                 objective_gradient_evaluations=counts["objgrad"],
                 hessian_applications=self.hessian_op.applications - h0,
                 preconditioner_applications=self._pc_count() - p0,
-                gradient_norm=float(gnorm), solve_time=elapsed,
-                tolerance=float(gatol))
+                gradient_norm=float(gnorm),
+                solve_time=elapsed,
+                tolerance=float(gatol),
+            )
         finally:
             tao.destroy()
         return self.x.array_r.copy(), info
@@ -238,7 +286,7 @@ class BoundSolver:
     def _pc_count(self) -> int:
         return self.preconditioner_op.applications if self.preconditioner_op is not None else 0
 
-    def __enter__(self) -> "BoundSolver":
+    def __enter__(self) -> BoundSolver:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -48,8 +48,14 @@ class Restricted(ShellInterface):
         return self.op.diagonal()
 
 
-def restricted_solve(petsc: Any, grid: Grid, op: ShellInterface, pc: ShellInterface,
-                     mask: np.ndarray, rtol: float = STIFFNESS_RTOL) -> tuple[np.ndarray, int]:
+def restricted_solve(
+    petsc: Any,
+    grid: Grid,
+    op: ShellInterface,
+    pc: ShellInterface,
+    mask: np.ndarray,
+    rtol: float = STIFFNESS_RTOL,
+) -> tuple[np.ndarray, int]:
     """Solve ``A_MM y = 1_M`` on the pixels of ``mask`` (local slab) by preconditioned CG.
 
     Returns
@@ -92,9 +98,13 @@ def restricted_solve(petsc: Any, grid: Grid, op: ShellInterface, pc: ShellInterf
     return out, int(its)
 
 
-def periodic_stiffness_exact(petsc: Any, grid: Grid, stiffness: ShellInterface,
-                             compliance: ShellInterface, contact: np.ndarray
-                             ) -> tuple[float, int]:
+def periodic_stiffness_exact(
+    petsc: Any,
+    grid: Grid,
+    stiffness: ShellInterface,
+    compliance: ShellInterface,
+    contact: np.ndarray,
+) -> tuple[float, int]:
     """``K = -dp0/du_bar`` with the contact set held fixed (per apparent area).
 
     ``inf`` at full contact (no open pixel), 0 without contact (the surfaces separate freely).
@@ -109,13 +119,14 @@ def periodic_stiffness_exact(petsc: Any, grid: Grid, stiffness: ShellInterface,
     return grid.size / float(grid.sum(y.sum())[0]), its
 
 
-def punch_stiffness_exact(petsc: Any, grid: Grid, compliance: ShellInterface,
-                          inverse: ShellInterface, contact: np.ndarray) -> tuple[float, int]:
+def punch_stiffness_exact(
+    petsc: Any, grid: Grid, compliance: ShellInterface, inverse: ShellInterface, contact: np.ndarray
+) -> tuple[float, int]:
     """Total stiffness ``dF/dδ`` of a punch with the contact set held fixed (0 if none)."""
     if grid.sum(np.count_nonzero(contact))[0] == 0:
         return 0.0, 0
     y, its = restricted_solve(petsc, grid, compliance, inverse, contact)
-    return grid.pixel ** 2 * float(grid.sum(y.sum())[0]), its
+    return grid.pixel**2 * float(grid.sum(y.sum())[0]), its
 
 
 def sweep_stiffness(pressure: np.ndarray, mean_gap: np.ndarray) -> np.ndarray:

@@ -17,6 +17,7 @@ import numpy as np
 
 from .fft import FFT, half_spectrum_weights, wavevector_magnitude
 from .grid import Grid
+from .validation import non_negative
 
 
 def psd_shape(q: np.ndarray, q0: float, qr: float, q1: float, hurst: float) -> np.ndarray:
@@ -32,14 +33,17 @@ def psd_shape(q: np.ndarray, q0: float, qr: float, q1: float, hurst: float) -> n
     return np.where((q >= q0 * (1 - 1e-12)) & (q < q1), shape, 0.0)
 
 
-def check_spectrum_parameters(n: int, hurst: float, rolloff_ratio: float,
-                              cutoff_ratio: float) -> None:
+def check_spectrum_parameters(
+    n: int, hurst: float, rolloff_ratio: float, cutoff_ratio: float
+) -> None:
     """Raise ``ValueError`` with a one-line reason for an impossible spectrum."""
     if not 0.0 <= hurst <= 1.0:
         raise ValueError(f"Hurst exponent must be in [0, 1], got {hurst}")
     if not 1.0 <= rolloff_ratio <= cutoff_ratio:
-        raise ValueError("need 1 <= L/lambda_r <= L/lambda_1, got "
-                         f"L/lambda_r = {rolloff_ratio}, L/lambda_1 = {cutoff_ratio}")
+        raise ValueError(
+            "need 1 <= L/lambda_r <= L/lambda_1, got "
+            f"L/lambda_r = {rolloff_ratio}, L/lambda_1 = {cutoff_ratio}"
+        )
     if cutoff_ratio > n / 2:
         raise ValueError(f"L/lambda_1 = {cutoff_ratio} exceeds the Nyquist limit n/2 = {n // 2}")
 
@@ -47,22 +51,32 @@ def check_spectrum_parameters(n: int, hurst: float, rolloff_ratio: float,
 def white_noise(grid: Grid, seed: int) -> np.ndarray:
     """Unit-variance Gaussian white noise on this rank's rows, independent of the rank count."""
     rows = range(grid.rows.start, grid.rows.stop)
-    return np.array([np.random.default_rng([seed, i]).standard_normal(grid.n) for i in rows]
-                    ).reshape(grid.local_shape)
+    return np.array(
+        [np.random.default_rng([seed, i]).standard_normal(grid.n) for i in rows]
+    ).reshape(grid.local_shape)
 
 
 def spectrum_sums(grid: Grid, fft: FFT, shape: np.ndarray) -> tuple[float, float]:
     """``(sum C, sum q^2 C) (2 pi/L)^2`` over the full spectrum for a half-spectrum ``C``."""
     w = half_spectrum_weights(grid, fft) * shape
     q2 = wavevector_magnitude(grid, fft) ** 2
-    dq2 = (2 * np.pi / grid.length) ** 2
+    dq2 = grid.q0**2
     s0, s2 = grid.sum(w.sum(), (w * q2).sum())
     return s0 * dq2, s2 * dq2
 
 
-def self_affine(grid: Grid, fft: FFT, *, hurst: float, rolloff_ratio: float,
-                cutoff_ratio: float, seed: int, rms_height: float | None = None,
-                rms_slope: float | None = None, exact: bool = False) -> np.ndarray:
+def self_affine(
+    grid: Grid,
+    fft: FFT,
+    *,
+    hurst: float,
+    rolloff_ratio: float,
+    cutoff_ratio: float,
+    seed: int,
+    rms_height: float | None = None,
+    rms_slope: float | None = None,
+    exact: bool = False,
+) -> np.ndarray:
     """A seeded self-affine surface with roll-off, this rank's row slab.
 
     Parameters
@@ -87,23 +101,25 @@ def self_affine(grid: Grid, fft: FFT, *, hurst: float, rolloff_ratio: float,
         Heights, mean zero, shape ``grid.local_shape``.
     """
     check_spectrum_parameters(grid.n, hurst, rolloff_ratio, cutoff_ratio)
-    if (rms_height is None) == (rms_slope is None):
+    if rms_height is not None and rms_slope is None:
+        target, slope = non_negative("rms target", rms_height), False
+    elif rms_slope is not None and rms_height is None:
+        target, slope = non_negative("rms target", rms_slope), True
+    else:
         raise ValueError("give exactly one of rms_height and rms_slope")
-    target = rms_height if rms_height is not None else rms_slope
-    if not np.isfinite(target) or target < 0:
-        raise ValueError(f"rms target must be non-negative and finite, got {target}")
-    q0 = 2 * np.pi / grid.length
-    shape = psd_shape(wavevector_magnitude(grid, fft), q0, q0 * rolloff_ratio,
-                      q0 * cutoff_ratio, hurst)
+    q0 = grid.q0
+    shape = psd_shape(
+        wavevector_magnitude(grid, fft), q0, q0 * rolloff_ratio, q0 * cutoff_ratio, hurst
+    )
     s0, s2 = spectrum_sums(grid, fft, shape)
-    c0 = target**2 / (s0 if rms_height is not None else s2)
+    c0 = target**2 / (s2 if slope else s0)
     fft.real[...] = white_noise(grid, seed)
     fft.forward()
-    fft.spectrum *= np.sqrt(c0 * shape * (2 * np.pi / grid.length) ** 2 * grid.size) / grid.size
+    fft.spectrum *= np.sqrt(c0 * shape * grid.q0**2 * grid.size) / grid.size
     fft.backward()
     h = fft.result.copy()
     if exact and target > 0:
-        realised = rms_of(grid, fft, h, slope=rms_slope is not None)
+        realised = rms_of(grid, fft, h, slope=slope)
         h *= target / realised
     return h
 
@@ -113,7 +129,7 @@ def fourier_power(grid: Grid, fft: FFT, h: np.ndarray) -> np.ndarray:
     fft.real[...] = h
     fft.forward()
     a = grid.pixel
-    return np.abs(fft.spectrum) ** 2 * a**4 / ((2 * np.pi) ** 2 * grid.length**2)
+    return np.abs(fft.spectrum) ** 2 * a**4 * grid.q0**2 / (2 * np.pi) ** 4
 
 
 def rms_of(grid: Grid, fft: FFT, h: np.ndarray, slope: bool = False) -> float:
@@ -123,8 +139,9 @@ def rms_of(grid: Grid, fft: FFT, h: np.ndarray, slope: bool = False) -> float:
     return float(np.sqrt(spectrum_sums(grid, fft, fourier_power(grid, fft, h))[1]))
 
 
-def radial_psd(grid: Grid, fft: FFT, h: np.ndarray, bins: int | None = None
-               ) -> tuple[np.ndarray, np.ndarray]:
+def radial_psd(
+    grid: Grid, fft: FFT, h: np.ndarray, bins: int | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Radially averaged PSD of a realisation.
 
     Parameters
@@ -141,7 +158,7 @@ def radial_psd(grid: Grid, fft: FFT, h: np.ndarray, bins: int | None = None
     c = fourier_power(grid, fft, h)
     q = wavevector_magnitude(grid, fft)
     w = half_spectrum_weights(grid, fft) * np.ones_like(q)
-    q0 = 2 * np.pi / grid.length
+    q0 = grid.q0
     qmax = np.pi / grid.pixel * np.sqrt(2)
     if bins is None:
         index = np.rint(q / q0).astype(int)
@@ -151,8 +168,10 @@ def radial_psd(grid: Grid, fft: FFT, h: np.ndarray, bins: int | None = None
         index = np.searchsorted(edges, q) - 1
         nbins = bins + 1
     index = np.clip(index, 0, nbins - 1)
-    stats = [np.bincount(index.ravel(), weights=(w * x).ravel(), minlength=nbins)
-             for x in (np.ones_like(q), q, c)]
+    stats = [
+        np.bincount(index.ravel(), weights=(w * x).ravel(), minlength=nbins)
+        for x in (np.ones_like(q), q, c)
+    ]
     count, qsum, csum = grid.sum(*np.concatenate(stats)).reshape(3, nbins)
     keep = (count > 0) & (qsum > 0)
     return qsum[keep] / count[keep], csum[keep] / count[keep]

@@ -24,22 +24,28 @@ KAPPA0 = 2 / 5  # Hertz mesoasperity energy prefactor (Appendix B)
 
 # -- finite-size scaling theory (paper Appendix B) -------------------------------------------
 
+
 def kappa1(hurst: np.ndarray | float, gamma: float = GAMMA) -> np.ndarray:
     """``kappa1 = gamma ((2 - H) / (pi^4 beta^2 H))^(1/2)`` (Appendix B)."""
     h = np.asarray(hurst, dtype=float)
-    return gamma * np.sqrt((2 - h) / (np.pi ** 4 * NAYAK_BETA ** 2 * h))
+    return gamma * np.sqrt((2 - h) / (np.pi**4 * NAYAK_BETA**2 * h))
 
 
-def inverse_theta_parts(hurst: np.ndarray | float, gamma: float = GAMMA
-                        ) -> tuple[np.ndarray, np.ndarray]:
+def inverse_theta_parts(
+    hurst: np.ndarray | float, gamma: float = GAMMA
+) -> tuple[np.ndarray, np.ndarray]:
     """``(1/theta0, 1/theta1)``: the Hertz-mesoasperity and microroughness contributions.
 
     ``1/theta_{0/1} = (1+2H)/(1+H) (3/(4 pi))^(H/(1+H)) (pi^4 beta^2 H/(2-H))^(1/(2+2H))
     kappa_{0/1}`` (paper, Appendix B; Fig. 2).
     """
     h = np.asarray(hurst, dtype=float)
-    common = ((1 + 2 * h) / (1 + h) * (3 / (4 * np.pi)) ** (h / (1 + h))
-              * (np.pi ** 4 * NAYAK_BETA ** 2 * h / (2 - h)) ** (1 / (2 + 2 * h)))
+    common = (
+        (1 + 2 * h)
+        / (1 + h)
+        * (3 / (4 * np.pi)) ** (h / (1 + h))
+        * (np.pi**4 * NAYAK_BETA**2 * h / (2 - h)) ** (1 / (2 + 2 * h))
+    )
     return common * KAPPA0, common * kappa1(h, gamma)
 
 
@@ -50,8 +56,11 @@ def theta(hurst: np.ndarray | float, gamma: float = GAMMA) -> np.ndarray:
 
 
 def roll_off_factor(hurst: float, rolloff_ratio: float) -> float:
-    """``s`` with ``1/s = 1 + H (1 - (lambda_r/L)^2)`` (P-oldEqno5; ``rolloff_ratio = L/lambda_r``)."""
-    return 1.0 / (1.0 + hurst * (1.0 - rolloff_ratio ** -2.0))
+    """``s`` with ``1/s = 1 + H (1 - (lambda_r/L)^2)`` (paper Eq. 12).
+
+    ``rolloff_ratio`` is ``L/lambda_r``.
+    """
+    return 1.0 / (1.0 + hurst * (1.0 - rolloff_ratio**-2.0))
 
 
 def _size_factor(h_rms: float, length: float, rolloff_ratio: float) -> float:
@@ -60,24 +69,40 @@ def _size_factor(h_rms: float, length: float, rolloff_ratio: float) -> float:
     return h_rms / (2 * np.pi * lam_r) * (lam_r / length) ** 2
 
 
-def finite_size_stiffness(pressure: np.ndarray | float, modulus: float, h_rms: float,
-                          hurst: float, length: float, rolloff_ratio: float,
-                          gamma: float = GAMMA) -> np.ndarray:
+def finite_size_stiffness(
+    pressure: np.ndarray | float,
+    modulus: float,
+    h_rms: float,
+    hurst: float,
+    length: float,
+    rolloff_ratio: float,
+    gamma: float = GAMMA,
+) -> np.ndarray:
     """Power-law regime ``K(p)`` of P-oldEqno5 (per area)::
 
-        K h_rms / E* = theta (h_rms/(2 pi lambda_r) lambda_r^2/L^2)^(H/(1+H))
-                             (p/(s^(1/2) E*))^(1/(1+H))
+    K h_rms / E* = theta (h_rms/(2 pi lambda_r) lambda_r^2/L^2)^(H/(1+H))
+                         (p/(s^(1/2) E*))^(1/(1+H))
     """
     p = np.asarray(pressure, dtype=float)
     s = roll_off_factor(hurst, rolloff_ratio)
     e = 1.0 / (1.0 + hurst)
-    return (modulus / h_rms * theta(hurst, gamma)
-            * _size_factor(h_rms, length, rolloff_ratio) ** (hurst * e)
-            * (p / (np.sqrt(s) * modulus)) ** e)
+    return (
+        modulus
+        / h_rms
+        * theta(hurst, gamma)
+        * _size_factor(h_rms, length, rolloff_ratio) ** (hurst * e)
+        * (p / (np.sqrt(s) * modulus)) ** e
+    )
 
 
-def crossover_pressure(modulus: float, h_rms: float, hurst: float, length: float,
-                       rolloff_ratio: float, gamma: float = GAMMA) -> float:
+def crossover_pressure(
+    modulus: float,
+    h_rms: float,
+    hurst: float,
+    length: float,
+    rolloff_ratio: float,
+    gamma: float = GAMMA,
+) -> float:
     """``p_c`` of P-oldEqno6, implemented as printed::
 
         p_c / E* = h_rms/(2 pi lambda_r) lambda_r^2/L^2 s^(-1/2H) (theta gamma)^((1+H)/H)
@@ -86,19 +111,24 @@ def crossover_pressure(modulus: float, h_rms: float, hurst: float, length: float
     5 times below the ``p_c`` the paper quotes; see README "Theory" for what we find.
     """
     s = roll_off_factor(hurst, rolloff_ratio)
-    return float(modulus * _size_factor(h_rms, length, rolloff_ratio)
-                 * s ** (-1.0 / (2 * hurst))
-                 * (theta(hurst, gamma) * gamma) ** ((1 + hurst) / hurst))
+    return float(
+        modulus
+        * _size_factor(h_rms, length, rolloff_ratio)
+        * s ** (-1.0 / (2 * hurst))
+        * (theta(hurst, gamma) * gamma) ** ((1 + hurst) / hurst)
+    )
 
 
-def linear_stiffness(pressure: np.ndarray | float, h_rms: float, gamma: float = GAMMA
-                     ) -> np.ndarray:
+def linear_stiffness(
+    pressure: np.ndarray | float, h_rms: float, gamma: float = GAMMA
+) -> np.ndarray:
     """The exponential regime: ``K = p / u0`` with ``u0 = gamma h_rms`` (P-oldEqno1)."""
     return np.asarray(pressure, dtype=float) / (gamma * h_rms)
 
 
-def hertz_stiffness(pressure: np.ndarray | float, modulus: float, radius: float,
-                    area: float) -> np.ndarray:
+def hertz_stiffness(
+    pressure: np.ndarray | float, modulus: float, radius: float, area: float
+) -> np.ndarray:
     """Single-asperity (Hertz) regime, ``K ~ p^(1/3)``, per apparent area ``A0``.
 
     ``F = p A0``, contact radius ``a = (3 F R/(4 E*))^(1/3)``, ``dF/dδ = 2 E* a``,
@@ -110,13 +140,15 @@ def hertz_stiffness(pressure: np.ndarray | float, modulus: float, radius: float,
 
 # -- Persson theory ---------------------------------------------------------------------------
 
+
 def _separation_kernel(t: np.ndarray, gamma: float) -> np.ndarray:
     """``[gamma + 3 (1 - gamma) erf(t)^2] exp(-t^2)``."""
     return (gamma + 3 * (1 - gamma) * special.erf(t) ** 2) * np.exp(-t * t)
 
 
-def _tail_integral(gamma: float, t_min: float = 1e-12, t_max: float = 12.0,
-                   points: int = 4001) -> tuple[np.ndarray, np.ndarray]:
+def _tail_integral(
+    gamma: float, t_min: float = 1e-12, t_max: float = 12.0, points: int = 4001
+) -> tuple[np.ndarray, np.ndarray]:
     """``I(t0) = int_t0^inf dt/t kernel(t)`` on a log grid of ``t0`` (cumulative quadrature
     in ``ln t``; the integrand is smooth there and below 1e-60 beyond ``t_max``)."""
     lnt = np.linspace(np.log(t_min), np.log(t_max), points)
@@ -127,13 +159,18 @@ def _tail_integral(gamma: float, t_min: float = 1e-12, t_max: float = 12.0,
 
 def persson_w(q: np.ndarray, psd: np.ndarray) -> np.ndarray:
     """``w(q) = (pi int_q0^q dq' q'^3 C(q'))^(-1/2)`` (``inf`` at the first ``q``)."""
-    cum = integrate.cumulative_trapezoid(q ** 3 * psd, q, initial=0.0)
+    cum = integrate.cumulative_trapezoid(q**3 * psd, q, initial=0.0)
     with np.errstate(divide="ignore"):
         return 1.0 / np.sqrt(np.pi * cum)
 
 
-def persson_mean_gap(pressure: np.ndarray | float, q: np.ndarray, psd: np.ndarray,
-                     modulus: float, gamma: float = GAMMA) -> np.ndarray:
+def persson_mean_gap(
+    pressure: np.ndarray | float,
+    q: np.ndarray,
+    psd: np.ndarray,
+    modulus: float,
+    gamma: float = GAMMA,
+) -> np.ndarray:
     """Persson's mean separation ``u_bar(p)`` (DESIGN.md section 6)::
 
         u_bar = sqrt(pi) int dq q^2 C(q) w(q) int_p^inf dp'/p' kernel(w(q) p'/E*)
@@ -157,31 +194,37 @@ def persson_mean_gap(pressure: np.ndarray | float, q: np.ndarray, psd: np.ndarra
     # below the table, I(t0) = I(t_min) + (gamma + ...) ln(t_min/t0) ~ gamma ln(t_min/t0)
     low = t0 < np.exp(lnt[0])
     inner[low] = tail[0] + gamma * (lnt[0] - np.log(np.maximum(t0[low], 1e-300)))
-    integrand = q ** 2 * psd * np.where(np.isfinite(w), w, 0.0) * inner
+    integrand = q**2 * psd * np.where(np.isfinite(w), w, 0.0) * inner
     u = np.sqrt(np.pi) * integrate.trapezoid(integrand, q, axis=-1)
     return u if np.ndim(pressure) else u[0]
 
 
-def persson_stiffness(pressure: np.ndarray | float, q: np.ndarray, psd: np.ndarray,
-                      modulus: float, gamma: float = GAMMA) -> np.ndarray:
+def persson_stiffness(
+    pressure: np.ndarray | float,
+    q: np.ndarray,
+    psd: np.ndarray,
+    modulus: float,
+    gamma: float = GAMMA,
+) -> np.ndarray:
     """``K = -dp/du_bar`` of Persson's theory, analytically differentiated::
 
-        -du_bar/dp = sqrt(pi)/p int dq q^2 C(q) w(q) kernel(w(q) p/E*)
+    -du_bar/dp = sqrt(pi)/p int dq q^2 C(q) w(q) kernel(w(q) p/E*)
     """
     p = np.atleast_1d(np.asarray(pressure, dtype=float))
     w = persson_w(q, psd)
     w = np.where(np.isfinite(w), w, 0.0)
     t0 = np.outer(p / modulus, w)
-    integrand = q ** 2 * psd * w * _separation_kernel(t0, gamma)
+    integrand = q**2 * psd * w * _separation_kernel(t0, gamma)
     k = p / (np.sqrt(np.pi) * integrate.trapezoid(integrand, q, axis=-1))
     return k if np.ndim(pressure) else k[0]
 
 
 # -- the paper's experiment (section III) ------------------------------------------------------
 
-def block_corrected_stiffness(pressure: np.ndarray, displacement: np.ndarray,
-                              block_modulus: float, thickness: float
-                              ) -> tuple[np.ndarray, np.ndarray]:
+
+def block_corrected_stiffness(
+    pressure: np.ndarray, displacement: np.ndarray, block_modulus: float, thickness: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Interfacial stiffness from a measured ``p(s)`` table (paper Eq. 7).
 
     ``K* = dp/ds`` by second-order finite differences on the (possibly non-uniform) table,

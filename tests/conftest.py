@@ -24,11 +24,11 @@ def python(*args: str, mpi: int = 0, timeout: float = 300) -> subprocess.Complet
     if mpi:
         cmd = [shutil.which("mpiexec") or "mpiexec", "--oversubscribe", "-n", str(mpi), *cmd]
     env = dict(os.environ)
-    env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               PYTHONPATH=str(ROOT))
+    env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", PYTHONPATH=str(ROOT))
     env.pop("PETSC_DIR", None)  # the package must find PETSc by itself
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env,
-                          stdin=subprocess.DEVNULL)
+    return subprocess.run(
+        cmd, capture_output=True, text=True, timeout=timeout, env=env, stdin=subprocess.DEVNULL
+    )
 
 
 @pytest.fixture(scope="session")

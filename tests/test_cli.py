@@ -5,24 +5,57 @@ import json
 import h5py
 import numpy as np
 import pytest
-
 from conftest import cli
 
-GEN = ["--grid", "64", "--hurst", "0.7", "--rms-slope", "0.1", "--rolloff-ratio", "2",
-       "--cutoff-ratio", "16", "--seed", "4"]
+GEN = [
+    "--grid",
+    "64",
+    "--hurst",
+    "0.7",
+    "--rms-slope",
+    "0.1",
+    "--rolloff-ratio",
+    "2",
+    "--cutoff-ratio",
+    "16",
+    "--seed",
+    "4",
+]
 
 
 def test_periodic_run_schema(tmp_path):
     out = tmp_path / "run.h5"
-    r = cli("periodic", *GEN, "--pressures", "1e-3,1e-2", "--output", str(out), "--fields",
-            "-tao_type", "bnls")
+    r = cli(
+        "periodic",
+        *GEN,
+        "--pressures",
+        "1e-3,1e-2",
+        "--output",
+        str(out),
+        "--fields",
+        "-tao_type",
+        "bnls",
+    )
     assert r.returncode == 0, r.stderr
-    assert len([l for l in r.stdout.splitlines() if "CONVERGED" in l]) == 2
+    assert len([line for line in r.stdout.splitlines() if "CONVERGED" in line]) == 2
     with h5py.File(out) as f:
-        for name in ("nominal_pressure", "mean_gap", "area_fraction", "iterations",
-                     "solve_time", "converged", "tao_reason", "elastic_energy", "max_pressure",
-                     "min_gap", "min_pressure", "complementarity", "kkt_residual",
-                     "objective_gradient_evaluations", "hessian_applications"):
+        for name in (
+            "nominal_pressure",
+            "mean_gap",
+            "area_fraction",
+            "iterations",
+            "solve_time",
+            "converged",
+            "tao_reason",
+            "elastic_energy",
+            "max_pressure",
+            "min_gap",
+            "min_pressure",
+            "complementarity",
+            "kkt_residual",
+            "objective_gradient_evaluations",
+            "hessian_applications",
+        ):
             assert f[name].shape == (2,), name
         assert f["converged"][:].all()
         assert f["heights"].shape == (64, 64)
@@ -42,8 +75,15 @@ def test_rerun_from_file_reproduces(tmp_path):
         np.save(tmp_path / "h.npy", f["heights"][:])
         gap = f["mean_gap"][0]
     second = tmp_path / "b.h5"
-    r = cli("periodic", "--heights", str(tmp_path / "h.npy"), "--pressures", "3e-3",
-            "--output", str(second))
+    r = cli(
+        "periodic",
+        "--heights",
+        str(tmp_path / "h.npy"),
+        "--pressures",
+        "3e-3",
+        "--output",
+        str(second),
+    )
     assert r.returncode == 0, r.stderr
     with h5py.File(second) as f:
         assert f["mean_gap"][0] == pytest.approx(gap, rel=1e-12)
@@ -51,8 +91,18 @@ def test_rerun_from_file_reproduces(tmp_path):
 
 def test_not_converged_exit_status(tmp_path):
     out = tmp_path / "bad.h5"
-    r = cli("periodic", *GEN, "--pressures", "1e-2", "--output", str(out),
-            "-tao_type", "blmvm", "-tao_max_it", "2")
+    r = cli(
+        "periodic",
+        *GEN,
+        "--pressures",
+        "1e-2",
+        "--output",
+        str(out),
+        "-tao_type",
+        "blmvm",
+        "-tao_max_it",
+        "2",
+    )
     assert r.returncode == 1
     assert "did NOT converge" in r.stderr
     with h5py.File(out) as f:
@@ -77,8 +127,13 @@ def _bad_inputs(tmp):
         "--modulus": ["--heights", str(tmp / "ok.npy"), "--modulus", "-1", *base],
         "--length": ["--heights", str(tmp / "ok.npy"), "--length", "0", *base],
         "--pressures": ["--heights", str(tmp / "ok.npy"), "--pressures", "1e-3,-2"],
-        "unknown or unbounded TAO type": ["--heights", str(tmp / "ok.npy"), *base,
-                                          "-tao_type", "nosuch"],
+        "unknown or unbounded TAO type": [
+            "--heights",
+            str(tmp / "ok.npy"),
+            *base,
+            "-tao_type",
+            "nosuch",
+        ],
     }
 
 
@@ -95,13 +150,29 @@ def test_bad_input_one_line_no_output(tmp_path):
 
 def test_unwritable_output_and_atomic_replace(tmp_path):
     np.save(tmp_path / "ok.npy", np.random.default_rng(0).standard_normal((16, 16)))
-    r = cli("periodic", "--heights", str(tmp_path / "ok.npy"), "--pressures", "1e-3",
-            "--output", str(tmp_path / "no" / "such" / "dir.h5"))
+    r = cli(
+        "periodic",
+        "--heights",
+        str(tmp_path / "ok.npy"),
+        "--pressures",
+        "1e-3",
+        "--output",
+        str(tmp_path / "no" / "such" / "dir.h5"),
+    )
     assert r.returncode == 2 and "does not exist" in r.stderr
     out = tmp_path / "keep.h5"
     out.write_bytes(b"previous result")
-    r = cli("periodic", "--heights", str(tmp_path / "ok.npy"), "--pressures", "1e-3",
-            "--output", str(out), "-tao_type", "nosuch")
+    r = cli(
+        "periodic",
+        "--heights",
+        str(tmp_path / "ok.npy"),
+        "--pressures",
+        "1e-3",
+        "--output",
+        str(out),
+        "-tao_type",
+        "nosuch",
+    )
     assert r.returncode == 2
     assert out.read_bytes() == b"previous result"
 
@@ -109,9 +180,23 @@ def test_unwritable_output_and_atomic_replace(tmp_path):
 def test_help_documents_options():
     r = cli("periodic", "--help")
     assert r.returncode == 0
-    for opt in ("--heights", "--grid", "--hurst", "--rms-slope", "--rms-height",
-                "--rolloff-ratio", "--cutoff-ratio", "--seed", "--length", "--modulus",
-                "--pressures", "--output", "--fields", "--plot", "--stiffness"):
+    for opt in (
+        "--heights",
+        "--grid",
+        "--hurst",
+        "--rms-slope",
+        "--rms-height",
+        "--rolloff-ratio",
+        "--cutoff-ratio",
+        "--seed",
+        "--length",
+        "--modulus",
+        "--pressures",
+        "--output",
+        "--fields",
+        "--plot",
+        "--stiffness",
+    ):
         assert opt in r.stdout
     r = cli("punch", "--help")
     assert r.returncode == 0
@@ -119,8 +204,10 @@ def test_help_documents_options():
         assert opt in r.stdout
 
 
-@pytest.mark.parametrize("ranks, solver, rtol", [
-    (2, [], 1e-8), (3, [], 1e-8), (2, ["-tao_type", "bqnls", "-tao_gatol", "1e-7"], 1e-7)])
+@pytest.mark.parametrize(
+    "ranks, solver, rtol",
+    [(2, [], 1e-8), (3, [], 1e-8), (2, ["-tao_type", "bqnls", "-tao_gatol", "1e-7"], 1e-7)],
+)
 def test_mpi_matches_serial(tmp_path, ranks, solver, rtol):
     """Same surface for any rank count; mean gap to ``rtol``, area to two pixels (n = 64).
 
@@ -150,8 +237,19 @@ def test_mpi_matches_serial(tmp_path, ranks, solver, rtol):
         assert np.all(np.abs(p["area_fraction"][:] - s["area_fraction"][:]) * 64**2 <= 2)
 
 
-PUNCH = ["punch", "--grid", "32", "--hurst", "0.7", "--rms-height", "1e-3", "--seed", "2",
-         "--cutoff-ratio", "8"]
+PUNCH = [
+    "punch",
+    "--grid",
+    "32",
+    "--hurst",
+    "0.7",
+    "--rms-height",
+    "1e-3",
+    "--seed",
+    "2",
+    "--cutoff-ratio",
+    "8",
+]
 
 
 def test_punch_run_schema(tmp_path):
@@ -159,9 +257,20 @@ def test_punch_run_schema(tmp_path):
     r = cli(*PUNCH, "--approaches", "1e-3,3e-3", "--output", str(out), "--stiffness")
     assert r.returncode == 0, r.stderr
     with h5py.File(out) as f:
-        for name in ("approach", "force", "nominal_pressure", "area_fraction",
-                     "total_stiffness", "interfacial_stiffness", "iterations", "solve_time",
-                     "converged", "tao_reason", "max_pressure", "stiffness"):
+        for name in (
+            "approach",
+            "force",
+            "nominal_pressure",
+            "area_fraction",
+            "total_stiffness",
+            "interfacial_stiffness",
+            "iterations",
+            "solve_time",
+            "converged",
+            "tao_reason",
+            "max_pressure",
+            "stiffness",
+        ):
             assert f[name].shape == (2,), name
         assert f.attrs["geometry"] == "punch" and f.attrs["complete"]
         assert np.array_equal(f["stiffness"][:], f["interfacial_stiffness"][:])
@@ -217,15 +326,32 @@ def test_interrupted_sweep_resumes_without_recomputing(tmp_path):
 
     from conftest import ROOT
 
-    args = ["periodic", "--grid", "256", "--hurst", "0.7", "--rms-slope", "0.1", "--seed", "3",
-            "--sweep", "16", "-tao_type", "tron"]
+    args = [
+        "periodic",
+        "--grid",
+        "256",
+        "--hurst",
+        "0.7",
+        "--rms-slope",
+        "0.1",
+        "--seed",
+        "3",
+        "--sweep",
+        "16",
+        "-tao_type",
+        "tron",
+    ]
     whole = tmp_path / "whole.h5"
     assert cli(*args, "--output", str(whole)).returncode == 0
     out = tmp_path / "cut.h5"
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    proc = subprocess.Popen([sys.executable, "-m", "petsc_contact.cli", *args, "--output",
-                             str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env=env)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "petsc_contact.cli", *args, "--output", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
     rows = 0
     for line in proc.stdout:
         rows += "/16 " in line

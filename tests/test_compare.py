@@ -4,18 +4,32 @@ import csv
 
 import h5py
 import numpy as np
-
 from conftest import ROOT, cli
 
 
 def test_compare_command(tmp_path):
     out = tmp_path / "cmp.h5"
-    r = cli("compare", "--grid", "64", "--hurst", "0.7", "--rms-slope", "0.1", "--seed", "2",
-            "--pressure", "3e-3", "--solvers", f"cg,pk,tron,{ROOT / 'options' / 'bnls.opts'}",
-            "--output", str(out))
+    r = cli(
+        "compare",
+        "--grid",
+        "64",
+        "--hurst",
+        "0.7",
+        "--rms-slope",
+        "0.1",
+        "--seed",
+        "2",
+        "--pressure",
+        "3e-3",
+        "--solvers",
+        f"cg,pk,tron,{ROOT / 'options' / 'bnls.opts'}",
+        "--output",
+        str(out),
+    )
     assert r.returncode == 0, r.stdout + r.stderr
     assert r.stdout.count("CONVERGED_GATOL") == 4
-    rows = list(csv.DictReader(open(tmp_path / "cmp.csv")))
+    with open(tmp_path / "cmp.csv") as table:
+        rows = list(csv.DictReader(table))
     assert [row["solver"] for row in rows][:3] == ["cg", "pk", "tron"]
     assert (tmp_path / "cmp.png").stat().st_size > 1000
     with h5py.File(out) as f:
@@ -38,14 +52,42 @@ def test_compare_command(tmp_path):
 
 def test_compare_time_limit_and_bad_solver(tmp_path):
     out = tmp_path / "cmp.h5"
-    r = cli("compare", "--grid", "64", "--hurst", "0.7", "--rms-slope", "0.1", "--pressure",
-            "3e-3", "--solvers", "bncg", "--time-limit", "0", "--output", str(out))
+    r = cli(
+        "compare",
+        "--grid",
+        "64",
+        "--hurst",
+        "0.7",
+        "--rms-slope",
+        "0.1",
+        "--pressure",
+        "3e-3",
+        "--solvers",
+        "bncg",
+        "--time-limit",
+        "0",
+        "--output",
+        str(out),
+    )
     assert r.returncode == 1, r.stderr
     assert "time limit" in r.stdout
     with h5py.File(out) as f:
         assert not f["bncg"].attrs["converged"]
-    r = cli("compare", "--grid", "64", "--hurst", "0.7", "--rms-slope", "0.1", "--pressure",
-            "3e-3", "--solvers", "no/such.opts", "--output", str(out))
+    r = cli(
+        "compare",
+        "--grid",
+        "64",
+        "--hurst",
+        "0.7",
+        "--rms-slope",
+        "0.1",
+        "--pressure",
+        "3e-3",
+        "--solvers",
+        "no/such.opts",
+        "--output",
+        str(out),
+    )
     assert r.returncode == 2 and "does not exist" in r.stderr
 
 
@@ -54,16 +96,44 @@ def test_compare_stall_limit(tmp_path):
     is stopped and reported as such; BNCG's residual is not monotone, so a one-iteration
     window stops it long before it converges (about 100 iterations here)."""
     out = tmp_path / "cmp.h5"
-    r = cli("compare", "--grid", "64", "--hurst", "0.7", "--rms-slope", "0.1", "--pressure",
-            "3e-3", "--solvers", "bncg", "--stall-iterations", "1", "--output", str(out))
+    r = cli(
+        "compare",
+        "--grid",
+        "64",
+        "--hurst",
+        "0.7",
+        "--rms-slope",
+        "0.1",
+        "--pressure",
+        "3e-3",
+        "--solvers",
+        "bncg",
+        "--stall-iterations",
+        "1",
+        "--output",
+        str(out),
+    )
     assert r.returncode == 1, r.stderr
     with h5py.File(out) as f:
         bncg = f["bncg"]
         assert not bncg.attrs["converged"] and "stalled" in bncg.attrs["reason"]
         assert bncg.attrs["iterations"] < 50
         assert bncg["natural_residual"][-1] > 1e-6  # stopped far from its tolerance
-    r = cli("compare", "--grid", "64", "--hurst", "0.7", "--rms-slope", "0.1", "--pressure",
-            "3e-3", "--stall-iterations", "-1", "--output", str(out))
+    r = cli(
+        "compare",
+        "--grid",
+        "64",
+        "--hurst",
+        "0.7",
+        "--rms-slope",
+        "0.1",
+        "--pressure",
+        "3e-3",
+        "--stall-iterations",
+        "-1",
+        "--output",
+        str(out),
+    )
     assert r.returncode == 2 and "must not be negative" in r.stderr
 
 
@@ -72,8 +142,21 @@ def test_compare_under_mpi_matches_serial(tmp_path):
     gap as in serial.  Both references are converged to 1e-12 p0 rms, which bounds their
     mean gaps' difference near 1e-12 relative (measured: 2e-16); 1e-10 leaves room for FFT
     rounding that differs between the serial and the distributed transform."""
-    args = ("compare", "--grid", "64", "--hurst", "0.7", "--rms-slope", "0.1", "--seed", "3",
-            "--pressure", "3e-3", "--solvers", "cg")
+    args = (
+        "compare",
+        "--grid",
+        "64",
+        "--hurst",
+        "0.7",
+        "--rms-slope",
+        "0.1",
+        "--seed",
+        "3",
+        "--pressure",
+        "3e-3",
+        "--solvers",
+        "cg",
+    )
     serial = cli(*args, "--output", str(tmp_path / "serial.h5"))
     parallel = cli(*args, "--output", str(tmp_path / "mpi.h5"), mpi=2, timeout=120)
     assert serial.returncode == 0 and parallel.returncode == 0, parallel.stderr

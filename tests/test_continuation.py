@@ -86,8 +86,9 @@ def test_held_operators_are_the_held_compliance():
     carry ``1/(E*|q|/2 + K)``; in the Schur form the preconditioner is the exact ``1/K``."""
     grid = Grid(32, 2.0, MPI.COMM_SELF)
     fft = make_fft(grid)
-    heights = self_affine(grid, fft, hurst=0.7, rolloff_ratio=1, cutoff_ratio=16, seed=1,
-                          rms_slope=0.1)
+    heights = self_affine(
+        grid, fft, hurst=0.7, rolloff_ratio=1, cutoff_ratio=16, seed=1, rms_slope=0.1
+    )
     problem = PeriodicProblem(grid, fft, heights, 3.0)
     q = wavevector_magnitude(grid, fft)
     expected = held_compliance(q, 3.0, 0.7) / grid.size
@@ -107,8 +108,9 @@ def test_held_operators_are_the_held_compliance():
 def paper_band():
     """A 128^2 surface with roughness down to two pixels (L/lambda_1 = n/2)."""
     grid = Grid(128, 1.0, MPI.COMM_SELF)
-    return self_affine(grid, make_fft(grid), hurst=0.7, rolloff_ratio=1, cutoff_ratio=64,
-                       seed=3, rms_slope=0.1)
+    return self_affine(
+        grid, make_fft(grid), hurst=0.7, rolloff_ratio=1, cutoff_ratio=64, seed=3, rms_slope=0.1
+    )
 
 
 def test_sweep_agrees_with_cold_solves(paper_band):
@@ -117,7 +119,7 @@ def test_sweep_agrees_with_cold_solves(paper_band):
     here), the areas to the pixel, the stiffness to 1e-8 (its CG tolerance gives 2e-10)."""
     pressures = list(np.geomspace(1e-4, 3e-2, 6))
     warm = periodic_contact(paper_band, 1.0, 1.0, pressures, stiffness=True)
-    for p0, step in zip(pressures, warm):
+    for p0, step in zip(pressures, warm, strict=True):
         (cold,) = periodic_contact(paper_band, 1.0, 1.0, [p0], stiffness=True)
         assert step.converged and cold.converged
         w, c = step.scalars, cold.scalars

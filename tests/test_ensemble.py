@@ -3,20 +3,22 @@
 import h5py
 import numpy as np
 import pytest
-
 from conftest import cli
+
 from petsc_contact.ensemble import ensemble_statistics, power_law_fit
 
 
 def test_power_law_fit_exact_and_noisy():
     p = np.geomspace(1e-6, 1e-3, 10)
-    fit = power_law_fit(p, 3.0 * p ** 0.62, points=4)
+    fit = power_law_fit(p, 3.0 * p**0.62, points=4)
     assert fit.alpha == pytest.approx(0.62, rel=1e-12) and fit.alpha_error < 1e-12
     assert fit.prefactor == pytest.approx(3.0, rel=1e-10)
     # log-normal noise of 5%: the fitted slopes scatter by about the reported error
     rng = np.random.default_rng(0)
-    fits = [power_law_fit(p, p ** 0.6 * np.exp(0.05 * rng.standard_normal(p.size)), points=6)
-            for _ in range(400)]
+    fits = [
+        power_law_fit(p, p**0.6 * np.exp(0.05 * rng.standard_normal(p.size)), points=6)
+        for _ in range(400)
+    ]
     alphas = np.array([f.alpha for f in fits])
     assert alphas.mean() == pytest.approx(0.6, abs=0.01)
     assert np.median([f.alpha_error for f in fits]) == pytest.approx(alphas.std(), rel=0.3)
@@ -34,8 +36,23 @@ def test_ensemble_statistics_skip_failed_steps():
 
 def test_ensemble_command(tmp_path):
     out = tmp_path / "ens.h5"
-    args = ["ensemble", "--grid", "32", "--hurst", "0.7", "--rms-slope", "0.1", "--seeds", "0-3",
-            "--pressures", "1e-3,1e-2", "--stiffness", "--output", str(out), "--quiet"]
+    args = [
+        "ensemble",
+        "--grid",
+        "32",
+        "--hurst",
+        "0.7",
+        "--rms-slope",
+        "0.1",
+        "--seeds",
+        "0-3",
+        "--pressures",
+        "1e-3,1e-2",
+        "--stiffness",
+        "--output",
+        str(out),
+        "--quiet",
+    ]
     r = cli(*args)
     assert r.returncode == 0, r.stderr
     with h5py.File(out) as f:
@@ -63,12 +80,31 @@ def test_experiment_command(tmp_path):
     table = tmp_path / "ps.csv"
     np.savetxt(table, np.column_stack([p, s]), delimiter=",", header="p, s")
     out = tmp_path / "exp.h5"
-    r = cli("experiment", "--table", str(table), "--modulus", str(e), "--thickness", str(d),
-            "--output", str(out), "--quiet")
+    r = cli(
+        "experiment",
+        "--table",
+        str(table),
+        "--modulus",
+        str(e),
+        "--thickness",
+        str(d),
+        "--output",
+        str(out),
+        "--quiet",
+    )
     assert r.returncode == 0, r.stderr
     with h5py.File(out) as f:
         assert np.allclose(f["stiffness"][1:-1], p[1:-1] / u0, rtol=5e-3)
     (tmp_path / "bad.csv").write_text("1,2,3\n4,5,6\n7,8,9\n")
-    r = cli("experiment", "--table", str(tmp_path / "bad.csv"), "--modulus", "1",
-            "--thickness", "1", "--output", str(out))
+    r = cli(
+        "experiment",
+        "--table",
+        str(tmp_path / "bad.csv"),
+        "--modulus",
+        "1",
+        "--thickness",
+        "1",
+        "--output",
+        str(out),
+    )
     assert r.returncode == 2 and "two finite columns" in r.stderr

@@ -1,7 +1,6 @@
 """The parallel FFT backends against numpy's serial transform, under mpiexec."""
 
 import pytest
-
 from conftest import python
 
 SCRIPT = r"""
@@ -43,8 +42,10 @@ assert abs(quadratic / grid.sum(np.vdot(x, out))[0] - 1) <= 1e-13
 """
 
 
-@pytest.mark.parametrize("ranks, n, backend", [(2, 64, "FFTWMPI"), (3, 96, "FFTWMPI"),
-                                               (3, 30, "FFTWMPI"), (3, 64, "SlabFFT")])
+@pytest.mark.parametrize(
+    "ranks, n, backend",
+    [(2, 64, "FFTWMPI"), (3, 96, "FFTWMPI"), (3, 30, "FFTWMPI"), (3, 64, "SlabFFT")],
+)
 def test_parallel_fft_matches_numpy(ranks, n, backend):
     """FFTW-MPI (spectrum transposed) where FFTW's row split is the grid's; mpi4py-fft when
     it is not (n = 64 on 3 ranks: FFTW splits 22/22/20, the grid 22/21/21).  Rounding of a

@@ -12,8 +12,7 @@ from petsc_contact.surface import self_affine
 
 TIGHT = ["-tao_gatol", "1e-11"]
 PK = ["-tao_type", "python", "-tao_python_type", "petsc_contact.cg.PolonskyKeer"]
-SOLVERS = {"default": [], "tron": ["-tao_type", "tron"], "bnls": ["-tao_type", "bnls"],
-           "pk": PK}
+SOLVERS = {"default": [], "tron": ["-tao_type", "tron"], "bnls": ["-tao_type", "bnls"], "pk": PK}
 N_WAVE = 256
 DELTA, LENGTH, MODULUS = 0.01, 1.0, 2.0
 P_STAR = np.pi * MODULUS * DELTA / LENGTH  # Westergaard full-contact pressure
@@ -31,16 +30,22 @@ def westergaard(x, p0):
     s2 = np.sin(np.pi * half / LENGTH) ** 2
     inside = np.abs(xs) < half
     p = np.zeros_like(x)
-    p[inside] = 2 * p0 * np.cos(np.pi * xs[inside] / LENGTH) / s2 * np.sqrt(
-        s2 - np.sin(np.pi * xs[inside] / LENGTH) ** 2)
+    p[inside] = (
+        2
+        * p0
+        * np.cos(np.pi * xs[inside] / LENGTH)
+        / s2
+        * np.sqrt(s2 - np.sin(np.pi * xs[inside] / LENGTH) ** 2)
+    )
     return half, p
 
 
 @pytest.fixture(scope="module")
 def rough():
     grid = Grid(128, 1.0)
-    return self_affine(grid, make_fft(grid), hurst=0.7, rolloff_ratio=2, cutoff_ratio=32,
-                       seed=7, rms_slope=0.1)
+    return self_affine(
+        grid, make_fft(grid), hurst=0.7, rolloff_ratio=2, cutoff_ratio=32, seed=7, rms_slope=0.1
+    )
 
 
 @pytest.mark.parametrize("solver", ["default", "tron", "pk"])
@@ -53,10 +58,16 @@ def test_westergaard(solver):
     """
     h, x = wave()
     fracs = [0.05, 0.3, 0.7]
-    steps = periodic_contact(h, LENGTH, MODULUS, [f * P_STAR for f in fracs],
-                             options=[*SOLVERS[solver], *TIGHT], fields=True)
+    steps = periodic_contact(
+        h,
+        LENGTH,
+        MODULUS,
+        [f * P_STAR for f in fracs],
+        options=[*SOLVERS[solver], *TIGHT],
+        fields=True,
+    )
     pix = LENGTH / N_WAVE
-    for f, step in zip(fracs, steps):
+    for f, step in zip(fracs, steps, strict=True):
         assert step.converged, step.scalars["verification"]
         half, p_exact = westergaard(x, f * P_STAR)
         contact_px = np.count_nonzero(step.gap[:, 0] == 0)
@@ -75,7 +86,7 @@ def test_identities_rough(rough):
     grid = Grid(128, 1.0)
     fft = make_fft(grid)
     k = FourierOperator(grid, fft, periodic_stiffness(wavevector_magnitude(grid, fft), 1.0))
-    for p0, step in zip(p0s, steps):
+    for p0, step in zip(p0s, steps, strict=True):
         s = step.scalars
         assert step.converged
         # force balance: the mean pressure on the contact set is p0
@@ -83,7 +94,7 @@ def test_identities_rough(rough):
         # complementarity (Tamaas-style): contact pixels have g = 0, open ones a pressure
         # residual, so Cauchy-Schwarz bounds sum(p+ g) by ||p_res|| ||g|| and the measure by
         # gatol * rms(g) / h_rms (gatol bounds the rms residual in units of p0)
-        rms_gap = np.sqrt(np.mean(step.gap ** 2))
+        rms_gap = np.sqrt(np.mean(step.gap**2))
         assert 0 <= s["complementarity"] <= 1e-11 * rms_gap / rough.std()
         assert s["min_gap"] >= 0
         # any pixel's pressure residual is bounded by the projected gradient's 2-norm,
@@ -94,8 +105,7 @@ def test_identities_rough(rough):
         energy = 0.5 * np.mean(u * k.apply_array(u, np.empty_like(u)))
         assert s["elastic_energy"] == pytest.approx(energy, rel=1e-9)
         # pressure equals the stiffness applied to the displacement, plus p0
-        assert np.allclose(step.pressure, k.apply_array(u, np.empty_like(u)) + p0,
-                           atol=1e-9 * p0)
+        assert np.allclose(step.pressure, k.apply_array(u, np.empty_like(u)) + p0, atol=1e-9 * p0)
 
 
 def test_work_equals_energy(rough):
@@ -116,8 +126,9 @@ def test_full_contact_limit(rough):
     h = rough - rough.mean()
     kh = k.apply_array(h, np.empty_like(h))
     p_full = -kh.min()
-    steps = periodic_contact(rough, 1.0, 1.0, [0.98 * p_full, 1.5 * p_full],
-                             options=TIGHT, fields=True)
+    steps = periodic_contact(
+        rough, 1.0, 1.0, [0.98 * p_full, 1.5 * p_full], options=TIGHT, fields=True
+    )
     below, above = steps
     assert below.scalars["area_fraction"] < 1.0
     assert above.converged
@@ -150,8 +161,9 @@ def test_fourier_ksp_preconditioner(rough, tao_type):
     128^2: about 5x fewer; asserted: 2x)."""
     steps = {}
     for name, extra in (("fourier", []), ("none", ["-petsc_contact_no_ksp_pc"])):
-        (steps[name],) = periodic_contact(rough, 1.0, 1.0, [2e-3],
-                                          options=["-tao_type", tao_type, *extra])
+        (steps[name],) = periodic_contact(
+            rough, 1.0, 1.0, [2e-3], options=["-tao_type", tao_type, *extra]
+        )
         assert steps[name].converged, steps[name].scalars["verification"]
     fourier, none = steps["fourier"].scalars, steps["none"].scalars
     assert fourier["preconditioner_applications"] > 0 == none["preconditioner_applications"]

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
+from petsc_contact.fft import make_fft
 from petsc_contact.greens import hockney_kernel, love_pixel_displacement
 from petsc_contact.grid import Grid
-from petsc_contact.fft import make_fft
 from petsc_contact.operator import PaddedOperator
 from petsc_contact.punch import flat_punch_stiffness, interfacial_stiffness, punch_contact
 from petsc_contact.surface import self_affine
@@ -25,8 +25,7 @@ def test_padded_operator_against_direct_summation():
     x = np.repeat(np.arange(n) * a, n)
     y = np.tile(np.arange(n) * a, n)
     # direct summation of the closed form, point by point (no FFT, no padding)
-    dense = love_pixel_displacement(x[:, None] - x[None, :], y[:, None] - y[None, :], a,
-                                    modulus)
+    dense = love_pixel_displacement(x[:, None] - x[None, :], y[:, None] - y[None, :], a, modulus)
     rng = np.random.default_rng(1)
     for _ in range(3):  # repeated applications must not depend on leftover buffer contents
         v = rng.standard_normal((n, n))
@@ -54,14 +53,14 @@ def test_hertz():
     radius, modulus = 1.0, 2.0
     deltas = [0.02, 0.05, 0.09]
     steps = punch_contact(-r2 / (2 * radius), 1.0, modulus, approaches=deltas, fields=True)
-    for d, step in zip(deltas, steps):
+    for d, step in zip(deltas, steps, strict=True):
         s = step.scalars
         assert step.converged, s["verification"]
         a = np.sqrt(radius * d)
-        force = 4 / 3 * modulus * np.sqrt(radius) * d ** 1.5
+        force = 4 / 3 * modulus * np.sqrt(radius) * d**1.5
         assert np.sqrt(s["area_fraction"] / np.pi) == pytest.approx(a, rel=0.01)
         assert s["force"] == pytest.approx(force, rel=0.01)
-        p_hertz = 3 * force / (2 * np.pi * a * a) * np.sqrt(np.clip(1 - r2 / a ** 2, 0, None))
+        p_hertz = 3 * force / (2 * np.pi * a * a) * np.sqrt(np.clip(1 - r2 / a**2, 0, None))
         inner = r2 < (0.9 * a) ** 2
         err = np.sqrt(np.mean((step.pressure[inner] - p_hertz[inner]) ** 2))
         assert err < 0.01 * p_hertz.max()
@@ -77,7 +76,7 @@ def test_flat_square_punch():
     assert s["force"] / 1e-3 == pytest.approx(flat_punch_stiffness(1.0, 1.0), rel=0.01)
     assert s["total_stiffness"] == pytest.approx(s["force"] / 1e-3, rel=1e-8)
     assert s["flat_punch_stiffness"] == pytest.approx(s["total_stiffness"], rel=1e-8)
-    line = step.pressure[N // 2, N // 2:]
+    line = step.pressure[N // 2, N // 2 :]
     assert np.all(np.diff(line) > 0)
     assert s["max_pressure"] == pytest.approx(step.pressure[0, 0], rel=1e-12)  # the corner
 
@@ -85,11 +84,12 @@ def test_flat_square_punch():
 def test_flat_circular_punch():
     """Masked disk footprint: stiffness within 1% of 2 E* r (r from the pixel area)."""
     x = centres(N)
-    disk = x[:, None] ** 2 + x[None, :] ** 2 < 0.45 ** 2
+    disk = x[:, None] ** 2 + x[None, :] ** 2 < 0.45**2
     modulus = 3.0
-    (step,) = punch_contact(np.zeros((N, N)), 1.0, modulus, approaches=[1e-3], fields=True,
-                            footprint=disk, beta=1.0)
-    r = np.sqrt(disk.sum() / N ** 2 / np.pi)
+    (step,) = punch_contact(
+        np.zeros((N, N)), 1.0, modulus, approaches=[1e-3], fields=True, footprint=disk, beta=1.0
+    )
+    r = np.sqrt(disk.sum() / N**2 / np.pi)
     assert step.converged
     assert step.scalars["total_stiffness"] == pytest.approx(2 * modulus * r, rel=0.01)
     assert np.all(step.pressure[~disk] == 0)
@@ -99,8 +99,9 @@ def test_flat_circular_punch():
 @pytest.fixture(scope="module")
 def rough():
     grid = Grid(64, 1.0)
-    return self_affine(grid, make_fft(grid), hurst=0.7, rolloff_ratio=1, cutoff_ratio=16,
-                       seed=3, rms_height=1e-3)
+    return self_affine(
+        grid, make_fft(grid), hurst=0.7, rolloff_ratio=1, cutoff_ratio=16, seed=3, rms_height=1e-3
+    )
 
 
 def test_stiffness_matches_force_difference(rough):
@@ -110,18 +111,20 @@ def test_stiffness_matches_force_difference(rough):
     steps = punch_contact(rough, 1.0, 1.0, approaches=[d - eps, d, d + eps])
     assert all(s.converged for s in steps)
     lo, mid, hi = (s.scalars for s in steps)
-    assert mid["total_stiffness"] == pytest.approx((hi["force"] - lo["force"]) / (2 * eps),
-                                                   rel=0.02)
+    assert mid["total_stiffness"] == pytest.approx(
+        (hi["force"] - lo["force"]) / (2 * eps), rel=0.02
+    )
     k_int = interfacial_stiffness(mid["total_stiffness"], mid["flat_punch_stiffness"])
     assert mid["interfacial_stiffness"] == pytest.approx(k_int, rel=1e-12)
-    assert 1 / k_int == pytest.approx(1 / mid["total_stiffness"]
-                                      - 1 / mid["flat_punch_stiffness"], rel=1e-12)
+    assert 1 / k_int == pytest.approx(
+        1 / mid["total_stiffness"] - 1 / mid["flat_punch_stiffness"], rel=1e-12
+    )
 
 
 def test_load_control_reaches_force(rough):
     forces = [1e-5, 1e-4, 1e-3]
     steps = punch_contact(rough, 1.0, 1.0, forces=forces)
-    for f, step in zip(forces, steps):
+    for f, step in zip(forces, steps, strict=True):
         s = step.scalars
         assert step.converged, s["verification"]
         assert s["force"] == pytest.approx(f, rel=1e-6)

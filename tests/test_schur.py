@@ -10,8 +10,9 @@ from petsc_contact.surface import self_affine
 
 def problem(n=48, p0=1e-3):
     grid = Grid(n, 1.3)
-    h = self_affine(grid, make_fft(grid), hurst=0.7, rolloff_ratio=2, cutoff_ratio=8, seed=5,
-                    rms_slope=0.2)
+    h = self_affine(
+        grid, make_fft(grid), hurst=0.7, rolloff_ratio=2, cutoff_ratio=8, seed=5, rms_slope=0.2
+    )
     pb = PeriodicProblem(grid, make_fft(grid), h, 2.0)
     pb.set_pressure(p0)
     return grid, pb

@@ -14,8 +14,15 @@ N = 64
 
 def rough(hurst=0.7, slope=0.1, seed=1):
     grid = Grid(N, 1.0)
-    return self_affine(grid, make_fft(grid), hurst=hurst, rolloff_ratio=2, cutoff_ratio=16,
-                       seed=seed, rms_slope=slope)
+    return self_affine(
+        grid,
+        make_fft(grid),
+        hurst=hurst,
+        rolloff_ratio=2,
+        cutoff_ratio=16,
+        seed=seed,
+        rms_slope=slope,
+    )
 
 
 def solve(h, p0, length=1.0, modulus=1.0, options=()):
@@ -31,8 +38,7 @@ def test_offset_heights_change_nothing():
     assert b["area_fraction"] == a["area_fraction"]
 
 
-@pytest.mark.parametrize("length, modulus", [(1e-6, 1.0), (1e3, 1.0), (1.0, 1e-6),
-                                             (1.0, 1e9)])
+@pytest.mark.parametrize("length, modulus", [(1e-6, 1.0), (1e3, 1.0), (1.0, 1e-6), (1.0, 1e9)])
 def test_scaling_invariance(length, modulus):
     """Heights scaled with L and pressures with E*: u_bar/L and the area are unchanged."""
     h = rough()
@@ -40,8 +46,9 @@ def test_scaling_invariance(length, modulus):
     s = solve(h * length, 1e-2 * modulus, length, modulus)
     assert s["mean_gap"] / length == pytest.approx(ref["mean_gap"], rel=1e-7)
     assert s["area_fraction"] == ref["area_fraction"]
-    assert s["elastic_energy"] / (modulus * length) == pytest.approx(ref["elastic_energy"],
-                                                                     rel=1e-6)
+    assert s["elastic_energy"] / (modulus * length) == pytest.approx(
+        ref["elastic_energy"], rel=1e-6
+    )
 
 
 def test_flat_surface_is_full_contact():
@@ -55,8 +62,7 @@ def test_flat_surface_is_full_contact():
 def test_extreme_spectra(hurst, slope, solver):
     """H near 0 and 1, slopes 0.01 and 1, from a single-asperity load to half contact."""
     h = rough(hurst, slope)
-    steps = periodic_contact(h, 1.0, 1.0, [slope * 1e-6, slope * 1e-2, slope * 0.3],
-                             options=solver)
+    steps = periodic_contact(h, 1.0, 1.0, [slope * 1e-6, slope * 1e-2, slope * 0.3], options=solver)
     assert all(s.converged for s in steps), [s.scalars["verification"] for s in steps]
     area = [s.scalars["area_fraction"] for s in steps]
     assert area[0] < area[1] < area[2]

@@ -22,9 +22,10 @@ def test_westergaard_mean_gap_and_stiffness():
     x = np.arange(N) * LENGTH / N
     h = np.repeat(DELTA * np.cos(2 * np.pi * x / LENGTH)[:, None], N, axis=1)
     fracs = np.array([0.05, 0.2, 0.5, 0.8])
-    steps = periodic_contact(h, LENGTH, MODULUS, fracs * P_STAR,
-                             options=["-tao_gatol", "1e-11"], stiffness=True)
-    for f, step in zip(fracs, steps):
+    steps = periodic_contact(
+        h, LENGTH, MODULUS, fracs * P_STAR, options=["-tao_gatol", "1e-11"], stiffness=True
+    )
+    for f, step in zip(fracs, steps, strict=True):
         s = step.scalars
         assert step.converged
         assert s["mean_gap"] / DELTA == pytest.approx(1 - f + f * np.log(f), abs=1e-4)
@@ -36,8 +37,9 @@ def test_exact_stiffness_matches_sweep_derivative():
     to 3% (the contact set changes by a few pixels per step; the difference scheme is
     second order)."""
     grid = Grid(128, 1.0)
-    h = self_affine(grid, make_fft(grid), hurst=0.7, rolloff_ratio=2, cutoff_ratio=32,
-                    seed=5, rms_slope=0.1)
+    h = self_affine(
+        grid, make_fft(grid), hurst=0.7, rolloff_ratio=2, cutoff_ratio=32, seed=5, rms_slope=0.1
+    )
     p0 = np.geomspace(3e-3, 3.3e-3, 11)
     steps = periodic_contact(h, 1.0, 1.0, p0, stiffness=True)
     assert all(s.converged for s in steps)

@@ -21,8 +21,13 @@ def make(n=128, **kw):
 def sampling_sigma(grid, fft, hurst, rolloff, cutoff, slope):
     """Relative std of the realised h_rms^2 (or h'_rms^2): each Hermitian pair of modes
     contributes c_q |z_q|^2 twice with |z|^2 ~ Exp(1), so var = sum_all 2 c_q^2."""
-    q = np.sqrt(np.add.outer(np.fft.fftfreq(grid.n) ** 2, np.fft.fftfreq(grid.n) ** 2)) \
-        * grid.n * 2 * np.pi / grid.length
+    q = (
+        np.sqrt(np.add.outer(np.fft.fftfreq(grid.n) ** 2, np.fft.fftfreq(grid.n) ** 2))
+        * grid.n
+        * 2
+        * np.pi
+        / grid.length
+    )
     q0 = 2 * np.pi / grid.length
     c = psd_shape(q, q0, q0 * rolloff, q0 * cutoff, hurst) * (q**2 if slope else 1)
     return np.sqrt(2 * np.sum(c**2)) / np.sum(c)
@@ -46,8 +51,9 @@ def test_rms_target_within_sampling_error(slope):
     target = 0.1 if slope else 0.01
     for seed in range(4):
         kw = {"rms_slope": target} if slope else {"rms_height": target}
-        h = self_affine(grid, fft, hurst=hurst, rolloff_ratio=rolloff, cutoff_ratio=cutoff,
-                        seed=seed, **kw)
+        h = self_affine(
+            grid, fft, hurst=hurst, rolloff_ratio=rolloff, cutoff_ratio=cutoff, seed=seed, **kw
+        )
         realised = rms_of(grid, fft, h, slope=slope)
         assert abs(realised**2 / target**2 - 1) < 4 * sigma, (seed, realised, sigma)
 
@@ -72,15 +78,21 @@ def test_psd_exponent(hurst):
 def test_realised_psd_matches_prescribed_level():
     """The radial average of C(q) equals the prescribed C0 (q/qr)^(-2-2H) on average."""
     n, hurst, rolloff, cutoff = 256, 0.7, 2, 64
-    grid, fft, h = make(n, hurst=hurst, rolloff_ratio=rolloff, cutoff_ratio=cutoff, seed=2,
-                        rms_height=1.0)
+    grid, fft, h = make(
+        n, hurst=hurst, rolloff_ratio=rolloff, cutoff_ratio=cutoff, seed=2, rms_height=1.0
+    )
     q, c = radial_psd(grid, fft, h)
     q0 = 2 * np.pi
     qm = wavevector_magnitude(grid, fft)
     shape_q = psd_shape(q, q0, rolloff * q0, cutoff * q0, hurst)
     # C0 from the target: h_rms^2 = C0 sum(shape) dq^2 over the full spectrum
-    full = psd_shape(np.sqrt(np.add.outer(np.fft.fftfreq(n) ** 2, np.fft.fftfreq(n) ** 2)) * n
-                     * q0, q0, rolloff * q0, cutoff * q0, hurst)
+    full = psd_shape(
+        np.sqrt(np.add.outer(np.fft.fftfreq(n) ** 2, np.fft.fftfreq(n) ** 2)) * n * q0,
+        q0,
+        rolloff * q0,
+        cutoff * q0,
+        hurst,
+    )
     c0 = 1.0 / (full.sum() * q0**2)
     band = (q > 4 * q0) & (q < cutoff * q0 * 0.9)
     ratio = c[band] / (c0 * shape_q[band])
@@ -88,8 +100,9 @@ def test_realised_psd_matches_prescribed_level():
     assert qm.shape == fft.spectrum.shape
 
 
-@pytest.mark.parametrize("bad", [dict(hurst=1.5), dict(rolloff_ratio=0.5),
-                                 dict(cutoff_ratio=100), dict(rms_slope=-1.0)])
+@pytest.mark.parametrize(
+    "bad", [dict(hurst=1.5), dict(rolloff_ratio=0.5), dict(cutoff_ratio=100), dict(rms_slope=-1.0)]
+)
 def test_bad_parameters(bad):
     with pytest.raises(ValueError):
         make(64, **bad)

@@ -72,7 +72,8 @@ def test_persson_stiffness_is_the_derivative(spectrum):
     p, dp = 0.05, 1e-5
     u = theory.persson_mean_gap(np.array([p - dp, p + dp]), q, c, 1.0)
     assert theory.persson_stiffness(p, q, c, 1.0) == pytest.approx(
-        -2 * dp / (u[1] - u[0]), rel=1e-4)
+        -2 * dp / (u[1] - u[0]), rel=1e-4
+    )
 
 
 def test_persson_scaling(spectrum):
@@ -80,7 +81,8 @@ def test_persson_scaling(spectrum):
     q, psd = spectrum
     c, p = 3.0, 2e-3
     assert theory.persson_mean_gap(p, q, c * c * psd, 1.0) == pytest.approx(
-        c * theory.persson_mean_gap(p / c, q, psd, 1.0), rel=1e-9)
+        c * theory.persson_mean_gap(p / c, q, psd, 1.0), rel=1e-9
+    )
 
 
 def test_block_correction_recovers_interfacial_stiffness():
@@ -108,4 +110,5 @@ def test_hertz_regime_against_the_punch_solver():
     heights = -(x[:, None] ** 2 + x[None, :] ** 2) / 2.0
     (step,) = punch_contact(heights, 1.0, 2.0, forces=[0.02])
     assert step.scalars["total_stiffness"] == pytest.approx(
-        float(theory.hertz_stiffness(0.02, 2.0, 1.0, 1.0)), rel=0.01)
+        float(theory.hertz_stiffness(0.02, 2.0, 1.0, 1.0)), rel=0.01
+    )

@@ -106,7 +106,7 @@ def main() -> None:
     for ratio, (hr, pcf, pcs, u0) in summary.items():
         print(
             f"L/lambda_r = {ratio:g}: q_r h_rms = {2 * np.pi * ratio * hr:.3g}, "
-            f"p_c/E* formula (P-oldEqno6) {pcf:.2e}, simulation crossover {pcs:.2e}, "
+            f"p_c/E* formula (paper Eq. 13) {pcf:.2e}, simulation crossover {pcs:.2e}, "
             f"u0/h_rms = {u0 / hr:.3f}"
         )
     print(f"wrote {args.output}.png and {args.output}.h5")

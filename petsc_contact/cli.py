@@ -345,7 +345,7 @@ def build_parser() -> argparse.ArgumentParser:
     cmp_.add_argument("--quiet", action="store_true", help="no table on standard output")
     exp = sub.add_parser(
         "experiment",
-        help="K(p) from a measured p(s) table (paper Eq. 7)",
+        help="K(p) from a measured p(s) table (paper Eq. C3)",
         description="Interfacial stiffness from a squeeze test of an elastic "
         "block of thickness d and effective modulus E' (paper "
         "section III): K* = dp/ds, K = K*/(1 - K* d/E').",
@@ -853,7 +853,7 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
 
 
 def run_experiment(args: argparse.Namespace) -> int:
-    """``petsc-contact experiment``: Eq. 7 on a measured ``p(s)`` table."""
+    """``petsc-contact experiment``: Eq. C3 on a measured ``p(s)`` table."""
     from .output import check_writable
     from .theory import block_corrected_stiffness
 

@@ -50,12 +50,12 @@ def plot_punch(path: str, steps: Sequence[dict[str, Any]]) -> None:
 
 
 def plot_experiment(path: str, pressure: np.ndarray, k_star: np.ndarray, k: np.ndarray) -> None:
-    """``K`` (Eq. 7) and the measured ``K* = dp/ds`` against pressure, log-log."""
+    """``K`` (paper Eq. C3) and the measured ``K* = dp/ds`` against pressure, log-log."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(5, 3.8), constrained_layout=True)
     ax.loglog(pressure, k_star, "s", mfc="none", label="$K^* = dp/ds$")
     ax.loglog(pressure, k, "o-", label="$K = K^*/(1 - K^* d/E')$")
-    ax.set(xlabel="$p$", ylabel="stiffness per area", title="experiment (paper Eq. 7)")
+    ax.set(xlabel="$p$", ylabel="stiffness per area", title="experiment (paper Eq. C3)")
     ax.legend()
     _finish(fig, (ax,), path)
 

@@ -1,4 +1,4 @@
-"""The periodic hard-wall contact as a bound-constrained QP in the gap (DESIGN.md section 3).
+"""The periodic hard-wall contact as a bound-constrained QP in the gap (docs/formulation.md).
 
 A rigid surface with heights ``h`` (peaks toward the elastic body) is pressed with nominal
 pressure ``p0`` onto an elastic half-space.  With the gap ``g >= 0`` as unknown,
@@ -295,7 +295,7 @@ class PeriodicProblem:
         return self.grid.max(float(self.heights.max())) - self.heights
 
     def full_contact_pressure(self) -> float:
-        """Nominal pressure at which contact becomes complete, ``-min(K h)`` (DESIGN.md 7)."""
+        """Nominal pressure at which contact becomes complete, ``-min(K h)``."""
         return -self._min_kh
 
     def stiffness_rounding_floor(self, p0: float) -> float:

@@ -3,7 +3,7 @@
 The punch face has heights ``h`` on an ``n x n`` footprint of side ``Lp`` (pixel ``a``);
 it is pressed by the rigid approach ``δ`` (measured from first touch) into a half-space of
 contact modulus ``E*``.  The unknown is the pressure ``p >= 0`` on the footprint, zero
-outside by construction; the dual QP (DESIGN.md section 3)
+outside by construction; the dual QP (docs/formulation.md)
 
     W(p) = a^2 [ 1/2 p^T G p - p^T (δ - s) ],   p >= 0,      s = max(h) - h,
 
@@ -38,18 +38,19 @@ from .grid import Grid
 from .operator import PaddedOperator
 from .output import check_finite
 from .periodic import VERIFY_FACTOR, Step
+from .reference import flat_punch
 from .solve import BoundSolver, Monitor, SolveInfo
 from .stiffness import punch_stiffness_exact
 from .validation import non_negative, positive
 
-PHARR_BETA = 1.012
+PHARR_BETA = flat_punch.SQUARE_BETA
 FORCE_RTOL = 1e-6
 MAX_NEWTON = 60
 
 
 def flat_punch_stiffness(modulus: float, area: float, beta: float = PHARR_BETA) -> float:
     """Pharr, Oliver & Brotzen (1992): ``K = β 2 E* sqrt(A/π)`` (β = 1.012 for a square)."""
-    return beta * 2.0 * modulus * np.sqrt(area / np.pi)
+    return flat_punch.stiffness(area, modulus, beta)
 
 
 def interfacial_stiffness(total: float, flat: float) -> float:

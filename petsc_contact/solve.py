@@ -293,7 +293,7 @@ class BoundSolver:
         self.close()
 
     def close(self) -> None:
-        """Destroy the PETSc objects (needed for a clean exit, DESIGN.md section 9)."""
+        """Destroy the PETSc objects (PETSc must not finalise with live objects)."""
         for obj in (self.pc, self.pmat, self.hessian, self.x, self.lower, self.upper):
             if obj is not None:
                 obj.destroy()

@@ -1,4 +1,4 @@
-"""Exact incremental stiffness at a converged contact state (Barber 2003; DESIGN.md section 4).
+"""Exact incremental stiffness at a converged contact state (Barber 2003).
 
 With the contact set held fixed, a small load change is a *linear* problem: one conjugate
 gradient solve restricted to a set of pixels, with no finite-difference noise.
@@ -130,7 +130,7 @@ def punch_stiffness_exact(
 
 
 def sweep_stiffness(pressure: np.ndarray, mean_gap: np.ndarray) -> np.ndarray:
-    """``K = -dp0/du_bar`` from a load sweep, by finite differences (DESIGN.md section 4).
+    """``K = -dp0/du_bar`` from a load sweep, by finite differences.
 
     Scheme: ``K = -p0 d(ln p0)/du_bar`` with second-order central differences on the
     non-uniform ``u_bar`` table (``numpy.gradient``, second-order one-sided at both ends).

@@ -1,6 +1,6 @@
 """Self-affine random surfaces with a roll-off (paper Eq. 5) and their statistics.
 
-Conventions (DESIGN.md section 5): for the DFT ``H(q) = sum_x h(x) exp(-i q.x)``,
+Conventions (docs/formulation.md): for the DFT ``H(q) = sum_x h(x) exp(-i q.x)``,
 ``C(q) = a^4 |H(q)|^2 / ((2 pi)^2 A0)`` so that ``h_rms^2 = sum_q C(q) (2 pi / L)^2``, the
 discrete form of ``integral d^2q C(q)``.
 
@@ -125,7 +125,7 @@ def self_affine(
 
 
 def fourier_power(grid: Grid, fft: FFT, h: np.ndarray) -> np.ndarray:
-    """``C(q)`` of a realisation on the local half-spectrum block (DESIGN.md section 5)."""
+    """``C(q)`` of a realisation on the local half-spectrum block (docs/formulation.md)."""
     fft.real[...] = h
     fft.forward()
     a = grid.pixel

@@ -1,12 +1,12 @@
 """Theories of the interfacial stiffness the paper compares with (pure numpy/scipy).
 
 - Persson's theory of the mean separation ``u_bar(p)`` and ``K = -dp/du_bar`` for any
-  isotropic PSD ``C(q)`` (DESIGN.md section 6; Persson, PRL 99, 125502 (2007); Yang &
+  isotropic PSD ``C(q)`` (Persson, PRL 99, 125502 (2007); Yang &
   Persson, PRL 100, 024303 (2008)).
 - The paper's finite-size scaling theory (Appendix B): ``theta0``, ``theta1``, ``theta(H)``,
-  the power-law stiffness (P-oldEqno5) and the crossover pressure (P-oldEqno6).
+  the power-law stiffness (paper Eq. 12) and the crossover pressure (paper Eq. 13).
 - The Hertz regime of a single asperity, and the block-compression correction of the
-  paper's experiment (Eq. 7).
+  paper's experiment (paper Eq. C3).
 
 Units: any consistent set; ``q`` in 1/length, ``C`` in length^4, pressures in the unit of
 ``modulus``, stiffness per area in pressure/length.
@@ -50,7 +50,7 @@ def inverse_theta_parts(
 
 
 def theta(hurst: np.ndarray | float, gamma: float = GAMMA) -> np.ndarray:
-    """The prefactor of P-oldEqno5, ``1/theta = 1/theta0 + 1/theta1`` (paper Fig. 2)."""
+    """The prefactor of paper Eq. 12, ``1/theta = 1/theta0 + 1/theta1`` (paper Fig. 2)."""
     inv0, inv1 = inverse_theta_parts(hurst, gamma)
     return 1.0 / (inv0 + inv1)
 
@@ -64,7 +64,7 @@ def roll_off_factor(hurst: float, rolloff_ratio: float) -> float:
 
 
 def _size_factor(h_rms: float, length: float, rolloff_ratio: float) -> float:
-    """``h_rms/(2 pi lambda_r) * lambda_r^2/L^2``, the combination in P-oldEqno5/6."""
+    """``h_rms/(2 pi lambda_r) * lambda_r^2/L^2``, the combination in paper Eqs. 12-13."""
     lam_r = length / rolloff_ratio
     return h_rms / (2 * np.pi * lam_r) * (lam_r / length) ** 2
 
@@ -78,7 +78,7 @@ def finite_size_stiffness(
     rolloff_ratio: float,
     gamma: float = GAMMA,
 ) -> np.ndarray:
-    """Power-law regime ``K(p)`` of P-oldEqno5 (per area)::
+    """Power-law regime ``K(p)`` of paper Eq. 12 (per area)::
 
     K h_rms / E* = theta (h_rms/(2 pi lambda_r) lambda_r^2/L^2)^(H/(1+H))
                          (p/(s^(1/2) E*))^(1/(1+H))
@@ -103,11 +103,11 @@ def crossover_pressure(
     rolloff_ratio: float,
     gamma: float = GAMMA,
 ) -> float:
-    """``p_c`` of P-oldEqno6, implemented as printed::
+    """``p_c`` of paper Eq. 13, implemented as printed::
 
         p_c / E* = h_rms/(2 pi lambda_r) lambda_r^2/L^2 s^(-1/2H) (theta gamma)^((1+H)/H)
 
-    Note (DESIGN.md section 6): with the paper's quoted ``q_r h_rms`` this gives values about
+    Note: with the paper's quoted ``q_r h_rms`` this gives values about
     5 times below the ``p_c`` the paper quotes; see README "Theory" for what we find.
     """
     s = roll_off_factor(hurst, rolloff_ratio)
@@ -122,7 +122,7 @@ def crossover_pressure(
 def linear_stiffness(
     pressure: np.ndarray | float, h_rms: float, gamma: float = GAMMA
 ) -> np.ndarray:
-    """The exponential regime: ``K = p / u0`` with ``u0 = gamma h_rms`` (P-oldEqno1)."""
+    """The exponential regime: ``K = p / u0`` with ``u0 = gamma h_rms`` (paper Eq. 1)."""
     return np.asarray(pressure, dtype=float) / (gamma * h_rms)
 
 
@@ -171,7 +171,7 @@ def persson_mean_gap(
     modulus: float,
     gamma: float = GAMMA,
 ) -> np.ndarray:
-    """Persson's mean separation ``u_bar(p)`` (DESIGN.md section 6)::
+    """Persson's mean separation ``u_bar(p)``::
 
         u_bar = sqrt(pi) int dq q^2 C(q) w(q) int_p^inf dp'/p' kernel(w(q) p'/E*)
 
@@ -225,7 +225,7 @@ def persson_stiffness(
 def block_corrected_stiffness(
     pressure: np.ndarray, displacement: np.ndarray, block_modulus: float, thickness: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Interfacial stiffness from a measured ``p(s)`` table (paper Eq. 7).
+    """Interfacial stiffness from a measured ``p(s)`` table (paper Eq. C3).
 
     ``K* = dp/ds`` by second-order finite differences on the (possibly non-uniform) table,
     then ``K = K* / (1 - K* d/E')``.

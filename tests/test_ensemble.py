@@ -1,4 +1,4 @@
-"""Ensembles over seeds, power-law fits, and the experiment subcommand (Eq. 7)."""
+"""Ensembles over seeds, power-law fits, and the experiment subcommand (paper Eq. C3)."""
 
 import h5py
 import numpy as np
@@ -73,7 +73,7 @@ def test_ensemble_command(tmp_path):
 
 
 def test_experiment_command(tmp_path):
-    """A synthetic squeeze test with u_bar = -u0 ln p: Eq. 7 recovers K = p/u0."""
+    """A synthetic squeeze test with u_bar = -u0 ln p: Eq. C3 recovers K = p/u0."""
     u0, d, e = 1e-4, 1e-2, 4.2e6
     p = np.geomspace(1e3, 1e5, 60)
     s = u0 * np.log(p / p[0]) + p * d / e

@@ -60,3 +60,36 @@ def test_quadratic_form_from_spectrum(n):
     kx = op.end_mult(np.empty_like(x))
     assert quadratic == pytest.approx(np.vdot(x, kx), rel=1e-12)
     assert np.allclose(kx, op.apply_array(x, np.empty_like(x)), rtol=0, atol=1e-12)
+
+
+def test_reference_solutions_are_consistent():
+    """The analytic references agree with their own identities: Westergaard's pressure
+    averages to p0 and its stiffness is -dp0/du_bar; Hertz's stiffness is dF/d delta and its
+    pressure integrates to the force."""
+    from petsc_contact.reference import flat_punch, hertz, westergaard
+
+    amp, lam, modulus, p0 = 0.01, 1.0, 2.0, 0.02
+    x = (np.arange(200000) + 0.5) / 200000 * lam
+    assert westergaard.pressure(x, p0, amp, lam, modulus).mean() == pytest.approx(p0, rel=1e-6)
+    dp = 1e-6 * p0
+    du = westergaard.mean_gap(p0 + dp, amp, lam, modulus) - westergaard.mean_gap(
+        p0 - dp, amp, lam, modulus
+    )
+    assert -2 * dp / du == pytest.approx(westergaard.stiffness(p0, amp, lam, modulus), rel=1e-8)
+    with pytest.raises(ValueError, match="full-contact"):
+        westergaard.half_width(
+            2 * westergaard.full_contact_pressure(amp, lam, modulus), amp, lam, modulus
+        )
+
+    radius, d = 2.0, 0.01
+    dd = 1e-6 * d
+    dfdd = (hertz.force(d + dd, radius, modulus) - hertz.force(d - dd, radius, modulus)) / (2 * dd)
+    assert dfdd == pytest.approx(hertz.stiffness(d, radius, modulus), rel=1e-8)
+    a = hertz.contact_radius(d, radius)
+    r = (np.arange(100000) + 0.5) / 100000 * a
+    integral = np.sum(hertz.pressure(r, d, radius, modulus) * 2 * np.pi * r) * (a / 100000)
+    assert integral == pytest.approx(hertz.force(d, radius, modulus), rel=1e-6)
+    assert hertz.radius_at_force(hertz.force(d, radius, modulus), radius, modulus) == pytest.approx(
+        a
+    )
+    assert flat_punch.stiffness(np.pi, 1.0, beta=1.0) == pytest.approx(2.0)

@@ -1,4 +1,4 @@
-"""Periodic contact against analytic solutions and identities (DESIGN.md section 7)."""
+"""Periodic contact against analytic solutions and identities."""
 
 import numpy as np
 import pytest
@@ -8,6 +8,7 @@ from petsc_contact.fft import make_fft, wavevector_magnitude
 from petsc_contact.greens import periodic_stiffness
 from petsc_contact.grid import Grid
 from petsc_contact.operator import FourierOperator
+from petsc_contact.reference import westergaard as wave_solution
 from petsc_contact.surface import self_affine
 
 TIGHT = ["-tao_gatol", "1e-11"]
@@ -15,7 +16,7 @@ PK = ["-tao_type", "python", "-tao_python_type", "petsc_contact.cg.PolonskyKeer"
 SOLVERS = {"default": [], "tron": ["-tao_type", "tron"], "bnls": ["-tao_type", "bnls"], "pk": PK}
 N_WAVE = 256
 DELTA, LENGTH, MODULUS = 0.01, 1.0, 2.0
-P_STAR = np.pi * MODULUS * DELTA / LENGTH  # Westergaard full-contact pressure
+P_STAR = wave_solution.full_contact_pressure(DELTA, LENGTH, MODULUS)
 
 
 def wave():
@@ -24,20 +25,11 @@ def wave():
 
 
 def westergaard(x, p0):
-    """Half-width and pressure of the periodic 1-D wave contact (DESIGN.md section 7)."""
-    half = LENGTH / np.pi * np.arcsin(np.sqrt(p0 / P_STAR))
-    xs = (x + LENGTH / 2) % LENGTH - LENGTH / 2  # periodic distance to the peak
-    s2 = np.sin(np.pi * half / LENGTH) ** 2
-    inside = np.abs(xs) < half
-    p = np.zeros_like(x)
-    p[inside] = (
-        2
-        * p0
-        * np.cos(np.pi * xs[inside] / LENGTH)
-        / s2
-        * np.sqrt(s2 - np.sin(np.pi * xs[inside] / LENGTH) ** 2)
+    """Half-width and pressure of the periodic 1-D wave contact."""
+    return (
+        wave_solution.half_width(p0, DELTA, LENGTH, MODULUS),
+        wave_solution.pressure(x, p0, DELTA, LENGTH, MODULUS),
     )
-    return half, p
 
 
 @pytest.fixture(scope="module")

@@ -8,6 +8,7 @@ from petsc_contact.greens import hockney_kernel, love_pixel_displacement
 from petsc_contact.grid import Grid
 from petsc_contact.operator import PaddedOperator
 from petsc_contact.punch import flat_punch_stiffness, interfacial_stiffness, punch_contact
+from petsc_contact.reference import flat_punch, hertz
 from petsc_contact.surface import self_affine
 
 N = 128  # footprint pixels per side for the analytic comparisons
@@ -56,15 +57,14 @@ def test_hertz():
     for d, step in zip(deltas, steps, strict=True):
         s = step.scalars
         assert step.converged, s["verification"]
-        a = np.sqrt(radius * d)
-        force = 4 / 3 * modulus * np.sqrt(radius) * d**1.5
+        a = hertz.contact_radius(d, radius)
         assert np.sqrt(s["area_fraction"] / np.pi) == pytest.approx(a, rel=0.01)
-        assert s["force"] == pytest.approx(force, rel=0.01)
-        p_hertz = 3 * force / (2 * np.pi * a * a) * np.sqrt(np.clip(1 - r2 / a**2, 0, None))
+        assert s["force"] == pytest.approx(hertz.force(d, radius, modulus), rel=0.01)
+        p_hertz = hertz.pressure(np.sqrt(r2), d, radius, modulus)
         inner = r2 < (0.9 * a) ** 2
         err = np.sqrt(np.mean((step.pressure[inner] - p_hertz[inner]) ** 2))
         assert err < 0.01 * p_hertz.max()
-        assert s["total_stiffness"] == pytest.approx(2 * modulus * a, rel=0.01)
+        assert s["total_stiffness"] == pytest.approx(hertz.stiffness(d, radius, modulus), rel=0.01)
 
 
 def test_flat_square_punch():
@@ -91,7 +91,9 @@ def test_flat_circular_punch():
     )
     r = np.sqrt(disk.sum() / N**2 / np.pi)
     assert step.converged
-    assert step.scalars["total_stiffness"] == pytest.approx(2 * modulus * r, rel=0.01)
+    assert step.scalars["total_stiffness"] == pytest.approx(
+        flat_punch.circular_stiffness(r, modulus), rel=0.01
+    )
     assert np.all(step.pressure[~disk] == 0)
     assert step.scalars["area_fraction"] == 1.0
 

@@ -1,4 +1,4 @@
-"""Theory module: the finite-size scaling prefactors, Persson theory, Eq. 7."""
+"""Theory module: the finite-size scaling prefactors, Persson theory, paper Eq. C3."""
 
 import numpy as np
 import pytest
@@ -25,15 +25,15 @@ def test_theta_from_the_energy(hurst):
 
 
 def test_theta_values_and_limits():
-    assert theory.theta(0.7) == pytest.approx(0.91, abs=0.005)  # DESIGN.md section 6
+    assert theory.theta(0.7) == pytest.approx(0.91, abs=0.005)  # the paper, Fig. 2
     assert theory.theta(0.8) == pytest.approx(0.95, abs=0.005)
     inv0, inv1 = theory.inverse_theta_parts(np.array([1e-6, 0.5]))
     assert inv0[0] < 0.01 * inv0[1] and inv1[0] > 0.1  # H -> 0: only theta1 survives
 
 
 def test_crossover_as_printed_and_continuity():
-    """p_c of P-oldEqno6 with the paper's q_r h_rms (DESIGN.md section 6 numbers), and the
-    power law (P-oldEqno5) meets K = p/(gamma h_rms) exactly at p_c."""
+    """p_c of paper Eq. 13 with the paper's q_r h_rms, and the
+    power law (paper Eq. 12) meets K = p/(gamma h_rms) exactly at p_c."""
     h1 = 5.7e-3 / (2 * np.pi)  # q_r h_rms = 5.7e-3, L = lambda_r = 1
     h8 = 1.3e-2 / (2 * np.pi * 8)  # L / lambda_r = 8
     pc1 = theory.crossover_pressure(1.0, h1, 0.7, 1.0, 1.0)

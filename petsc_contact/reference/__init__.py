@@ -1,0 +1,10 @@
+"""Analytic contact solutions the package is tested against (pure numpy).
+
+- :mod:`~petsc_contact.reference.westergaard`: a periodic sinusoidal wave;
+- :mod:`~petsc_contact.reference.hertz`: a sphere on a half-space;
+- :mod:`~petsc_contact.reference.flat_punch`: flat circular and square punches.
+"""
+
+from . import flat_punch, hertz, westergaard
+
+__all__ = ["flat_punch", "hertz", "westergaard"]

@@ -20,6 +20,9 @@ from typing import Any
 
 import numpy as np
 
+from . import __version__
+from .output import ENSEMBLE, EXPERIMENT, annotate, atomic_h5, ensemble_entry, schema_markdown
+
 EXIT_NOT_CONVERGED = 1
 EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
@@ -253,7 +256,22 @@ def build_parser() -> argparse.ArgumentParser:
         "bntr, bntl).",
         epilog="Exit status: 0 converged, 1 a step did not converge, 2 bad input, 130 interrupted.",
     )
+    parser.add_argument("--version", action="version", version=f"petsc-contact {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    _geometry_parsers(sub)
+    _compare_parser(sub)
+    _experiment_parser(sub)
+    _demo_parser(sub)
+    sub.add_parser(
+        "schema",
+        help="print the HDF5 output schema (docs/output-schema.md)",
+        description="Every dataset the commands write, with its units and description.",
+    )
+    return parser
+
+
+def _geometry_parsers(sub: Any) -> None:
+    """``periodic``, ``punch`` and ``ensemble``."""
     per = sub.add_parser(
         "periodic",
         help="periodic, load-controlled contact of a rough surface",
@@ -288,6 +306,9 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="K1,K2,...|A-B",
         help="the seeds (a list, or a range A-B inclusive)",
     )
+
+
+def _compare_parser(sub: Any) -> None:
     cmp_ = sub.add_parser(
         "compare",
         help="error against wall time for several solvers",
@@ -343,6 +364,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     cmp_.add_argument("--output", required=True, metavar="OUT.h5")
     cmp_.add_argument("--quiet", action="store_true", help="no table on standard output")
+
+
+def _experiment_parser(sub: Any) -> None:
     exp = sub.add_parser(
         "experiment",
         help="K(p) from a measured p(s) table (paper Eq. C3)",
@@ -374,6 +398,9 @@ def build_parser() -> argparse.ArgumentParser:
     exp.add_argument("--output", required=True, metavar="OUT.h5")
     exp.add_argument("--plot", metavar="PNG", help="K and K* against p")
     exp.add_argument("--quiet", action="store_true", help="no table on standard output")
+
+
+def _demo_parser(sub: Any) -> None:
     demo = sub.add_parser(
         "demo",
         help="the default scene (periodic 512^2, H=0.7, slope 0.1)",
@@ -384,7 +411,6 @@ def build_parser() -> argparse.ArgumentParser:
     _surface_arguments(demo)
     _run_arguments(demo, {**DEMO, "output": "demo.h5", "plot": "demo.png"})
     demo.set_defaults(**{k: v for k, v in DEMO.items() if k != "pressures"})
-    return parser
 
 
 def _generated(args: argparse.Namespace) -> bool:
@@ -745,15 +771,7 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
     return status
 
 
-ENSEMBLE_QUANTITIES = (
-    "mean_gap",
-    "area_fraction",
-    "stiffness",
-    "elastic_energy",
-    "max_pressure",
-    "iterations",
-    "solve_time",
-)
+ENSEMBLE_QUANTITIES = tuple(k for k in ENSEMBLE if k not in ("seeds", "nominal_pressure"))
 
 
 def _write_ensemble(args: argparse.Namespace, files: list[str], stats: Any, h5py: Any) -> None:
@@ -765,8 +783,7 @@ def _write_ensemble(args: argparse.Namespace, files: list[str], stats: Any, h5py
             for q in ENSEMBLE_QUANTITIES:
                 if q in f:
                     tables.setdefault(q, []).append(np.where(ok, f[q][:], np.nan))
-    partial = args.output + ".partial"
-    with h5py.File(partial, "w") as out:
+    with atomic_h5(args.output) as out:
         out.attrs["geometry"] = "periodic ensemble"
         out.attrs["parameters"] = json.dumps(
             {k: v for k, v in vars(args).items() if k not in ("quiet",)}
@@ -780,7 +797,7 @@ def _write_ensemble(args: argparse.Namespace, files: list[str], stats: Any, h5py
             for name, v in stats(values).items():
                 out[f"{q}_{name}"] = v
         out.attrs["complete"] = True
-    os.replace(partial, args.output)
+        annotate(out, ensemble_entry)
 
 
 def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
@@ -872,10 +889,8 @@ def run_experiment(args: argparse.Namespace) -> int:
     check_writable(args.output)
     p, disp = table[:, 0], table[:, 1]
     k_star, k = block_corrected_stiffness(p, disp, args.modulus, args.thickness)
-    import h5py
 
-    partial = args.output + ".partial"
-    with h5py.File(partial, "w") as f:
+    with atomic_h5(args.output) as f:
         f["pressure"], f["displacement"] = p, disp
         f["measured_stiffness"], f["stiffness"] = k_star, k
         f.attrs.update(
@@ -885,7 +900,7 @@ def run_experiment(args: argparse.Namespace) -> int:
             table=os.path.abspath(args.table),
             formula="K* = dp/ds (2nd-order differences), K = K*/(1 - K* d/E')",
         )
-    os.replace(partial, args.output)
+        annotate(f, EXPERIMENT.__getitem__)
     if not args.quiet:
         print(f"{'p':>12} {'s':>12} {'K*':>12} {'K':>12}")
         for row in zip(p, disp, k_star, k, strict=True):
@@ -913,6 +928,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             return run_experiment(args)
         if args.command == "compare":
             return run_compare(args, argv, petsc_args)
+        if args.command == "schema":
+            sys.stdout.write(schema_markdown())
+            return 0
         return run(args, argv, petsc_args)
     except (InputError, ValueError, OSError) as exc:
         _error(str(exc))

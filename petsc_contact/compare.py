@@ -32,6 +32,7 @@ import numpy as np
 
 from . import _petsc
 from .observables import natural_residual
+from .output import COMPARE, annotate, atomic_h5, write_attributes
 from .periodic import VERIFY_FACTOR, sweep
 from .problem import PeriodicProblem
 from .solve import BoundSolver, SolveInfo
@@ -256,34 +257,21 @@ def write_compare(
 
     Returns the CSV and PNG paths (next to ``path``).
     """
-    import json
-
-    import h5py
-
     stem = path[:-3] if path.endswith(".h5") else path
-    with h5py.File(path + ".partial", "w") as f:
-        for k, v in attributes.items():
-            f.attrs[k] = json.dumps(v) if isinstance(v, (dict, list, tuple)) else v
-        for k, v in reference.items():
-            f.attrs[f"reference_{k}"] = v
+    with atomic_h5(path) as f:
+        write_attributes(f, attributes)
+        write_attributes(f, {f"reference_{k}": v for k, v in reference.items()})
         for t in trajectories:
             g = f.create_group(t.name.replace("/", "_"))
-            for k in (
-                "time",
-                "iteration",
-                "mean_gap_error",
-                "pressure_error",
-                "natural_residual",
-                "complementarity",
-            ):
+            for k in COMPARE:
                 g[k] = np.asarray(getattr(t, k))
+            annotate(g, COMPARE.__getitem__)
             for k in ("reason", "solve_time", "iterations", "converged", "verification"):
                 g.attrs[k] = getattr(t, k)
             g.attrs["petsc_options"] = " ".join(t.options)
             if "-options_file" in t.options:  # what the file said when it ran
                 with open(t.options[t.options.index("-options_file") + 1]) as opts:
                     g.attrs["options_file_text"] = opts.read()
-    os.replace(path + ".partial", path)
     csv = stem + ".csv"
     with open(csv, "w") as f:
         f.write(

@@ -3,7 +3,9 @@
 A run writes ``OUT.h5.partial`` and renames it to ``OUT.h5`` when it ends (atomic on POSIX),
 so a killed run never damages an earlier ``OUT.h5``, and every finished load step is already
 on disk, flushed, in the ``.partial`` file.  Only rank 0 touches the file; distributed fields
-are gathered to it (see :meth:`petsc_contact.grid.Grid.gather`).  The schema is in README.md.
+are gathered to it (see :meth:`petsc_contact.grid.Grid.gather`).  This module owns the
+schema: every dataset any command writes, with its units and description (the tables below,
+rendered as ``docs/output-schema.md``).
 """
 
 from __future__ import annotations
@@ -14,6 +16,9 @@ import os
 import platform
 import sys
 import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
 from importlib import metadata
 from typing import Any
 
@@ -91,6 +96,16 @@ def petsc_options(petsc: Any) -> str:
     return " ".join(f"-{k} {v}".rstrip() for k, v in sorted(opts.items()))
 
 
+def write_attributes(obj: Any, attributes: dict[str, Any]) -> None:
+    """HDF5 attributes of a file or group: dicts and lists as JSON, ``None`` as ``''``."""
+    for key, value in attributes.items():
+        obj.attrs[key] = (
+            json.dumps(value)
+            if isinstance(value, (dict, list, tuple))
+            else ("" if value is None else value)
+        )
+
+
 def check_writable(path: str) -> None:
     """Raise ``OSError`` with a one-line reason unless ``path`` can be created."""
     folder = os.path.dirname(os.path.abspath(path))
@@ -135,6 +150,7 @@ class StepWriter:
         self.fields = fields
         self.root = grid.comm.rank == 0
         self.file: Any = None
+        self.schema: dict[str, Entry] = GEOMETRIES.get(attributes.get("geometry", ""), {})
         if resume:
             self.steps = grid.comm.bcast(self._open_partial() if self.root else 0, root=0)
         else:
@@ -153,30 +169,33 @@ class StepWriter:
 
         n = self.grid.n
         f = self.file = h5py.File(self.partial, "w")
-        for key, value in attributes.items():
-            f.attrs[key] = (
-                json.dumps(value)
-                if isinstance(value, (dict, list, tuple))
-                else ("" if value is None else value)
-            )
+        write_attributes(f, attributes)
         f.attrs["created"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
         f.attrs["complete"] = False
         if heights is not None:
-            f.create_dataset("heights", data=heights)
+            describe(f.create_dataset("heights", data=heights), self._entry("heights"))
         for name in self.fields:
-            f.create_dataset(
+            d = f.create_dataset(
                 name,
                 shape=(0, n, n),
                 maxshape=(None, n, n),
                 chunks=(1, min(n, 256), min(n, 256)),
             )
+            describe(d, self._entry(name))
         f.flush()
+
+    def _entry(self, name: str) -> Entry:
+        try:
+            return self.schema[name]
+        except KeyError:
+            raise KeyError(f"no schema entry for dataset '{name}' (petsc_contact.output)") from None
 
     def _open_partial(self) -> int:
         """Open the ``.partial`` file for appending; the number of steps it holds."""
         import h5py
 
         self.file = h5py.File(self.partial, "a")
+        self.schema = GEOMETRIES.get(str(self.file.attrs.get("geometry", "")), {})
         return int(self.file["converged"].shape[0]) if "converged" in self.file else 0
 
     def append(
@@ -196,7 +215,8 @@ class StepWriter:
             f = self.file
             for key, value in scalars.items():
                 if key not in f:
-                    f.create_dataset(key, shape=(0,), maxshape=(None,), dtype=h5_dtype(value))
+                    d = f.create_dataset(key, shape=(0,), maxshape=(None,), dtype=h5_dtype(value))
+                    describe(d, self._entry(key))
                 d = f[key]
                 d.resize((self.steps + 1,))
                 d[self.steps] = value
@@ -206,7 +226,8 @@ class StepWriter:
                 d[self.steps] = value
             if full_state is not None:
                 if "resume_state" not in f:
-                    f.create_dataset("resume_state", data=full_state)
+                    d = f.create_dataset("resume_state", data=full_state)
+                    describe(d, self._entry("resume_state"))
                 else:
                     f["resume_state"][...] = full_state
                 f["resume_state"].attrs["after_step"] = self.steps
@@ -288,3 +309,227 @@ def h5_dtype(value: Any) -> Any:
     if isinstance(value, (int, np.integer)):
         return np.int64
     return np.float64
+
+
+# -- the schema: every dataset any command writes, its units and its meaning ------------------
+#
+# Units are symbolic, because the package has no unit system of its own: ``length`` is the
+# unit of ``--length`` and of the heights, ``pressure`` the unit of ``--modulus``; ``1`` is
+# dimensionless, ``s`` seconds of wall time, ``count`` a number of things, ``text`` a string
+# and ``bool`` a flag.
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One dataset of the schema: its units and what it holds."""
+
+    units: str
+    description: str
+
+
+def _entries(**entries: tuple[str, str]) -> dict[str, Entry]:
+    return {name: Entry(*value) for name, value in entries.items()}
+
+
+SOLVE_COLUMNS = _entries(
+    iterations=("count", "TAO iterations of the step (punch with forces: summed over Newton)"),
+    solve_time=("s", "wall time of the solve, the slowest rank's"),
+    converged=("bool", "TAO converged and the package's own verification passed"),
+    verification=("text", "'ok', or why the step's answer cannot be used"),
+    tao_type=("text", "TAO type; python:PreconditionedCG for the default"),
+    tao_reason=("text", "TAO's converged reason"),
+    tao_reason_code=("count", "TAO's converged reason as a number (positive: converged)"),
+    objective_gradient_evaluations=("count", "objective and gradient evaluations"),
+    hessian_applications=(
+        "count",
+        "Hessian applications (the default CG: forward transforms of a direction)",
+    ),
+    preconditioner_applications=("count", "preconditioner applications"),
+    gradient_norm=("1", "TAO's final gradient norm (its own definition, per type)"),
+    tolerance=("1", "the absolute gradient tolerance used (raised to the rounding floor)"),
+    stiffness_iterations=("count", "CG iterations of the exact stiffness solve"),
+    complementarity=("1", "sum(p+ g) / (sum(p+) h_rms), as Tamaas reports it"),
+    max_pressure=("pressure", "largest contact pressure"),
+    min_gap=("length", "smallest gap (negative: the bound is violated)"),
+    area_fraction=("1", "fraction of the pixels in contact (punch: of the footprint)"),
+    nominal_pressure=("pressure", "nominal pressure p0 (punch: F / Lp^2)"),
+)
+PERIODIC_COLUMNS = _entries(
+    mean_gap=("length", "mean gap u_bar"),
+    contact_pressure_mean=("pressure", "mean over all pixels of the contact pressure (= p0)"),
+    elastic_energy=("pressure*length", "elastic energy per apparent area, 1/2 <(g+h)(p-p0)>"),
+    min_pressure=("pressure", "smallest pressure over all pixels (negative: tension)"),
+    kkt_residual=("1", "natural residual rms(min(k g, p)) / p0"),
+    preconditioner_stiffness=(
+        "pressure/length",
+        "interfacial stiffness estimate the preconditioner was held by (path, not answer)",
+    ),
+    stiffness=("pressure/length", "exact -dp0/du_bar with the contact set held fixed"),
+)
+PUNCH_COLUMNS = _entries(
+    approach=("length", "rigid approach beyond first touch"),
+    force=("pressure*length^2", "total force F"),
+    total_stiffness=("pressure*length", "dF/d delta with the contact set held fixed"),
+    interfacial_stiffness=("pressure/length", "interfacial stiffness per area (paper Eq. 2)"),
+    flat_punch_stiffness=("pressure*length", "the flat punch's stiffness used in paper Eq. 2"),
+    kkt_residual=("1", "natural residual rms(min(g, p/k)) / l, l the rms recess"),
+    target_force=("pressure*length^2", "the prescribed force (load control)"),
+    newton_iterations=("count", "Newton steps on the approach (load control)"),
+    stiffness=("pressure/length", "the interfacial stiffness per area (--stiffness)"),
+)
+FIELDS = _entries(
+    heights=("length", "the height map as given or generated (n x n)"),
+    gap=("length", "gap field of every step (steps x n x n)"),
+    pressure=("pressure", "pressure field of every step (steps x n x n)"),
+    resume_state=("length", "the last converged state (only in an unfinished .partial file)"),
+)
+ENSEMBLE = _entries(
+    seeds=("count", "the seeds, one row of every table each"),
+    nominal_pressure=("pressure", "nominal pressures, one column of every table each"),
+    **{
+        q: (units, f"{q} of every seed and step (seeds x steps; NaN: not converged)")
+        for q, units in (
+            ("mean_gap", "length"),
+            ("area_fraction", "1"),
+            ("stiffness", "pressure/length"),
+            ("elastic_energy", "pressure*length"),
+            ("max_pressure", "pressure"),
+            ("iterations", "count"),
+            ("solve_time", "s"),
+        )
+    },
+)
+ENSEMBLE_STATISTICS = {
+    "mean": "mean over the converged seeds",
+    "std": "standard deviation over the converged seeds",
+    "sem": "standard error of the mean",
+    "count": "number of converged seeds",
+}
+COMPARE = _entries(
+    time=("s", "the solver's own wall time at each iteration (measurement excluded)"),
+    iteration=("count", "TAO iteration"),
+    mean_gap_error=("1", "|u_bar - u_bar_ref| / u_bar_ref"),
+    pressure_error=("1", "||p - p_ref|| / ||p_ref||"),
+    natural_residual=("1", "rms(min(k g, p)) / p0"),
+    complementarity=("1", "sum(p+ g) / (sum(p+) h_rms)"),
+)
+EXPERIMENT = _entries(
+    pressure=("pressure", "measured pressure p"),
+    displacement=("length", "measured displacement s"),
+    measured_stiffness=("pressure/length", "K* = dp/ds (second-order differences)"),
+    stiffness=("pressure/length", "K = K*/(1 - K* d/E') (paper Eq. C3; NaN where K* d/E' >= 1)"),
+)
+GEOMETRIES = {
+    "periodic": {**SOLVE_COLUMNS, **PERIODIC_COLUMNS, **FIELDS},
+    "punch": {**SOLVE_COLUMNS, **PUNCH_COLUMNS, **FIELDS},
+}
+
+
+def ensemble_entry(name: str) -> Entry:
+    """The entry of an ensemble summary dataset, statistics (``mean_gap_sem``) included."""
+    if name in ENSEMBLE:
+        return ENSEMBLE[name]
+    quantity, _, statistic = name.rpartition("_")
+    if quantity in ENSEMBLE and statistic in ENSEMBLE_STATISTICS:
+        units = "count" if statistic == "count" else ENSEMBLE[quantity].units
+        return Entry(units, f"{quantity}: {ENSEMBLE_STATISTICS[statistic]}, per step")
+    raise KeyError(f"no schema entry for ensemble dataset '{name}'")
+
+
+def describe(dataset: Any, entry: Entry) -> None:
+    """Attach ``units`` and ``description`` to an h5py dataset."""
+    dataset.attrs["units"] = entry.units
+    dataset.attrs["description"] = entry.description
+
+
+def annotate(group: Any, lookup: Callable[[str], Entry]) -> None:
+    """Describe every dataset directly in ``group``; ``KeyError`` for one the schema lacks."""
+    for name, item in group.items():
+        if hasattr(item, "shape"):
+            describe(item, lookup(name))
+
+
+def schema_markdown() -> str:
+    """``docs/output-schema.md``, generated from the tables above (a test keeps it current)."""
+    lines = [
+        "# Output schema",
+        "",
+        "Generated from `petsc_contact/output.py` by",
+        "`petsc-contact schema > docs/output-schema.md`; a test fails when this page and the",
+        "code disagree. Every dataset carries the `units` and `description` attributes listed",
+        "here. Units are symbolic: `length` is the unit of `--length` and of the heights,",
+        "`pressure` the unit of `--modulus`; `1` is dimensionless, `s` seconds of wall time.",
+        "",
+        "Every file of `periodic`, `demo`, `punch` and `compare` also records, as root",
+        "attributes, what reproduces it: " + ", ".join(f"`{a}`" for a in RUN_ATTRIBUTES) + ".",
+        "",
+    ]
+
+    def table(title: str, intro: str, entries: dict[str, Entry]) -> None:
+        lines.extend([f"## {title}", "", intro, "", "| dataset | units | description |"])
+        lines.append("| --- | --- | --- |")
+        lines.extend(f"| `{k}` | {e.units} | {e.description} |" for k, e in entries.items())
+        lines.append("")
+
+    table(
+        "periodic and demo",
+        "One entry per load step; fields with `--fields`; `stiffness` with `--stiffness`.",
+        GEOMETRIES["periodic"],
+    )
+    table("punch", "One entry per approach or force.", GEOMETRIES["punch"])
+    table(
+        "ensemble summary",
+        "Each quantity also has `_mean`, `_std`, `_sem` and `_count` over seeds. Attributes: "
+        "`parameters`, `seed_files` and the versions.",
+        ENSEMBLE,
+    )
+    table(
+        "compare",
+        "One group per solver, one entry per TAO iteration. Group attributes: `reason`, "
+        "`converged`, `iterations`, `solve_time`, `verification`, `petsc_options` and, for an "
+        "options file, `options_file_text`. Root attributes add `reference_mean_gap`, "
+        "`reference_natural_residual`, `reference_tolerance`, `reference_iterations`.",
+        COMPARE,
+    )
+    table(
+        "experiment",
+        "Attributes: `block_modulus`, `thickness`, `table`, `formula`.",
+        EXPERIMENT,
+    )
+    return "\n".join(lines).rstrip() + "\n"
+
+
+RUN_ATTRIBUTES = (
+    "geometry",
+    "command_line",
+    "parameters",
+    "petsc_options",
+    "versions",
+    "mpi_size",
+    "length",
+    "modulus",
+    "units",
+    "rms_height",
+    "rms_slope",
+    "fft_backend",
+    "seed",
+    "hurst",
+    "rolloff_ratio",
+    "cutoff_ratio",
+    "grid",
+    "heights_file",
+    "heights_sha256",
+    "created",
+    "complete",
+)
+
+
+@contextmanager
+def atomic_h5(path: str) -> Iterator[Any]:
+    """An HDF5 file written as ``path.partial`` and renamed to ``path`` only when complete."""
+    import h5py
+
+    partial = path + ".partial"
+    with h5py.File(partial, "w") as f:
+        yield f
+    os.replace(partial, path)

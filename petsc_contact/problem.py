@@ -61,30 +61,38 @@ class MeanModePreconditioner(FourierOperator):
     Called by :class:`~petsc_contact.cg.PolonskyKeer` through :meth:`adapt`.
     """
 
-    hessian_diagonal = 1.0
-    base_mean_mode = mean_mode = 0.0
-    expected_bound_count = 0  # contact pixels Persson's theory expects (set by the problem)
-    schur_max = 0  # the Schur form's largest bound set (set by the problem)
-    schur: ContactSchur | None = None
-    _quarter: np.ndarray | None = None  # G's quarter, computed when the Schur form is first used
-    _spread: np.ndarray | None = None  # work fields of the Schur form
-    support = 0.0  # the interfacial stiffness held by (normalised), set by invert
-    _filled = 0.0  # the support the multiplier holds now (0 in the Schur form)
-    _hessian: FourierOperator
+    def __init__(self, grid: Grid, fft: FFT, hessian: FourierOperator, schur_max: int) -> None:
+        super().__init__(grid, fft, np.zeros(fft.spectrum.shape))  # filled by invert
+        self._hessian = hessian
+        self.schur_max = schur_max  # the Schur form's largest bound set
+        self.hessian_diagonal = 1.0
+        self.base_mean_mode = self.mean_mode = 0.0
+        self.expected_bound_count = 0  # contact pixels Persson's theory expects at this load
+        self.support = 0.0  # the interfacial stiffness held by (normalised), set by invert
+        self._filled = 0.0  # the support the multiplier holds now (0 in the Schur form)
+        self.schur: ContactSchur | None = None
+        self._quarter: np.ndarray | None = None  # G's quarter, made when the Schur form starts
+        self._spread: np.ndarray | None = None  # work fields of the Schur form
 
     def invert(
-        self, hessian: FourierOperator, support: float, hessian_diagonal: float, mean_mode: float
+        self,
+        support: float,
+        hessian_diagonal: float,
+        mean_mode: float,
+        expected_bound_count: int,
     ) -> None:
-        """Become the inverse of ``hessian + support`` (``hessian``'s diagonal entry is
-        ``hessian_diagonal``), with ``mean_mode`` as its ``q = 0`` entry; ``support >= 0``
-        is the interfacial stiffness in the Hessian's normalised units.
+        """Become the inverse of the Hessian plus ``support`` (the Hessian's diagonal entry
+        is ``hessian_diagonal``), with ``mean_mode`` as its ``q = 0`` entry; ``support >= 0``
+        is the interfacial stiffness in the Hessian's normalised units, and
+        ``expected_bound_count`` the contact the load is expected to bring (a scale for the
+        CG's growth limit).
 
         Computed in place, with no copy of the kernel kept: with ``N = n^2`` the normalised
         multipliers are ``c K/N`` for the Hessian, ``s = c K_i/N`` for the support and
         ``N^-2/(c K/N + s)`` for the inverse, whose ``q = 0`` entry is ``1/(N c K_i)``.
         """
-        self._hessian = hessian
         self.support = support
+        self.expected_bound_count = int(expected_bound_count)
         self._fill(support)
         self.base_mean_mode = mean_mode
         self._set_mean_mode(self.base_mean_mode)
@@ -180,8 +188,7 @@ class PeriodicProblem:
         q0 = grid.q0
         self.stiffness = FourierOperator(grid, fft, periodic_stiffness(q, modulus))
         self.hessian = self.stiffness.scaled(1.0)
-        self.preconditioner = MeanModePreconditioner(grid, fft, periodic_compliance(q, modulus, q0))
-        self.preconditioner.schur_max = schur_limit(grid.n)
+        self.preconditioner = MeanModePreconditioner(grid, fft, self.hessian, schur_limit(grid.n))
         self._free_mean_compliance = float(periodic_compliance(0.0, modulus, q0))
         self.pixel_stiffness = self.stiffness.diagonal()
         kh = self.stiffness.apply_array(self.heights, np.empty(grid.local_shape))
@@ -214,12 +221,11 @@ class PeriodicProblem:
         np.multiply(self.stiffness.multiplier, c, out=self.hessian.multiplier)
         mean_compliance = 1.0 / k_i if k_i > 0 else self._free_mean_compliance
         self.preconditioner.invert(
-            self.hessian,
             c * k_i / self.grid.size,
             self.pixel_stiffness * c,
             mean_compliance / (self.grid.size * c),
+            self.expected_contact_count(p0),
         )
-        self.preconditioner.expected_bound_count = self.expected_contact_count(p0)
 
     def stiffness_estimate(self, p0: float) -> float:
         """Persson's interfacial stiffness ``K = p0/u0``, ``u0 = gamma h_rms`` (paper Eq. 1).

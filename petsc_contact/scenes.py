@@ -6,8 +6,6 @@ stiffness, compare with theory, save the numbers behind the plot.
 
 from __future__ import annotations
 
-import json
-import os
 from collections.abc import Sequence
 from typing import Any
 
@@ -15,6 +13,7 @@ import numpy as np
 
 from .fft import make_fft
 from .grid import Grid, fundamental_wavevector
+from .output import atomic_h5, write_attributes
 from .periodic import periodic_contact
 from .punch import punch_contact
 from .stiffness import sweep_stiffness
@@ -170,7 +169,6 @@ def ideal_spectrum(
 
 def save(path: str, data: dict[str, Any], **attributes: Any) -> None:
     """Write a figure's numbers: nested dicts become groups, arrays datasets, rest attrs."""
-    import h5py
 
     def put(group: Any, items: dict[str, Any]) -> None:
         for key, value in items.items():
@@ -179,8 +177,6 @@ def save(path: str, data: dict[str, Any], **attributes: Any) -> None:
             else:
                 group[key] = np.asarray(value)
 
-    with h5py.File(path + ".partial", "w") as f:
+    with atomic_h5(path) as f:
         put(f, data)
-        for key, value in attributes.items():
-            f.attrs[key] = json.dumps(value) if isinstance(value, (dict, list)) else value
-    os.replace(path + ".partial", path)
+        write_attributes(f, attributes)

@@ -6,7 +6,7 @@ before ``setFromOptions``, so options always win.
 
 The default is ``-tao_type python`` with the package's Fourier-preconditioned active-set
 conjugate gradient (:class:`petsc_contact.cg.PreconditionedCG`, the fastest robust choice
-measured, README "Solvers"); any other Python type is chosen with ``-tao_python_type``.
+measured, docs/solvers.md); any other Python type is chosen with ``-tao_python_type``.
 A Python type that has ``set_preconditioner`` receives the Fourier preconditioner.
 
 Quasi-Newton types of the BQNK family (``bqnls``, ``bqnkls``, ``bqnktr``, ``bqnktl``) get

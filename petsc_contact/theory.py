@@ -108,7 +108,7 @@ def crossover_pressure(
         p_c / E* = h_rms/(2 pi lambda_r) lambda_r^2/L^2 s^(-1/2H) (theta gamma)^((1+H)/H)
 
     Note: with the paper's quoted ``q_r h_rms`` this gives values about
-    5 times below the ``p_c`` the paper quotes; see README "Theory" for what we find.
+    5 times below the ``p_c`` the paper quotes; see docs/figures.md for what the package finds.
     """
     s = roll_off_factor(hurst, rolloff_ratio)
     return float(

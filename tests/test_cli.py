@@ -374,3 +374,42 @@ def test_interrupted_sweep_resumes_without_recomputing(tmp_path):
         assert np.allclose(b["nominal_pressure"][:], a["nominal_pressure"][:], rtol=1e-9)
     r = cli(*args[:-2], "--output", str(tmp_path / "x.h5"), "--resume")  # nothing to resume
     assert r.returncode == 0
+
+
+def test_output_schema_document_is_current():
+    """docs/output-schema.md is what ``petsc-contact schema`` prints (generated from the code)."""
+    import pathlib
+
+    from petsc_contact.output import schema_markdown
+
+    page = pathlib.Path(__file__).parent.parent / "docs" / "output-schema.md"
+    assert page.read_text() == schema_markdown()
+
+
+def test_every_dataset_is_described(tmp_path):
+    """Every dataset of periodic, punch, compare and ensemble output carries units and a
+    description from the schema (a dataset the schema lacks fails the run)."""
+    surface = ["--grid", "32", "--hurst", "0.7", "--rms-slope", "0.1", "--seed", "2"]
+    runs = {
+        "p.h5": ["periodic", *surface, "--pressures", "1e-3", "--stiffness", "--fields"],
+        "u.h5": ["punch", *surface, "--forces", "1e-4", "--stiffness", "--fields"],
+        "c.h5": ["compare", *surface, "--pressure", "1e-3", "--solvers", "cg,tron"],
+        "e.h5": ["ensemble", *surface, "--seeds", "1-2", "--sweep", "3,1e-4,1e-2", "--stiffness"],
+    }
+    for name, command in runs.items():
+        out = tmp_path / name
+        r = cli(*command, "--output", str(out), "--quiet")
+        assert r.returncode == 0, r.stderr
+        with h5py.File(out) as f:
+            datasets = list(_datasets(f))
+            assert datasets
+            for d in datasets:
+                assert d.attrs["units"] and d.attrs["description"], d.name
+
+
+def _datasets(group):
+    for item in group.values():
+        if isinstance(item, h5py.Group):
+            yield from _datasets(item)
+        else:
+            yield item

@@ -99,12 +99,7 @@ def _bound(values: np.ndarray) -> np.ndarray | float:
 
 
 def growth_fraction(
-    x: np.ndarray,
-    d: np.ndarray,
-    alpha: float,
-    lower: np.ndarray | float,
-    limit: int,
-    allsum: Any,
+    x: np.ndarray, d: np.ndarray, alpha: float, lower: np.ndarray | float, limit: int, allsum: Any
 ) -> float:
     """Fraction of the step ``alpha d`` (just taken to ``x``) at which ``limit`` variables
     reach ``lower``.

@@ -164,56 +164,68 @@ def _run_arguments(
         help="contact modulus E* (default %(default)s)",
     )
     if punch:
-        loads = p.add_mutually_exclusive_group(required=True)
-        loads.add_argument(
-            "--approaches",
-            type=_float_list,
-            metavar="D1,D2,...",
-            help="rigid approaches beyond first touch (length units), in order",
-        )
-        loads.add_argument(
-            "--forces",
-            type=_float_list,
-            metavar="F1,F2,...",
-            help="total forces (E* x length^2), in order (load control)",
-        )
-        loads.add_argument(
-            "--sweep",
-            type=_sweep_spec,
-            metavar="N[,DMIN,DMAX]",
-            help="N log-spaced approaches from DMIN to DMAX (default: 0.01 and "
-            "3 times the rms recess of the punch face)",
-        )
-        p.add_argument(
-            "--footprint",
-            choices=("square", "disk"),
-            default="square",
-            help="punch outline: the whole square, or the inscribed disk",
-        )
-        p.add_argument(
-            "--flat-stiffness",
-            choices=("grid", "analytic"),
-            default="grid",
-            help="flat-punch stiffness in Eq. 2: computed on the same grid "
-            "(default) or beta x 2 E* sqrt(A/pi), beta = 1.012 (square) or 1 "
-            "(disk)",
-        )
+        _punch_loads(p)
     else:
-        loads = p.add_mutually_exclusive_group(required="pressures" not in d)
-        loads.add_argument(
-            "--pressures",
-            type=_float_list,
-            default=_float_list(d["pressures"]) if "pressures" in d else None,
-            metavar="P1,P2,...",
-            help="nominal pressures p0 (units of E*), in order",
-        )
-        loads.add_argument(
-            "--sweep",
-            type=_sweep_spec,
-            metavar="N[,PMIN,PMAX]",
-            help="N log-spaced pressures from PMIN to PMAX (default: 1e-4 and "
-            "0.9 times the full-contact pressure -min(K h))",
-        )
+        _periodic_loads(p, d)
+    _output_arguments(p, d)
+
+
+def _punch_loads(p: argparse.ArgumentParser) -> None:
+    loads = p.add_mutually_exclusive_group(required=True)
+    loads.add_argument(
+        "--approaches",
+        type=_float_list,
+        metavar="D1,D2,...",
+        help="rigid approaches beyond first touch (length units), in order",
+    )
+    loads.add_argument(
+        "--forces",
+        type=_float_list,
+        metavar="F1,F2,...",
+        help="total forces (E* x length^2), in order (load control)",
+    )
+    loads.add_argument(
+        "--sweep",
+        type=_sweep_spec,
+        metavar="N[,DMIN,DMAX]",
+        help="N log-spaced approaches from DMIN to DMAX (default: 0.01 and "
+        "3 times the rms recess of the punch face)",
+    )
+    p.add_argument(
+        "--footprint",
+        choices=("square", "disk"),
+        default="square",
+        help="punch outline: the whole square, or the inscribed disk",
+    )
+    p.add_argument(
+        "--flat-stiffness",
+        choices=("grid", "analytic"),
+        default="grid",
+        help="flat-punch stiffness in Eq. 2: computed on the same grid "
+        "(default) or beta x 2 E* sqrt(A/pi), beta = 1.012 (square) or 1 "
+        "(disk)",
+    )
+
+
+def _periodic_loads(p: argparse.ArgumentParser, d: dict[str, Any]) -> None:
+    loads = p.add_mutually_exclusive_group(required="pressures" not in d)
+    loads.add_argument(
+        "--pressures",
+        type=_float_list,
+        default=_float_list(d["pressures"]) if "pressures" in d else None,
+        metavar="P1,P2,...",
+        help="nominal pressures p0 (units of E*), in order",
+    )
+    loads.add_argument(
+        "--sweep",
+        type=_sweep_spec,
+        metavar="N[,PMIN,PMAX]",
+        help="N log-spaced pressures from PMIN to PMAX (default: 1e-4 and "
+        "0.9 times the full-contact pressure -min(K h))",
+    )
+
+
+def _output_arguments(p: argparse.ArgumentParser, d: dict[str, Any]) -> None:
     p.add_argument(
         "--stiffness",
         action="store_true",
@@ -245,6 +257,58 @@ def _run_arguments(
     )
 
 
+COMMANDS = {  # name: (one-line help, description)
+    "schema": (
+        "print the HDF5 output schema (docs/output-schema.md)",
+        "Every dataset the commands write, with its units and description.",
+    ),
+    "periodic": (
+        "periodic, load-controlled contact of a rough surface",
+        "Hard-wall contact of a rigid rough surface on a periodic "
+        "elastic half-space, one TAO solve per nominal pressure.",
+    ),
+    "punch": (
+        "rigid rough square punch on a free half-space",
+        "A rigid punch with a rough face pressed into a "
+        "non-periodic elastic half-space (Hockney padding), "
+        "displacement (--approaches) or load (--forces) "
+        "controlled.",
+    ),
+    "ensemble": (
+        "periodic sweeps over many seeds, with statistics",
+        "The periodic scene for each seed (one resumable file "
+        "OUT_seedK.h5 per seed), then mean, std and standard "
+        "error over seeds of every per-step quantity in OUT.h5.",
+    ),
+    "compare": (
+        "error against wall time for several solvers",
+        "One periodic scene solved by each solver from first "
+        "touch; errors against a tightly converged reference "
+        "at every iteration; a table (stdout and OUT.csv), "
+        "OUT.h5 and a plot OUT.png.",
+    ),
+    "experiment": (
+        "K(p) from a measured p(s) table (paper Eq. C3)",
+        "Interfacial stiffness from a squeeze test of an elastic "
+        "block of thickness d and effective modulus E' (paper "
+        "section III): K* = dp/ds, K = K*/(1 - K* d/E').",
+    ),
+    "demo": (
+        "the default scene (periodic 512^2, H=0.7, slope 0.1)",
+        "The default scene: periodic 512 x 512 self-affine "
+        "surface, H = 0.7, rms slope 0.1, L/lambda_r = 2, "
+        "L/lambda_1 = 64, loads from first contact to ~50% area.",
+    ),
+}
+
+
+def _command(sub: Any, name: str) -> argparse.ArgumentParser:
+    """The subcommand ``name`` with its help and description from :data:`COMMANDS`."""
+    summary, description = COMMANDS[name]
+    parser: argparse.ArgumentParser = sub.add_parser(name, help=summary, description=description)
+    return parser
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="petsc-contact",
@@ -262,41 +326,19 @@ def build_parser() -> argparse.ArgumentParser:
     _compare_parser(sub)
     _experiment_parser(sub)
     _demo_parser(sub)
-    sub.add_parser(
-        "schema",
-        help="print the HDF5 output schema (docs/output-schema.md)",
-        description="Every dataset the commands write, with its units and description.",
-    )
+    _command(sub, "schema")
     return parser
 
 
 def _geometry_parsers(sub: Any) -> None:
     """``periodic``, ``punch`` and ``ensemble``."""
-    per = sub.add_parser(
-        "periodic",
-        help="periodic, load-controlled contact of a rough surface",
-        description="Hard-wall contact of a rigid rough surface on a periodic "
-        "elastic half-space, one TAO solve per nominal pressure.",
-    )
+    per = _command(sub, "periodic")
     _surface_arguments(per)
     _run_arguments(per)
-    pun = sub.add_parser(
-        "punch",
-        help="rigid rough square punch on a free half-space",
-        description="A rigid punch with a rough face pressed into a "
-        "non-periodic elastic half-space (Hockney padding), "
-        "displacement (--approaches) or load (--forces) "
-        "controlled.",
-    )
+    pun = _command(sub, "punch")
     _surface_arguments(pun)
     _run_arguments(pun, punch=True)
-    ens = sub.add_parser(
-        "ensemble",
-        help="periodic sweeps over many seeds, with statistics",
-        description="The periodic scene for each seed (one resumable file "
-        "OUT_seedK.h5 per seed), then mean, std and standard "
-        "error over seeds of every per-step quantity in OUT.h5.",
-    )
+    ens = _command(sub, "ensemble")
     _surface_arguments(ens)
     _run_arguments(ens)
     ens.add_argument(
@@ -309,14 +351,7 @@ def _geometry_parsers(sub: Any) -> None:
 
 
 def _compare_parser(sub: Any) -> None:
-    cmp_ = sub.add_parser(
-        "compare",
-        help="error against wall time for several solvers",
-        description="One periodic scene solved by each solver from first "
-        "touch; errors against a tightly converged reference "
-        "at every iteration; a table (stdout and OUT.csv), "
-        "OUT.h5 and a plot OUT.png.",
-    )
+    cmp_ = _command(sub, "compare")
     _surface_arguments(cmp_)
     cmp_.add_argument(
         "--length",
@@ -367,13 +402,7 @@ def _compare_parser(sub: Any) -> None:
 
 
 def _experiment_parser(sub: Any) -> None:
-    exp = sub.add_parser(
-        "experiment",
-        help="K(p) from a measured p(s) table (paper Eq. C3)",
-        description="Interfacial stiffness from a squeeze test of an elastic "
-        "block of thickness d and effective modulus E' (paper "
-        "section III): K* = dp/ds, K = K*/(1 - K* d/E').",
-    )
+    exp = _command(sub, "experiment")
     exp.add_argument(
         "--table",
         required=True,
@@ -401,13 +430,7 @@ def _experiment_parser(sub: Any) -> None:
 
 
 def _demo_parser(sub: Any) -> None:
-    demo = sub.add_parser(
-        "demo",
-        help="the default scene (periodic 512^2, H=0.7, slope 0.1)",
-        description="The default scene: periodic 512 x 512 self-affine "
-        "surface, H = 0.7, rms slope 0.1, L/lambda_r = 2, "
-        "L/lambda_1 = 64, loads from first contact to ~50% area.",
-    )
+    demo = _command(sub, "demo")
     _surface_arguments(demo)
     _run_arguments(demo, {**DEMO, "output": "demo.h5", "plot": "demo.png"})
     demo.set_defaults(**{k: v for k, v in DEMO.items() if k != "pressures"})
@@ -558,45 +581,25 @@ def _disk(n: int) -> np.ndarray:
 
 def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
     """Run ``periodic``, ``demo`` or ``punch``; write the HDF5 file (and plot)."""
-    from . import _petsc
-    from .output import StepWriter, check_writable, load_heights, read_resume
-
-    _check_numbers(args)
-    full = None if _generated(args) else load_heights(args.heights)
-    check_writable(args.output)
-    if args.plot:
-        check_writable(args.plot)
-    petsc = _petsc.init(petsc_args)
-    from .solve import check_tao_type
+    petsc, grid, fft, heights = _prepare(args, petsc_args)
     from .surface import rms_of
 
-    check_tao_type(petsc)
-    grid, fft, heights = _scene(args, full)
     realised = {
         "rms_height": rms_of(grid, fft, heights),
         "rms_slope": rms_of(grid, fft, heights, slope=True),
     }
-    punch = args.command == "punch"
-    root = grid.comm.rank == 0
-    fields = ("gap", "pressure") if args.fields else ()
-    if punch:
+    if args.command == "punch":
         plan = _punch_plan(petsc, args, grid, heights)
     else:
         plan = _periodic_plan(petsc, args, grid, fft, heights)
     attributes = _attributes(args, argv, petsc, realised)
     attributes["fft_backend"] = plan.fft_backend
-    done, state = read_resume(args.output, attributes["parameters"]) if args.resume else (0, None)
-    total = len(plan.loads)
-    if done:
-        writer = StepWriter.reopen(args.output, grid, fields)
-        if root and not args.quiet:
-            print(f"# resuming {args.output}.partial after {done} of {total} steps", flush=True)
-    else:
-        writer = StepWriter(args.output, grid, attributes, heights, fields)
-    start = grid.scatter(state) if state is not None else None
-    table: list[dict[str, Any]] = _finished_rows(args.output, done) if done and root else []
+    root = grid.comm.rank == 0
+    show = root and not args.quiet
     try:
-        if root and not args.quiet:
+        writer, done, start = _open_writer(args, grid, attributes, heights, len(plan.loads), show)
+        table = _finished_rows(args.output, done) if done and root else []
+        if show:
             print(
                 f"# {args.command} {grid.n}x{grid.n}, L = {args.length:g}, E* = {args.modulus:g}, "
                 f"h_rms = {realised['rms_height']:.4g}, h'_rms = {realised['rms_slope']:.4g}"
@@ -604,27 +607,91 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
                 flush=True,
             )
             print(_header(plan.columns), flush=True)
-        for i, step in enumerate(plan.steps(plan.loads[done:], start, bool(fields)), done):
-            if punch and args.stiffness:
-                step.scalars["stiffness"] = step.scalars["interfacial_stiffness"]
-            writer.append(
-                step.scalars,
-                {"gap": step.gap, "pressure": step.pressure} if fields else None,
-                state=step.state,
-            )
-            table.append(step.scalars)
-            if root and not args.quiet:
-                print(_row(i, total, step.scalars, plan.columns), flush=True)
-    except KeyboardInterrupt:
-        writer.abandon()
-        return EXIT_INTERRUPTED
+        try:
+            _run_steps(args, plan, writer, done, start, table, show)
+        except KeyboardInterrupt:
+            writer.abandon()
+            return EXIT_INTERRUPTED
     finally:
         plan.close()
     writer.finish()
+    return _conclude(args, plan, table, realised, root)
+
+
+def _prepare(
+    args: argparse.Namespace, petsc_args: list[str], check_type: bool = True
+) -> tuple[Any, Any, Any, np.ndarray]:
+    """Check the input, then PETSc, the grid, its FFT and this rank's heights."""
+    from . import _petsc
+    from .output import check_writable, load_heights
+    from .solve import check_tao_type
+
+    _check_numbers(args)
+    full = None if _generated(args) else load_heights(args.heights)
+    check_writable(args.output)
+    if getattr(args, "plot", None):
+        check_writable(args.plot)
+    petsc = _petsc.init(petsc_args)
+    if check_type:
+        check_tao_type(petsc)
+    grid, fft, heights = _scene(args, full)
+    return petsc, grid, fft, heights
+
+
+def _open_writer(
+    args: argparse.Namespace,
+    grid: Any,
+    attributes: dict[str, Any],
+    heights: np.ndarray,
+    total: int,
+    show: bool,
+) -> tuple[Any, int, np.ndarray | None]:
+    """The step writer, the steps already done and the state to start from (``--resume``)."""
+    from .output import StepWriter, read_resume
+
+    fields = ("gap", "pressure") if args.fields else ()
+    done, state = read_resume(args.output, attributes["parameters"]) if args.resume else (0, None)
+    if not done:
+        return StepWriter(args.output, grid, attributes, heights, fields), 0, None
+    if show:
+        print(f"# resuming {args.output}.partial after {done} of {total} steps", flush=True)
+    start = grid.scatter(state) if state is not None else None
+    return StepWriter.reopen(args.output, grid, fields), done, start
+
+
+def _run_steps(
+    args: argparse.Namespace,
+    plan: Plan,
+    writer: Any,
+    done: int,
+    start: np.ndarray | None,
+    table: list[dict[str, Any]],
+    show: bool,
+) -> None:
+    """Solve the remaining loads; write, tabulate and print each step as it finishes."""
+    total = len(plan.loads)
+    for i, step in enumerate(plan.steps(plan.loads[done:], start, args.fields), done):
+        if args.command == "punch" and args.stiffness:
+            step.scalars["stiffness"] = step.scalars["interfacial_stiffness"]
+        fields = {"gap": step.gap, "pressure": step.pressure} if args.fields else None
+        writer.append(step.scalars, fields, state=step.state)
+        table.append(step.scalars)
+        if show:
+            print(_row(i, total, step.scalars, plan.columns), flush=True)
+
+
+def _conclude(
+    args: argparse.Namespace,
+    plan: Plan,
+    table: list[dict[str, Any]],
+    realised: dict[str, float],
+    root: bool,
+) -> int:
+    """Plot, report the steps that did not converge, and return the exit status."""
     if args.plot and root:
         from .plot import plot_punch, plot_sweep
 
-        if punch:
+        if args.command == "punch":
             plot_punch(args.plot, table)
         else:
             plot_sweep(args.plot, table, args.modulus, realised["rms_height"])
@@ -802,30 +869,17 @@ def _write_ensemble(args: argparse.Namespace, files: list[str], stats: Any, h5py
 
 def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
     """``petsc-contact compare``: every solver on one scene, error against time."""
-    from . import _petsc
-    from .compare import (
-        DEFAULT_SOLVERS,
-        Trajectory,
-        compare,
-        solver_options,
-        table_rows,
-        write_compare,
-    )
-    from .output import check_writable, load_heights
+    from .compare import DEFAULT_SOLVERS, compare, solver_options, write_compare
     from .problem import PeriodicProblem
     from .surface import rms_of
 
     args.pressures = [args.pressure]
-    _check_numbers(args)
     if not args.time_limit >= 0 or args.stall_iterations < 0:
         raise InputError("--time-limit and --stall-iterations must not be negative")
     solvers = args.solvers or list(DEFAULT_SOLVERS)
     for name in solvers:
         solver_options(name)  # unknown options files fail here, before any work
-    full = None if _generated(args) else load_heights(args.heights)
-    check_writable(args.output)
-    petsc = _petsc.init(petsc_args)
-    grid, fft, heights = _scene(args, full)
+    petsc, grid, fft, heights = _prepare(args, petsc_args, check_type=False)
     problem = PeriodicProblem(grid, fft, heights, args.modulus)
     show = grid.comm.rank == 0 and not args.quiet
     if show:
@@ -835,16 +889,6 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
             flush=True,
         )
 
-    def report(trajectory: Trajectory) -> None:
-        if show:
-            (row,) = table_rows([trajectory])
-            name, reason, ok, its, t, eg, ep, r, c = row
-            print(
-                f"{name:>16} {str(ok):>9} {its:>6d} {t:>8.3f} {eg:>9.1e} {ep:>9.1e} "
-                f"{r:>9.1e} {c:>9.1e}  {reason}",
-                flush=True,
-            )
-
     reference, trajectories = compare(
         petsc,
         problem,
@@ -852,7 +896,7 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
         solvers,
         args.time_limit,
         stall_iterations=args.stall_iterations,
-        report=report,
+        report=_print_trajectory if show else None,
     )
     realised = {"rms_height": rms_of(grid, fft, heights), "pressure": args.pressure}  # collective
     status = 0 if all(t.converged for t in trajectories) else EXIT_NOT_CONVERGED
@@ -867,6 +911,18 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
         )
         print(f"# wrote {args.output}, {csv} and {png}")
     return status
+
+
+def _print_trajectory(trajectory: Any) -> None:
+    """One row of the ``compare`` table, printed as the solver finishes."""
+    from .compare import table_rows
+
+    ((name, reason, ok, its, t, eg, ep, r, c),) = table_rows([trajectory])
+    print(
+        f"{name:>16} {str(ok):>9} {its:>6d} {t:>8.3f} {eg:>9.1e} {ep:>9.1e} "
+        f"{r:>9.1e} {c:>9.1e}  {reason}",
+        flush=True,
+    )
 
 
 def run_experiment(args: argparse.Namespace) -> int:

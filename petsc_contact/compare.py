@@ -226,13 +226,7 @@ def compare(
             problem.start(x0)
             with BoundSolver(petsc, problem.grid, problem.hessian, problem.preconditioner) as s:
                 recorder = _Recorder(
-                    problem,
-                    reference,
-                    pressure,
-                    traj,
-                    s,
-                    time_limit,
-                    stall_iterations,
+                    problem, reference, pressure, traj, s, time_limit, stall_iterations
                 )
                 _, info = s.solve(
                     problem.objective_gradient,

@@ -235,29 +235,21 @@ class _FFTWMPILibrary:
                 return None
             size_t = ctypes.c_ssize_t
             lib.fftw_mpi_local_size_many_transposed.restype = size_t
-            lib.fftw_mpi_local_size_many_transposed.argtypes = [
+            # rank, n[], howmany, two block sizes and a pointer open both signatures
+            head: list[Any] = [
                 ctypes.c_int,
                 ctypes.POINTER(size_t),
                 size_t,
                 size_t,
                 size_t,
                 ctypes.c_void_p,
-                *[ctypes.POINTER(size_t)] * 4,
             ]
+            local_size = lib.fftw_mpi_local_size_many_transposed
+            local_size.argtypes = [*head, *[ctypes.POINTER(size_t)] * 4]
             for name in ("fftw_mpi_plan_many_dft_r2c", "fftw_mpi_plan_many_dft_c2r"):
                 fn = getattr(lib, name)
                 fn.restype = ctypes.c_void_p
-                fn.argtypes = [
-                    ctypes.c_int,
-                    ctypes.POINTER(size_t),
-                    size_t,
-                    size_t,
-                    size_t,
-                    ctypes.c_void_p,
-                    ctypes.c_void_p,
-                    ctypes.c_void_p,
-                    ctypes.c_uint,
-                ]
+                fn.argtypes = [*head, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint]
             lib.fftw_execute.argtypes = [ctypes.c_void_p]
             lib.fftw_mpi_init()
             cls._lib = lib

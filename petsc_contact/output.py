@@ -176,10 +176,7 @@ class StepWriter:
             describe(f.create_dataset("heights", data=heights), self._entry("heights"))
         for name in self.fields:
             d = f.create_dataset(
-                name,
-                shape=(0, n, n),
-                maxshape=(None, n, n),
-                chunks=(1, min(n, 256), min(n, 256)),
+                name, shape=(0, n, n), maxshape=(None, n, n), chunks=(1, min(n, 256), min(n, 256))
             )
             describe(d, self._entry(name))
         f.flush()
@@ -491,11 +488,7 @@ def schema_markdown() -> str:
         "`reference_natural_residual`, `reference_tolerance`, `reference_iterations`.",
         COMPARE,
     )
-    table(
-        "experiment",
-        "Attributes: `block_modulus`, `thickness`, `table`, `formula`.",
-        EXPERIMENT,
-    )
+    table("experiment", "Attributes: `block_modulus`, `thickness`, `table`, `formula`.", EXPERIMENT)
     return "\n".join(lines).rstrip() + "\n"
 
 

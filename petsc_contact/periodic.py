@@ -47,15 +47,14 @@ class Step:
         return bool(self.scalars["converged"])
 
 
-def verify(
-    info: SolveInfo, obs: dict[str, float], scale_length: float, gnorm0: float, grtol: float
-) -> str:
+def verify(info: SolveInfo, obs: dict[str, float], scale_length: float) -> str:
     """``'ok'`` or the reason a TAO answer cannot be used."""
     if info.reason_code <= 0:
         return f"TAO did not converge ({info.reason})"
     if obs["min_gap"] < -1e-12 * scale_length:
         return f"bound violated: min gap {obs['min_gap']:.3e}"
-    tol = max(info.tolerance, grtol * gnorm0)
+    relative = info.relative_tolerance
+    tol = max(info.tolerance, relative * info.initial_gradient_norm if relative > 0 else 0.0)
     if not obs["kkt_residual"] <= VERIFY_FACTOR * tol:
         return f"KKT residual {obs['kkt_residual']:.2e} > {VERIFY_FACTOR:g} x tolerance {tol:.1e}"
     return "ok"
@@ -69,17 +68,6 @@ def check_pressures(pressures: Sequence[float]) -> list[float]:
     for p in out:
         positive("nominal pressures", p)
     return out
-
-
-def _recording(history: list[float], monitor: Monitor | None) -> Monitor:
-    """A TAO monitor that appends the gradient norm to ``history``, then calls ``monitor``."""
-
-    def record(it: int, f: float, gnorm: float) -> None:
-        history.append(gnorm)
-        if monitor is not None:
-            monitor(it, f, gnorm)
-
-    return record
 
 
 def sweep(
@@ -111,58 +99,64 @@ def sweep(
         Scalars (observables, TAO report, ``converged``, ``verification``) and, with
         ``fields``, the local ``gap`` and ``pressure`` slabs.
     """
-    grid = problem.grid
     ell = problem.scale_length
     x = (problem.initial_gap() if start is None else start).reshape(-1) / ell
     path = LoadPath()
-    with BoundSolver(petsc, grid, problem.hessian, problem.preconditioner) as solver:
+    with BoundSolver(petsc, problem.grid, problem.hessian, problem.preconditioner) as solver:
         for p0 in check_pressures(pressures):
             problem.set_pressure(p0, path.stiffness_estimate(p0))
             problem.start(path.start(p0, x))
-            history: list[float] = []
             x_new, info = solver.solve(
                 problem.objective_gradient,
                 problem.start_point,
-                monitor=_recording(history, monitor),
+                monitor=monitor,
                 gatol_floor=problem.rounding_floor(p0),
             )
-            gap = x_new.reshape(grid.local_shape) * ell
-            pressure = problem.pressure(gap)
-            obs = step_observables(
-                grid, gap, pressure, problem.heights, p0, problem.pixel_stiffness
-            )
-            contact = obs.pop("contact")
-            grtol = petsc.Options().getReal("tao_grtol", 0.0)
-            verdict = verify(info, obs, ell, history[0] if history else np.inf, grtol)
-            scalars = {
-                "nominal_pressure": p0,
-                **obs,
-                **info.scalars(verdict),
-                "preconditioner_stiffness": problem.interfacial_stiffness,
-            }
-            k = np.nan
-            if stiffness:
-                k, its = (
-                    periodic_stiffness_exact(
-                        petsc,
-                        grid,
-                        problem.stiffness,
-                        problem.held_compliance(problem.interfacial_stiffness),
-                        contact,
-                    )
-                    if verdict == "ok"
-                    else (np.nan, 0)
-                )
-                scalars.update(stiffness=k, stiffness_iterations=its)
-            if verdict == "ok":
+            step = measure(petsc, problem, x_new, info, stiffness, fields)
+            if step.converged:
                 x = x_new
-                path.add(ConvergedStep(p0, obs["mean_gap"], x, k))
-            yield Step(
-                scalars,
-                gap if fields else None,
-                pressure if fields else None,
-                state=x.reshape(grid.local_shape) * ell,
+                k = step.scalars.get("stiffness", np.nan)
+                path.add(ConvergedStep(p0, step.scalars["mean_gap"], x, k))
+            step.state = x.reshape(problem.grid.local_shape) * ell
+            yield step
+
+
+def measure(
+    petsc: Any,
+    problem: PeriodicProblem,
+    x: np.ndarray,
+    info: SolveInfo,
+    stiffness: bool = False,
+    fields: bool = False,
+) -> Step:
+    """The step of a solution ``x`` (TAO's scaled gap) at the problem's nominal pressure:
+    observables, TAO's report, the package's verdict and, if asked, the exact stiffness."""
+    grid, ell, p0 = problem.grid, problem.scale_length, problem.nominal_pressure
+    gap = x.reshape(grid.local_shape) * ell
+    pressure = problem.pressure(gap)
+    obs = step_observables(grid, gap, pressure, problem.heights, p0, problem.pixel_stiffness)
+    contact = obs.pop("contact")
+    verdict = verify(info, obs, ell)
+    scalars = {
+        "nominal_pressure": p0,
+        **obs,
+        **info.scalars(verdict),
+        "preconditioner_stiffness": problem.interfacial_stiffness,
+    }
+    if stiffness:
+        k, its = (
+            periodic_stiffness_exact(
+                petsc,
+                grid,
+                problem.stiffness,
+                problem.held_compliance(problem.interfacial_stiffness),
+                contact,
             )
+            if verdict == "ok"
+            else (np.nan, 0)
+        )
+        scalars.update(stiffness=k, stiffness_iterations=its)
+    return Step(scalars, gap if fields else None, pressure if fields else None)
 
 
 def periodic_contact(

@@ -75,11 +75,7 @@ class MeanModePreconditioner(FourierOperator):
         self._spread: np.ndarray | None = None  # work fields of the Schur form
 
     def invert(
-        self,
-        support: float,
-        hessian_diagonal: float,
-        mean_mode: float,
-        expected_bound_count: int,
+        self, support: float, hessian_diagonal: float, mean_mode: float, expected_bound_count: int
     ) -> None:
         """Become the inverse of the Hessian plus ``support`` (the Hessian's diagonal entry
         is ``hessian_diagonal``), with ``mean_mode`` as its ``q = 0`` entry; ``support >= 0``

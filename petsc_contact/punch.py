@@ -232,10 +232,7 @@ class PunchSolver:
         self.close()
 
     def at_approach(
-        self,
-        delta: float,
-        fields: bool = False,
-        monitor: Monitor | None = None,
+        self, delta: float, fields: bool = False, monitor: Monitor | None = None
     ) -> Step:
         """Solve at approach ``δ`` from the last converged pressure."""
         pb = self.problem

@@ -139,13 +139,8 @@ def punch_curve(
     """Rigid rough punch: force, ``F/Lp^2`` and the interfacial stiffness (Eq. 2) per step."""
     steps = punch_contact(heights, length, modulus, approaches=approaches)
     keys = (
-        "approach",
-        "force",
-        "nominal_pressure",
-        "area_fraction",
-        "total_stiffness",
-        "interfacial_stiffness",
-    )
+        "approach force nominal_pressure area_fraction total_stiffness interfacial_stiffness"
+    ).split()
     col = {k: np.array([s.scalars[k] for s in steps], dtype=float) for k in keys}
     col["converged"] = np.array([s.converged for s in steps])
     return col

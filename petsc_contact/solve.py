@@ -81,6 +81,8 @@ class SolveInfo:
     gradient_norm: float
     solve_time: float
     tolerance: float
+    relative_tolerance: float = 0.0  # TAO's grtol
+    initial_gradient_norm: float = np.inf  # TAO's gnorm at the start point
 
     def scalars(self, verdict: str) -> dict[str, Any]:
         """The per-step output columns of this report, with the package's verdict."""
@@ -210,53 +212,15 @@ class BoundSolver:
         (see :meth:`~petsc_contact.problem.PeriodicProblem.rounding_floor`); the tolerance
         actually used is reported in :class:`SolveInfo`.
         """
-        petsc = self.petsc
+        self._load(x0, lower, upper)
         counts = {"objgrad": 0}
-
-        def tao_objgrad(tao: Any, x: Any, g: Any) -> float:
-            counts["objgrad"] += 1
-            with g as garr:
-                return objgrad(x.array_r, garr)
-
-        def tao_hessian(tao: Any, x: Any, H: Any, P: Any) -> None:
-            pass  # the Hessian is constant: the shell Mat already is it
-
-        with self.x as xa:
-            xa[...] = x0.reshape(-1)
-        self.lower.set(lower)
-        if upper is None:
-            self.upper.set(petsc.INFINITY)
-        else:
-            with self.upper as ua:
-                ua[...] = upper
-        tao = petsc.TAO().create(comm=self.grid.comm)
+        norms: list[float] = []  # the first iteration's gradient norm, for the report
+        tao = self._create(objgrad, counts)
         try:
-            tao.setType(self.tao_type)
-            if self.tao_type == "python":
-                tao.setPythonType(DEFAULT_PYTHON_TYPE)
-            tao.setObjectiveGradient(tao_objgrad, None)
-            tao.setHessian(
-                tao_hessian, self.hessian, self.hessian if self.pmat is None else self.pmat
-            )
-            tao.setVariableBounds(self.lower, self.upper)
-            tao.setTolerances(gatol=DEFAULT_GATOL, grtol=0.0, gttol=0.0)
-            tao.setMaximumIterations(DEFAULT_MAX_IT)
-            tao.setMaximumFunctionEvaluations(10 * DEFAULT_MAX_IT)
-            if self.tao_type in KSP_TYPES:
-                tao.getKSP().getPC().setType("none" if self.pmat is None else "mat")
-            tao.setFromOptions()
-            if self.pc is not None and self.tao_type in J0_TYPES:
-                attach_lmvm_j0(tao, self.pc)
             context = tao.getPythonContext() if self.tao_type == "python" else None
             if self.pc is not None and isinstance(context, TakesPreconditioner):
                 context.set_preconditioner(self.pc)
-            if monitor is not None:
-
-                def tao_monitor(t: Any) -> None:
-                    if monitor(*t.getSolutionStatus()[:3]):  # True: stop this solve
-                        t.setConvergedReason(petsc.TAO.Reason.DIVERGED_USER)
-
-                tao.setMonitor(tao_monitor)
+            tao.setMonitor(self._monitor(norms, monitor))
             gatol, grtol, _ = tao.getTolerances()
             if gatol < gatol_floor:
                 gatol = gatol_floor
@@ -278,10 +242,64 @@ class BoundSolver:
                 gradient_norm=float(gnorm),
                 solve_time=elapsed,
                 tolerance=float(gatol),
+                relative_tolerance=float(grtol),
+                initial_gradient_norm=norms[0] if norms else np.inf,
             )
         finally:
             tao.destroy()
         return self.x.array_r.copy(), info
+
+    def _load(self, x0: np.ndarray, lower: float, upper: np.ndarray | None) -> None:
+        """The start point and the bounds into the solver's Vecs."""
+        with self.x as xa:
+            xa[...] = x0.reshape(-1)
+        self.lower.set(lower)
+        if upper is None:
+            self.upper.set(self.petsc.INFINITY)
+        else:
+            with self.upper as ua:
+                ua[...] = upper
+
+    def _create(self, objgrad: ObjGrad, counts: dict[str, int]) -> Any:
+        """A TAO of the requested type with the package's defaults, then the user's options."""
+
+        def tao_objgrad(tao: Any, x: Any, g: Any) -> float:
+            counts["objgrad"] += 1
+            with g as garr:
+                return objgrad(x.array_r, garr)
+
+        def tao_hessian(tao: Any, x: Any, H: Any, P: Any) -> None:
+            pass  # the Hessian is constant: the shell Mat already is it
+
+        tao = self.petsc.TAO().create(comm=self.grid.comm)
+        tao.setType(self.tao_type)
+        if self.tao_type == "python":
+            tao.setPythonType(DEFAULT_PYTHON_TYPE)
+        tao.setObjectiveGradient(tao_objgrad, None)
+        tao.setHessian(tao_hessian, self.hessian, self.hessian if self.pmat is None else self.pmat)
+        tao.setVariableBounds(self.lower, self.upper)
+        tao.setTolerances(gatol=DEFAULT_GATOL, grtol=0.0, gttol=0.0)
+        tao.setMaximumIterations(DEFAULT_MAX_IT)
+        tao.setMaximumFunctionEvaluations(10 * DEFAULT_MAX_IT)
+        if self.tao_type in KSP_TYPES:
+            tao.getKSP().getPC().setType("none" if self.pmat is None else "mat")
+        tao.setFromOptions()
+        if self.pc is not None and self.tao_type in J0_TYPES:
+            attach_lmvm_j0(tao, self.pc)
+        return tao
+
+    def _monitor(self, norms: list[float], monitor: Monitor | None) -> Callable[[Any], None]:
+        """TAO's monitor: record the first gradient norm, call ``monitor``, stop if it says so."""
+        stop = self.petsc.TAO.Reason.DIVERGED_USER
+
+        def tao_monitor(tao: Any) -> None:
+            it, f, gnorm = tao.getSolutionStatus()[:3]
+            if not norms:
+                norms.append(float(gnorm))
+            if monitor is not None and monitor(it, f, gnorm):  # True: stop this solve
+                tao.setConvergedReason(stop)
+
+        return tao_monitor
 
     def _pc_count(self) -> int:
         return self.preconditioner_op.applications if self.preconditioner_op is not None else 0

@@ -7,20 +7,7 @@ import numpy as np
 import pytest
 from conftest import cli
 
-GEN = [
-    "--grid",
-    "64",
-    "--hurst",
-    "0.7",
-    "--rms-slope",
-    "0.1",
-    "--rolloff-ratio",
-    "2",
-    "--cutoff-ratio",
-    "16",
-    "--seed",
-    "4",
-]
+GEN = "--grid 64 --hurst 0.7 --rms-slope 0.1 --rolloff-ratio 2 --cutoff-ratio 16 --seed 4".split()
 
 
 def test_periodic_run_schema(tmp_path):
@@ -75,15 +62,7 @@ def test_rerun_from_file_reproduces(tmp_path):
         np.save(tmp_path / "h.npy", f["heights"][:])
         gap = f["mean_gap"][0]
     second = tmp_path / "b.h5"
-    r = cli(
-        "periodic",
-        "--heights",
-        str(tmp_path / "h.npy"),
-        "--pressures",
-        "3e-3",
-        "--output",
-        str(second),
-    )
+    r = cli(*f"periodic --heights {tmp_path / 'h.npy'} --pressures 3e-3 --output {second}".split())
     assert r.returncode == 0, r.stderr
     with h5py.File(second) as f:
         assert f["mean_gap"][0] == pytest.approx(gap, rel=1e-12)
@@ -150,29 +129,12 @@ def test_bad_input_one_line_no_output(tmp_path):
 
 def test_unwritable_output_and_atomic_replace(tmp_path):
     np.save(tmp_path / "ok.npy", np.random.default_rng(0).standard_normal((16, 16)))
-    r = cli(
-        "periodic",
-        "--heights",
-        str(tmp_path / "ok.npy"),
-        "--pressures",
-        "1e-3",
-        "--output",
-        str(tmp_path / "no" / "such" / "dir.h5"),
-    )
+    given = ["periodic", "--heights", str(tmp_path / "ok.npy"), "--pressures", "1e-3"]
+    r = cli(*given, "--output", str(tmp_path / "no" / "such" / "dir.h5"))
     assert r.returncode == 2 and "does not exist" in r.stderr
     out = tmp_path / "keep.h5"
     out.write_bytes(b"previous result")
-    r = cli(
-        "periodic",
-        "--heights",
-        str(tmp_path / "ok.npy"),
-        "--pressures",
-        "1e-3",
-        "--output",
-        str(out),
-        "-tao_type",
-        "nosuch",
-    )
+    r = cli(*given, "--output", str(out), "-tao_type", "nosuch")
     assert r.returncode == 2
     assert out.read_bytes() == b"previous result"
 
@@ -258,19 +220,9 @@ def test_punch_run_schema(tmp_path):
     assert r.returncode == 0, r.stderr
     with h5py.File(out) as f:
         for name in (
-            "approach",
-            "force",
-            "nominal_pressure",
-            "area_fraction",
-            "total_stiffness",
-            "interfacial_stiffness",
-            "iterations",
-            "solve_time",
-            "converged",
-            "tao_reason",
-            "max_pressure",
-            "stiffness",
-        ):
+            "approach force nominal_pressure area_fraction total_stiffness interfacial_stiffness "
+            "iterations solve_time converged tao_reason max_pressure stiffness"
+        ).split():
             assert f[name].shape == (2,), name
         assert f.attrs["geometry"] == "punch" and f.attrs["complete"]
         assert np.array_equal(f["stiffness"][:], f["interfacial_stiffness"][:])

@@ -6,21 +6,16 @@ import h5py
 import numpy as np
 from conftest import ROOT, cli
 
+SCENE = ("compare", "--grid", "64", "--hurst", "0.7", "--rms-slope", "0.1")
+
 
 def test_compare_command(tmp_path):
     out = tmp_path / "cmp.h5"
     r = cli(
-        "compare",
-        "--grid",
-        "64",
-        "--hurst",
-        "0.7",
-        "--rms-slope",
-        "0.1",
+        *SCENE,
         "--seed",
         "2",
-        "--pressure",
-        "3e-3",
+        *"--pressure 3e-3".split(),
         "--solvers",
         f"cg,pk,tron,{ROOT / 'options' / 'bnls.opts'}",
         "--output",
@@ -53,41 +48,13 @@ def test_compare_command(tmp_path):
 def test_compare_time_limit_and_bad_solver(tmp_path):
     out = tmp_path / "cmp.h5"
     r = cli(
-        "compare",
-        "--grid",
-        "64",
-        "--hurst",
-        "0.7",
-        "--rms-slope",
-        "0.1",
-        "--pressure",
-        "3e-3",
-        "--solvers",
-        "bncg",
-        "--time-limit",
-        "0",
-        "--output",
-        str(out),
+        *SCENE, "--pressure", "3e-3", "--solvers", "bncg", "--time-limit", "0", "--output", str(out)
     )
     assert r.returncode == 1, r.stderr
     assert "time limit" in r.stdout
     with h5py.File(out) as f:
         assert not f["bncg"].attrs["converged"]
-    r = cli(
-        "compare",
-        "--grid",
-        "64",
-        "--hurst",
-        "0.7",
-        "--rms-slope",
-        "0.1",
-        "--pressure",
-        "3e-3",
-        "--solvers",
-        "no/such.opts",
-        "--output",
-        str(out),
-    )
+    r = cli(*SCENE, "--pressure", "3e-3", "--solvers", "no/such.opts", "--output", str(out))
     assert r.returncode == 2 and "does not exist" in r.stderr
 
 
@@ -97,15 +64,8 @@ def test_compare_stall_limit(tmp_path):
     window stops it long before it converges (about 100 iterations here)."""
     out = tmp_path / "cmp.h5"
     r = cli(
-        "compare",
-        "--grid",
-        "64",
-        "--hurst",
-        "0.7",
-        "--rms-slope",
-        "0.1",
-        "--pressure",
-        "3e-3",
+        *SCENE,
+        *"--pressure 3e-3".split(),
         "--solvers",
         "bncg",
         "--stall-iterations",
@@ -119,21 +79,7 @@ def test_compare_stall_limit(tmp_path):
         assert not bncg.attrs["converged"] and "stalled" in bncg.attrs["reason"]
         assert bncg.attrs["iterations"] < 50
         assert bncg["natural_residual"][-1] > 1e-6  # stopped far from its tolerance
-    r = cli(
-        "compare",
-        "--grid",
-        "64",
-        "--hurst",
-        "0.7",
-        "--rms-slope",
-        "0.1",
-        "--pressure",
-        "3e-3",
-        "--stall-iterations",
-        "-1",
-        "--output",
-        str(out),
-    )
+    r = cli(*SCENE, "--pressure", "3e-3", "--stall-iterations", "-1", "--output", str(out))
     assert r.returncode == 2 and "must not be negative" in r.stderr
 
 
@@ -142,21 +88,7 @@ def test_compare_under_mpi_matches_serial(tmp_path):
     gap as in serial.  Both references are converged to 1e-12 p0 rms, which bounds their
     mean gaps' difference near 1e-12 relative (measured: 2e-16); 1e-10 leaves room for FFT
     rounding that differs between the serial and the distributed transform."""
-    args = (
-        "compare",
-        "--grid",
-        "64",
-        "--hurst",
-        "0.7",
-        "--rms-slope",
-        "0.1",
-        "--seed",
-        "3",
-        "--pressure",
-        "3e-3",
-        "--solvers",
-        "cg",
-    )
+    args = (*SCENE, "--seed", "3", "--pressure", "3e-3", "--solvers", "cg")
     serial = cli(*args, "--output", str(tmp_path / "serial.h5"))
     parallel = cli(*args, "--output", str(tmp_path / "mpi.h5"), mpi=2, timeout=120)
     assert serial.returncode == 0 and parallel.returncode == 0, parallel.stderr

@@ -671,8 +671,6 @@ def _run_steps(
     """Solve the remaining loads; write, tabulate and print each step as it finishes."""
     total = len(plan.loads)
     for i, step in enumerate(plan.steps(plan.loads[done:], start, args.fields), done):
-        if args.command == "punch" and args.stiffness:
-            step.scalars["stiffness"] = step.scalars["interfacial_stiffness"]
         fields = {"gap": step.gap, "pressure": step.pressure} if args.fields else None
         writer.append(step.scalars, fields, state=step.state)
         table.append(step.scalars)
@@ -752,10 +750,9 @@ def _punch_plan(petsc: Any, args: argparse.Namespace, grid: Any, heights: np.nda
     from .punch import PHARR_BETA, PunchProblem, PunchSolver
 
     mask = grid.scatter(_disk(grid.n)) > 0 if args.footprint == "disk" else None
-    problem = PunchProblem(grid, heights, args.modulus, mask)
-    solver = PunchSolver(
-        petsc, problem, args.flat_stiffness, 1.0 if args.footprint == "disk" else PHARR_BETA
-    )
+    beta = 1.0 if args.footprint == "disk" else PHARR_BETA
+    problem = PunchProblem(grid, heights, args.modulus, mask, args.flat_stiffness, beta)
+    solver = PunchSolver(petsc, problem)
     by_force = args.forces is not None
     if args.sweep is not None:
         n, lo, hi = (
@@ -770,7 +767,10 @@ def _punch_plan(petsc: Any, args: argparse.Namespace, grid: Any, heights: np.nda
         if start is not None:
             solver.restart_from(start)
         for v in loads:
-            yield solver.at_force(v, fields) if by_force else solver.at_approach(v, fields)
+            if by_force:
+                yield solver.at_force(v, fields, stiffness=args.stiffness)
+            else:
+                yield solver.at_approach(v, fields, stiffness=args.stiffness)
 
     intro = (
         f", K_flat = {solver.k_flat:.6g} ({args.flat_stiffness}; analytic "

@@ -33,9 +33,10 @@ import numpy as np
 from . import _petsc
 from .observables import natural_residual
 from .output import COMPARE, annotate, atomic_h5, write_attributes
-from .periodic import VERIFY_FACTOR, sweep
+from .periodic import sweep
 from .problem import PeriodicProblem
 from .solve import BoundSolver, SolveInfo
+from .step import residual_verdict
 
 REFERENCE_GATOL = 1e-12
 STALL_GAIN = 0.9  # a new low of the natural residual must be 10% below the best so far
@@ -178,16 +179,9 @@ def _conclude(traj: Trajectory, info: SolveInfo, recorder: _Recorder) -> None:
     traj.solve_time = info.solve_time - recorder.spent
     traj.iterations = info.iterations
     final = traj.natural_residual[-1] if traj.natural_residual else np.inf
-    limit = VERIFY_FACTOR * max(info.tolerance, 1e-300)
-    traj.converged = info.reason_code > 0 and final <= limit
-    if traj.converged:
-        traj.verification = "ok"
-    elif info.reason_code <= 0:
-        traj.verification = f"TAO: {info.reason}"
-    else:
-        traj.verification = (
-            f"natural residual {final:.1e} > {VERIFY_FACTOR:g} x {info.tolerance:.0e}"
-        )
+    verdict = residual_verdict(final, info.tolerance)
+    traj.converged = info.reason_code > 0 and verdict == "ok"
+    traj.verification = verdict if info.reason_code > 0 else f"TAO: {info.reason}"
 
 
 def compare(

@@ -14,7 +14,6 @@ is within ten times the tolerance TAO was asked for.
 from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -23,41 +22,20 @@ from . import _petsc
 from .continuation import ConvergedStep, LoadPath
 from .fft import make_fft
 from .grid import Grid
-from .observables import step_observables
 from .output import check_finite
-from .problem import PeriodicProblem
-from .solve import BoundSolver, Monitor, SolveInfo
-from .stiffness import periodic_stiffness_exact
+from .problem import PeriodicProblem, verify
+from .solve import BoundSolver, Monitor
+from .step import VERIFY_FACTOR, Step, solve_step
+
+__all__ = [
+    "VERIFY_FACTOR",  # re-exported with Step and verify: scripts import them from here
+    "Step",
+    "check_pressures",
+    "periodic_contact",
+    "sweep",
+    "verify",
+]
 from .validation import positive
-
-VERIFY_FACTOR = 10.0
-
-
-@dataclass
-class Step:
-    """One load step: scalars for the table and the HDF5 file, and optional local fields."""
-
-    scalars: dict[str, Any]
-    gap: np.ndarray | None = None
-    pressure: np.ndarray | None = None
-    state: np.ndarray | None = None  # local gap/pressure the next step starts from
-
-    @property
-    def converged(self) -> bool:
-        return bool(self.scalars["converged"])
-
-
-def verify(info: SolveInfo, obs: dict[str, float], scale_length: float) -> str:
-    """``'ok'`` or the reason a TAO answer cannot be used."""
-    if info.reason_code <= 0:
-        return f"TAO did not converge ({info.reason})"
-    if obs["min_gap"] < -1e-12 * scale_length:
-        return f"bound violated: min gap {obs['min_gap']:.3e}"
-    relative = info.relative_tolerance
-    tol = max(info.tolerance, relative * info.initial_gradient_norm if relative > 0 else 0.0)
-    if not obs["kkt_residual"] <= VERIFY_FACTOR * tol:
-        return f"KKT residual {obs['kkt_residual']:.2e} > {VERIFY_FACTOR:g} x tolerance {tol:.1e}"
-    return "ok"
 
 
 def check_pressures(pressures: Sequence[float]) -> list[float]:
@@ -106,57 +84,15 @@ def sweep(
         for p0 in check_pressures(pressures):
             problem.set_pressure(p0, path.stiffness_estimate(p0))
             problem.start(path.start(p0, x))
-            x_new, info = solver.solve(
-                problem.objective_gradient,
-                problem.start_point,
-                monitor=monitor,
-                gatol_floor=problem.rounding_floor(p0),
+            step, x_new = solve_step(
+                solver, problem, problem.start_point, monitor, stiffness, fields
             )
-            step = measure(petsc, problem, x_new, info, stiffness, fields)
             if step.converged:
                 x = x_new
                 k = step.scalars.get("stiffness", np.nan)
                 path.add(ConvergedStep(p0, step.scalars["mean_gap"], x, k))
             step.state = x.reshape(problem.grid.local_shape) * ell
             yield step
-
-
-def measure(
-    petsc: Any,
-    problem: PeriodicProblem,
-    x: np.ndarray,
-    info: SolveInfo,
-    stiffness: bool = False,
-    fields: bool = False,
-) -> Step:
-    """The step of a solution ``x`` (TAO's scaled gap) at the problem's nominal pressure:
-    observables, TAO's report, the package's verdict and, if asked, the exact stiffness."""
-    grid, ell, p0 = problem.grid, problem.scale_length, problem.nominal_pressure
-    gap = x.reshape(grid.local_shape) * ell
-    pressure = problem.pressure(gap)
-    obs = step_observables(grid, gap, pressure, problem.heights, p0, problem.pixel_stiffness)
-    contact = obs.pop("contact")
-    verdict = verify(info, obs, ell)
-    scalars = {
-        "nominal_pressure": p0,
-        **obs,
-        **info.scalars(verdict),
-        "preconditioner_stiffness": problem.interfacial_stiffness,
-    }
-    if stiffness:
-        k, its = (
-            periodic_stiffness_exact(
-                petsc,
-                grid,
-                problem.stiffness,
-                problem.held_compliance(problem.interfacial_stiffness),
-                contact,
-            )
-            if verdict == "ok"
-            else (np.nan, 0)
-        )
-        scalars.update(stiffness=k, stiffness_iterations=its)
-    return Step(scalars, gap if fields else None, pressure if fields else None)
 
 
 def periodic_contact(

@@ -27,8 +27,12 @@ from . import kernels
 from .fft import FFT, wavevector_magnitude
 from .greens import periodic_compliance, periodic_stiffness
 from .grid import Grid
+from .observables import step_observables
 from .operator import FourierOperator
 from .schur import ContactSchur, quarter
+from .solve import SolveInfo
+from .step import Step, residual_verdict
+from .stiffness import periodic_stiffness_exact
 from .theory import linear_stiffness
 from .validation import non_negative, positive
 
@@ -149,6 +153,17 @@ class MeanModePreconditioner(FourierOperator):
         return out
 
 
+def verify(info: SolveInfo, obs: dict[str, float], scale_length: float) -> str:
+    """``'ok'`` or the reason a TAO answer cannot be used."""
+    if info.reason_code <= 0:
+        return f"TAO did not converge ({info.reason})"
+    if obs["min_gap"] < -1e-12 * scale_length:
+        return f"bound violated: min gap {obs['min_gap']:.3e}"
+    relative = info.relative_tolerance
+    tol = max(info.tolerance, relative * info.initial_gradient_norm if relative > 0 else 0.0)
+    return residual_verdict(obs["kkt_residual"], tol)
+
+
 def schur_limit(n: int) -> int:
     """Largest bound set for the Schur preconditioner on an ``n x n`` grid.
 
@@ -222,6 +237,40 @@ class PeriodicProblem:
             mean_compliance / (self.grid.size * c),
             self.expected_contact_count(p0),
         )
+
+    upper_bound = None  # the gap has no upper bound
+
+    def tolerance_floor(self) -> float:
+        """The tolerance double precision can resolve at the current load."""
+        return self.rounding_floor(self.nominal_pressure)
+
+    def measure(
+        self, x: np.ndarray, info: SolveInfo, stiffness: bool = False, fields: bool = False
+    ) -> Step:
+        """The step of a solution ``x`` (TAO's scaled gap) at the current nominal pressure:
+        observables, TAO's report, the package's verdict and, if asked, the exact stiffness
+        ``-dp0/du_bar`` with the contact set held fixed."""
+        grid, ell, p0 = self.grid, self.scale_length, self.nominal_pressure
+        gap = x.reshape(grid.local_shape) * ell
+        pressure = self.pressure(gap)
+        obs = step_observables(grid, gap, pressure, self.heights, p0, self.pixel_stiffness)
+        contact = obs.pop("contact")
+        verdict = verify(info, obs, ell)
+        scalars = {
+            "nominal_pressure": p0,
+            **obs,
+            **info.scalars(verdict),
+            "preconditioner_stiffness": self.interfacial_stiffness,
+        }
+        if stiffness:
+            held = self.held_compliance(self.interfacial_stiffness) if verdict == "ok" else None
+            k, its = (
+                periodic_stiffness_exact(grid, self.stiffness, held, contact)
+                if held is not None
+                else (np.nan, 0)
+            )
+            scalars.update(stiffness=k, stiffness_iterations=its)
+        return Step(scalars, gap if fields else None, pressure if fields else None)
 
     def stiffness_estimate(self, p0: float) -> float:
         """Persson's interfacial stiffness ``K = p0/u0``, ``u0 = gamma h_rms`` (paper Eq. 1).

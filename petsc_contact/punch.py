@@ -37,9 +37,9 @@ from .greens import hockney_kernel
 from .grid import Grid
 from .operator import PaddedOperator
 from .output import check_finite
-from .periodic import VERIFY_FACTOR, Step
 from .reference import flat_punch
 from .solve import BoundSolver, Monitor, SolveInfo
+from .step import Step, residual_verdict, solve_step
 from .stiffness import punch_stiffness_exact
 from .validation import non_negative, positive
 
@@ -78,12 +78,25 @@ class PunchProblem:
     footprint
         This rank's slab of a boolean mask of the pixels that belong to the punch
         (default: the whole square); pressure is held at zero elsewhere.
+    flat, beta
+        The flat-punch stiffness of paper Eq. 2: ``'grid'``, the flat punch of the same
+        footprint on the same grid (discretisation errors cancel), or ``'analytic'``,
+        ``beta 2 E* sqrt(A/pi)``.
     """
 
     def __init__(
-        self, grid: Grid, heights: np.ndarray, modulus: float, footprint: np.ndarray | None = None
+        self,
+        grid: Grid,
+        heights: np.ndarray,
+        modulus: float,
+        footprint: np.ndarray | None = None,
+        flat: str = "grid",
+        beta: float = PHARR_BETA,
     ) -> None:
         positive("modulus", modulus)
+        if flat not in ("grid", "analytic"):
+            raise ValueError(f"flat-punch stiffness must be 'grid' or 'analytic', got {flat}")
+        self.flat = flat
         self.grid = grid
         self.modulus = float(modulus)
         self.footprint = (
@@ -118,6 +131,11 @@ class PunchProblem:
         self._u = np.empty(grid.local_shape)  # objective buffer, reused every evaluation
         self._recess_flat = self.recess.reshape(-1)
         self._footprint_flat = self.footprint.reshape(-1).astype(float)
+        self.k_flat_analytic = flat_punch_stiffness(
+            self.modulus, self.footprint_pixels * a**2, beta
+        )
+        self.k_flat_grid = self.flat_stiffness_on_grid() if flat == "grid" else np.nan
+        self.k_flat = self.k_flat_grid if flat == "grid" else self.k_flat_analytic
 
     @property
     def upper_bound(self) -> np.ndarray:
@@ -152,12 +170,46 @@ class PunchProblem:
         grad *= c
         return c * float(w)
 
-    def flat_stiffness_on_grid(self, petsc: Any) -> float:
-        """``dF/dδ`` of the flat punch of the same footprint, on the same grid."""
-        k, _ = punch_stiffness_exact(
-            petsc, self.grid, self.compliance, self.inverse, self.footprint
-        )
+    def flat_stiffness_on_grid(self, petsc: Any = None) -> float:
+        """``dF/dδ`` of the flat punch of the same footprint, on the same grid.
+
+        ``petsc`` is accepted for compatibility and not used.
+        """
+        k, _ = punch_stiffness_exact(self.grid, self.compliance, self.inverse, self.footprint)
         return k
+
+    def tolerance_floor(self) -> float:
+        """No floor: the gap residual is not a difference of large stresses."""
+        return 0.0
+
+    def measure(
+        self, x: np.ndarray, info: SolveInfo, stiffness: bool = False, fields: bool = False
+    ) -> Step:
+        """The step of a solution ``x`` (TAO's scaled pressure) at the current approach:
+        observables, TAO's report, the verdict and the exact total and interfacial stiffness
+        (always: load control needs ``dF/dδ``; ``stiffness`` adds the dataset ``stiffness``)."""
+        pressure = x.reshape(self.grid.local_shape) * self.pressure_scale
+        gap = self.gap(pressure)
+        obs = punch_observables(self, pressure, gap)
+        contact = obs.pop("contact")
+        verdict = verify_punch(info, obs)
+        k_tot, k_its = (
+            punch_stiffness_exact(self.grid, self.compliance, self.inverse, contact)
+            if verdict == "ok"
+            else (np.nan, 0)
+        )
+        k_int = interfacial_stiffness(k_tot, self.k_flat) / self.grid.length**2
+        scalars = {
+            **obs,
+            "total_stiffness": k_tot,
+            "interfacial_stiffness": k_int,
+            "flat_punch_stiffness": self.k_flat,
+            "stiffness_iterations": k_its,
+            **info.scalars(verdict),
+        }
+        if stiffness:
+            scalars["stiffness"] = k_int
+        return Step(scalars, gap if fields else None, pressure if fields else None)
 
 
 def punch_observables(
@@ -194,33 +246,25 @@ def verify_punch(info: SolveInfo, obs: dict[str, Any]) -> str:
     """``'ok'`` or the reason a TAO answer cannot be used (natural residual in units of l)."""
     if info.reason_code <= 0:
         return f"TAO did not converge ({info.reason})"
-    if not obs["kkt_residual"] <= VERIFY_FACTOR * info.tolerance:
-        return (
-            f"KKT residual {obs['kkt_residual']:.2e} > {VERIFY_FACTOR:g} x tolerance "
-            f"{info.tolerance:.1e}"
-        )
-    return "ok"
+    return residual_verdict(obs["kkt_residual"], info.tolerance)
 
 
 class PunchSolver:
     """Displacement- and load-controlled solves of one :class:`PunchProblem` (warm-started)."""
 
-    def __init__(
-        self, petsc: Any, problem: PunchProblem, flat: str = "grid", beta: float = PHARR_BETA
-    ) -> None:
-        if flat not in ("grid", "analytic"):
-            raise ValueError(f"flat-punch stiffness must be 'grid' or 'analytic', got {flat}")
-        self.petsc = petsc
+    def __init__(self, petsc: Any, problem: PunchProblem) -> None:
         self.problem = problem
-        grid = problem.grid
-        self.k_flat_analytic = flat_punch_stiffness(
-            problem.modulus, problem.footprint_pixels * grid.pixel**2, beta
-        )
-        self.k_flat_grid = problem.flat_stiffness_on_grid(petsc) if flat == "grid" else np.nan
-        self.flat = flat
-        self.k_flat = self.k_flat_grid if flat == "grid" else self.k_flat_analytic
-        self.x = np.zeros(int(np.prod(grid.local_shape)))
-        self.solver = BoundSolver(petsc, grid, problem.hessian, problem.preconditioner)
+        self.x = np.zeros(int(np.prod(problem.grid.local_shape)))
+        self.solver = BoundSolver(petsc, problem.grid, problem.hessian, problem.preconditioner)
+
+    @property
+    def k_flat(self) -> float:
+        """The flat-punch stiffness in use (:attr:`PunchProblem.k_flat`)."""
+        return self.problem.k_flat
+
+    @property
+    def k_flat_analytic(self) -> float:
+        return self.problem.k_flat_analytic
 
     def close(self) -> None:
         self.solver.close()
@@ -232,42 +276,20 @@ class PunchSolver:
         self.close()
 
     def at_approach(
-        self, delta: float, fields: bool = False, monitor: Monitor | None = None
+        self,
+        delta: float,
+        fields: bool = False,
+        monitor: Monitor | None = None,
+        stiffness: bool = False,
     ) -> Step:
         """Solve at approach ``δ`` from the last converged pressure."""
         pb = self.problem
         pb.set_approach(delta)
-        x_new, info = self.solver.solve(
-            pb.objective_gradient, self.x, monitor=monitor, upper=pb.upper_bound
-        )
-        pressure = x_new.reshape(pb.grid.local_shape) * pb.pressure_scale
-        gap = pb.gap(pressure)
-        obs = punch_observables(pb, pressure, gap)
-        contact = obs.pop("contact")
-        verdict = verify_punch(info, obs)
-        k_tot, k_its = (
-            punch_stiffness_exact(self.petsc, pb.grid, pb.compliance, pb.inverse, contact)
-            if verdict == "ok"
-            else (np.nan, 0)
-        )
-        if verdict == "ok":
+        step, x_new = solve_step(self.solver, pb, self.x, monitor, stiffness, fields)
+        if step.converged:
             self.x = x_new
-        area = pb.grid.length**2
-        k_int = interfacial_stiffness(k_tot, self.k_flat)
-        scalars = {
-            **obs,
-            "total_stiffness": k_tot,
-            "interfacial_stiffness": k_int / area,
-            "flat_punch_stiffness": self.k_flat,
-            "stiffness_iterations": k_its,
-            **info.scalars(verdict),
-        }
-        return Step(
-            scalars,
-            gap if fields else None,
-            pressure if fields else None,
-            state=self.x.reshape(pb.grid.local_shape) * pb.pressure_scale,
-        )
+        step.state = self.x.reshape(pb.grid.local_shape) * pb.pressure_scale
+        return step
 
     def restart_from(self, pressure: np.ndarray) -> None:
         """Start the next solve from this local pressure slab (a resumed run's state)."""
@@ -279,6 +301,7 @@ class PunchSolver:
         fields: bool = False,
         rtol: float = FORCE_RTOL,
         monitor: Monitor | None = None,
+        stiffness: bool = False,
     ) -> Step:
         """Find ``δ`` with ``F(δ) = force`` (relative tolerance ``rtol``) and solve there.
 
@@ -292,7 +315,7 @@ class PunchSolver:
         delta = force / self.k_flat_analytic
         total_its, total_time = 0, 0.0
         for newton in range(1, MAX_NEWTON + 1):  # noqa: B007 - reported after the loop
-            step = self.at_approach(delta, fields, monitor)
+            step = self.at_approach(delta, fields, monitor, stiffness)
             s = step.scalars
             total_its += s["iterations"]
             total_time += s["solve_time"]
@@ -406,8 +429,8 @@ def punch_steps(
         local = grid.scatter(heights)
         check_finite(grid, local)
         mask = None if footprint is None else grid.scatter(footprint).astype(bool)
-        problem = PunchProblem(grid, local, modulus, mask)
-        with PunchSolver(petsc, problem, flat, beta) as solver:
+        problem = PunchProblem(grid, local, modulus, mask, flat, beta)
+        with PunchSolver(petsc, problem) as solver:
             for v in values:
                 if approaches is not None:
                     yield solver.at_approach(v, fields, monitor)

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from . import _petsc
 from .grid import Grid
 from .operator import ShellInterface, shell_matrix
 
@@ -49,7 +50,6 @@ class Restricted(ShellInterface):
 
 
 def restricted_solve(
-    petsc: Any,
     grid: Grid,
     op: ShellInterface,
     pc: ShellInterface,
@@ -69,6 +69,7 @@ def restricted_solve(
         If CG does not converge (the stiffness would be wrong, not approximate).
     """
     a_ctx, m_ctx = Restricted(op, mask), Restricted(pc, mask)
+    petsc = _petsc.petsc()
     mat = shell_matrix(petsc, a_ctx)
     ksp = petsc.KSP().create(comm=grid.comm)
     try:
@@ -99,11 +100,7 @@ def restricted_solve(
 
 
 def periodic_stiffness_exact(
-    petsc: Any,
-    grid: Grid,
-    stiffness: ShellInterface,
-    compliance: ShellInterface,
-    contact: np.ndarray,
+    grid: Grid, stiffness: ShellInterface, compliance: ShellInterface, contact: np.ndarray
 ) -> tuple[float, int]:
     """``K = -dp0/du_bar`` with the contact set held fixed (per apparent area).
 
@@ -115,17 +112,17 @@ def periodic_stiffness_exact(
         return np.inf, 0
     if n_contact == 0:
         return 0.0, 0
-    y, its = restricted_solve(petsc, grid, stiffness, compliance, free)
+    y, its = restricted_solve(grid, stiffness, compliance, free)
     return grid.size / float(grid.sum(y.sum())[0]), its
 
 
 def punch_stiffness_exact(
-    petsc: Any, grid: Grid, compliance: ShellInterface, inverse: ShellInterface, contact: np.ndarray
+    grid: Grid, compliance: ShellInterface, inverse: ShellInterface, contact: np.ndarray
 ) -> tuple[float, int]:
     """Total stiffness ``dF/dδ`` of a punch with the contact set held fixed (0 if none)."""
     if grid.sum(np.count_nonzero(contact))[0] == 0:
         return 0.0, 0
-    y, its = restricted_solve(petsc, grid, compliance, inverse, contact)
+    y, its = restricted_solve(grid, compliance, inverse, contact)
     return grid.pixel**2 * float(grid.sum(y.sum())[0]), its
 
 

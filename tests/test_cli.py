@@ -365,3 +365,34 @@ def _datasets(group):
             yield from _datasets(item)
         else:
             yield item
+
+
+def test_modules_import_only_from_layers_above():
+    """The layering the README's layout states: a module imports only from its own layer
+    or the layers above it (physics never from the PETSc edge, the edge never from the
+    geometries or workflows)."""
+    import ast
+    import pathlib
+
+    layers = [
+        "validation grid fft kernels",
+        "theory greens surface observables continuation reference",
+        "_petsc operator schur solve cg stiffness",
+        "step output plot",
+        "problem punch",
+        "periodic compare ensemble scenes",
+        "cli",
+    ]
+    rank = {m: i for i, layer in enumerate(layers) for m in layer.split()}
+    package = pathlib.Path(__file__).parent.parent / "petsc_contact"
+    for path in package.rglob("*.py"):
+        if path.name == "__init__.py" and path.parent == package:
+            continue
+        parts = path.relative_to(package).with_suffix("").parts
+        mine = rank[parts[0]]
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level and node.module:
+                target = node.module.split(".")[0]
+                if node.level == 1 and len(parts) > 1:  # inside a subpackage
+                    continue
+                assert rank.get(target, -1) <= mine, f"{path.name} imports {target}"

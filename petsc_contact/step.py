@@ -1,0 +1,94 @@
+"""One load step of either geometry: the problem it needs, the driver, what it yields.
+
+Both geometries (:class:`~petsc_contact.problem.PeriodicProblem`,
+:class:`~petsc_contact.punch.PunchProblem`) are a :class:`ContactProblem`: a scaled
+bound-constrained QP that TAO minimises, and the observables and verdict of its solution.
+:func:`solve_step` is the one step driver both go through.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+
+from .grid import Grid
+from .operator import SpectralOperator
+from .solve import BoundSolver, Monitor, SolveInfo
+
+VERIFY_FACTOR = 10.0  # a step's natural residual may exceed the tolerance asked for by this
+
+
+@dataclass
+class Step:
+    """One load step: scalars for the table and the HDF5 file, and optional local fields."""
+
+    scalars: dict[str, Any]
+    gap: np.ndarray | None = None
+    pressure: np.ndarray | None = None
+    state: np.ndarray | None = None  # local gap/pressure the next step starts from
+
+    @property
+    def converged(self) -> bool:
+        return bool(self.scalars["converged"])
+
+
+def residual_verdict(residual: float, tolerance: float) -> str:
+    """``'ok'`` if the natural residual is within :data:`VERIFY_FACTOR` of the tolerance."""
+    if residual <= VERIFY_FACTOR * tolerance:
+        return "ok"
+    return f"KKT residual {residual:.2e} > {VERIFY_FACTOR:g} x tolerance {tolerance:.1e}"
+
+
+class ContactProblem(Protocol):
+    """A contact geometry posed as a scaled bound-constrained QP (lower bound 0)."""
+
+    @property
+    def grid(self) -> Grid: ...
+
+    @property
+    def hessian(self) -> SpectralOperator:
+        """The scaled Hessian (a constant: the QP is quadratic)."""
+        ...
+
+    @property
+    def preconditioner(self) -> SpectralOperator:
+        """An approximation of the Hessian's inverse."""
+        ...
+
+    @property
+    def upper_bound(self) -> np.ndarray | None:
+        """Local upper bounds of the unknowns, or ``None``."""
+        ...
+
+    def objective_gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
+        """The scaled objective at ``x``; its gradient into ``grad``."""
+        ...
+
+    def tolerance_floor(self) -> float:
+        """The smallest gradient tolerance double precision resolves for the current load."""
+        ...
+
+    def measure(self, x: np.ndarray, info: SolveInfo, stiffness: bool, fields: bool) -> Step:
+        """Observables, verdict and (if asked) the held-set stiffness of a solution ``x``."""
+        ...
+
+
+def solve_step(
+    solver: BoundSolver,
+    problem: ContactProblem,
+    start: np.ndarray,
+    monitor: Monitor | None = None,
+    stiffness: bool = False,
+    fields: bool = False,
+) -> tuple[Step, np.ndarray]:
+    """Solve the problem's current load from ``start``; the step and TAO's solution."""
+    x, info = solver.solve(
+        problem.objective_gradient,
+        start,
+        monitor=monitor,
+        upper=problem.upper_bound,
+        gatol_floor=problem.tolerance_floor(),
+    )
+    return problem.measure(x, info, stiffness, fields), x

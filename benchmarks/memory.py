@@ -1,4 +1,4 @@
-"""Peak memory per grid point of one load step, per geometry and solver (issue 6).
+"""Peak memory per grid point of one load step, per geometry and solver.
 
 usage: .venv/bin/python benchmarks/memory.py [--grids 1024 2048 4096] [--punch-grids 512 1024]
 Each case runs in a fresh process; peak resident memory (ru_maxrss) minus the resident memory

@@ -1,4 +1,4 @@
-"""One paper-scale periodic load step with the default solver (issue 6): iterations, time, memory.
+"""One paper-scale periodic load step with the default solver: iterations, time, memory.
 
 usage: [mpiexec -n P] .venv/bin/python benchmarks/paper_scale.py [--grid 8192] [--pressure 1e-3]
        [--rolloff-ratio 2] [--cutoff-ratio N/4] [--profile]

@@ -1,4 +1,4 @@
-"""Strong scaling of a periodic load step, and a projection to many ranks (issue 6).
+"""Strong scaling of a periodic load step, and a projection to many ranks.
 
 usage: mpiexec -n P .venv/bin/python benchmarks/scaling.py [--grid 2048] [--pressure 1e-3]
        [--bandwidth 1.0] [--latency 2e-6] [--project 8192]

@@ -1,4 +1,4 @@
-"""Stability matrix: every solver on stiff and extreme periodic scenes (issue 5).
+"""Stability matrix: every solver on stiff and extreme periodic scenes.
 
 usage: .venv/bin/python benchmarks/stability.py [--grid 128] [--solvers cg pk tron ...]
        [--time-limit 20] [--stall-iterations 1000] [--markdown docs/stability.md]

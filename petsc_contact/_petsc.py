@@ -68,6 +68,21 @@ def init(petsc_args: list[str] | None = None) -> ModuleType:
     return PETSc
 
 
+def library_path() -> str:
+    """The ``libpetsc`` shared library petsc4py runs on (whatever its version or scalar type).
+
+    Read from the process's own memory map after PETSc is loaded, so that ctypes calls go to
+    the very library petsc4py uses.
+    """
+    init()
+    with open("/proc/self/maps") as maps:
+        for line in maps:
+            path = line.split()[-1]
+            if os.path.basename(path).startswith("libpetsc") and ".so" in path:
+                return path
+    raise ImportError("the PETSc library petsc4py uses is not mapped in this process")
+
+
 def petsc() -> ModuleType:
     """Return ``petsc4py.PETSc``, initialising PETSc without options if needed."""
     return init()

@@ -15,7 +15,7 @@ import re
 import signal
 import sys
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -468,12 +468,17 @@ def _check_numbers(args: argparse.Namespace) -> None:
     if getattr(args, "sweep", None) is not None:
         return
     name = next(
-        (n for n in ("pressures", "approaches", "forces") if getattr(args, n, None) is not None),
+        (
+            n
+            for n in ("pressures", "approaches", "forces", "pressure")
+            if getattr(args, n, None) is not None
+        ),
         None,
     )
     if name is None:
         return
     values = getattr(args, name)
+    values = values if isinstance(values, list) else [values]
     if not values:
         raise InputError(f"--{name} needs at least one value")
     for v in values:
@@ -482,11 +487,16 @@ def _check_numbers(args: argparse.Namespace) -> None:
 
 
 def _attributes(
-    args: argparse.Namespace, argv: Sequence[str], petsc: Any, realised: dict[str, float]
+    args: argparse.Namespace,
+    argv: Sequence[str],
+    petsc: Any,
+    realised: dict[str, float],
+    resolved: dict[str, Any],
 ) -> dict[str, Any]:
+    """What reproduces the run: every option (defaults resolved), versions, PETSc options."""
     from .output import file_digest, petsc_options, versions
 
-    params = {k: v for k, v in vars(args).items() if k not in ("quiet",)}
+    params = {k: v for k, v in vars(args).items() if k not in ("quiet",)} | resolved
     attrs: dict[str, Any] = {
         "geometry": "punch" if args.command == "punch" else "periodic",
         "command_line": " ".join(["petsc-contact", *argv]),
@@ -510,7 +520,7 @@ def _attributes(
             seed=args.seed,
             hurst=args.hurst,
             rolloff_ratio=args.rolloff_ratio,
-            cutoff_ratio=args.cutoff_ratio,
+            cutoff_ratio=params["cutoff_ratio"],
             grid=args.grid,
         )
     return attrs
@@ -539,24 +549,32 @@ def _row(i: int, total: int, s: dict[str, Any], columns: tuple[tuple[str, str, s
     )
 
 
-def _scene(args: argparse.Namespace, full: np.ndarray | None) -> tuple[Any, Any, np.ndarray]:
-    """The grid, its FFT and this rank's slab of the heights (read, or generated)."""
+def _scene(
+    args: argparse.Namespace, full: np.ndarray | None
+) -> tuple[Any, Any, np.ndarray, dict[str, Any]]:
+    """The grid, its FFT, this rank's slab of the heights (read, or generated) and the
+    parameters the options left to their defaults (``cutoff_ratio``)."""
     from .fft import make_fft
     from .grid import Grid
 
     grid = Grid(args.grid if full is None else int(full.shape[0]), args.length)
     fft = make_fft(grid)
-    return grid, fft, _surface(args, full, grid, fft)
+    resolved = {}
+    if full is None:
+        resolved["cutoff_ratio"] = (
+            args.cutoff_ratio if args.cutoff_ratio is not None else grid.n / 2
+        )
+    return grid, fft, _surface(args, full, grid, fft, resolved.get("cutoff_ratio")), resolved
 
 
-def _surface(args: argparse.Namespace, full: np.ndarray | None, grid: Any, fft: Any) -> np.ndarray:
+def _surface(
+    args: argparse.Namespace, full: np.ndarray | None, grid: Any, fft: Any, cutoff: Any
+) -> np.ndarray:
     """This rank's slab of the heights: read, or generated (paper Eq. 5)."""
     from .output import check_finite
     from .surface import self_affine
 
     if full is None:
-        cutoff = args.cutoff_ratio if args.cutoff_ratio is not None else grid.n / 2
-        args.cutoff_ratio = cutoff
         return self_affine(
             grid,
             fft,
@@ -581,7 +599,7 @@ def _disk(n: int) -> np.ndarray:
 
 def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
     """Run ``periodic``, ``demo`` or ``punch``; write the HDF5 file (and plot)."""
-    petsc, grid, fft, heights = _prepare(args, petsc_args)
+    petsc, grid, fft, heights, resolved = _prepare(args, petsc_args)
     from .surface import rms_of
 
     realised = {
@@ -592,7 +610,7 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
         plan = _punch_plan(petsc, args, grid, heights)
     else:
         plan = _periodic_plan(petsc, args, grid, fft, heights)
-    attributes = _attributes(args, argv, petsc, realised)
+    attributes = _attributes(args, argv, petsc, realised, {**resolved, **plan.resolved})
     attributes["fft_backend"] = plan.fft_backend
     root = grid.comm.rank == 0
     show = root and not args.quiet
@@ -620,7 +638,7 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
 
 def _prepare(
     args: argparse.Namespace, petsc_args: list[str], check_type: bool = True
-) -> tuple[Any, Any, Any, np.ndarray]:
+) -> tuple[Any, Any, Any, np.ndarray, dict[str, Any]]:
     """Check the input, then PETSc, the grid, its FFT and this rank's heights."""
     from . import _petsc
     from .output import check_writable, load_heights
@@ -634,8 +652,8 @@ def _prepare(
     petsc = _petsc.init(petsc_args)
     if check_type:
         check_tao_type(petsc)
-    grid, fft, heights = _scene(args, full)
-    return petsc, grid, fft, heights
+    grid, fft, heights, resolved = _scene(args, full)
+    return petsc, grid, fft, heights, resolved
 
 
 def _open_writer(
@@ -717,6 +735,7 @@ class Plan:
     intro: str
     close: Callable[[], None] = lambda: None
     fft_backend: str = ""  # class name of the operator's FFT backend (fft module)
+    resolved: dict[str, Any] = field(default_factory=dict)  # options the plan resolved
 
 
 def _periodic_plan(
@@ -727,22 +746,25 @@ def _periodic_plan(
 
     problem = PeriodicProblem(grid, fft, heights, args.modulus)
     p_full = problem.full_contact_pressure()
+    resolved = {}
+    pressures = args.pressures
     if args.sweep is not None:
         n, lo, hi = (
             (args.sweep + [1e-4 * p_full, 0.9 * p_full])[:3] if len(args.sweep) == 1 else args.sweep
         )
-        args.pressures = [float(p) for p in np.geomspace(lo, hi, int(n))]
-        args.sweep = None  # resolved: the file records the pressures themselves
+        pressures = [float(p) for p in np.geomspace(lo, hi, int(n))]
+        resolved = {"pressures": pressures, "sweep": None}  # the file records the loads
 
     def steps(loads: list[float], start: np.ndarray | None, fields: bool) -> Iterator[Any]:
         return sweep(petsc, problem, loads, fields, stiffness=args.stiffness, start=start)
 
     return Plan(
-        list(args.pressures),
+        list(pressures),
         steps,
         PERIODIC_COLUMNS,
         f", full contact at p0 = {p_full:.4g}",
         fft_backend=type(fft).__name__,
+        resolved=resolved,
     )
 
 
@@ -754,14 +776,16 @@ def _punch_plan(petsc: Any, args: argparse.Namespace, grid: Any, heights: np.nda
     problem = PunchProblem(grid, heights, args.modulus, mask, args.flat_stiffness, beta)
     solver = PunchSolver(petsc, problem)
     by_force = args.forces is not None
+    resolved = {}
+    approaches = args.approaches
     if args.sweep is not None:
         n, lo, hi = (
             (args.sweep + [0.01 * problem.scale_length, 3 * problem.scale_length])[:3]
             if len(args.sweep) == 1
             else args.sweep
         )
-        args.approaches = [float(d) for d in np.geomspace(lo, hi, int(n))]
-        args.sweep = None  # resolved: the file records the approaches themselves
+        approaches = [float(d) for d in np.geomspace(lo, hi, int(n))]
+        resolved = {"approaches": approaches, "sweep": None}  # the file records the loads
 
     def steps(loads: list[float], start: np.ndarray | None, fields: bool) -> Iterator[Any]:
         if start is not None:
@@ -777,12 +801,13 @@ def _punch_plan(petsc: Any, args: argparse.Namespace, grid: Any, heights: np.nda
         f"{solver.k_flat_analytic:.6g})"
     )
     return Plan(
-        list(args.forces if by_force else args.approaches),
+        list(args.forces if by_force else approaches),
         steps,
         PUNCH_COLUMNS + (("p0", "nominal_pressure", "{:>10.3e}"),),
         intro,
         solver.close,
         type(problem.compliance.fft).__name__,
+        resolved,
     )
 
 
@@ -873,13 +898,12 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
     from .problem import PeriodicProblem
     from .surface import rms_of
 
-    args.pressures = [args.pressure]
     if not args.time_limit >= 0 or args.stall_iterations < 0:
         raise InputError("--time-limit and --stall-iterations must not be negative")
     solvers = args.solvers or list(DEFAULT_SOLVERS)
     for name in solvers:
         solver_options(name)  # unknown options files fail here, before any work
-    petsc, grid, fft, heights = _prepare(args, petsc_args, check_type=False)
+    petsc, grid, fft, heights, resolved = _prepare(args, petsc_args, check_type=False)
     problem = PeriodicProblem(grid, fft, heights, args.modulus)
     show = grid.comm.rank == 0 and not args.quiet
     if show:
@@ -902,7 +926,7 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
     status = 0 if all(t.converged for t in trajectories) else EXIT_NOT_CONVERGED
     if grid.comm.rank != 0:
         return status  # the same on every rank: the verdicts come from reduced residuals
-    attrs = _attributes(args, argv, petsc, realised)
+    attrs = _attributes(args, argv, petsc, realised, resolved)
     csv, png = write_compare(args.output, reference, trajectories, attrs)
     if show:
         print(

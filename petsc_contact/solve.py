@@ -30,6 +30,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from . import _petsc
 from .grid import Grid
 from .operator import SpectralOperator, shell_matrix
 
@@ -113,7 +114,7 @@ def _type_name(tao: Any, context: Any) -> str:
 
 
 def _libpetsc() -> ctypes.CDLL:
-    lib = ctypes.CDLL("libpetsc_real.so.3.18")
+    lib = ctypes.CDLL(_petsc.library_path())
     for name in ("TaoGetLMVMMatrix", "MatLMVMSetJ0PC"):
         getattr(lib, name).argtypes = [ctypes.c_void_p, ctypes.c_void_p]
         getattr(lib, name).restype = ctypes.c_int

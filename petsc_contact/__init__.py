@@ -11,7 +11,7 @@ PETSc is found and initialised lazily (:func:`petsc_contact._petsc.init`).
 import os
 
 # FFTW runs one thread per core; a threaded BLAS spinning beside it (np.dot, PETSc's VecDot)
-# made every FFT 10x slower here.  Effective when numpy is not imported yet (the CLI).
+# slows every FFT down many times.  Effective when numpy is not imported yet (the CLI).
 # Not OMP_NUM_THREADS: Debian's FFTW threads through OpenMP, and OMP_NUM_THREADS=1 halves it.
 # Passive OpenMP waiting keeps FFTW's idle threads off the core numpy works on (~5-10%).
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")

@@ -2,12 +2,12 @@
 
 One interface, three backends chosen by the communicator size:
 
-- one rank: FFTW through Debian's ``pyfftw``, measured plan, one thread per core
-  (fastest measured here: 512^2 round trip 0.52 ms vs 1.5 ms scipy, 8.7 ms numpy);
+- one rank: FFTW through Debian's ``pyfftw``, measured plan, one thread per core (faster
+  than scipy's and numpy's FFTs; docs/performance.md);
 - several ranks: FFTW's own MPI transforms (``libfftw3_mpi``, the library PETSc's MATFFTW
   uses, called through ctypes) with the spectrum in transposed order, which skips one global
-  transpose per direction and keeps every local transform contiguous (2048^2 on 2 ranks:
-  27-43 ms per round trip against 64-92 ms for mpi4py-fft in the same runs);
+  transpose per direction and keeps every local transform contiguous (faster than
+  mpi4py-fft; docs/parallel.md);
 - several ranks whose row slabs are not FFTW's (FFTW gives every rank ``ceil(n/P)`` rows but
   the last; :func:`~petsc_contact.grid.block_rows` spreads the remainder, e.g. 22/21/21 rows
   for n = 64 on 3 ranks), or without ``libfftw3_mpi``: the slab-decomposed parallel FFT of
@@ -25,8 +25,8 @@ spectrum) and ``result`` (output of :meth:`backward`).  Both transforms are unno
 :meth:`forward_from` and :meth:`backward_into` are the hot path of every operator (one round
 trip with a spectral multiplier between them, :mod:`petsc_contact.operator`).  The serial
 backend runs FFTW directly on the caller's arrays when they are as aligned as its plans
-(PETSc's Vec arrays are: 16 bytes), which saves two copies of the field per application
-(24 -> 19 ms per round trip at 2048^2 here); otherwise it copies.
+(PETSc's Vec arrays are: 16 bytes), which saves two copies of the field per application;
+otherwise it copies.
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ def default_threads() -> int:
 class _Wisdom:
     """FFTW's measured plans kept on disk between runs (the serial backend's).
 
-    Measuring plans for an 8192^2 grid takes 13 s here; with the wisdom of an earlier run
+    Measuring plans for a large grid takes seconds; with the wisdom of an earlier run
     FFTW plans at once, and every run of a machine uses the same plans (so the same
     rounding, and the same iteration counts).  The file is
     ``$XDG_CACHE_HOME/petsc-contact/fftw-wisdom-HOST`` (``~/.cache`` by default), or the path

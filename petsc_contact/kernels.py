@@ -1,8 +1,7 @@
 """Fused element-wise passes of the constrained CG and of the spectral operators (numba).
 
 Every function here does in one pass over memory what numpy does in several: the CG's
-vector work is memory-bound, so the number of passes is its cost.  At 4096^2 the free-set
-pass (:func:`free_set`) took 15 ms here against 28 ms for the same numpy expressions.
+vector work is memory-bound, so the number of passes is its cost (docs/solvers.md).
 Bounds are given as a float (the same everywhere) or an array of the vector's length.
 Sums are reassociated (``fastmath`` reassociation and contraction only: infinite bounds and
 NaNs keep their IEEE meaning), so they differ from numpy's in rounding only.
@@ -118,8 +117,8 @@ def scale_spectrum(values: np.ndarray, multiplier: np.ndarray, single: np.ndarra
     and ``single`` the complex indices of the entries of multiplicity ``w = 1``
     (:func:`~petsc_contact.fft.single_entries`; all others have ``w = 2``).  With a
     normalised kernel the sum over all ranks is the quadratic form ``x.Kx`` of the
-    transformed field (Parseval).  Flat loops of floats: numba vectorises these (one complex
-    per step ran 2.8x slower here).
+    transformed field (Parseval).  Flat loops of floats: numba vectorises these, and not a
+    loop over complex entries.
     """
     once = 0.0
     for m in single:

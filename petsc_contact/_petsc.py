@@ -7,12 +7,16 @@ path itself, so users never set ``PETSC_DIR``.
 
 from __future__ import annotations
 
+import ctypes
 import glob
 import os
+import shlex
 import sys
-from collections.abc import Iterator, Sequence
+import warnings
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from types import ModuleType
+from typing import Any, TypeAlias
 
 DEBIAN_PETSC_DIRS = ("/usr/lib/petscdir/petsc3.18/x86_64-linux-gnu-real",)
 
@@ -88,20 +92,73 @@ def petsc() -> ModuleType:
     return init()
 
 
+OptionsArg: TypeAlias = Sequence[str] | str | Mapping[str, Any] | None
+
+
+def option_list(options: OptionsArg) -> list[str]:
+    """PETSc options as a command-line list, from any of the forms the Python API takes.
+
+    ``["-tao_type", "bncg"]``, the string ``"-tao_type bncg"`` and the mapping
+    ``{"tao_type": "bncg"}`` (a value of ``None`` or ``True`` gives a bare flag) are the same.
+    Raises ``TypeError`` for anything else, and ``ValueError`` for options without a dash.
+    """
+    if options is None:
+        return []
+    if isinstance(options, str):
+        args = shlex.split(options)
+    elif isinstance(options, Mapping):
+        args = []
+        for key, value in options.items():
+            args.append(key if str(key).startswith("-") else f"-{key}")
+            if value is not None and value is not True:
+                args.append(str(value))
+    elif isinstance(options, (list, tuple)) and all(isinstance(o, str) for o in options):
+        args = list(options)
+    else:
+        raise TypeError(
+            "options must be a list of strings such as ['-tao_type', 'bncg'], such a string "
+            f"or a dict, not {type(options).__name__}"
+        )
+    if args and not args[0].startswith("-"):
+        raise ValueError(f"PETSc options start with a dash: got '{args[0]}'")
+    return args
+
+
+def unused_options(names: Iterable[str] | None = None) -> list[str]:
+    """The options in the database (or those of ``names`` in it) that nothing has read."""
+    options = init().Options().getAll()
+    lib = ctypes.CDLL(library_path())
+    lib.PetscOptionsUsed.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.POINTER(ctypes.c_int)]
+    unused = []
+    for name in options if names is None else names:
+        flag = ctypes.c_int(0)
+        known = name in options
+        if known and lib.PetscOptionsUsed(None, name.encode(), ctypes.byref(flag)) == 0:
+            unused += [] if flag.value else [f"-{name}"]
+    return sorted(unused)
+
+
 @contextmanager
-def scoped_options(args: Sequence[str] | None) -> Iterator[ModuleType]:
+def scoped_options(args: OptionsArg) -> Iterator[ModuleType]:
     """Insert PETSc options for the duration of a ``with`` block, then restore the database.
 
-    ``args`` are command-line style (``["-tao_type", "bncg", "-options_file", "f.opts"]``).
+    ``args`` are command-line style (``["-tao_type", "bncg", "-options_file", "f.opts"]``),
+    or any form :func:`option_list` takes.  Options of the block that nothing read (a
+    misspelt ``-tao_typo``) are reported as a warning when it ends.
     """
     petsc = init()
     opts = petsc.Options()
     before = opts.getAll()
-    if args:
-        opts.insertString(" ".join(args))
+    given = option_list(args)
+    if given:
+        opts.insertString(" ".join(shlex.quote(a) for a in given))
     try:
         yield petsc
     finally:
+        mine = [k for k, v in opts.getAll().items() if before.get(k) != v]
+        unused = unused_options(mine)
+        if unused:
+            warnings.warn(f"PETSc options never used: {' '.join(unused)}", stacklevel=3)
         for name, value in opts.getAll().items():
             if name not in before:
                 opts.delValue(name)

@@ -21,7 +21,16 @@ from typing import Any
 import numpy as np
 
 from . import __version__
-from .output import ENSEMBLE, EXPERIMENT, annotate, atomic_h5, ensemble_entry, schema_markdown
+from .output import (
+    ENSEMBLE,
+    EXPERIMENT,
+    annotate,
+    atomic_h5,
+    ensemble_entry,
+    schema_markdown,
+    write_attributes,
+)
+from .step import FIELD_NAMES
 
 EXIT_NOT_CONVERGED = 1
 EXIT_BAD_INPUT = 2
@@ -240,7 +249,9 @@ def _output_arguments(p: argparse.ArgumentParser, d: dict[str, Any]) -> None:
         help="HDF5 results (written atomically)",
     )
     p.add_argument(
-        "--fields", action="store_true", help="store the gap and pressure fields of every step"
+        "--fields",
+        action="store_true",
+        help="store the gap, pressure and contact fields of every step (compressed)",
     )
     p.add_argument(
         "--plot",
@@ -258,6 +269,10 @@ def _output_arguments(p: argparse.ArgumentParser, d: dict[str, Any]) -> None:
 
 
 COMMANDS = {  # name: (one-line help, description)
+    "plot": (
+        "draw a map of a stored field (pressure, gap, contact, heights)",
+        "A map of one load step's field over the cell, with physical axes and a colour bar.",
+    ),
     "schema": (
         "print the HDF5 output schema (docs/output-schema.md)",
         "Every dataset the commands write, with its units and description.",
@@ -278,7 +293,8 @@ COMMANDS = {  # name: (one-line help, description)
         "periodic sweeps over many seeds, with statistics",
         "The periodic scene for each seed (one resumable file "
         "OUT_seedK.h5 per seed), then mean, std and standard "
-        "error over seeds of every per-step quantity in OUT.h5.",
+        "error over seeds of every per-step quantity in OUT.h5. Every seed gets the "
+        "same pressures: --sweep N takes its default range from the first seed's surface.",
     ),
     "compare": (
         "error against wall time for several solvers",
@@ -326,8 +342,22 @@ def build_parser() -> argparse.ArgumentParser:
     _compare_parser(sub)
     _experiment_parser(sub)
     _demo_parser(sub)
+    _plot_parser(sub)
     _command(sub, "schema")
     return parser
+
+
+def _plot_parser(sub: Any) -> None:
+    p = _command(sub, "plot")
+    p.add_argument("file", metavar="OUT.h5", help="a periodic or punch output file")
+    p.add_argument("--step", type=int, default=-1, metavar="K", help="load step (default: last)")
+    p.add_argument(
+        "--field",
+        choices=("pressure", "gap", "contact", "heights"),
+        default="pressure",
+        help="the map to draw (default pressure; fields need a run with --fields)",
+    )
+    p.add_argument("--output", metavar="PNG", help="default: OUT_FIELD_stepK.png")
 
 
 def _geometry_parsers(sub: Any) -> None:
@@ -406,9 +436,9 @@ def _experiment_parser(sub: Any) -> None:
     exp.add_argument(
         "--table",
         required=True,
-        metavar="FILE.csv",
-        help="two columns: nominal pressure p, displacement s of the block's "
-        "top (header lines starting with # are skipped)",
+        metavar="FILE",
+        help="two columns, comma- or whitespace-separated: nominal pressure p, displacement "
+        "s of the block's top (# comments and one header line are skipped)",
     )
     exp.add_argument(
         "--modulus",
@@ -667,7 +697,7 @@ def _open_writer(
     """The step writer, the steps already done and the state to start from (``--resume``)."""
     from .output import StepWriter, read_resume
 
-    fields = ("gap", "pressure") if args.fields else ()
+    fields = FIELD_NAMES if args.fields else ()
     done, state = read_resume(args.output, attributes["parameters"]) if args.resume else (0, None)
     if not done:
         return StepWriter(args.output, grid, attributes, heights, fields), 0, None
@@ -689,7 +719,7 @@ def _run_steps(
     """Solve the remaining loads; write, tabulate and print each step as it finishes."""
     total = len(plan.loads)
     for i, step in enumerate(plan.steps(plan.loads[done:], start, args.fields), done):
-        fields = {"gap": step.gap, "pressure": step.pressure} if args.fields else None
+        fields = {name: step.field(name) for name in FIELD_NAMES} if args.fields else None
         writer.append(step.scalars, fields, state=step.state)
         table.append(step.scalars)
         if show:
@@ -833,12 +863,10 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
 
     if args.heights is not None:
         raise InputError("ensemble needs a generated surface (--grid, --hurst, ...), not --heights")
-    if args.pressures is None and len(args.sweep) == 1:
-        raise InputError(
-            "ensemble needs the same pressures for every seed: give "
-            "--pressures or --sweep N,PMIN,PMAX"
-        )
     check_writable(args.output)
+    if args.plot:
+        check_writable(args.plot)
+    pressures = args.pressures if args.pressures is not None else _ensemble_loads(args, petsc_args)
     stem = args.output[:-3] if args.output.endswith(".h5") else args.output
     files, status = [], 0
     for seed in args.seeds:
@@ -847,7 +875,11 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
         if args.resume and os.path.exists(path):
             continue  # finished earlier: nothing recomputed
         one = argparse.Namespace(
-            **{**vars(args), "seed": seed, "output": path, "command": "periodic", "plot": None}
+            **{
+                **vars(args),
+                **{"seed": seed, "output": path, "command": "periodic", "plot": None},
+                **{"pressures": pressures, "sweep": None},
+            }
         )
         del one.seeds
         code = run(one, argv, petsc_args)
@@ -856,17 +888,59 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
         status = max(status, code)
     from mpi4py import MPI
 
+    record = _ensemble_record(args, argv, pressures)  # collective: every rank joins
     if MPI.COMM_WORLD.rank == 0:
-        _write_ensemble(args, files, ensemble_statistics, h5py)
+        summary = _write_ensemble(args, files, ensemble_statistics, h5py, record)
+        if args.plot:
+            from .plot import plot_ensemble
+
+            plot_ensemble(args.plot, summary, args.modulus)
         if not args.quiet:
-            print(f"# wrote {args.output} ({len(files)} seeds)")
+            plotted = f" and {args.plot}" if args.plot else ""
+            print(f"# wrote {args.output}{plotted} ({len(files)} seeds)")
     return status
+
+
+def _ensemble_loads(args: argparse.Namespace, petsc_args: list[str]) -> list[float]:
+    """``--sweep N[,PMIN,PMAX]``'s pressures, the same for every seed: the default range is
+    ``1e-4`` to ``0.9`` times the full-contact pressure of the first seed's surface."""
+    if len(args.sweep) == 3:
+        n, lo, hi = args.sweep
+    else:
+        from .problem import PeriodicProblem
+
+        first = argparse.Namespace(**{**vars(args), "seed": args.seeds[0]})
+        _, grid, fft, heights, _ = _prepare(first, petsc_args)
+        p_full = PeriodicProblem(grid, fft, heights, args.modulus).full_contact_pressure()
+        n, lo, hi = args.sweep[0], 1e-4 * p_full, 0.9 * p_full
+    return [float(p) for p in np.geomspace(lo, hi, int(n))]
+
+
+def _ensemble_record(
+    args: argparse.Namespace, argv: Sequence[str], pressures: list[float]
+) -> dict[str, Any]:
+    """What reproduces an ensemble: its command, options, versions and PETSc options."""
+    from . import _petsc
+    from .output import petsc_options, versions
+
+    petsc = _petsc.petsc()
+    return {
+        "command_line": " ".join(["petsc-contact", *argv]),
+        "parameters": {k: v for k, v in vars(args).items() if k != "quiet"}
+        | {"pressures": pressures, "sweep": None},
+        "petsc_options": petsc_options(petsc),
+        "versions": versions(petsc),
+        "mpi_size": petsc.COMM_WORLD.getSize(),
+    }
 
 
 ENSEMBLE_QUANTITIES = tuple(k for k in ENSEMBLE if k not in ("seeds", "nominal_pressure"))
 
 
-def _write_ensemble(args: argparse.Namespace, files: list[str], stats: Any, h5py: Any) -> None:
+def _write_ensemble(
+    args: argparse.Namespace, files: list[str], stats: Any, h5py: Any, record: dict[str, Any]
+) -> dict[str, np.ndarray]:
+    """The summary over seeds, written to ``OUT.h5`` with the run record; returned too."""
     tables: dict[str, list[np.ndarray]] = {}
     for path in files:
         with h5py.File(path, "r") as f:
@@ -875,21 +949,18 @@ def _write_ensemble(args: argparse.Namespace, files: list[str], stats: Any, h5py
             for q in ENSEMBLE_QUANTITIES:
                 if q in f:
                     tables.setdefault(q, []).append(np.where(ok, f[q][:], np.nan))
+    summary: dict[str, np.ndarray] = {"seeds": np.array(args.seeds), "nominal_pressure": pressure}
+    for q, rows in tables.items():
+        summary[q] = np.array(rows)
+        summary.update({f"{q}_{name}": v for name, v in stats(summary[q]).items()})
     with atomic_h5(args.output) as out:
-        out.attrs["geometry"] = "periodic ensemble"
-        out.attrs["parameters"] = json.dumps(
-            {k: v for k, v in vars(args).items() if k not in ("quiet",)}
-        )
+        write_attributes(out, {"geometry": "periodic ensemble", **record})
         out.attrs["seed_files"] = json.dumps([os.path.abspath(p) for p in files])
-        out["seeds"] = np.array(args.seeds)
-        out["nominal_pressure"] = pressure
-        for q, rows in tables.items():
-            values = np.array(rows)
-            out[q] = values
-            for name, v in stats(values).items():
-                out[f"{q}_{name}"] = v
+        for name, values in summary.items():
+            out[name] = values
         out.attrs["complete"] = True
         annotate(out, ensemble_entry)
+    return summary
 
 
 def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
@@ -949,9 +1020,42 @@ def _print_trajectory(trajectory: Any) -> None:
     )
 
 
+def run_plot(args: argparse.Namespace) -> int:
+    """``petsc-contact plot``: one field of one step as a map."""
+    import h5py
+
+    from .output import ENTRIES, check_writable
+    from .plot import plot_field
+
+    if not os.path.isfile(args.file):
+        raise InputError(f"'{args.file}' does not exist")
+    with h5py.File(args.file, "r") as f:
+        if args.field not in f:
+            hint = " (run with --fields)" if args.field != "heights" else ""
+            raise InputError(f"'{args.file}' has no dataset '{args.field}'{hint}")
+        data = f[args.field]
+        steps = data.shape[0] if data.ndim == 3 else 1
+        if not -steps <= args.step < steps:
+            raise InputError(f"--step {args.step} is out of range: the file has {steps} steps")
+        values = data[args.step] if data.ndim == 3 else data[...]
+        length = float(f.attrs.get("length", 1.0))
+        step = args.step % steps
+        load = f["nominal_pressure"][step] if "nominal_pressure" in f else np.nan
+        per_step = data.ndim == 3
+    stem = args.file[:-3] if args.file.endswith(".h5") else args.file
+    out = args.output or f"{stem}_{args.field}_step{step}.png"
+    check_writable(out)
+    title = f"{args.field}, step {step}" + (f", p0 = {load:.3g}" if per_step else "")
+    unit = {"length": "in the unit of --length", "pressure": "in the unit of --modulus"}
+    label = f"{args.field} {unit.get(ENTRIES[args.field].units, '(1: in contact)')}"
+    plot_field(out, values, length, title, label, args.field == "contact")
+    print(f"# wrote {out}")
+    return 0
+
+
 def run_experiment(args: argparse.Namespace) -> int:
     """``petsc-contact experiment``: Eq. C3 on a measured ``p(s)`` table."""
-    from .output import check_writable
+    from .output import check_writable, load_table
     from .theory import block_corrected_stiffness
 
     for name in ("modulus", "thickness"):
@@ -960,12 +1064,7 @@ def run_experiment(args: argparse.Namespace) -> int:
             raise InputError(f"--{name} must be positive and finite, got {v}")
     if not os.path.isfile(args.table):
         raise InputError(f"table '{args.table}' does not exist")
-    try:
-        table = np.loadtxt(args.table, delimiter=",", comments="#", ndmin=2)
-    except ValueError as exc:
-        raise InputError(f"cannot read '{args.table}' as two numeric columns: {exc}") from None
-    if table.shape[1] != 2 or not np.all(np.isfinite(table)):
-        raise InputError(f"'{args.table}' must have two finite columns (p, s)")
+    table = load_table(args.table, 2)
     check_writable(args.output)
     p, disp = table[:, 0], table[:, 1]
     k_star, k = block_corrected_stiffness(p, disp, args.modulus, args.thickness)
@@ -1002,16 +1101,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(ours)
     signal.signal(signal.SIGTERM, _interrupt)
     try:
-        if args.command == "ensemble":
-            return run_ensemble(args, argv, petsc_args)
-        if args.command == "experiment":
-            return run_experiment(args)
-        if args.command == "compare":
-            return run_compare(args, argv, petsc_args)
-        if args.command == "schema":
-            sys.stdout.write(schema_markdown())
-            return 0
-        return run(args, argv, petsc_args)
+        status = _dispatch(args, argv, petsc_args)
+        _report_unused(petsc_args)
+        return status
     except (InputError, ValueError, OSError) as exc:
         _error(str(exc))
         return EXIT_BAD_INPUT
@@ -1024,11 +1116,46 @@ def main(argv: Sequence[str] | None = None) -> int:
         raise
 
 
-def _error(message: str) -> None:
+def _dispatch(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
+    if args.command == "ensemble":
+        return run_ensemble(args, argv, petsc_args)
+    if args.command == "experiment":
+        return run_experiment(args)
+    if args.command == "compare":
+        return run_compare(args, argv, petsc_args)
+    if args.command == "schema":
+        sys.stdout.write(schema_markdown())
+        return 0
+    if args.command == "plot":
+        return run_plot(args)
+    return run(args, argv, petsc_args)
+
+
+def _report_unused(petsc_args: list[str]) -> None:
+    """Warn about the user's PETSc options that nothing read (a misspelt ``-tao_typo``)."""
+    if not petsc_args or "petsc4py.PETSc" not in sys.modules:
+        return
+    from . import _petsc
+
+    names = [a[1:] for a in petsc_args if a.startswith("-") and not _is_number(a)]
+    unused = _petsc.unused_options(names)
+    if unused:
+        _error(f"PETSc options never used: {' '.join(unused)}", "warning")
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _error(message: str, kind: str = "error") -> None:
     from mpi4py import MPI
 
     if MPI.COMM_WORLD.rank == 0:
-        print(f"petsc-contact: error: {message}", file=sys.stderr)
+        print(f"petsc-contact: {kind}: {message}", file=sys.stderr)
 
 
 if __name__ == "__main__":

@@ -29,6 +29,20 @@ def periodic_compliance(q: np.ndarray | float, modulus: float, q_zero: float) ->
     return 2.0 / (modulus * np.where(q > 0, q, q_zero))
 
 
+def mean_mode_compliance(modulus: float, q0: float, interfacial_stiffness: float) -> float:
+    """The compliance a preconditioner gives the mean mode ``q = 0``: the package's one
+    convention for it.
+
+    The periodic stiffness vanishes at ``q = 0``, so its inverse has no value there.  Held
+    by an interfacial stiffness ``K > 0`` the mean gap moves by ``dp0/K``, so the entry is
+    ``1/K`` (:func:`held_compliance`); with no support it is the free compliance of the
+    longest wavelength, ``2/(E* q0)`` (:func:`periodic_compliance`).
+    """
+    if interfacial_stiffness > 0:
+        return 1.0 / interfacial_stiffness
+    return float(periodic_compliance(0.0, modulus, q0))
+
+
 def held_compliance(q: np.ndarray, modulus: float, interfacial_stiffness: float) -> np.ndarray:
     """Compliance ``1 / (E* |q|/2 + K)`` of the open surface of a contact of stiffness ``K``.
 

@@ -10,6 +10,7 @@ gives TAO both the exact Hessian and the Fourier preconditioner.
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 import numpy as np
@@ -68,7 +69,17 @@ class SpectralOperator(ShellInterface):
 
     fft: FFT
     multiplier: np.ndarray
+    transform_size: int  # N, the points of the transform: a round trip multiplies by N
     _single: np.ndarray
+
+    def normalised(self, value: Any) -> Any:
+        """A physical multiplier (scalar or array) in the units this operator stores: over
+        :attr:`transform_size`.  The package's one FFT normalisation convention."""
+        return value / self.transform_size
+
+    def inverse_spectrum(self) -> np.ndarray:
+        """The normalised spectrum of the inverse operator: ``1/(N a)`` over ``N``."""
+        return self.normalised(self.normalised(1.0)) / self.spectrum
 
     def begin_mult(self, x: np.ndarray) -> float:
         """Transform and multiply ``x`` (local array); return this rank's part of ``x.Ax``."""
@@ -99,8 +110,7 @@ class SpectralOperator(ShellInterface):
 
     def _with(self, multiplier: np.ndarray) -> Any:
         """Another operator of this kind on the same FFT, with ``multiplier``."""
-        other = object.__new__(type(self))
-        other.__dict__.update(self.__dict__)
+        other = copy.copy(self)
         other.multiplier = multiplier
         other.applications = 0
         return other
@@ -132,7 +142,8 @@ class FourierOperator(SpectralOperator):
     def __init__(self, grid: Grid, fft: FFT, kernel: np.ndarray) -> None:
         self.grid = grid
         self.fft = fft
-        self.multiplier = twice(kernel / grid.size)
+        self.transform_size = grid.size
+        self.multiplier = twice(self.normalised(kernel))
         self._single = single_entries(grid, fft)
         self.applications = 0
 
@@ -148,8 +159,8 @@ class FourierOperator(SpectralOperator):
         of ``op`` gives ``inf`` when ``support`` is 0 (the caller sets that entry).
         """
         np.add(op.multiplier, support, out=self.multiplier)
-        with np.errstate(divide="ignore"):
-            np.divide(1.0 / self.grid.size**2, self.multiplier, out=self.multiplier)
+        with np.errstate(divide="ignore"):  # 1/(N a) normalised: N^-2 / a
+            np.divide(self.normalised(self.normalised(1.0)), self.multiplier, out=self.multiplier)
 
     def set_entry(self, row: int, column: int, value: float) -> None:
         """Set one entry of the normalised multiplier (local spectrum indices)."""
@@ -192,7 +203,8 @@ class PaddedOperator(SpectralOperator):
         self.fft = fft if fft is not None else make_fft(self.padded)
         self.fft.real[...] = kernel_rows(self.padded.rows)
         self.fft.forward()
-        self.multiplier = twice(self.fft.spectrum.real / self.padded.size)
+        self.transform_size = self.padded.size
+        self.multiplier = twice(self.normalised(self.fft.spectrum.real))
         self._single = single_entries(self.padded, self.fft)
         self._centre = float(kernel_rows(slice(0, 1))[0, 0])
         self.exchange = RowExchange(grid.comm, grid.n, self.padded.n)

@@ -14,6 +14,7 @@ import hashlib
 import json
 import os
 import platform
+import re
 import sys
 import time
 from collections.abc import Callable, Iterator
@@ -53,6 +54,31 @@ def load_heights(path: str) -> np.ndarray:
     if not np.issubdtype(h.dtype, np.number) or np.iscomplexobj(h):
         raise ValueError(f"heights must be real numbers, '{path}' holds {h.dtype}")
     return h
+
+
+def load_table(path: str, columns: int) -> np.ndarray:
+    """A small numeric table: comma- or whitespace-separated, ``#`` comments, and at most one
+    header line (a first row that is not numbers).  Raises ``ValueError`` with the line."""
+    rows: list[list[float]] = []
+    with open(path) as f:
+        for number, line in enumerate(f, 1):
+            text = line.split("#", 1)[0].strip()
+            if not text:
+                continue
+            fields = [v for v in re.split(r"[,\s]+", text) if v]
+            try:
+                rows.append([float(v) for v in fields])
+            except ValueError:
+                if rows:  # only the first row may be a header
+                    raise ValueError(f"'{path}' line {number} is not {columns} numbers") from None
+                rows.append([])  # the header
+                continue
+            if len(fields) != columns:
+                raise ValueError(f"'{path}' line {number} has {len(fields)} columns, not {columns}")
+    table = np.array([r for r in rows if r], dtype=float).reshape(-1, columns)
+    if not table.size or not np.all(np.isfinite(table)):
+        raise ValueError(f"'{path}' must hold rows of {columns} finite numbers")
+    return table
 
 
 def check_finite(grid: Grid, h: np.ndarray, what: str = "heights") -> None:
@@ -176,7 +202,14 @@ class StepWriter:
             describe(f.create_dataset("heights", data=heights), self._entry("heights"))
         for name in self.fields:
             d = f.create_dataset(
-                name, shape=(0, n, n), maxshape=(None, n, n), chunks=(1, min(n, 256), min(n, 256))
+                name,
+                shape=(0, n, n),
+                maxshape=(None, n, n),
+                dtype=bool if name == "contact" else np.float64,
+                chunks=(1, min(n, 256), min(n, 256)),
+                compression="gzip",
+                compression_opts=4,
+                shuffle=True,
             )
             describe(d, self._entry(name))
         f.flush()
@@ -376,8 +409,9 @@ PUNCH_COLUMNS = _entries(
 )
 FIELDS = _entries(
     heights=("length", "the height map as given or generated (n x n)"),
-    gap=("length", "gap field of every step (steps x n x n)"),
-    pressure=("pressure", "pressure field of every step (steps x n x n)"),
+    gap=("length", "gap of every step, exactly zero in contact (steps x n x n)"),
+    pressure=("pressure", "pressure of every step, exactly zero out of contact (steps x n x n)"),
+    contact=("bool", "contact mask of every step, p > k g (steps x n x n)"),
     resume_state=("length", "the last converged state (only in an unfinished .partial file)"),
 )
 ENSEMBLE = _entries(
@@ -416,6 +450,7 @@ EXPERIMENT = _entries(
     measured_stiffness=("pressure/length", "K* = dp/ds (second-order differences)"),
     stiffness=("pressure/length", "K = K*/(1 - K* d/E') (paper Eq. C3; NaN where K* d/E' >= 1)"),
 )
+ENTRIES = {**SOLVE_COLUMNS, **PERIODIC_COLUMNS, **PUNCH_COLUMNS, **FIELDS}  # by name
 GEOMETRIES = {
     "periodic": {**SOLVE_COLUMNS, **PERIODIC_COLUMNS, **FIELDS},
     "punch": {**SOLVE_COLUMNS, **PUNCH_COLUMNS, **FIELDS},

@@ -100,7 +100,7 @@ def periodic_contact(
     length: float,
     modulus: float,
     pressures: Sequence[float],
-    options: Sequence[str] | None = None,
+    options: _petsc.OptionsArg = None,
     fields: bool = False,
     comm: Any = None,
     stiffness: bool = False,
@@ -116,7 +116,9 @@ def periodic_contact(
     pressures
         Nominal pressures ``p0`` (same unit as ``modulus``), solved in order, warm-started.
     options
-        PETSc options, e.g. ``["-tao_type", "bncg", "-tao_gatol", "1e-10"]``.
+        PETSc options for this call only: ``["-tao_type", "bncg", "-tao_gatol", "1e-10"]``,
+        the same as one string, or ``{"tao_type": "bncg", "tao_gatol": 1e-10}``; options
+        nothing read (a misspelt name) are reported in a warning.
     fields
         Keep the local ``gap`` and ``pressure`` slabs of every step.
     comm

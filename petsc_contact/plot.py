@@ -60,6 +60,38 @@ def plot_experiment(path: str, pressure: np.ndarray, k_star: np.ndarray, k: np.n
     _finish(fig, (ax,), path)
 
 
+def plot_ensemble(path: str, summary: dict[str, np.ndarray], modulus: float) -> None:
+    """Mean over seeds with its standard error against ``p0/E*``: the area fraction and, when
+    computed, the stiffness per area (log-log)."""
+    plt = _pyplot()
+    p = np.asarray(summary["nominal_pressure"]) / modulus
+    names = [q for q in ("area_fraction", "stiffness") if f"{q}_mean" in summary]
+    fig, axes = plt.subplots(1, len(names), figsize=(4.5 * len(names), 3.8), squeeze=False)
+    for ax, q in zip(axes[0], names, strict=True):
+        mean, sem = summary[f"{q}_mean"], summary[f"{q}_sem"]
+        ax.errorbar(p, mean, yerr=sem, fmt="o-", capsize=2)
+        ax.set(xscale="log", yscale="log", xlabel="$p_0/E^*$", ylabel=q.replace("_", " "))
+        ax.set_title(f"mean over {int(np.max(summary[f'{q}_count']))} seeds, +- s.e.m.")
+    fig.set_layout_engine("constrained")
+    _finish(fig, list(axes[0]), path)
+
+
+def plot_field(
+    path: str, values: np.ndarray, length: float, title: str, label: str, contact: bool = False
+) -> None:
+    """A map of one field over the cell ``[0, L]^2`` (physical axes) with a colour bar."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(5.6, 4.6), constrained_layout=True)
+    cmap = "Greys" if contact else "viridis"
+    image = ax.imshow(
+        values.T, origin="lower", extent=(0, length, 0, length), cmap=cmap, interpolation="nearest"
+    )
+    ax.set(xlabel="x", ylabel="y", title=title)
+    fig.colorbar(image, ax=ax, label=label)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def _pyplot() -> Any:
     import matplotlib
 

@@ -25,13 +25,13 @@ from scipy.special import erf
 
 from . import kernels
 from .fft import FFT, wavevector_magnitude
-from .greens import periodic_compliance, periodic_stiffness
+from .greens import mean_mode_compliance, periodic_stiffness
 from .grid import Grid
 from .observables import step_observables
 from .operator import FourierOperator
 from .schur import ContactSchur, quarter
 from .solve import SolveInfo
-from .step import Step, residual_verdict
+from .step import Step, contact_fields, residual_verdict
 from .stiffness import periodic_stiffness_exact
 from .theory import linear_stiffness
 from .validation import non_negative, positive
@@ -196,11 +196,9 @@ class PeriodicProblem:
         self.h_rms = grid.rms(self.heights)
         self.scale_length = self.h_rms if self.h_rms > 0 else grid.length
         q = wavevector_magnitude(grid, fft)
-        q0 = grid.q0
         self.stiffness = FourierOperator(grid, fft, periodic_stiffness(q, modulus))
         self.hessian = self.stiffness.scaled(1.0)
         self.preconditioner = MeanModePreconditioner(grid, fft, self.hessian, schur_limit(grid.n))
-        self._free_mean_compliance = float(periodic_compliance(0.0, modulus, q0))
         self.pixel_stiffness = self.stiffness.diagonal()
         kh = self.stiffness.apply_array(self.heights, np.empty(grid.local_shape))
         self.elastic_pressure_rms = grid.rms(kh)  # rms(K h) ~ E* h'_rms / 2
@@ -230,11 +228,11 @@ class PeriodicProblem:
         self._s = 1.0 / (np.sqrt(self.grid.size) * p0)
         c = self._s * self.scale_length
         np.multiply(self.stiffness.multiplier, c, out=self.hessian.multiplier)
-        mean_compliance = 1.0 / k_i if k_i > 0 else self._free_mean_compliance
+        mean_compliance = mean_mode_compliance(self.modulus, self.grid.q0, k_i)
         self.preconditioner.invert(
-            c * k_i / self.grid.size,
+            self.hessian.normalised(c * k_i),
             self.pixel_stiffness * c,
-            mean_compliance / (self.grid.size * c),
+            self.hessian.normalised(mean_compliance / c),
             self.expected_contact_count(p0),
         )
 
@@ -270,7 +268,9 @@ class PeriodicProblem:
                 else (np.nan, 0)
             )
             scalars.update(stiffness=k, stiffness_iterations=its)
-        return Step(scalars, gap if fields else None, pressure if fields else None)
+        if not fields:
+            return Step(scalars)
+        return Step(scalars, *contact_fields(gap, pressure, contact), contact=contact)
 
     def stiffness_estimate(self, p0: float) -> float:
         """Persson's interfacial stiffness ``K = p0/u0``, ``u0 = gamma h_rms`` (paper Eq. 1).
@@ -290,7 +290,7 @@ class PeriodicProblem:
         positive("interfacial stiffness", interfacial_stiffness)
         if self._held is None:
             self._held = self.stiffness.scaled(1.0)
-        self._held.set_inverse(self.stiffness, interfacial_stiffness / self.grid.size)
+        self._held.set_inverse(self.stiffness, self.stiffness.normalised(interfacial_stiffness))
         return self._held
 
     def expected_contact_count(self, p0: float) -> int:

@@ -39,7 +39,7 @@ from .operator import PaddedOperator
 from .output import check_finite
 from .reference import flat_punch
 from .solve import BoundSolver, Monitor, SolveInfo
-from .step import Step, residual_verdict, solve_step
+from .step import Step, contact_fields, residual_verdict, solve_step
 from .stiffness import punch_stiffness_exact
 from .validation import non_negative, positive
 
@@ -118,10 +118,7 @@ class PunchProblem:
         self.compliance = PaddedOperator(
             grid, lambda rows: hockney_kernel(n, a, self.modulus, rows)
         )
-        padded_size = self.compliance.padded.size
-        self.inverse = self.compliance.with_spectrum(
-            1.0 / (self.compliance.spectrum * padded_size**2)
-        )
+        self.inverse = self.compliance.with_spectrum(self.compliance.inverse_spectrum())
         self.pixel_stiffness = 1.0 / self.compliance.diagonal()
         self._scale = a * np.sqrt(grid.size) / self.modulus  # H = G / _scale
         self.hessian = self.compliance.with_spectrum(self.compliance.spectrum / self._scale)
@@ -209,7 +206,9 @@ class PunchProblem:
         }
         if stiffness:
             scalars["stiffness"] = k_int
-        return Step(scalars, gap if fields else None, pressure if fields else None)
+        if not fields:
+            return Step(scalars)
+        return Step(scalars, *contact_fields(gap, pressure, contact), contact=contact)
 
 
 def punch_observables(
@@ -352,7 +351,7 @@ def punch_contact(
     modulus: float,
     approaches: Sequence[float] | None = None,
     forces: Sequence[float] | None = None,
-    options: Sequence[str] | None = None,
+    options: _petsc.OptionsArg = None,
     fields: bool = False,
     footprint: np.ndarray | None = None,
     flat: str = "grid",
@@ -408,7 +407,7 @@ def punch_steps(
     modulus: float,
     approaches: Sequence[float] | None,
     forces: Sequence[float] | None,
-    options: Sequence[str] | None = None,
+    options: _petsc.OptionsArg = None,
     fields: bool = False,
     footprint: np.ndarray | None = None,
     flat: str = "grid",

@@ -17,21 +17,42 @@ from .grid import Grid
 from .operator import SpectralOperator
 from .solve import BoundSolver, Monitor, SolveInfo
 
+FIELD_NAMES = ("gap", "pressure", "contact")
 VERIFY_FACTOR = 10.0  # a step's natural residual may exceed the tolerance asked for by this
 
 
 @dataclass
 class Step:
-    """One load step: scalars for the table and the HDF5 file, and optional local fields."""
+    """One load step: scalars for the table and the HDF5 file, and optional local fields.
+
+    The fields are projected by the contact rule (``p > k g``): the pressure is exactly zero
+    on open pixels, the gap exactly zero on contact pixels; the residual of that projection
+    is the step's ``kkt_residual``.
+    """
 
     scalars: dict[str, Any]
     gap: np.ndarray | None = None
     pressure: np.ndarray | None = None
     state: np.ndarray | None = None  # local gap/pressure the next step starts from
+    contact: np.ndarray | None = None  # local mask of the pixels in contact
+
+    def field(self, name: str) -> np.ndarray | None:
+        """A field by its dataset name: ``gap``, ``pressure`` or ``contact``."""
+        if name not in FIELD_NAMES:
+            raise KeyError(f"no field '{name}': choose one of {', '.join(FIELD_NAMES)}")
+        value: np.ndarray | None = getattr(self, name)
+        return value
 
     @property
     def converged(self) -> bool:
         return bool(self.scalars["converged"])
+
+
+def contact_fields(
+    gap: np.ndarray, pressure: np.ndarray, contact: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Gap and pressure projected by the contact mask: ``g = 0`` on it, ``p = 0`` off it."""
+    return np.where(contact, 0.0, gap), np.where(contact, pressure, 0.0)
 
 
 def residual_verdict(residual: float, tolerance: float) -> str:

@@ -396,3 +396,52 @@ def test_modules_import_only_from_layers_above():
                 if node.level == 1 and len(parts) > 1:  # inside a subpackage
                     continue
                 assert rank.get(target, -1) <= mine, f"{path.name} imports {target}"
+
+
+def test_unused_petsc_option_is_reported(tmp_path):
+    r = cli(
+        "periodic",
+        *GEN,
+        "--pressures",
+        "1e-3",
+        "--output",
+        str(tmp_path / "u.h5"),
+        "--quiet",
+        "-tao_typo",
+        "bncg",
+        "-tao_gatol",
+        "1e-9",
+    )
+    assert r.returncode == 0, r.stderr
+    assert "never used: -tao_typo" in r.stderr and "tao_gatol" not in r.stderr
+
+
+def test_fields_written_with_contact_mask(tmp_path):
+    out = tmp_path / "f.h5"
+    r = cli("periodic", *GEN, "--pressures", "1e-3,1e-2", "--fields", "--output", str(out))
+    assert r.returncode == 0, r.stderr
+    with h5py.File(out) as f:
+        contact, pressure, gap = f["contact"][:], f["pressure"][:], f["gap"][:]
+        assert contact.dtype == bool and contact.shape == (2, 64, 64)
+        assert f["pressure"].compression == "gzip"
+        assert np.all(pressure[~contact] == 0) and np.all(gap[contact] == 0)
+        assert np.allclose(contact.mean(axis=(1, 2)), f["area_fraction"][:], atol=1e-12)
+
+
+def test_plot_command(tmp_path):
+    out = tmp_path / "f.h5"
+    assert (
+        cli("periodic", *GEN, "--pressures", "1e-3", "--fields", "--output", str(out)).returncode
+        == 0
+    )
+    for field in ("pressure", "gap", "contact", "heights"):
+        r = cli("plot", str(out), "--field", field)
+        assert r.returncode == 0, r.stderr
+        step = 0
+        assert (tmp_path / f"f_{field}_step{step}.png").stat().st_size > 1000
+    r = cli("plot", str(out), "--step", "3")
+    assert r.returncode == 2 and "out of range" in r.stderr
+    bare = tmp_path / "bare.h5"
+    assert cli("periodic", *GEN, "--pressures", "1e-3", "--output", str(bare)).returncode == 0
+    r = cli("plot", str(bare), "--field", "gap")
+    assert r.returncode == 2 and "--fields" in r.stderr

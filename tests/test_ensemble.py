@@ -1,5 +1,7 @@
 """Ensembles over seeds, power-law fits, and the experiment subcommand (paper Eq. C3)."""
 
+import json
+
 import h5py
 import numpy as np
 import pytest
@@ -68,8 +70,20 @@ def test_ensemble_command(tmp_path):
     before = (tmp_path / "ens_seed2.h5").stat().st_mtime_ns
     r = cli(*args, "--resume")
     assert r.returncode == 0 and (tmp_path / "ens_seed2.h5").stat().st_mtime_ns == before
-    r = cli(*args[:-6], "--sweep", "4", "--output", str(out))
-    assert r.returncode == 2 and "same pressures" in r.stderr
+    # --sweep N: the documented default range, the same pressures for every seed, a plot and
+    # the run record in the summary
+    plot = tmp_path / "ens.png"
+    r = cli(*args[:-6], "--sweep", "4", "--output", str(out), "--plot", str(plot), "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert plot.stat().st_size > 1000
+    with h5py.File(out) as f:
+        p = f["nominal_pressure"][:]
+        assert p.size == 4 and p[-1] / p[0] == pytest.approx(0.9 / 1e-4, rel=1e-9)
+        assert "petsc4py" in f.attrs["versions"] and "--sweep 4" in f.attrs["command_line"]
+        assert json.loads(f.attrs["parameters"])["pressures"] == pytest.approx(list(p))
+    for k in range(4):
+        with h5py.File(tmp_path / f"ens_seed{k}.h5") as f:
+            assert np.array_equal(f["nominal_pressure"][:], p)
 
 
 def test_experiment_command(tmp_path):
@@ -107,4 +121,19 @@ def test_experiment_command(tmp_path):
         "--output",
         str(out),
     )
-    assert r.returncode == 2 and "two finite columns" in r.stderr
+    assert r.returncode == 2 and "has 3 columns, not 2" in r.stderr
+    # a header line and whitespace-separated columns are read like the comma file
+    text = "pressure  displacement\n" + "\n".join(
+        f"{a:.17g}  {b:.17g}" for a, b in zip(p, s, strict=True)
+    )
+    (tmp_path / "ps.txt").write_text(text + "\n")
+    out2 = tmp_path / "exp2.h5"
+    r = cli(
+        *f"experiment --table {tmp_path / 'ps.txt'} --modulus {e} --thickness {d}".split(),
+        "--output",
+        str(out2),
+        "--quiet",
+    )
+    assert r.returncode == 0, r.stderr
+    with h5py.File(out) as f, h5py.File(out2) as g:
+        assert np.array_equal(f["stiffness"][:], g["stiffness"][:])

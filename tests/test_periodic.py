@@ -184,3 +184,31 @@ def test_options_do_not_leak(rough):
     periodic_contact(rough, 1.0, 1.0, [1e-2], options=["-tao_type", "bncg"])
     (step,) = periodic_contact(rough, 1.0, 1.0, [1e-2])
     assert step.scalars["tao_type"] == "python:PreconditionedCG"
+
+
+def test_contact_fields_are_projected(rough):
+    """Stored fields follow the contact rule exactly: zero pressure off contact, zero gap in
+    it, the mask's fraction is the area fraction; force balance survives the projection to
+    the step's own tolerance (the projected pressures are the KKT residual's share)."""
+    (step,) = periodic_contact(rough, 1.0, 1.0, [1e-2], fields=True)
+    contact = step.field("contact")
+    assert contact is not None and contact.dtype == bool
+    assert np.all(step.pressure[~contact] == 0.0) and np.all(step.gap[contact] == 0.0)
+    assert contact.mean() == pytest.approx(step.scalars["area_fraction"], abs=1e-12)
+    assert step.pressure.mean() == pytest.approx(1e-2, rel=1e-6)
+    with pytest.raises(KeyError, match="no field"):
+        step.field("heights")
+
+
+def test_options_forms_and_unused(rough):
+    """A list, a string and a dict select the same solver; a misspelt option is reported;
+    anything else is refused with the reason."""
+    for options in (["-tao_type", "bnls"], "-tao_type bnls", {"tao_type": "bnls"}):
+        (step,) = periodic_contact(rough, 1.0, 1.0, [1e-3], options=options)
+        assert step.scalars["tao_type"] == "bnls"
+    with pytest.warns(UserWarning, match="never used: -tao_typo"):
+        periodic_contact(rough, 1.0, 1.0, [1e-3], options="-tao_typo bncg")
+    with pytest.raises(TypeError, match="options must be"):
+        periodic_contact(rough, 1.0, 1.0, [1e-3], options=3)
+    with pytest.raises(ValueError, match="start with a dash"):
+        periodic_contact(rough, 1.0, 1.0, [1e-3], options=["tao_type", "bnls"])

@@ -28,7 +28,7 @@ def sampling_sigma(grid, fft, hurst, rolloff, cutoff, slope):
         * np.pi
         / grid.length
     )
-    q0 = 2 * np.pi / grid.length
+    q0 = grid.q0
     c = psd_shape(q, q0, q0 * rolloff, q0 * cutoff, hurst) * (q**2 if slope else 1)
     return np.sqrt(2 * np.sum(c**2)) / np.sum(c)
 

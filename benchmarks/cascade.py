@@ -51,7 +51,7 @@ def cascade(petsc, heights: np.ndarray, p0: float, levels: int) -> list[tuple[in
             if displacement is None
             else np.maximum(resample(displacement, m) - problem.heights, 0.0)
         )
-        (step,) = sweep(petsc, problem, [p0], start=start)
+        (step,) = sweep(problem, [p0], start=start)
         if not step.converged:
             raise SystemExit(f"level {m}^2 did not converge: {step.scalars['verification']}")
         rows.append((m, step.scalars["iterations"], step.scalars["solve_time"]))

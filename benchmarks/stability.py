@@ -104,7 +104,7 @@ def main() -> None:
         help="run the scenes at --grid (--no-scenes: only the --grids rows)",
     )
     args = ap.parse_args()
-    petsc = _petsc.init([])
+    _petsc.init([])
     cases = scenes(args.grid) if args.scenes else []
     cases += [(f"grid {n}, p0=1e-3", rough(n), 1.0, 1.0, 1e-3) for n in args.grids]
     lines = [
@@ -117,12 +117,7 @@ def main() -> None:
         problem = PeriodicProblem(grid, make_fft(grid), h, modulus)
         try:
             _, trajs = compare(
-                petsc,
-                problem,
-                p0,
-                args.solvers,
-                args.time_limit,
-                stall_iterations=args.stall_iterations,
+                problem, p0, args.solvers, args.time_limit, stall_iterations=args.stall_iterations
             )
             cells = []
             for t in trajs:

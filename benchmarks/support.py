@@ -35,11 +35,11 @@ def main() -> None:
     heights = self_affine(
         grid, fft, hurst=0.7, rolloff_ratio=1, cutoff_ratio=n / 2, seed=1, rms_slope=0.1
     )
-    petsc = _petsc.init([])
+    _petsc.init([])
     problem = PeriodicProblem(grid, fft, heights, 1.0)
     x0 = problem.initial_gap().reshape(-1) / problem.scale_length
     print(f"{'p0/E*':>7} {'factor':>6} {'its':>5} {'solve_s':>8} {'mean_gap':>16}")
-    with BoundSolver(petsc, grid, problem.hessian, problem.preconditioner) as solver:
+    with BoundSolver(grid, problem.hessian, problem.preconditioner) as solver:
         for p0 in args.pressures:
             for factor in args.factors:
                 problem.set_pressure(p0, factor * problem.stiffness_estimate(p0))

@@ -637,9 +637,9 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
         "rms_slope": rms_of(grid, fft, heights, slope=True),
     }
     if args.command == "punch":
-        plan = _punch_plan(petsc, args, grid, heights)
+        plan = _punch_plan(args, grid, heights)
     else:
-        plan = _periodic_plan(petsc, args, grid, fft, heights)
+        plan = _periodic_plan(args, grid, fft, heights)
     attributes = _attributes(args, argv, petsc, realised, {**resolved, **plan.resolved})
     attributes["fft_backend"] = plan.fft_backend
     root = grid.comm.rank == 0
@@ -768,9 +768,7 @@ class Plan:
     resolved: dict[str, Any] = field(default_factory=dict)  # options the plan resolved
 
 
-def _periodic_plan(
-    petsc: Any, args: argparse.Namespace, grid: Any, fft: Any, heights: np.ndarray
-) -> Plan:
+def _periodic_plan(args: argparse.Namespace, grid: Any, fft: Any, heights: np.ndarray) -> Plan:
     from .periodic import sweep
     from .problem import PeriodicProblem
 
@@ -786,7 +784,7 @@ def _periodic_plan(
         resolved = {"pressures": pressures, "sweep": None}  # the file records the loads
 
     def steps(loads: list[float], start: np.ndarray | None, fields: bool) -> Iterator[Any]:
-        return sweep(petsc, problem, loads, fields, stiffness=args.stiffness, start=start)
+        return sweep(problem, loads, fields, stiffness=args.stiffness, start=start)
 
     return Plan(
         list(pressures),
@@ -798,13 +796,13 @@ def _periodic_plan(
     )
 
 
-def _punch_plan(petsc: Any, args: argparse.Namespace, grid: Any, heights: np.ndarray) -> Plan:
+def _punch_plan(args: argparse.Namespace, grid: Any, heights: np.ndarray) -> Plan:
     from .punch import PHARR_BETA, PunchProblem, PunchSolver
 
     mask = grid.scatter(_disk(grid.n)) > 0 if args.footprint == "disk" else None
     beta = 1.0 if args.footprint == "disk" else PHARR_BETA
     problem = PunchProblem(grid, heights, args.modulus, mask, args.flat_stiffness, beta)
-    solver = PunchSolver(petsc, problem)
+    solver = PunchSolver(problem)
     by_force = args.forces is not None
     resolved = {}
     approaches = args.approaches
@@ -985,7 +983,6 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
         )
 
     reference, trajectories = compare(
-        petsc,
         problem,
         args.pressure,
         solvers,

@@ -97,11 +97,11 @@ class Reference:
         }
 
 
-def reference_solve(petsc: Any, problem: PeriodicProblem, pressure: float) -> Reference:
+def reference_solve(problem: PeriodicProblem, pressure: float) -> Reference:
     """The default solver at ``REFERENCE_GATOL`` (or the rounding floor); raises if it fails."""
     gatol = max(REFERENCE_GATOL, problem.stiffness_rounding_floor(pressure))
     with _petsc.scoped_options(["-tao_gatol", str(gatol)]):
-        (step,) = sweep(petsc, problem, [pressure], fields=True)
+        (step,) = sweep(problem, [pressure], fields=True)
     if not step.converged or step.pressure is None:
         raise RuntimeError(f"reference solve failed: {step.scalars['verification']}")
     s = step.scalars
@@ -185,7 +185,6 @@ def _conclude(traj: Trajectory, info: SolveInfo, recorder: _Recorder) -> None:
 
 
 def compare(
-    petsc: Any,
     problem: PeriodicProblem,
     pressure: float,
     solvers: Sequence[str],
@@ -209,7 +208,7 @@ def compare(
         ``natural_residual``, ``tolerance``, ``iterations``); one :class:`Trajectory` per
         solver, in order.
     """
-    reference = reference_solve(petsc, problem, pressure)
+    reference = reference_solve(problem, pressure)
     x0 = problem.initial_gap().reshape(-1) / problem.scale_length
     out = []
     for name in solvers:
@@ -218,7 +217,7 @@ def compare(
         with _petsc.scoped_options(opts):
             problem.set_pressure(pressure)
             problem.start(x0)
-            with BoundSolver(petsc, problem.grid, problem.hessian, problem.preconditioner) as s:
+            with BoundSolver(problem.grid, problem.hessian, problem.preconditioner) as s:
                 recorder = _Recorder(
                     problem, reference, pressure, traj, s, time_limit, stall_iterations
                 )

@@ -49,7 +49,6 @@ def check_pressures(pressures: Sequence[float]) -> list[float]:
 
 
 def sweep(
-    petsc: Any,
     problem: PeriodicProblem,
     pressures: Sequence[float],
     fields: bool = False,
@@ -80,7 +79,7 @@ def sweep(
     ell = problem.scale_length
     x = (problem.initial_gap() if start is None else start).reshape(-1) / ell
     path = LoadPath()
-    with BoundSolver(petsc, problem.grid, problem.hessian, problem.preconditioner) as solver:
+    with BoundSolver(problem.grid, problem.hessian, problem.preconditioner) as solver:
         for p0 in check_pressures(pressures):
             problem.set_pressure(p0, path.stiffness_estimate(p0))
             problem.start(path.start(p0, x))
@@ -132,9 +131,9 @@ def periodic_contact(
     """
     from mpi4py import MPI
 
-    with _petsc.scoped_options(options) as petsc:
+    with _petsc.scoped_options(options):
         grid = Grid(int(heights.shape[0]), float(length), comm or MPI.COMM_WORLD)
         local = grid.scatter(heights)
         check_finite(grid, local)
         problem = PeriodicProblem(grid, make_fft(grid), local, modulus)
-        return list(sweep(petsc, problem, pressures, fields, stiffness=stiffness))
+        return list(sweep(problem, pressures, fields, stiffness=stiffness))

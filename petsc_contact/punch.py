@@ -27,6 +27,7 @@ iteration on ``δ`` that uses the exact ``dF/dδ``; ``F(δ)`` is increasing and 
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Iterator, Sequence
 from typing import Any
 
@@ -251,10 +252,10 @@ def verify_punch(info: SolveInfo, obs: dict[str, Any]) -> str:
 class PunchSolver:
     """Displacement- and load-controlled solves of one :class:`PunchProblem` (warm-started)."""
 
-    def __init__(self, petsc: Any, problem: PunchProblem) -> None:
+    def __init__(self, problem: PunchProblem) -> None:
         self.problem = problem
         self.x = np.zeros(int(np.prod(problem.grid.local_shape)))
-        self.solver = BoundSolver(petsc, problem.grid, problem.hessian, problem.preconditioner)
+        self.solver = BoundSolver(problem.grid, problem.hessian, problem.preconditioner)
 
     @property
     def k_flat(self) -> float:
@@ -357,6 +358,7 @@ def punch_contact(
     flat: str = "grid",
     beta: float = PHARR_BETA,
     comm: Any = None,
+    monitor: Monitor | None = None,
 ) -> list[Step]:
     """Press a rigid punch with face ``heights`` into a free elastic half-space.
 
@@ -370,7 +372,8 @@ def punch_contact(
         Exactly one of them: rigid approaches ``δ`` beyond first touch (displacement
         control), or total forces ``F`` (load control).  Solved in order, warm-started.
     options
-        PETSc options (``-tao_type``, ``-tao_gatol``, ...).
+        PETSc options for this call (a list, a string or a dict; see
+        :func:`~petsc_contact.periodic.periodic_contact`).
     fields
         Keep the local ``gap`` and ``pressure`` slabs of every step.
     footprint
@@ -379,59 +382,35 @@ def punch_contact(
         ``'grid'`` or ``'analytic'``: which flat-punch stiffness goes into Eq. 2.
     beta
         Shape factor of the analytic flat punch (1.012 square, 1 for a disk).
+    comm
+        mpi4py communicator (default ``COMM_WORLD``).
+    monitor
+        Called as ``monitor(iteration, f, gnorm)`` at every TAO iteration; ``True`` stops.
 
     Returns
     -------
     list of Step
     """
-    return list(
-        punch_steps(
-            heights,
-            length,
-            modulus,
-            approaches,
-            forces,
-            options,
-            fields,
-            footprint,
-            flat,
-            beta,
-            comm,
-        )
-    )
-
-
-def punch_steps(
-    heights: np.ndarray,
-    length: float,
-    modulus: float,
-    approaches: Sequence[float] | None,
-    forces: Sequence[float] | None,
-    options: _petsc.OptionsArg = None,
-    fields: bool = False,
-    footprint: np.ndarray | None = None,
-    flat: str = "grid",
-    beta: float = PHARR_BETA,
-    comm: Any = None,
-    monitor: Monitor | None = None,
-) -> Iterator[Step]:
-    """Generator form of :func:`punch_contact` (steps are yielded as they finish)."""
-    from mpi4py import MPI
-
     if (approaches is None) == (forces is None):
         raise ValueError("give either approaches or forces")
     values = [float(v) for v in (approaches if approaches is not None else forces or [])]
     if not values:
         raise ValueError("give at least one approach or force")
-    with _petsc.scoped_options(options) as petsc:
+    from mpi4py import MPI
+
+    with _petsc.scoped_options(options):
         grid = Grid(int(heights.shape[0]), float(length), comm or MPI.COMM_WORLD)
         local = grid.scatter(heights)
         check_finite(grid, local)
         mask = None if footprint is None else grid.scatter(footprint).astype(bool)
         problem = PunchProblem(grid, local, modulus, mask, flat, beta)
-        with PunchSolver(petsc, problem) as solver:
-            for v in values:
-                if approaches is not None:
-                    yield solver.at_approach(v, fields, monitor)
-                else:
-                    yield solver.at_force(v, fields, monitor=monitor)
+        with PunchSolver(problem) as solver:
+            if forces is not None:
+                return [solver.at_force(v, fields, monitor=monitor) for v in values]
+            return [solver.at_approach(v, fields, monitor) for v in values]
+
+
+def punch_steps(*args: Any, **kwargs: Any) -> Iterator[Step]:
+    """Deprecated: the steps of :func:`punch_contact` (same arguments), one by one."""
+    warnings.warn("punch_steps is deprecated; use punch_contact", DeprecationWarning, stacklevel=2)
+    yield from punch_contact(*args, **kwargs)

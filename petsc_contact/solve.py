@@ -152,8 +152,6 @@ class BoundSolver:
 
     Parameters
     ----------
-    petsc
-        The ``petsc4py.PETSc`` module.
     grid
         Layout of the unknowns.
     hessian
@@ -163,13 +161,9 @@ class BoundSolver:
     """
 
     def __init__(
-        self,
-        petsc: Any,
-        grid: Grid,
-        hessian: SpectralOperator,
-        preconditioner: SpectralOperator | None,
+        self, grid: Grid, hessian: SpectralOperator, preconditioner: SpectralOperator | None
     ) -> None:
-        self.petsc = petsc
+        self.petsc = petsc = _petsc.petsc()
         self.grid = grid
         self.hessian_op = hessian
         self.preconditioner_op = preconditioner

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import integrate, special
 
+Values = np.ndarray | float  # one value, or an array of them (the result has its shape)
 GAMMA = 0.4  # Persson's gamma (and the paper's u0 = gamma h_rms)
 NAYAK_BETA = np.sqrt(8 / (3 * np.pi))  # mean summit curvature factor for q1/q0 >> 1
 KAPPA0 = 2 / 5  # Hertz mesoasperity energy prefactor (Appendix B)
@@ -25,15 +26,13 @@ KAPPA0 = 2 / 5  # Hertz mesoasperity energy prefactor (Appendix B)
 # -- finite-size scaling theory (paper Appendix B) -------------------------------------------
 
 
-def kappa1(hurst: np.ndarray | float, gamma: float = GAMMA) -> np.ndarray:
+def kappa1(hurst: Values, gamma: float = GAMMA) -> np.ndarray:
     """``kappa1 = gamma ((2 - H) / (pi^4 beta^2 H))^(1/2)`` (Appendix B)."""
     h = np.asarray(hurst, dtype=float)
     return gamma * np.sqrt((2 - h) / (np.pi**4 * NAYAK_BETA**2 * h))
 
 
-def inverse_theta_parts(
-    hurst: np.ndarray | float, gamma: float = GAMMA
-) -> tuple[np.ndarray, np.ndarray]:
+def inverse_theta_parts(hurst: Values, gamma: float = GAMMA) -> tuple[np.ndarray, np.ndarray]:
     """``(1/theta0, 1/theta1)``: the Hertz-mesoasperity and microroughness contributions.
 
     ``1/theta_{0/1} = (1+2H)/(1+H) (3/(4 pi))^(H/(1+H)) (pi^4 beta^2 H/(2-H))^(1/(2+2H))
@@ -49,7 +48,7 @@ def inverse_theta_parts(
     return common * KAPPA0, common * kappa1(h, gamma)
 
 
-def theta(hurst: np.ndarray | float, gamma: float = GAMMA) -> np.ndarray:
+def theta(hurst: Values, gamma: float = GAMMA) -> np.ndarray:
     """The prefactor of paper Eq. 12, ``1/theta = 1/theta0 + 1/theta1`` (paper Fig. 2)."""
     inv0, inv1 = inverse_theta_parts(hurst, gamma)
     return 1.0 / (inv0 + inv1)
@@ -70,7 +69,7 @@ def _size_factor(h_rms: float, length: float, rolloff_ratio: float) -> float:
 
 
 def finite_size_stiffness(
-    pressure: np.ndarray | float,
+    pressure: Values,
     modulus: float,
     h_rms: float,
     hurst: float,
@@ -119,16 +118,12 @@ def crossover_pressure(
     )
 
 
-def linear_stiffness(
-    pressure: np.ndarray | float, h_rms: float, gamma: float = GAMMA
-) -> np.ndarray:
+def linear_stiffness(pressure: Values, h_rms: float, gamma: float = GAMMA) -> np.ndarray:
     """The exponential regime: ``K = p / u0`` with ``u0 = gamma h_rms`` (paper Eq. 1)."""
     return np.asarray(pressure, dtype=float) / (gamma * h_rms)
 
 
-def hertz_stiffness(
-    pressure: np.ndarray | float, modulus: float, radius: float, area: float
-) -> np.ndarray:
+def hertz_stiffness(pressure: Values, modulus: float, radius: float, area: float) -> np.ndarray:
     """Single-asperity (Hertz) regime, ``K ~ p^(1/3)``, per apparent area ``A0``.
 
     ``F = p A0``, contact radius ``a = (3 F R/(4 E*))^(1/3)``, ``dF/dδ = 2 E* a``,
@@ -165,11 +160,7 @@ def persson_w(q: np.ndarray, psd: np.ndarray) -> np.ndarray:
 
 
 def persson_mean_gap(
-    pressure: np.ndarray | float,
-    q: np.ndarray,
-    psd: np.ndarray,
-    modulus: float,
-    gamma: float = GAMMA,
+    pressure: Values, q: np.ndarray, psd: np.ndarray, modulus: float, gamma: float = GAMMA
 ) -> np.ndarray:
     """Persson's mean separation ``u_bar(p)``::
 
@@ -200,11 +191,7 @@ def persson_mean_gap(
 
 
 def persson_stiffness(
-    pressure: np.ndarray | float,
-    q: np.ndarray,
-    psd: np.ndarray,
-    modulus: float,
-    gamma: float = GAMMA,
+    pressure: Values, q: np.ndarray, psd: np.ndarray, modulus: float, gamma: float = GAMMA
 ) -> np.ndarray:
     """``K = -dp/du_bar`` of Persson's theory, analytically differentiated::
 

@@ -136,14 +136,14 @@ def test_wrong_support_changes_the_path_not_the_answer(petsc, paper_band, factor
     grid = Grid(128, 1.0, MPI.COMM_SELF)
     problem = PeriodicProblem(grid, make_fft(grid), paper_band, 1.0)
     p0 = 3e-3
-    (reference,) = sweep(petsc, problem, [p0])
+    (reference,) = sweep(problem, [p0])
     problem.set_pressure(p0, factor * problem.stiffness_estimate(p0))
     assert problem.interfacial_stiffness == pytest.approx(factor * problem.stiffness_estimate(p0))
     x0 = problem.initial_gap().reshape(-1) / problem.scale_length
     problem.start(x0)
     from petsc_contact.solve import BoundSolver
 
-    with BoundSolver(petsc, grid, problem.hessian, problem.preconditioner) as solver:
+    with BoundSolver(grid, problem.hessian, problem.preconditioner) as solver:
         x, info = solver.solve(problem.objective_gradient, problem.start_point)
     assert info.reason_code > 0
     gap = x.reshape(grid.local_shape) * problem.scale_length

@@ -1,0 +1,7 @@
+"""``python -m petsc_contact.cli``: the same as ``petsc-contact``."""
+
+import sys
+
+from .main import main
+
+sys.exit(main())

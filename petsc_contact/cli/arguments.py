@@ -1,0 +1,438 @@
+"""The command line's arguments: the package's own (two dashes) and PETSc's (one dash)."""
+
+from __future__ import annotations
+
+import argparse
+import re
+from collections.abc import Sequence
+from typing import Any
+
+from .. import __version__
+
+DEMO = {
+    "grid": 512,
+    "hurst": 0.7,
+    "rms_slope": 0.1,
+    "rolloff_ratio": 2.0,
+    "cutoff_ratio": 64.0,
+    "seed": 1,
+    "length": 1.0,
+    "modulus": 1.0,
+    "pressures": "3e-5,1e-4,3e-4,1e-3,3e-3,1e-2,2e-2,3e-2",
+}
+
+
+_PETSC_OPTION = re.compile(r"^-[A-Za-z_]")
+
+
+_NUMBER = re.compile(r"^-?(\d|\.\d)")
+
+
+def split_arguments(argv: Sequence[str]) -> tuple[list[str], list[str]]:
+    """Split a command line into the package's arguments and PETSc's options.
+
+    A token like ``-tao_type`` starts a PETSc option; the token after it is its value unless
+    it starts with a dash (numbers such as ``-1`` are values).  ``-h`` is the package's help.
+    """
+    ours: list[str] = []
+    petsc: list[str] = []
+    tokens = list(argv)
+    i = 0
+    while i < len(tokens):
+        tok = tokens[i]
+        if tok != "-h" and _PETSC_OPTION.match(tok) and not tok.startswith("--"):
+            petsc.append(tok)
+            if i + 1 < len(tokens) and (
+                not tokens[i + 1].startswith("-") or _NUMBER.match(tokens[i + 1])
+            ):
+                petsc.append(tokens[i + 1])
+                i += 1
+        else:
+            ours.append(tok)
+            if (
+                tok.startswith("--")
+                and "=" not in tok
+                and i + 1 < len(tokens)
+                and _NUMBER.match(tokens[i + 1])
+            ):
+                ours.append(tokens[i + 1])
+                i += 1
+        i += 1
+    return ours, petsc
+
+
+def _float_list(text: str) -> list[float]:
+    try:
+        return [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected comma-separated numbers, got '{text}'"
+        ) from None
+
+
+def _sweep_spec(text: str) -> list[float]:
+    values = _float_list(text)
+    if len(values) not in (1, 3) or values[0] < 2 or values[0] != int(values[0]):
+        raise argparse.ArgumentTypeError(f"expected N or N,PMIN,PMAX with N >= 2, got '{text}'")
+    if len(values) == 3 and not 0 < values[1] < values[2]:
+        raise argparse.ArgumentTypeError(f"need 0 < PMIN < PMAX, got '{text}'")
+    return values
+
+
+def _seed_list(text: str) -> list[int]:
+    try:
+        if "-" in text.strip("-") and "," not in text:
+            a, b = (int(v) for v in text.split("-", 1))
+            seeds = list(range(a, b + 1))
+        else:
+            seeds = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected K1,K2,... or A-B, got '{text}'") from None
+    if not seeds or len(set(seeds)) != len(seeds):
+        raise argparse.ArgumentTypeError(f"need distinct seeds, got '{text}'")
+    return seeds
+
+
+def _surface_arguments(p: argparse.ArgumentParser) -> None:
+    s = p.add_argument_group("surface (a file, or a generated self-affine surface, paper Eq. 5)")
+    s.add_argument(
+        "--heights",
+        metavar="FILE",
+        help="height map: .npy, or a text/.csv matrix; square n x n, length units",
+    )
+    s.add_argument("--grid", type=int, metavar="N", help="generate an N x N surface")
+    s.add_argument("--hurst", type=float, metavar="H", help="Hurst exponent (0..1)")
+    s.add_argument("--rms-slope", type=float, metavar="S", help="target rms slope h'_rms")
+    s.add_argument("--rms-height", type=float, metavar="R", help="target rms height h_rms")
+    s.add_argument(
+        "--rolloff-ratio",
+        type=float,
+        metavar="L/lambda_r",
+        default=1.0,
+        help="system size over roll-off wavelength (default 1)",
+    )
+    s.add_argument(
+        "--cutoff-ratio",
+        type=float,
+        metavar="L/lambda_1",
+        help="system size over short-wavelength cut-off (default N/2)",
+    )
+    s.add_argument("--seed", type=int, default=0, metavar="K", help="random seed (default 0)")
+    s.add_argument(
+        "--exact-rms",
+        action="store_true",
+        help="rescale the realisation to hit the rms target exactly",
+    )
+
+
+def _run_arguments(
+    p: argparse.ArgumentParser, defaults: dict[str, Any] | None = None, punch: bool = False
+) -> None:
+    d = defaults or {}
+    p.add_argument(
+        "--length",
+        type=float,
+        default=d.get("length", 1.0),
+        metavar="L",
+        help=("side Lp of the square punch footprint" if punch else "side of the periodic cell")
+        + " (default %(default)s)",
+    )
+    p.add_argument(
+        "--modulus",
+        type=float,
+        default=d.get("modulus", 1.0),
+        metavar="ESTAR",
+        help="contact modulus E* (default %(default)s)",
+    )
+    if punch:
+        _punch_loads(p)
+    else:
+        _periodic_loads(p, d)
+    _output_arguments(p, d)
+
+
+def _punch_loads(p: argparse.ArgumentParser) -> None:
+    loads = p.add_mutually_exclusive_group(required=True)
+    loads.add_argument(
+        "--approaches",
+        type=_float_list,
+        metavar="D1,D2,...",
+        help="rigid approaches beyond first touch (length units), in order",
+    )
+    loads.add_argument(
+        "--forces",
+        type=_float_list,
+        metavar="F1,F2,...",
+        help="total forces (E* x length^2), in order (load control)",
+    )
+    loads.add_argument(
+        "--sweep",
+        type=_sweep_spec,
+        metavar="N[,DMIN,DMAX]",
+        help="N log-spaced approaches from DMIN to DMAX (default: 0.01 and "
+        "3 times the rms recess of the punch face)",
+    )
+    p.add_argument(
+        "--footprint",
+        choices=("square", "disk"),
+        default="square",
+        help="punch outline: the whole square, or the inscribed disk",
+    )
+    p.add_argument(
+        "--flat-stiffness",
+        choices=("grid", "analytic"),
+        default="grid",
+        help="flat-punch stiffness in Eq. 2: computed on the same grid "
+        "(default) or beta x 2 E* sqrt(A/pi), beta = 1.012 (square) or 1 "
+        "(disk)",
+    )
+
+
+def _periodic_loads(p: argparse.ArgumentParser, d: dict[str, Any]) -> None:
+    loads = p.add_mutually_exclusive_group(required="pressures" not in d)
+    loads.add_argument(
+        "--pressures",
+        type=_float_list,
+        default=_float_list(d["pressures"]) if "pressures" in d else None,
+        metavar="P1,P2,...",
+        help="nominal pressures p0 (units of E*), in order",
+    )
+    loads.add_argument(
+        "--sweep",
+        type=_sweep_spec,
+        metavar="N[,PMIN,PMAX]",
+        help="N log-spaced pressures from PMIN to PMAX (default: 1e-4 and "
+        "0.9 times the full-contact pressure -min(K h))",
+    )
+
+
+def _output_arguments(p: argparse.ArgumentParser, d: dict[str, Any]) -> None:
+    p.add_argument(
+        "--stiffness",
+        action="store_true",
+        help="add the exact incremental stiffness per area (contact set held "
+        "fixed) as the dataset 'stiffness'",
+    )
+    p.add_argument(
+        "--output",
+        required="output" not in d,
+        default=d.get("output"),
+        metavar="OUT.h5",
+        help="HDF5 results (written atomically)",
+    )
+    p.add_argument(
+        "--fields",
+        action="store_true",
+        help="store the gap, pressure and contact fields of every step (compressed)",
+    )
+    p.add_argument(
+        "--plot",
+        metavar="PNG",
+        default=d.get("plot"),
+        help="write a PNG of the results against load",
+    )
+    p.add_argument("--quiet", action="store_true", help="no table on standard output")
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue an interrupted run from OUT.h5.partial (same options): "
+        "finished steps are kept, not recomputed",
+    )
+
+
+COMMANDS = {  # name: (one-line help, description)
+    "plot": (
+        "draw a map of a stored field (pressure, gap, contact, heights)",
+        "A map of one load step's field over the cell, with physical axes and a colour bar.",
+    ),
+    "schema": (
+        "print the HDF5 output schema (docs/output-schema.md)",
+        "Every dataset the commands write, with its units and description.",
+    ),
+    "periodic": (
+        "periodic, load-controlled contact of a rough surface",
+        "Hard-wall contact of a rigid rough surface on a periodic "
+        "elastic half-space, one TAO solve per nominal pressure.",
+    ),
+    "punch": (
+        "rigid rough square punch on a free half-space",
+        "A rigid punch with a rough face pressed into a "
+        "non-periodic elastic half-space (Hockney padding), "
+        "displacement (--approaches) or load (--forces) "
+        "controlled.",
+    ),
+    "ensemble": (
+        "periodic sweeps over many seeds, with statistics",
+        "The periodic scene for each seed (one resumable file "
+        "OUT_seedK.h5 per seed), then mean, std and standard "
+        "error over seeds of every per-step quantity in OUT.h5. Every seed gets the "
+        "same pressures: --sweep N takes its default range from the first seed's surface.",
+    ),
+    "compare": (
+        "error against wall time for several solvers",
+        "One periodic scene solved by each solver from first "
+        "touch; errors against a tightly converged reference "
+        "at every iteration; a table (stdout and OUT.csv), "
+        "OUT.h5 and a plot OUT.png.",
+    ),
+    "experiment": (
+        "K(p) from a measured p(s) table (paper Eq. C3)",
+        "Interfacial stiffness from a squeeze test of an elastic "
+        "block of thickness d and effective modulus E' (paper "
+        "section III): K* = dp/ds, K = K*/(1 - K* d/E').",
+    ),
+    "demo": (
+        "the default scene (periodic 512^2, H=0.7, slope 0.1)",
+        "The default scene: periodic 512 x 512 self-affine "
+        "surface, H = 0.7, rms slope 0.1, L/lambda_r = 2, "
+        "L/lambda_1 = 64, loads from first contact to ~50% area.",
+    ),
+}
+
+
+def _command(sub: Any, name: str) -> argparse.ArgumentParser:
+    """The subcommand ``name`` with its help and description from :data:`COMMANDS`."""
+    summary, description = COMMANDS[name]
+    parser: argparse.ArgumentParser = sub.add_parser(name, help=summary, description=description)
+    return parser
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="petsc-contact",
+        description="Non-adhesive contact of rough elastic solids with PETSc/TAO. "
+        "Options with one dash (-tao_type bncg, -tao_monitor, -options_file F, "
+        "-log_view, ...) are passed to PETSc. The package's own PETSc options: "
+        "-petsc_contact_no_j0 (no Fourier initial Hessian for the BQNK types), "
+        "-petsc_contact_no_ksp_pc (no Fourier KSP preconditioner for tron, bnls, "
+        "bntr, bntl).",
+        epilog="Exit status: 0 converged, 1 a step did not converge, 2 bad input, 130 interrupted.",
+    )
+    parser.add_argument("--version", action="version", version=f"petsc-contact {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    _geometry_parsers(sub)
+    _compare_parser(sub)
+    _experiment_parser(sub)
+    _demo_parser(sub)
+    _plot_parser(sub)
+    _command(sub, "schema")
+    return parser
+
+
+def _plot_parser(sub: Any) -> None:
+    p = _command(sub, "plot")
+    p.add_argument("file", metavar="OUT.h5", help="a periodic or punch output file")
+    p.add_argument("--step", type=int, default=-1, metavar="K", help="load step (default: last)")
+    p.add_argument(
+        "--field",
+        choices=("pressure", "gap", "contact", "heights"),
+        default="pressure",
+        help="the map to draw (default pressure; fields need a run with --fields)",
+    )
+    p.add_argument("--output", metavar="PNG", help="default: OUT_FIELD_stepK.png")
+
+
+def _geometry_parsers(sub: Any) -> None:
+    """``periodic``, ``punch`` and ``ensemble``."""
+    per = _command(sub, "periodic")
+    _surface_arguments(per)
+    _run_arguments(per)
+    pun = _command(sub, "punch")
+    _surface_arguments(pun)
+    _run_arguments(pun, punch=True)
+    ens = _command(sub, "ensemble")
+    _surface_arguments(ens)
+    _run_arguments(ens)
+    ens.add_argument(
+        "--seeds",
+        type=_seed_list,
+        required=True,
+        metavar="K1,K2,...|A-B",
+        help="the seeds (a list, or a range A-B inclusive)",
+    )
+
+
+def _compare_parser(sub: Any) -> None:
+    cmp_ = _command(sub, "compare")
+    _surface_arguments(cmp_)
+    cmp_.add_argument(
+        "--length",
+        type=float,
+        default=1.0,
+        metavar="L",
+        help="side of the periodic cell (default %(default)s)",
+    )
+    cmp_.add_argument(
+        "--modulus",
+        type=float,
+        default=1.0,
+        metavar="ESTAR",
+        help="contact modulus E* (default %(default)s)",
+    )
+    cmp_.add_argument(
+        "--pressure",
+        type=float,
+        required=True,
+        metavar="P",
+        help="nominal pressure p0 (units of E*)",
+    )
+    cmp_.add_argument(
+        "--solvers",
+        type=lambda t: [v for v in t.split(",") if v],
+        default=None,
+        metavar="S1,S2,...",
+        help="TAO types, 'cg' (default solver), 'pk' (Polonsky-Keer) or "
+        "options files (default: cg,pk,tron,bnls,bntr,bqnls,blmvm,bncg,gpcg)",
+    )
+    cmp_.add_argument(
+        "--time-limit",
+        type=float,
+        default=120.0,
+        metavar="S",
+        help="stop a solver after S seconds of wall time (default 120)",
+    )
+    cmp_.add_argument(
+        "--stall-iterations",
+        type=int,
+        default=1000,
+        metavar="N",
+        help="stop a solver whose natural residual has not fallen 10%% below "
+        "its best for N iterations (default 1000; 0: never)",
+    )
+    cmp_.add_argument("--output", required=True, metavar="OUT.h5")
+    cmp_.add_argument("--quiet", action="store_true", help="no table on standard output")
+
+
+def _experiment_parser(sub: Any) -> None:
+    exp = _command(sub, "experiment")
+    exp.add_argument(
+        "--table",
+        required=True,
+        metavar="FILE",
+        help="two columns, comma- or whitespace-separated: nominal pressure p, displacement "
+        "s of the block's top (# comments and one header line are skipped)",
+    )
+    exp.add_argument(
+        "--modulus",
+        type=float,
+        required=True,
+        metavar="EPRIME",
+        help="effective Young's modulus E' of the block (pressure units)",
+    )
+    exp.add_argument(
+        "--thickness",
+        type=float,
+        required=True,
+        metavar="D",
+        help="block thickness d (length units of s)",
+    )
+    exp.add_argument("--output", required=True, metavar="OUT.h5")
+    exp.add_argument("--plot", metavar="PNG", help="K and K* against p")
+    exp.add_argument("--quiet", action="store_true", help="no table on standard output")
+
+
+def _demo_parser(sub: Any) -> None:
+    demo = _command(sub, "demo")
+    _surface_arguments(demo)
+    _run_arguments(demo, {**DEMO, "output": "demo.h5", "plot": "demo.png"})
+    demo.set_defaults(**{k: v for k, v in DEMO.items() if k != "pressures"})

@@ -1,0 +1,78 @@
+"""The entry point: parse, dispatch, report unused PETSc options, exit status."""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+from collections.abc import Sequence
+from typing import Any
+
+from ..output import schema_markdown
+from .arguments import build_parser, split_arguments
+from .common import EXIT_BAD_INPUT, EXIT_INTERRUPTED, InputError, say
+from .comparison import run_compare
+from .ensemble import run_ensemble
+from .runs import run
+from .tools import run_experiment, run_plot
+
+
+def _interrupt(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``petsc-contact`` with ``argv`` (default: the process's); return the exit status."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    ours, petsc_args = split_arguments(argv)
+    args = build_parser().parse_args(ours)
+    signal.signal(signal.SIGTERM, _interrupt)
+    try:
+        status = _dispatch(args, argv, petsc_args)
+        _report_unused(petsc_args)
+        return status
+    except (InputError, ValueError, OSError) as exc:
+        say(str(exc))
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        return EXIT_INTERRUPTED
+    except Exception as exc:
+        if type(exc).__name__ == "Error" and "petsc4py" in type(exc).__module__:
+            say(f"PETSc error: {exc}")
+            return EXIT_BAD_INPUT
+        raise
+
+
+def _dispatch(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
+    if args.command == "ensemble":
+        return run_ensemble(args, argv, petsc_args)
+    if args.command == "experiment":
+        return run_experiment(args)
+    if args.command == "compare":
+        return run_compare(args, argv, petsc_args)
+    if args.command == "schema":
+        sys.stdout.write(schema_markdown())
+        return 0
+    if args.command == "plot":
+        return run_plot(args)
+    return run(args, argv, petsc_args)
+
+
+def _report_unused(petsc_args: list[str]) -> None:
+    """Warn about the user's PETSc options that nothing read (a misspelt ``-tao_typo``)."""
+    if not petsc_args or "petsc4py.PETSc" not in sys.modules:
+        return
+    from .. import _petsc
+
+    names = [a[1:] for a in petsc_args if a.startswith("-") and not _is_number(a)]
+    unused = _petsc.unused_options(names)
+    if unused:
+        say(f"PETSc options never used: {' '.join(unused)}", "warning")
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True

@@ -1,0 +1,249 @@
+"""``periodic``, ``punch`` and ``demo``: a load sweep with a table, HDF5 output and resume."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..step import FIELD_NAMES
+from .common import EXIT_INTERRUPTED, EXIT_NOT_CONVERGED, prepare_scene, run_record
+
+PERIODIC_COLUMNS = (("p0", "nominal_pressure", "{:>11.4e}"), ("mean_gap", "mean_gap", "{:>12.6e}"))
+
+
+PUNCH_COLUMNS = (
+    ("approach", "approach", "{:>11.4e}"),
+    ("force", "force", "{:>12.6e}"),
+    ("K_tot", "total_stiffness", "{:>10.4e}"),
+)
+
+
+def _header(columns: tuple[tuple[str, str, str], ...]) -> str:
+    widths = [len(fmt.format(0.0)) for _, _, fmt in columns]
+    head = " ".join(f"{title:>{w}}" for (title, _, _), w in zip(columns, widths, strict=True))
+    return f"{'step':>7} {head} {'area':>9} {'its':>6} {'time_s':>8} {'kkt':>9}  tao_reason"
+
+
+def _row(i: int, total: int, s: dict[str, Any], columns: tuple[tuple[str, str, str], ...]) -> str:
+    flag = "" if s["converged"] else "   <-- NOT CONVERGED: " + s["verification"]
+    values = " ".join(fmt.format(s[key]) for _, key, fmt in columns)
+    return (
+        f"{f'{i + 1}/{total}':>7} {values} {s['area_fraction']:>9.5f} {s['iterations']:>6d} "
+        f"{s['solve_time']:>8.3f} {s['kkt_residual']:>9.1e}  {s['tao_reason']}{flag}"
+    )
+
+
+def _disk(n: int) -> np.ndarray:
+    """The disk inscribed in an ``n x n`` footprint (pixel centres within radius n/2)."""
+    x = np.arange(n) + 0.5 - n / 2
+    return x[:, None] ** 2 + x[None, :] ** 2 < (n / 2) ** 2
+
+
+def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
+    """Run ``periodic``, ``demo`` or ``punch``; write the HDF5 file (and plot)."""
+    petsc, grid, fft, heights, resolved = prepare_scene(args, petsc_args)
+    from ..surface import rms_of
+
+    realised = {
+        "rms_height": rms_of(grid, fft, heights),
+        "rms_slope": rms_of(grid, fft, heights, slope=True),
+    }
+    if args.command == "punch":
+        plan = _punch_plan(args, grid, heights)
+    else:
+        plan = _periodic_plan(args, grid, fft, heights)
+    attributes = run_record(args, argv, petsc, realised, {**resolved, **plan.resolved})
+    attributes["fft_backend"] = plan.fft_backend
+    root = grid.comm.rank == 0
+    show = root and not args.quiet
+    try:
+        writer, done, start = _open_writer(args, grid, attributes, heights, len(plan.loads), show)
+        table = _finished_rows(args.output, done) if done and root else []
+        if show:
+            print(
+                f"# {args.command} {grid.n}x{grid.n}, L = {args.length:g}, E* = {args.modulus:g}, "
+                f"h_rms = {realised['rms_height']:.4g}, h'_rms = {realised['rms_slope']:.4g}"
+                f"{plan.intro}",
+                flush=True,
+            )
+            print(_header(plan.columns), flush=True)
+        try:
+            _run_steps(args, plan, writer, done, start, table, show)
+        except KeyboardInterrupt:
+            writer.abandon()
+            return EXIT_INTERRUPTED
+    finally:
+        plan.close()
+    writer.finish()
+    return _conclude(args, plan, table, realised, root)
+
+
+def _open_writer(
+    args: argparse.Namespace,
+    grid: Any,
+    attributes: dict[str, Any],
+    heights: np.ndarray,
+    total: int,
+    show: bool,
+) -> tuple[Any, int, np.ndarray | None]:
+    """The step writer, the steps already done and the state to start from (``--resume``)."""
+    from ..output import StepWriter, read_resume
+
+    fields = FIELD_NAMES if args.fields else ()
+    done, state = read_resume(args.output, attributes["parameters"]) if args.resume else (0, None)
+    if not done:
+        return StepWriter(args.output, grid, attributes, heights, fields), 0, None
+    if show:
+        print(f"# resuming {args.output}.partial after {done} of {total} steps", flush=True)
+    start = grid.scatter(state) if state is not None else None
+    return StepWriter.reopen(args.output, grid, fields), done, start
+
+
+def _run_steps(
+    args: argparse.Namespace,
+    plan: Plan,
+    writer: Any,
+    done: int,
+    start: np.ndarray | None,
+    table: list[dict[str, Any]],
+    show: bool,
+) -> None:
+    """Solve the remaining loads; write, tabulate and print each step as it finishes."""
+    total = len(plan.loads)
+    for i, step in enumerate(plan.steps(plan.loads[done:], start, args.fields), done):
+        fields = {name: step.field(name) for name in FIELD_NAMES} if args.fields else None
+        writer.append(step.scalars, fields, state=step.state)
+        table.append(step.scalars)
+        if show:
+            print(_row(i, total, step.scalars, plan.columns), flush=True)
+
+
+def _conclude(
+    args: argparse.Namespace,
+    plan: Plan,
+    table: list[dict[str, Any]],
+    realised: dict[str, float],
+    root: bool,
+) -> int:
+    """Plot, report the steps that did not converge, and return the exit status."""
+    if args.plot and root:
+        from ..plot import plot_punch, plot_sweep
+
+        if args.command == "punch":
+            plot_punch(args.plot, table)
+        else:
+            plot_sweep(args.plot, table, args.modulus, realised["rms_height"])
+    failed = [s for s in table if not s["converged"]]
+    if failed and root:
+        load = plan.columns[0]
+        print(
+            f"petsc-contact: error: {len(failed)} of {len(table)} load steps did NOT converge "
+            f"(first: {load[0]} = {failed[0][load[1]]:g}, {failed[0]['verification']}); "
+            f"they are flagged converged = False in {args.output}",
+            file=sys.stderr,
+        )
+    if root and not args.quiet:
+        print(f"# wrote {args.output}" + (f" and {args.plot}" if args.plot else ""))
+    return EXIT_NOT_CONVERGED if failed else 0
+
+
+@dataclass
+class Plan:
+    """What a geometry runs: its loads, a step generator, table columns, a closer."""
+
+    loads: list[float]
+    steps: Callable[[list[float], np.ndarray | None, bool], Iterator[Any]]
+    columns: tuple[tuple[str, str, str], ...]
+    intro: str
+    close: Callable[[], None] = lambda: None
+    fft_backend: str = ""  # class name of the operator's FFT backend (fft module)
+    resolved: dict[str, Any] = field(default_factory=dict)  # options the plan resolved
+
+
+def _periodic_plan(args: argparse.Namespace, grid: Any, fft: Any, heights: np.ndarray) -> Plan:
+    from ..periodic import sweep
+    from ..problem import PeriodicProblem
+
+    problem = PeriodicProblem(grid, fft, heights, args.modulus)
+    p_full = problem.full_contact_pressure()
+    resolved = {}
+    pressures = args.pressures
+    if args.sweep is not None:
+        n, lo, hi = (
+            (args.sweep + [1e-4 * p_full, 0.9 * p_full])[:3] if len(args.sweep) == 1 else args.sweep
+        )
+        pressures = [float(p) for p in np.geomspace(lo, hi, int(n))]
+        resolved = {"pressures": pressures, "sweep": None}  # the file records the loads
+
+    def steps(loads: list[float], start: np.ndarray | None, fields: bool) -> Iterator[Any]:
+        return sweep(problem, loads, fields, stiffness=args.stiffness, start=start)
+
+    return Plan(
+        list(pressures),
+        steps,
+        PERIODIC_COLUMNS,
+        f", full contact at p0 = {p_full:.4g}",
+        fft_backend=type(fft).__name__,
+        resolved=resolved,
+    )
+
+
+def _punch_plan(args: argparse.Namespace, grid: Any, heights: np.ndarray) -> Plan:
+    from ..punch import PHARR_BETA, PunchProblem, PunchSolver
+
+    mask = grid.scatter(_disk(grid.n)) > 0 if args.footprint == "disk" else None
+    beta = 1.0 if args.footprint == "disk" else PHARR_BETA
+    problem = PunchProblem(grid, heights, args.modulus, mask, args.flat_stiffness, beta)
+    solver = PunchSolver(problem)
+    by_force = args.forces is not None
+    resolved = {}
+    approaches = args.approaches
+    if args.sweep is not None:
+        n, lo, hi = (
+            (args.sweep + [0.01 * problem.scale_length, 3 * problem.scale_length])[:3]
+            if len(args.sweep) == 1
+            else args.sweep
+        )
+        approaches = [float(d) for d in np.geomspace(lo, hi, int(n))]
+        resolved = {"approaches": approaches, "sweep": None}  # the file records the loads
+
+    def steps(loads: list[float], start: np.ndarray | None, fields: bool) -> Iterator[Any]:
+        if start is not None:
+            solver.restart_from(start)
+        for v in loads:
+            if by_force:
+                yield solver.at_force(v, fields, stiffness=args.stiffness)
+            else:
+                yield solver.at_approach(v, fields, stiffness=args.stiffness)
+
+    intro = (
+        f", K_flat = {solver.k_flat:.6g} ({args.flat_stiffness}; analytic "
+        f"{solver.k_flat_analytic:.6g})"
+    )
+    return Plan(
+        list(args.forces if by_force else approaches),
+        steps,
+        PUNCH_COLUMNS + (("p0", "nominal_pressure", "{:>10.3e}"),),
+        intro,
+        solver.close,
+        type(problem.compliance.fft).__name__,
+        resolved,
+    )
+
+
+def _finished_rows(path: str, steps: int) -> list[dict[str, Any]]:
+    """The per-step scalars already in an interrupted run's partial file (for the plot)."""
+    import h5py
+
+    with h5py.File(path + ".partial", "r") as f:
+        names = [k for k in f if f[k].ndim == 1 and f[k].shape[0] >= steps]
+        rows = [{k: f[k][i] for k in names} for i in range(steps)]
+    for row in rows:
+        for k, v in row.items():
+            row[k] = v.decode() if isinstance(v, bytes) else v
+    return rows

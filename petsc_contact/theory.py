@@ -14,6 +14,8 @@ Units: any consistent set; ``q`` in 1/length, ``C`` in length^4, pressures in th
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy import integrate, special
 
@@ -152,11 +154,64 @@ def _tail_integral(
     return lnt, tail
 
 
+ROOT_POINTS = 4000  # points of the sqrt(q - q0) grid Persson's integrals are evaluated on
+
+
 def persson_w(q: np.ndarray, psd: np.ndarray) -> np.ndarray:
     """``w(q) = (pi int_q0^q dq' q'^3 C(q'))^(-1/2)`` (``inf`` at the first ``q``)."""
     cum = integrate.cumulative_trapezoid(q**3 * psd, q, initial=0.0)
     with np.errstate(divide="ignore"):
         return 1.0 / np.sqrt(np.pi * cum)
+
+
+@dataclass(frozen=True)
+class _RootGrid:
+    """Persson's integrals on ``q = q0 + s^2``.
+
+    ``w(q)`` diverges like ``(q - q0)^(-1/2)`` at ``q0``: integrable, but a trapezoid rule on
+    ``q`` drops its weight.  In ``s`` the measure ``dq = 2 s ds`` cancels the divergence, so
+    ``ws = w 2s`` is finite everywhere (``2 / sqrt(pi q0^3 C(q0))`` at ``s = 0``) and every
+    integrand is smooth.  ``C`` is interpolated log-log from the caller's grid.
+    """
+
+    s: np.ndarray
+    q: np.ndarray
+    psd: np.ndarray
+    w: np.ndarray  # inf at s = 0
+    ws: np.ndarray  # w 2s: the weight of the integrals in s
+
+    @classmethod
+    def of(cls, q: np.ndarray, psd: np.ndarray, points: int = ROOT_POINTS) -> _RootGrid:
+        q = np.asarray(q, dtype=float)
+        psd = np.asarray(psd, dtype=float)
+        if q.ndim != 1 or q.shape != psd.shape or q.size < 2 or np.any(np.diff(q) <= 0):
+            raise ValueError("q must increase and match psd in shape (at least 2 points)")
+        if not psd[0] > 0:
+            raise ValueError("the spectrum must be positive at its first wavevector q0")
+        end = np.sqrt(q[-1] - q[0])
+        # uniform in s, and geometric towards s = 0, where the inner integrals switch on at
+        # s ~ w^-1 ~ p/E* (any load down to 1e-9 E* is resolved)
+        n = max(points, q.size)
+        s = np.unique(np.r_[np.linspace(0.0, end, n), np.geomspace(end * 1e-10, end, n)])
+        qs = q[0] + s * s
+        positive = psd > 0
+        log_c = np.interp(np.log(qs), np.log(q[positive]), np.log(psd[positive]))
+        cs = np.where(qs <= q[positive][-1], np.exp(log_c), 0.0)
+        cum = integrate.cumulative_trapezoid(qs**3 * cs * 2 * s, s, initial=0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            w = 1.0 / np.sqrt(np.pi * cum)
+            ws = np.where(s > 0, w * 2 * s, 2.0 / np.sqrt(np.pi * q[0] ** 3 * psd[0]))
+        return cls(s, qs, cs, w, ws)
+
+    def integrate(self, integrand: np.ndarray) -> np.ndarray:
+        """``int dq f(q) w(q)`` given ``integrand = f w 2s`` on the grid (last axis)."""
+        return np.asarray(integrate.trapezoid(integrand, self.s, axis=-1))
+
+
+def _tail_constant(gamma: float) -> float:
+    """``c = lim_{t -> 0} [I(t) - gamma ln(1/t)]``, with ``I`` the tabulated tail integral."""
+    lnt, tail = _tail_integral(gamma)
+    return float(tail[0] + gamma * lnt[0])
 
 
 def persson_mean_gap(
@@ -166,7 +221,8 @@ def persson_mean_gap(
 
         u_bar = sqrt(pi) int dq q^2 C(q) w(q) int_p^inf dp'/p' kernel(w(q) p'/E*)
 
-    The inner integral is the universal ``I(w p/E*)``, tabulated once.
+    The inner integral is the universal ``I(w p/E*)``, tabulated once.  The outer one is
+    exact at ``q0``, where ``w`` diverges (:class:`_RootGrid`).
 
     Parameters
     ----------
@@ -174,19 +230,19 @@ def persson_mean_gap(
         Nominal pressures (scalar or array).
     q, psd
         Increasing wavevector magnitudes from ``q0`` to ``q1`` and the isotropic PSD
-        ``C(q)`` on them (normalised as ``h_rms^2 = 2 pi int q C dq``); use a log-spaced
-        grid with a few hundred points per decade for smooth spectra.
+        ``C(q)`` on them (normalised as ``h_rms^2 = 2 pi int q C dq``): the prescribed
+        (continuum) spectrum on a fine grid, or a realisation's radial average.
     """
     p = np.atleast_1d(np.asarray(pressure, dtype=float))
+    grid = _RootGrid.of(q, psd)
     lnt, tail = _tail_integral(gamma)
-    w = persson_w(q, psd)
-    t0 = np.outer(p / modulus, np.where(np.isfinite(w), w, 0.0))
-    inner = np.interp(np.log(np.maximum(t0, 1e-300)), lnt, tail, left=np.nan, right=0.0)
+    t0 = np.outer(p / modulus, grid.w)
+    with np.errstate(invalid="ignore"):
+        inner = np.interp(np.log(np.maximum(t0, 1e-300)), lnt, tail, left=np.nan, right=0.0)
     # below the table, I(t0) = I(t_min) + (gamma + ...) ln(t_min/t0) ~ gamma ln(t_min/t0)
     low = t0 < np.exp(lnt[0])
     inner[low] = tail[0] + gamma * (lnt[0] - np.log(np.maximum(t0[low], 1e-300)))
-    integrand = q**2 * psd * np.where(np.isfinite(w), w, 0.0) * inner
-    u = np.sqrt(np.pi) * integrate.trapezoid(integrand, q, axis=-1)
+    u = np.sqrt(np.pi) * grid.integrate(grid.q**2 * grid.psd * grid.ws * inner)
     return u if np.ndim(pressure) else u[0]
 
 
@@ -198,12 +254,38 @@ def persson_stiffness(
     -du_bar/dp = sqrt(pi)/p int dq q^2 C(q) w(q) kernel(w(q) p/E*)
     """
     p = np.atleast_1d(np.asarray(pressure, dtype=float))
-    w = persson_w(q, psd)
-    w = np.where(np.isfinite(w), w, 0.0)
-    t0 = np.outer(p / modulus, w)
-    integrand = q**2 * psd * w * _separation_kernel(t0, gamma)
-    k = p / (np.sqrt(np.pi) * integrate.trapezoid(integrand, q, axis=-1))
+    grid = _RootGrid.of(q, psd)
+    t0 = np.outer(p / modulus, grid.w)
+    integrand = grid.q**2 * grid.psd * grid.ws * _separation_kernel(t0, gamma)
+    k = p / (np.sqrt(np.pi) * grid.integrate(integrand))
     return k if np.ndim(pressure) else k[0]
+
+
+def persson_exponential(
+    q: np.ndarray, psd: np.ndarray, gamma: float = GAMMA
+) -> tuple[float, float]:
+    """``(beta, u0)`` of Persson's small-load law ``p = beta E* exp(-u_bar/u0)`` (paper
+    Eq. 3 with ``p0 = beta E*``), in closed form.
+
+    For ``p -> 0`` the inner integral is ``I(t) = gamma ln(1/t) + c`` with ``t = w p/E*``,
+    so ``u_bar = u0 ln(E*/p) + sqrt(pi) int dq q^2 C w (c - gamma ln w)`` with
+    ``u0 = gamma sqrt(pi) int dq q^2 C w``, and ``beta`` is the exponential of the second
+    term over ``u0``.  Both integrals are evaluated exactly at ``q0``.
+    """
+    grid = _RootGrid.of(q, psd)
+    weight = grid.q**2 * grid.psd * grid.ws
+    u0 = gamma * np.sqrt(np.pi) * float(grid.integrate(weight))
+    # c - gamma ln w = c - gamma ln(w s) + gamma ln s: the first part is smooth (w s -> the
+    # finite ws(0)/2 at s = 0), the second has an integrable log, integrated in closed form
+    ws_half = grid.ws / 2
+    smooth = float(grid.integrate(weight * (_tail_constant(gamma) - gamma * np.log(ws_half))))
+    s_grid = grid.s
+    with np.errstate(divide="ignore", invalid="ignore"):
+        log_part = np.where(s_grid > 0, (weight - weight[0]) * np.log(s_grid), 0.0)
+    end = s_grid[-1]
+    logarithmic = float(grid.integrate(log_part)) + weight[0] * end * (np.log(end) - 1.0)
+    constant = np.sqrt(np.pi) * (smooth + gamma * logarithmic)
+    return float(np.exp(constant / u0)), u0
 
 
 # -- the paper's experiment (section III) ------------------------------------------------------

@@ -112,3 +112,46 @@ def test_hertz_regime_against_the_punch_solver():
     assert step.scalars["total_stiffness"] == pytest.approx(
         float(theory.hertz_stiffness(0.02, 2.0, 1.0, 1.0)), rel=0.01
     )
+
+
+def _eq5(points, rolloff_ratio, norm_points=1_000_000):
+    """Paper Eq. 5 with H = 0.7, L/lambda_1 = 4096 on ``points`` log-spaced wavevectors,
+    normalised to h_rms = 1 by a fine quadrature (the same for every ``points``)."""
+    from petsc_contact.surface import psd_shape
+
+    q0 = 2 * np.pi
+
+    def shape(n):
+        q = np.geomspace(q0, 4096 * q0, n)
+        return q, psd_shape(q, q0, rolloff_ratio * q0, 4096 * q0 * (1 + 1e-12), 0.7)
+
+    qf, cf = shape(norm_points)
+    q, c = shape(points)
+    return q, c / (2 * np.pi * np.trapz(qf * cf, qf))
+
+
+@pytest.mark.parametrize("rolloff_ratio", [1.0, 8.0])
+def test_persson_quadrature_exact_at_q0(rolloff_ratio):
+    """w(q) diverges like (q - q0)^(-1/2) at q0; integrated on q = q0 + s^2 the default grid
+    agrees with a 100x finer one to 1e-4 from 1e-8 E* to 0.1 E* (a trapezoid rule on q that
+    drops the q0 end was 0.5-2.5% off at L = lambda_r)."""
+    p = np.geomspace(1e-8, 1e-1, 8)
+    q, c = _eq5(4000, rolloff_ratio)
+    qf, cf = _eq5(400_000, rolloff_ratio)
+    for f in (theory.persson_mean_gap, theory.persson_stiffness):
+        assert np.allclose(f(p, q, c, 1.0), f(p, qf, cf, 1.0), rtol=1e-4, atol=0)
+
+
+@pytest.mark.parametrize("rolloff_ratio", [1.0, 8.0])
+def test_persson_exponential_parameters(rolloff_ratio):
+    """The closed-form beta and u0 of p = beta E* exp(-u_bar/u0) match the slope and the
+    intercept of Persson's u_bar(p) at vanishing load (1e-9 E*, where the law is exact to
+    the kernel's O(t^2) correction)."""
+    q, c = _eq5(4000, rolloff_ratio)
+    beta, u0 = theory.persson_exponential(q, c)
+    p = np.array([1e-9, 2e-9])
+    u = theory.persson_mean_gap(p, q, c, 1.0)
+    slope = -(u[1] - u[0]) / np.log(2)
+    assert u0 == pytest.approx(slope, rel=1e-6)
+    assert beta == pytest.approx(p[0] * np.exp(u[0] / slope), rel=1e-5)
+    assert 0.4 < u0 < 0.55  # the paper's u0 ~ 0.4 h_rms (gamma = 0.4) and a bit more

@@ -1,53 +1,76 @@
-"""Fig. 5: the prescribed power spectrum (Eq. 5) against the realised one of a generated surface."""
+"""Spectra: Eq. 5 against a realisation, (a) without and (b) with roll-off; q0, qr, q1 marked."""
 
 import argparse
 
+import numpy as np
 from mpi4py import MPI
 
 from petsc_contact import scenes
 from petsc_contact.fft import make_fft
-from petsc_contact.grid import Grid
+from petsc_contact.grid import Grid, fundamental_wavevector
 from petsc_contact.surface import radial_psd
+
+
+def spectra(grid_n: int, hurst: float, ratio: float, cutoff: float, seed: int) -> dict:
+    """The realised radial PSD of one surface and the prescribed spectrum it was drawn from."""
+    h, h_rms = scenes.surface(grid_n, hurst, ratio, cutoff, seed)
+    grid = Grid(grid_n, 1.0, MPI.COMM_SELF)
+    q, c = radial_psd(grid, make_fft(grid), h)
+    qi, ci = scenes.ideal_spectrum(1.0, hurst, ratio, cutoff, h_rms)
+    return {"q": q, "psd": c, "q_prescribed": qi, "psd_prescribed": ci, "h_rms": h_rms}
+
+
+def panel(ax, data: dict, ratio: float, cutoff: float, title: str) -> None:
+    q, c = data["q"], data["psd"]
+    ok = c > 1e-20 * c.max()  # beyond q1 only FFT rounding is left
+    ax.loglog(q[ok], c[ok], ".", ms=3, label="realised (radial average)")
+    ax.loglog(data["q_prescribed"], data["psd_prescribed"], "k-", label="prescribed, Eq. 5")
+    q0 = fundamental_wavevector(1.0)
+    marks = {"$q_0$": q0, "$q_1$": cutoff * q0}
+    if ratio > 1:
+        marks["$q_r$"] = ratio * q0
+    for label, value in marks.items():
+        ax.axvline(value, color="0.5", lw=0.8, ls="--")
+        ax.text(value, 0.97, label, transform=ax.get_xaxis_transform(), ha="center", va="top")
+    ax.set(xlabel="$q$ (1/L)", ylabel="$C(q)$", title=title)
+    ax.grid(alpha=0.3, which="both")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--grid", type=int, default=1024)
     ap.add_argument("--hurst", type=float, default=0.7)
-    ap.add_argument("--rolloff-ratio", type=float, default=8.0)
+    ap.add_argument("--rolloff-ratio", type=float, default=8.0, help="L/lambda_r of panel (b)")
     ap.add_argument("--cutoff-ratio", type=float, default=None, help="default grid/4")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--output", default="fig5")
     args = ap.parse_args()
     cutoff = args.cutoff_ratio or args.grid / 4
-    h, h_rms = scenes.surface(args.grid, args.hurst, args.rolloff_ratio, cutoff, args.seed)
-    grid = Grid(args.grid, 1.0, MPI.COMM_SELF)
-    q, c = radial_psd(grid, make_fft(grid), h)
-    qi, ci = scenes.ideal_spectrum(1.0, args.hurst, args.rolloff_ratio, cutoff, h_rms)
+    ratios = {"a": 1.0, "b": args.rolloff_ratio}
+    data = {k: spectra(args.grid, args.hurst, r, cutoff, args.seed) for k, r in ratios.items()}
     scenes.save(
         f"{args.output}.h5",
-        {"q": q, "psd": c, "q_prescribed": qi, "psd_prescribed": ci},
+        {k: {n: v for n, v in d.items() if n != "h_rms"} for k, d in data.items()},
         hurst=args.hurst,
-        rolloff_ratio=args.rolloff_ratio,
+        rolloff_ratios=[ratios["a"], ratios["b"]],
         cutoff_ratio=cutoff,
         seed=args.seed,
         grid=args.grid,
-        h_rms=h_rms,
+        h_rms=[float(data["a"]["h_rms"]), float(data["b"]["h_rms"])],
     )
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(5, 3.8), constrained_layout=True)
-    ok = c > 1e-20 * c.max()  # beyond q1 only FFT rounding is left
-    ax.loglog(q[ok], c[ok], ".", ms=3, label="realised (radial average)")
-    ax.loglog(qi, ci, "k-", label="prescribed, Eq. 5")
-    ax.set(xlabel="$q$ (1/L)", ylabel="$C(q)$", title=f"Fig. 5, H = {args.hurst}")
-    ax.legend()
-    ax.grid(alpha=0.3, which="both")
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), constrained_layout=True, sharey=False)
+    for ax, (key, ratio) in zip(axes, ratios.items(), strict=True):
+        roll = "without roll-off" if ratio <= 1 else f"with roll-off, $L/\\lambda_r$ = {ratio:g}"
+        panel(ax, data[key], ratio, cutoff, f"({key}) H = {args.hurst}, {roll}")
+    axes[0].legend(loc="lower left")
     fig.savefig(f"{args.output}.png", dpi=120)
-    print(f"h_rms = {h_rms:.4g}; wrote {args.output}.png and {args.output}.h5")
+    rms = ", ".join(f"{np.round(d['h_rms'], 6)}" for d in data.values())
+    print(f"h_rms = {rms}; wrote {args.output}.png and {args.output}.h5")
 
 
 if __name__ == "__main__":

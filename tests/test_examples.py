@@ -13,6 +13,10 @@ from conftest import ROOT
     [
         ("fig2_theta.py", []),
         ("fig5_spectrum.py", ["--grid", "64"]),
+        (
+            "fig4_alpha_extrapolation.py",
+            "--grid 64 --ratios 8 16 32 --seeds 2 --pressures 1e-4 3e-2 8 --fit-points 3".split(),
+        ),
         ("fig1_stiffness.py", ["--grid", "64", "--pressures", "1e-5", "1e-2", "6"]),
         (
             "fig3_finite_size.py",

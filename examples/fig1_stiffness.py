@@ -11,10 +11,13 @@ from petsc_contact.ensemble import power_law_fit
 def crossover_from_simulation(
     p: np.ndarray, k: np.ndarray, area: np.ndarray, points: int = 4
 ) -> tuple[float, float]:
-    """Where the low-load power law meets K = p/u0 fitted at 1-10% contact area."""
-    fit = power_law_fit(p, k, points)
+    """Where the low-load power law meets K = p/u0 fitted at 1-10% contact area (NaN when
+    fewer than ``points`` resolved steps are left to fit)."""
     mid = (area > 0.01) & (area < 0.1) & np.isfinite(k)
     u0 = float(np.median(p[mid] / k[mid])) if mid.any() else float("nan")
+    if np.count_nonzero(np.isfinite(k) & (k > 0)) < points:
+        return float("nan"), u0
+    fit = power_law_fit(p, k, points)
     return (fit.prefactor * u0) ** (1 / (1 - fit.alpha)), u0
 
 
@@ -41,7 +44,11 @@ def main() -> None:
         curve["persson_stiffness"] = theory.persson_stiffness(p, q, c, 1.0)
         curve["persson_mean_gap"] = theory.persson_mean_gap(p, q, c, 1.0)
         pc_formula = theory.crossover_pressure(1.0, h_rms, args.hurst, 1.0, ratio)
-        pc_sim, u0 = crossover_from_simulation(p, curve["stiffness"], curve["area_fraction"])
+        curve["resolved"] = scenes.resolved(curve["area_fraction"], args.grid)
+        ok = curve["resolved"]
+        pc_sim, u0 = crossover_from_simulation(
+            p[ok], curve["stiffness"][ok], curve["area_fraction"][ok]
+        )
         curve.update(h_rms=h_rms, pc_formula=pc_formula, pc_simulation=pc_sim, u0=u0)
         data[f"ratio{ratio:g}"] = curve
         summary[ratio] = (h_rms, pc_formula, pc_sim, u0)
@@ -75,14 +82,22 @@ def main() -> None:
     for ratio in args.rolloff_ratios:
         d = data[f"ratio{ratio:g}"]
         hr = d["h_rms"]
+        ok = d["resolved"]
         (line,) = ax.loglog(
-            p, d["stiffness"] * hr, "o", mfc="none", label=f"$L/\\lambda_r$ = {ratio:g} (exact)"
+            p[ok],
+            d["stiffness"][ok] * hr,
+            "o",
+            mfc="none",
+            label=f"$L/\\lambda_r$ = {ratio:g} (exact)",
         )
+        # fewer than 16 contact pixels: not resolved, drawn small and never fitted
+        ax.loglog(p[~ok], d["stiffness"][~ok] * hr, ".", color=line.get_color(), alpha=0.5)
         ax.loglog(p, d["stiffness_sweep"] * hr, "x", color=line.get_color(), ms=4)
         ax.loglog(p, d["persson_stiffness"] * hr, "-", color=line.get_color(), lw=1)
         ax.axvline(d["pc_formula"], color=line.get_color(), ls=":", lw=1)
         inset.semilogy(d["mean_gap"] / hr, p, "o", ms=2, color=line.get_color())
         inset.semilogy(d["persson_mean_gap"] / hr, p, "-", lw=1, color=line.get_color())
+    ax.plot([], [], ".", color="gray", label="< 16 contact pixels (not fitted)")
     ax.loglog(p, p / theory.GAMMA, "k--", lw=1, label=r"$K = p/(\gamma h_\mathrm{rms})$")
     ok = punch["converged"] & (punch["nominal_pressure"] > 0)
     ax.loglog(

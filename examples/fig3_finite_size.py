@@ -54,7 +54,9 @@ def main() -> None:
         r = results[f"H{h}"]
         h_rms = r["h_rms"].mean()
         k = r["stiffness_mean"] * h_rms
-        (line,) = ax.loglog(p, k, "o", mfc="none", label=f"H = {h}")
+        ok = r["fitted"]  # resolved contact (scenes.resolved), the points fits may use
+        (line,) = ax.loglog(p[ok], k[ok], "o", mfc="none", label=f"H = {h}")
+        ax.loglog(p[~ok], k[~ok], ".", color=line.get_color(), alpha=0.5)
         low = np.sort(p[r["fitted"]])[: args.fit_points]
         ax.loglog(
             low,
@@ -67,6 +69,7 @@ def main() -> None:
         print(
             f"{h:>4} {r['alpha']:>9.3f} +- {r['alpha_error']:.3f} {paper:>12} {1 / (1 + h):>8.3f}"
         )
+    ax.plot([], [], ".", color="gray", label="< 16 contact pixels (not fitted)")
     ax.set(
         xlabel="$p_0/E^*$",
         ylabel=r"$K h_\mathrm{rms}/E^*$",

@@ -58,9 +58,15 @@ def main() -> None:
         )
     n_punch = args.punch_grid or args.grid // 2
     hp, hp_rms = scenes.surface(n_punch, args.hurst, 1.0, n_punch / 4, args.seed)
-    approaches = np.geomspace(1e-2, 3.0, 14) * hp_rms
+    approaches = np.geomspace(1e-2, 30.0, 18) * hp_rms  # to well over 10% contact area
     punch = scenes.punch_curve(hp, approaches)
     punch["h_rms"] = hp_rms
+    top = punch["area_fraction"][punch["converged"]].max(initial=0.0)
+    print(
+        f"# punch {n_punch}^2: {int(punch['converged'].sum())}/{approaches.size} converged, "
+        f"up to {top:.0%} of the footprint in contact",
+        flush=True,
+    )
     data["punch"] = punch
     scenes.save(
         f"{args.output}.h5",

@@ -275,13 +275,14 @@ class StepWriter:
             os.replace(self.partial, self.path)
         self.grid.comm.Barrier()
 
-    def abandon(self) -> None:
+    def abandon(self, why: str = "interrupted") -> None:
         """Close after an interruption, keeping the finished steps in the ``.partial`` file."""
         if self.root and self.file is not None:
             self.file.close()
             self.file = None
             print(
-                f"petsc-contact: interrupted; {self.steps} finished step(s) kept in {self.partial}",
+                f"petsc-contact: {why}; {self.steps} finished step(s) kept in {self.partial} "
+                "(--resume continues)",
                 file=sys.stderr,
             )
 
@@ -298,7 +299,7 @@ def read_resume(path: str, parameters: dict[str, Any]) -> tuple[int, np.ndarray 
     partial = path + ".partial"
     if not os.path.exists(partial):
         return 0, None
-    ignore = ("resume", "quiet")
+    ignore = ("resume", "quiet", "stop_after")
     mine = {k: v for k, v in parameters.items() if k not in ignore}
     with h5py.File(partial, "r") as f:
         theirs = {k: v for k, v in json.loads(f.attrs["parameters"]).items() if k not in ignore}

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import re
 from collections.abc import Sequence
 from typing import Any
@@ -238,12 +239,31 @@ def _output_arguments(p: argparse.ArgumentParser, d: dict[str, Any]) -> None:
         help="continue an interrupted run from OUT.h5.partial (same options): "
         "finished steps are kept, not recomputed",
     )
+    p.add_argument(
+        "--stop-after",
+        type=float,
+        default=None,
+        metavar="MINUTES",
+        help="after the step that ends past MINUTES of wall time, stop; --resume continues "
+        "(exit status 75)",
+    )
+    p.add_argument(
+        "--scalars-only",
+        action="store_true",
+        help="do not store the height map (for compact result files of large grids)",
+    )
 
 
 COMMANDS = {  # name: (one-line help, description)
     "plot": (
         "draw a map of a stored field (pressure, gap, contact, heights)",
         "A map of one load step's field over the cell, with physical axes and a colour bar.",
+    ),
+    "study": (
+        "the paper's datasets at the paper's parameters, in resumable pieces",
+        "Runs the pieces of the paper's figures (periodic sweeps and the punch, with the "
+        "exact stiffness, scalars only) into DATA/figN/, skipping complete pieces and "
+        "stopping cleanly after --minutes; run it again to go on.",
     ),
     "schema": (
         "print the HDF5 output schema (docs/output-schema.md)",
@@ -315,8 +335,19 @@ def build_parser() -> argparse.ArgumentParser:
     _experiment_parser(sub)
     _demo_parser(sub)
     _plot_parser(sub)
+    _study_parser(sub)
     _command(sub, "schema")
     return parser
+
+
+def _study_parser(sub: Any) -> None:
+    p = _command(sub, "study")
+    p.add_argument("--figure", choices=("1", "2", "3", "all"), default="all", help="default all")
+    p.add_argument("--minutes", type=float, default=45.0, help="time budget (default 45)")
+    p.add_argument("--data", default=os.path.join("data", "paper"), help="default data/paper")
+    p.add_argument("--shrink", type=int, default=1, help="divide every grid (a quick look)")
+    p.add_argument("--list", action="store_true", help="print the pieces and stop")
+    p.add_argument("--quiet", action="store_true", help="no tables")
 
 
 def _plot_parser(sub: Any) -> None:

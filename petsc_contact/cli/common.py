@@ -11,11 +11,8 @@ from typing import Any
 import numpy as np
 
 EXIT_NOT_CONVERGED = 1
-
-
 EXIT_BAD_INPUT = 2
-
-
+EXIT_PAUSED = 75  # --stop-after reached: the run continues with --resume
 EXIT_INTERRUPTED = 130
 
 

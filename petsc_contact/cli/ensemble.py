@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from ..output import ENSEMBLE, annotate, atomic_h5, ensemble_entry, write_attributes
-from .common import EXIT_INTERRUPTED, InputError, prepare_scene
+from .common import EXIT_INTERRUPTED, EXIT_PAUSED, InputError, prepare_scene
 from .runs import run
 
 
@@ -44,8 +44,8 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
         )
         del one.seeds
         code = run(one, argv, petsc_args)
-        if code == EXIT_INTERRUPTED:
-            return code
+        if code in (EXIT_INTERRUPTED, EXIT_PAUSED):
+            return code  # the next --resume continues with this seed
         status = max(status, code)
     from mpi4py import MPI
 

@@ -14,6 +14,7 @@ from .common import EXIT_BAD_INPUT, EXIT_INTERRUPTED, InputError, say
 from .comparison import run_compare
 from .ensemble import run_ensemble
 from .runs import run
+from .study import run_study, study_plan
 from .tools import run_experiment, run_plot
 
 
@@ -55,6 +56,11 @@ def _dispatch(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[st
         return 0
     if args.command == "plot":
         return run_plot(args)
+    if args.command == "study":
+        if args.list:
+            print(study_plan(args))
+            return 0
+        return run_study(args, petsc_args)
     return run(args, argv, petsc_args)
 
 

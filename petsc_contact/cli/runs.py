@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -11,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from ..step import FIELD_NAMES
-from .common import EXIT_INTERRUPTED, EXIT_NOT_CONVERGED, prepare_scene, run_record
+from .common import EXIT_INTERRUPTED, EXIT_NOT_CONVERGED, EXIT_PAUSED, prepare_scene, run_record
 
 PERIODIC_COLUMNS = (("p0", "nominal_pressure", "{:>11.4e}"), ("mean_gap", "mean_gap", "{:>12.6e}"))
 
@@ -73,7 +74,9 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
             )
             print(_header(plan.columns), flush=True)
         try:
-            _run_steps(args, plan, writer, done, start, table, show)
+            if not _run_steps(args, plan, writer, done, start, table, show):
+                writer.abandon(f"stopped after {args.stop_after:g} minutes")
+                return EXIT_PAUSED
         except KeyboardInterrupt:
             writer.abandon()
             return EXIT_INTERRUPTED
@@ -97,7 +100,8 @@ def _open_writer(
     fields = FIELD_NAMES if args.fields else ()
     done, state = read_resume(args.output, attributes["parameters"]) if args.resume else (0, None)
     if not done:
-        return StepWriter(args.output, grid, attributes, heights, fields), 0, None
+        stored = None if args.scalars_only else heights
+        return StepWriter(args.output, grid, attributes, stored, fields), 0, None
     if show:
         print(f"# resuming {args.output}.partial after {done} of {total} steps", flush=True)
     start = grid.scatter(state) if state is not None else None
@@ -112,15 +116,24 @@ def _run_steps(
     start: np.ndarray | None,
     table: list[dict[str, Any]],
     show: bool,
-) -> None:
-    """Solve the remaining loads; write, tabulate and print each step as it finishes."""
+) -> bool:
+    """Solve the remaining loads; write, tabulate and print each step as it finishes.
+
+    Returns ``False`` when ``--stop-after`` ended the run before the last load.
+    """
     total = len(plan.loads)
+    began = time.perf_counter()
+    limit = np.inf if args.stop_after is None else 60.0 * args.stop_after
     for i, step in enumerate(plan.steps(plan.loads[done:], start, args.fields), done):
         fields = {name: step.field(name) for name in FIELD_NAMES} if args.fields else None
         writer.append(step.scalars, fields, state=step.state)
         table.append(step.scalars)
         if show:
             print(_row(i, total, step.scalars, plan.columns), flush=True)
+        elapsed = writer.grid.max(time.perf_counter() - began)  # every rank stops together
+        if i + 1 < total and elapsed > limit:
+            return False
+    return True
 
 
 def _conclude(

@@ -194,6 +194,8 @@ class StepWriter:
         import h5py
 
         n = self.grid.n
+        if os.path.exists(state_path(self.path)):  # a fresh run: an old state is not ours
+            os.remove(state_path(self.path))
         f = self.file = h5py.File(self.partial, "w")
         write_attributes(f, attributes)
         f.attrs["created"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
@@ -236,8 +238,9 @@ class StepWriter:
     ) -> None:
         """Add one load step: scalars (numbers, bools or strings) and the requested fields.
 
-        ``state`` (local slab) is the solution a resumed run restarts from; it is kept in
-        the dataset ``resume_state`` until :meth:`finish` removes it.
+        ``state`` (local slab) is the solution a resumed run restarts from; it is kept
+        beside the file, in ``path + '.state.npz'`` (:func:`state_path`), until :meth:`finish`
+        removes it, so that the results file never holds (or keeps the space of) a field.
         """
         gathered = {k: self.grid.gather(fields[k]) for k in self.fields} if fields else {}
         full_state = self.grid.gather(state) if state is not None else None
@@ -254,25 +257,24 @@ class StepWriter:
                 d = f[key]
                 d.resize((self.steps + 1, self.grid.n, self.grid.n))
                 d[self.steps] = value
-            if full_state is not None:
-                if "resume_state" not in f:
-                    d = f.create_dataset("resume_state", data=full_state)
-                    describe(d, self._entry("resume_state"))
-                else:
-                    f["resume_state"][...] = full_state
-                f["resume_state"].attrs["after_step"] = self.steps
             f.flush()
+            if full_state is not None:
+                temporary = state_path(self.path) + ".tmp.npz"
+                np.savez(temporary, state=full_state, after_step=self.steps)
+                os.replace(temporary, state_path(self.path))
         self.steps += 1
 
     def finish(self) -> None:
         """Mark complete and rename into place (the earlier ``path``, if any, is replaced)."""
         if self.root and self.file is not None:
             self.file.attrs["complete"] = True
-            if "resume_state" in self.file:
+            if "resume_state" in self.file:  # written there by earlier versions
                 del self.file["resume_state"]
             self.file.close()
             self.file = None
             os.replace(self.partial, self.path)
+            if os.path.exists(state_path(self.path)):
+                os.remove(state_path(self.path))
         self.grid.comm.Barrier()
 
     def abandon(self, why: str = "interrupted") -> None:
@@ -313,8 +315,16 @@ def read_resume(path: str, parameters: dict[str, Any]) -> tuple[int, np.ndarray 
                 f"parameters ({', '.join(changed)})"
             )
         steps = int(f["converged"].shape[0]) if "converged" in f else 0
-        state = f["resume_state"][...] if "resume_state" in f else None
+        state = f["resume_state"][...] if "resume_state" in f else None  # earlier versions
+    if os.path.exists(state_path(path)):
+        with np.load(state_path(path)) as saved:
+            state = saved["state"]
     return steps, state
+
+
+def state_path(path: str) -> str:
+    """Where an unfinished run keeps the state it resumes from: beside ``path``."""
+    return path + ".state.npz"
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -413,7 +423,6 @@ FIELDS = _entries(
     gap=("length", "gap of every step, exactly zero in contact (steps x n x n)"),
     pressure=("pressure", "pressure of every step, exactly zero out of contact (steps x n x n)"),
     contact=("bool", "contact mask of every step, p > k g (steps x n x n)"),
-    resume_state=("length", "the last converged state (only in an unfinished .partial file)"),
 )
 ENSEMBLE = _entries(
     seeds=("count", "the seeds, one row of every table each"),

@@ -456,10 +456,12 @@ def test_study_runs_in_resumable_pieces(tmp_path):
     r = cli(*base, "--minutes", "0.00001")
     assert r.returncode == 75, r.stderr
     assert (data / "fig1" / "periodic_r1.h5.partial").exists()
+    assert (data / "fig1" / "periodic_r1.h5.state.npz").exists()  # the state, beside it
     r = cli(*base, "--minutes", "10")
     assert r.returncode == 0, r.stderr
     files = sorted((data / "fig1").glob("*.h5"))
     assert [f.name for f in files] == ["periodic_r1.h5", "periodic_r8.h5", "punch.h5"]
+    assert not list((data / "fig1").glob("*.npz")) and not list((data / "fig1").glob("*.partial"))
     stamps = [f.stat().st_mtime_ns for f in files]
     with h5py.File(files[0]) as f:
         assert f.attrs["complete"] and "heights" not in f and f["stiffness"].shape == (16,)

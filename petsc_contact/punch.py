@@ -378,10 +378,8 @@ def punch_contact(
         Keep the local ``gap`` and ``pressure`` slabs of every step.
     footprint
         Optional full ``n x n`` boolean mask of the punch (e.g. a disk); default square.
-    flat
-        ``'grid'`` or ``'analytic'``: which flat-punch stiffness goes into Eq. 2.
-    beta
-        Shape factor of the analytic flat punch (1.012 square, 1 for a disk).
+    flat, beta
+        The flat-punch stiffness of paper Eq. 2 (:class:`PunchProblem`).
     comm
         mpi4py communicator (default ``COMM_WORLD``).
     monitor

@@ -504,6 +504,9 @@ def schema_markdown() -> str:
         "",
         "Every file of `periodic`, `demo`, `punch` and `compare` also records, as root",
         "attributes, what reproduces it: " + ", ".join(f"`{a}`" for a in RUN_ATTRIBUTES) + ".",
+        "A run writes `OUT.h5.partial` and renames it to `OUT.h5` when it ends; until then the",
+        "state a `--resume` starts from is kept beside it in `OUT.h5.state.npz` (array `state`,",
+        "the gap or pressure field, and `after_step`), never in the results file.",
         "",
     ]
 
@@ -522,7 +525,8 @@ def schema_markdown() -> str:
     table(
         "ensemble summary",
         "Each quantity also has `_mean`, `_std`, `_sem` and `_count` over seeds. Attributes: "
-        "`parameters`, `seed_files` and the versions.",
+        "`geometry`, `command_line`, `parameters` (the pressures resolved), `petsc_options`, "
+        "`versions`, `mpi_size`, `seed_files`, `complete`.",
         ENSEMBLE,
     )
     table(

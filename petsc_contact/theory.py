@@ -19,6 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import integrate, special
 
+from .reference import hertz
+
 Values = np.ndarray | float  # one value, or an array of them (the result has its shape)
 GAMMA = 0.4  # Persson's gamma (and the paper's u0 = gamma h_rms)
 NAYAK_BETA = np.sqrt(8 / (3 * np.pi))  # mean summit curvature factor for q1/q0 >> 1
@@ -128,11 +130,10 @@ def linear_stiffness(pressure: Values, h_rms: float, gamma: float = GAMMA) -> np
 def hertz_stiffness(pressure: Values, modulus: float, radius: float, area: float) -> np.ndarray:
     """Single-asperity (Hertz) regime, ``K ~ p^(1/3)``, per apparent area ``A0``.
 
-    ``F = p A0``, contact radius ``a = (3 F R/(4 E*))^(1/3)``, ``dF/dδ = 2 E* a``,
-    ``K = 2 E* a / A0``.
+    ``F = p A0`` on one sphere (:mod:`~petsc_contact.reference.hertz`): ``K = 2 E* a / A0``.
     """
-    f = np.asarray(pressure, dtype=float) * area
-    return 2 * modulus * (3 * f * radius / (4 * modulus)) ** (1 / 3) / area
+    a = hertz.radius_at_force(np.asarray(pressure, dtype=float) * area, radius, modulus)
+    return np.asarray(2 * modulus * a / area)
 
 
 # -- Persson theory ---------------------------------------------------------------------------

@@ -29,6 +29,11 @@ _PETSC_OPTION = re.compile(r"^-[A-Za-z_]")
 _NUMBER = re.compile(r"^-?(\d|\.\d)")
 
 
+def is_petsc_option(token: str) -> bool:
+    """``-tao_type`` is a PETSc option; ``--grid``, ``-h`` and numbers such as ``-1`` are not."""
+    return token != "-h" and bool(_PETSC_OPTION.match(token)) and not token.startswith("--")
+
+
 def split_arguments(argv: Sequence[str]) -> tuple[list[str], list[str]]:
     """Split a command line into the package's arguments and PETSc's options.
 
@@ -41,7 +46,7 @@ def split_arguments(argv: Sequence[str]) -> tuple[list[str], list[str]]:
     i = 0
     while i < len(tokens):
         tok = tokens[i]
-        if tok != "-h" and _PETSC_OPTION.match(tok) and not tok.startswith("--"):
+        if is_petsc_option(tok):
             petsc.append(tok)
             if i + 1 < len(tokens) and (
                 not tokens[i + 1].startswith("-") or _NUMBER.match(tokens[i + 1])

@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from ..validation import non_negative, positive
+
 EXIT_NOT_CONVERGED = 1
 EXIT_BAD_INPUT = 2
 EXIT_PAUSED = 75  # --stop-after reached: the run continues with --resume
@@ -46,9 +48,7 @@ def _generated(args: argparse.Namespace) -> bool:
 
 def _check_numbers(args: argparse.Namespace) -> None:
     for option in ("length", "modulus"):
-        v = getattr(args, option)
-        if not (np.isfinite(v) and v > 0):
-            raise InputError(f"--{option} must be positive and finite, got {v}")
+        positive(f"--{option}", getattr(args, option))
     if getattr(args, "sweep", None) is not None:
         return
     name = next(
@@ -65,9 +65,16 @@ def _check_numbers(args: argparse.Namespace) -> None:
     values = values if isinstance(values, list) else [values]
     if not values:
         raise InputError(f"--{name} needs at least one value")
+    check = non_negative if name == "approaches" else positive  # an approach may be 0
     for v in values:
-        if not (np.isfinite(v) and (v > 0 or (name == "approaches" and v == 0))):
-            raise InputError(f"--{name} must be positive and finite, got {v}")
+        check(f"--{name}", v)
+
+
+def swept(spec: list[float], low: float, high: float) -> list[float]:
+    """The loads of ``--sweep N[,MIN,MAX]``: ``N`` log-spaced, by default from ``low`` to
+    ``high``."""
+    n, lo, hi = spec if len(spec) == 3 else (spec[0], low, high)
+    return [float(v) for v in np.geomspace(lo, hi, int(n))]
 
 
 def run_record(

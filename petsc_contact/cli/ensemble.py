@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from ..output import ENSEMBLE, annotate, atomic_h5, ensemble_entry, write_attributes
-from .common import EXIT_INTERRUPTED, EXIT_PAUSED, InputError, prepare_scene
+from .common import EXIT_INTERRUPTED, EXIT_PAUSED, InputError, prepare_scene, swept
 from .runs import run
 
 
@@ -66,15 +66,13 @@ def _ensemble_loads(args: argparse.Namespace, petsc_args: list[str]) -> list[flo
     """``--sweep N[,PMIN,PMAX]``'s pressures, the same for every seed: the default range is
     ``1e-4`` to ``0.9`` times the full-contact pressure of the first seed's surface."""
     if len(args.sweep) == 3:
-        n, lo, hi = args.sweep
-    else:
-        from ..problem import PeriodicProblem
+        return swept(args.sweep, args.sweep[1], args.sweep[2])
+    from ..problem import PeriodicProblem
 
-        first = argparse.Namespace(**{**vars(args), "seed": args.seeds[0]})
-        _, grid, fft, heights, _ = prepare_scene(first, petsc_args)
-        p_full = PeriodicProblem(grid, fft, heights, args.modulus).full_contact_pressure()
-        n, lo, hi = args.sweep[0], 1e-4 * p_full, 0.9 * p_full
-    return [float(p) for p in np.geomspace(lo, hi, int(n))]
+    first = argparse.Namespace(**{**vars(args), "seed": args.seeds[0]})
+    _, grid, fft, heights, _ = prepare_scene(first, petsc_args)
+    p_full = PeriodicProblem(grid, fft, heights, args.modulus).full_contact_pressure()
+    return swept(args.sweep, 1e-4 * p_full, 0.9 * p_full)
 
 
 def _ensemble_record(

@@ -9,7 +9,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from ..output import schema_markdown
-from .arguments import build_parser, split_arguments
+from .arguments import build_parser, is_petsc_option, split_arguments
 from .common import EXIT_BAD_INPUT, EXIT_INTERRUPTED, InputError, say
 from .comparison import run_compare
 from .ensemble import run_ensemble
@@ -70,15 +70,7 @@ def _report_unused(petsc_args: list[str]) -> None:
         return
     from .. import _petsc
 
-    names = [a[1:] for a in petsc_args if a.startswith("-") and not _is_number(a)]
+    names = [a[1:] for a in petsc_args if is_petsc_option(a)]
     unused = _petsc.unused_options(names)
     if unused:
         say(f"PETSc options never used: {' '.join(unused)}", "warning")
-
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True

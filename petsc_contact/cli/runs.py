@@ -12,7 +12,14 @@ from typing import Any
 import numpy as np
 
 from ..step import FIELD_NAMES
-from .common import EXIT_INTERRUPTED, EXIT_NOT_CONVERGED, EXIT_PAUSED, prepare_scene, run_record
+from .common import (
+    EXIT_INTERRUPTED,
+    EXIT_NOT_CONVERGED,
+    EXIT_PAUSED,
+    prepare_scene,
+    run_record,
+    swept,
+)
 
 PERIODIC_COLUMNS = (("p0", "nominal_pressure", "{:>11.4e}"), ("mean_gap", "mean_gap", "{:>12.6e}"))
 
@@ -187,10 +194,7 @@ def _periodic_plan(args: argparse.Namespace, grid: Any, fft: Any, heights: np.nd
     resolved = {}
     pressures = args.pressures
     if args.sweep is not None:
-        n, lo, hi = (
-            (args.sweep + [1e-4 * p_full, 0.9 * p_full])[:3] if len(args.sweep) == 1 else args.sweep
-        )
-        pressures = [float(p) for p in np.geomspace(lo, hi, int(n))]
+        pressures = swept(args.sweep, 1e-4 * p_full, 0.9 * p_full)
         resolved = {"pressures": pressures, "sweep": None}  # the file records the loads
 
     def steps(loads: list[float], start: np.ndarray | None, fields: bool) -> Iterator[Any]:
@@ -217,12 +221,7 @@ def _punch_plan(args: argparse.Namespace, grid: Any, heights: np.ndarray) -> Pla
     resolved = {}
     approaches = args.approaches
     if args.sweep is not None:
-        n, lo, hi = (
-            (args.sweep + [0.01 * problem.scale_length, 3 * problem.scale_length])[:3]
-            if len(args.sweep) == 1
-            else args.sweep
-        )
-        approaches = [float(d) for d in np.geomspace(lo, hi, int(n))]
+        approaches = swept(args.sweep, 0.01 * problem.scale_length, 3 * problem.scale_length)
         resolved = {"approaches": approaches, "sweep": None}  # the file records the loads
 
     def steps(loads: list[float], start: np.ndarray | None, fields: bool) -> Iterator[Any]:

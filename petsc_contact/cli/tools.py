@@ -8,6 +8,7 @@ import os
 import numpy as np
 
 from ..output import EXPERIMENT, annotate, atomic_h5
+from ..validation import positive
 from .common import InputError
 
 
@@ -50,9 +51,7 @@ def run_experiment(args: argparse.Namespace) -> int:
     from ..theory import block_corrected_stiffness
 
     for name in ("modulus", "thickness"):
-        v = getattr(args, name)
-        if not (np.isfinite(v) and v > 0):
-            raise InputError(f"--{name} must be positive and finite, got {v}")
+        positive(f"--{name}", getattr(args, name))
     if not os.path.isfile(args.table):
         raise InputError(f"table '{args.table}' does not exist")
     table = load_table(args.table, 2)

@@ -7,6 +7,8 @@ force ``F = 4/3 E* sqrt(R) delta^(3/2)``, pressure ``p0 sqrt(1 - r^2/a^2)`` with
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..validation import non_negative, positive
@@ -25,12 +27,13 @@ def force(approach: float, radius: float, modulus: float) -> float:
     )
 
 
-def radius_at_force(force_: float, radius: float, modulus: float) -> float:
-    """Contact radius under a force: ``a = (3 F R/(4 E*))^(1/3)``."""
-    f = non_negative("force", force_)
-    return float(
-        (3 * f * positive("radius", radius) / (4 * positive("modulus", modulus))) ** (1 / 3)
-    )
+def radius_at_force(force_: Any, radius: float, modulus: float) -> Any:
+    """Contact radius under a force (scalar or array): ``a = (3 F R/(4 E*))^(1/3)``."""
+    f = np.asarray(force_, dtype=float)
+    if not np.all(np.isfinite(f) & (f >= 0)):
+        raise ValueError(f"force must be non-negative and finite, got {force_}")
+    a = (3 * f * positive("radius", radius) / (4 * positive("modulus", modulus))) ** (1 / 3)
+    return float(a) if a.ndim == 0 else a
 
 
 def pressure(r: np.ndarray, approach: float, radius: float, modulus: float) -> np.ndarray:

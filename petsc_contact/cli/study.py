@@ -12,7 +12,7 @@ import argparse
 import os
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -28,9 +28,15 @@ FIG3_RATIOS = (512, 768, 2048, 4096)  # lambda_r/lambda_1, L = lambda_r
 class Piece:
     """One run of the study: its figure, its file name and its command line."""
 
-    figure: str  # "fig1", "fig2" or "fig3"
+    figure: str  # "fig1", "fig2" or "fig3": where the file is kept
     name: str
     argv: tuple[str, ...]
+    used_by: tuple[str, ...] = ()  # further figures drawn from the same file
+
+    @property
+    def grid(self) -> int:
+        """The run's grid size, the measure of its cost."""
+        return int(self.argv[self.argv.index("--grid") + 1])
 
     def path(self, data: str) -> str:
         return os.path.join(data, self.figure, f"{self.name}.h5")
@@ -79,13 +85,27 @@ def pieces(shrink: int = 1) -> list[Piece]:
             )
             for k in SEEDS
         ]
-    return out
+    return _once(out)
+
+
+def _once(todo: list[Piece]) -> list[Piece]:
+    """Each distinct run once: a piece whose command line an earlier piece already has (Fig. 3's
+    largest ratio is Fig. 2's H = 0.3) is that earlier piece, now used by both figures."""
+    first: dict[tuple[str, ...], Piece] = {}
+    for piece in todo:
+        seen = first.setdefault(piece.argv, piece)
+        if seen is not piece:
+            first[piece.argv] = replace(seen, used_by=(*seen.used_by, piece.figure))
+    return list(first.values())
 
 
 def chosen(args: argparse.Namespace) -> list[Piece]:
-    """The pieces of ``--figure`` (all of them for ``all``)."""
+    """The pieces of ``--figure`` (all of them for ``all``), the smaller grids first."""
     figure = f"fig{args.figure}"
-    return [p for p in pieces(args.shrink) if args.figure == "all" or p.figure == figure]
+    todo = [
+        p for p in pieces(args.shrink) if args.figure == "all" or figure in (p.figure, *p.used_by)
+    ]
+    return sorted(todo, key=lambda p: p.grid)
 
 
 def complete(path: str) -> bool:

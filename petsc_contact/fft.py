@@ -8,7 +8,7 @@ One interface, three backends chosen by the communicator size:
   uses, called through ctypes) with the spectrum in transposed order, which skips one global
   transpose per direction and keeps every local transform contiguous (faster than
   mpi4py-fft; docs/parallel.md);
-- several ranks whose row slabs are not FFTW's (FFTW gives every rank ``ceil(n/P)`` rows but
+- several ranks whose row slabs are not FFTW's (FFTW gives every rank ``ceil(nx/P)`` rows but
   the last; :func:`~petsc_contact.grid.block_rows` spreads the remainder, e.g. 22/21/21 rows
   for n = 64 on 3 ranks), or without ``libfftw3_mpi``: the slab-decomposed parallel FFT of
   Debian's ``mpi4py-fft`` (FFTW underneath).
@@ -18,9 +18,9 @@ A backend's ``transposed`` attribute says how its spectrum block is stored: ``Fa
 with :func:`wavevectors` follow it; ``spectral_index`` is always (``qx`` range, ``qy`` range).
 
 Each backend owns three buffers: ``real`` (input of :meth:`forward`, never modified by
-either transform), ``spectrum`` (its output, the local block of the ``n x (n//2+1)`` half
+either transform), ``spectrum`` (its output, the local block of the ``nx x (ny//2+1)`` half
 spectrum) and ``result`` (output of :meth:`backward`).  Both transforms are unnormalised:
-``backward(forward(x)) = n^2 x``.
+``backward(forward(x)) = nx ny x``.
 
 :meth:`forward_from` and :meth:`backward_into` are the hot path of every operator (one round
 trip with a spectral multiplier between them, :mod:`petsc_contact.operator`).  The serial
@@ -111,12 +111,12 @@ class SerialFFT:
 
         _Wisdom.load(pyfftw)
         known = pyfftw.export_wisdom()
-        n = grid.n
+        nx, m = grid.shape[0], grid.half
         threads = threads or default_threads()
         self.threads = threads
-        self.real = pyfftw.empty_aligned((n, n), dtype="float64")
-        self.spectrum = pyfftw.empty_aligned((n, n // 2 + 1), dtype="complex128")
-        self.result = pyfftw.empty_aligned((n, n), dtype="float64")
+        self.real = pyfftw.empty_aligned(grid.shape, dtype="float64")
+        self.spectrum = pyfftw.empty_aligned((nx, m), dtype="complex128")
+        self.result = pyfftw.empty_aligned(grid.shape, dtype="float64")
         self._forward = pyfftw.FFTW(
             self.real, self.spectrum, axes=(0, 1), flags=(PLANNER_EFFORT,), threads=threads
         )
@@ -130,7 +130,7 @@ class SerialFFT:
         )
         if pyfftw.export_wisdom() != known:  # new plans were measured
             _Wisdom.save(pyfftw)
-        self.spectral_index = (slice(0, n), slice(0, n // 2 + 1))
+        self.spectral_index = (slice(0, nx), slice(0, m))
 
     transposed = False
 
@@ -139,7 +139,7 @@ class SerialFFT:
         self._forward.execute()
 
     def backward(self) -> None:
-        """``result <- IFFT(spectrum)`` without the ``1/n^2``; destroys ``spectrum``."""
+        """``result <- IFFT(spectrum)`` without the ``1/(nx ny)``; destroys ``spectrum``."""
         self._backward.execute()
 
     def forward_from(self, x: np.ndarray) -> None:
@@ -181,7 +181,7 @@ class SlabFFT:
 
         self._pfft = PFFT(
             grid.comm,
-            (grid.n, grid.n),
+            grid.shape,
             axes=(0, 1),
             dtype=np.float64,
             grid=(-1,),
@@ -266,21 +266,21 @@ class _FFTWMPIPlans:
     the backward instead), so the buffer can be shared.
     """
 
-    _made: dict[tuple[int, int], _FFTWMPIPlans | None] = {}
+    _made: dict[tuple[int, tuple[int, int]], _FFTWMPIPlans | None] = {}
 
     def __init__(
         self, grid: Grid, lib: Any, block0: int, block1: int, local: list[int], alloc: int
     ) -> None:
         from mpi4py import MPI
 
-        n, m = grid.n, grid.n // 2 + 1
+        (nx, ny), m = grid.shape, grid.half
         rows, _, n_cols, col_start = local
         self.lib = lib
         self._buffer = _aligned(2 * alloc, np.float64)
-        self.padded = self._buffer[: rows * 2 * m].reshape(rows, 2 * m)[:, :n]
-        self.spectrum = self._buffer.view(np.complex128)[: n_cols * n].reshape(n_cols, n)
-        self.spectral_index = (slice(0, n), slice(col_start, col_start + n_cols))
-        dims = (ctypes.c_ssize_t * 2)(n, n)
+        self.padded = self._buffer[: rows * 2 * m].reshape(rows, 2 * m)[:, :ny]
+        self.spectrum = self._buffer.view(np.complex128)[: n_cols * nx].reshape(n_cols, nx)
+        self.spectral_index = (slice(0, nx), slice(col_start, col_start + n_cols))
+        dims = (ctypes.c_ssize_t * 2)(nx, ny)
         comm = ctypes.c_void_p(MPI._handleof(grid.comm))
         data = self._buffer.ctypes.data
         self.forward = lib.fftw_mpi_plan_many_dft_r2c(
@@ -296,7 +296,7 @@ class _FFTWMPIPlans:
         """The plans for ``grid``; ``None`` without FFTW-MPI or if its rows are not the grid's."""
         from mpi4py import MPI
 
-        key = (MPI._handleof(grid.comm), grid.n)
+        key = (MPI._handleof(grid.comm), grid.shape)
         if key not in cls._made:
             cls._made[key] = cls._make(grid)
         return cls._made[key]
@@ -308,12 +308,12 @@ class _FFTWMPIPlans:
         lib = _FFTWMPILibrary.get()
         if lib is None:
             return None
-        n, m = grid.n, grid.n // 2 + 1
-        block0 = block1 = 0  # FFTW_MPI_DEFAULT_BLOCK: ceil(n/P) rows, ceil(m/P) columns
+        nx, m = grid.shape[0], grid.half
+        block0 = block1 = 0  # FFTW_MPI_DEFAULT_BLOCK: ceil(nx/P) rows, ceil(m/P) columns
         local = [ctypes.c_ssize_t() for _ in range(4)]
         alloc = lib.fftw_mpi_local_size_many_transposed(
             2,
-            (ctypes.c_ssize_t * 2)(n, m),
+            (ctypes.c_ssize_t * 2)(nx, m),
             1,
             block0,
             block1,
@@ -330,9 +330,9 @@ class _FFTWMPIPlans:
 class FFTWMPI:
     """FFTW-MPI slab transforms with the spectrum in transposed order (``transposed = True``).
 
-    Real space: this rank's rows of the grid, ``ceil(n/P)`` per rank (FFTW's distribution).
-    Fourier space: this rank's ``qy`` columns of the half spectrum, each holding all ``n``
-    values of ``qx`` contiguously.  FFTW's real arrays are padded to ``2 (n//2 + 1)`` per
+    Real space: this rank's rows of the grid, ``ceil(nx/P)`` per rank (FFTW's distribution).
+    Fourier space: this rank's ``qy`` columns of the half spectrum, each holding all ``nx``
+    values of ``qx`` contiguously.  FFTW's real arrays are padded to ``2 (ny//2 + 1)`` per
     row, so ``real`` and ``result`` are this object's own dense arrays, copied in and out;
     the plans and ``spectrum`` are shared by all objects of the same grid
     (:class:`_FFTWMPIPlans`).  Use :meth:`create`, which returns ``None`` when FFTW-MPI
@@ -360,7 +360,7 @@ class FFTWMPI:
         self.forward_from(self.real)
 
     def backward(self) -> None:
-        """``result <- IFFT(spectrum)`` without the ``1/n^2``; destroys ``spectrum``."""
+        """``result <- IFFT(spectrum)`` without the ``1/(nx ny)``; destroys ``spectrum``."""
         self.backward_into(self.result)
 
     def forward_from(self, x: np.ndarray) -> None:
@@ -394,12 +394,13 @@ def make_fft(grid: Grid) -> FFT:
 def wavevectors(grid: Grid, fft: FFT) -> tuple[np.ndarray, np.ndarray]:
     """Local components ``(qx, qy)`` of the half-spectrum block, broadcastable to its shape.
 
-    ``q = 2 pi (i, j) / L`` with ``i`` in numpy's FFT order (:func:`~petsc_contact.grid.fft_order`).
+    ``q = 2 pi (i/Lx, j/Ly)`` with ``i`` in numpy's FFT order
+    (:func:`~petsc_contact.grid.fft_order`) and ``j = 0 .. ny//2``.
     """
     rows, cols = fft.spectral_index
-    q0 = grid.q0
-    qx = q0 * fft_order(grid.n)[rows]
-    qy = q0 * np.arange(grid.n // 2 + 1)[cols]
+    dqx, dqy = grid.dq
+    qx = dqx * fft_order(grid.shape[0])[rows]
+    qy = dqy * np.arange(grid.half)[cols]
     return (qx[None, :], qy[:, None]) if fft.transposed else (qx[:, None], qy[None, :])
 
 
@@ -414,15 +415,16 @@ def half_spectrum_weights(grid: Grid, fft: FFT) -> np.ndarray:
 
     ``sum(w * |F|^2)`` over all ranks equals the full-spectrum sum (Parseval).
     """
-    cols = np.arange(grid.n // 2 + 1)[fft.spectral_index[1]]
-    w = np.where((cols == 0) | ((grid.n % 2 == 0) & (cols == grid.n // 2)), 1.0, 2.0)
+    ny = grid.shape[1]
+    cols = np.arange(grid.half)[fft.spectral_index[1]]
+    w = np.where((cols == 0) | ((ny % 2 == 0) & (cols == ny // 2)), 1.0, 2.0)
     return w[:, None] if fft.transposed else w[None, :]
 
 
 def single_entries(grid: Grid, fft: FFT) -> np.ndarray:
     """Flat indices, in the local spectrum block, of the entries of multiplicity 1.
 
-    They are the columns ``qy = 0`` and ``qy = n/2`` (even ``n``) of the half spectrum; every
+    They are the columns ``qy = 0`` and ``qy = ny/2`` (even ``ny``) of the half spectrum; every
     other entry stands for itself and its complex conjugate (:func:`half_spectrum_weights`).
     """
     weights = np.broadcast_to(half_spectrum_weights(grid, fft), fft.spectrum.shape)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .grid import fft_order
-from .validation import positive
+from .validation import per_axis, positive
 
 
 def periodic_stiffness(q: np.ndarray, modulus: float) -> np.ndarray:
@@ -69,38 +69,48 @@ def _corner_primitive(xi: np.ndarray, eta: np.ndarray) -> np.ndarray:
 
 
 def love_pixel_displacement(
-    x: np.ndarray, y: np.ndarray, pixel: float, modulus: float
+    x: np.ndarray, y: np.ndarray, pixel: float | tuple[float, float], modulus: float
 ) -> np.ndarray:
-    """Normal surface displacement at ``(x, y)`` under unit pressure on one square pixel.
+    """Normal surface displacement at ``(x, y)`` under unit pressure on one pixel.
 
-    The pixel ``[-a/2, a/2]^2`` (``a = pixel``) carries a uniform unit pressure on an
-    elastic half-space of contact modulus ``E*``; Boussinesq's point-force solution
-    integrated over the square (Love 1929; Johnson, Contact Mechanics, 1985, eq. 3.25) gives
+    The pixel ``[-a/2, a/2] x [-b/2, b/2]`` (``pixel = a`` for a square one, ``(a, b)`` for a
+    rectangle) carries a uniform unit pressure on an elastic half-space of contact modulus
+    ``E*``; Boussinesq's point-force solution integrated over the pixel (Love 1929; Johnson,
+    Contact Mechanics, 1985, eq. 3.25) gives
 
         u(x, y) = 1/(pi E*) sum_corners (+-) G(x - x_c, y - y_c)
 
-    with the primitive ``G`` of ``1/r`` (see :func:`_corner_primitive`).  At the pixel's own
-    centre ``u = 4 a asinh(1) / (pi E*)``.
+    with the primitive ``G`` of ``1/r`` (see :func:`_corner_primitive`).  At the centre of a
+    square pixel ``u = 4 a asinh(1) / (pi E*)``.
     """
-    h = 0.5 * pixel
+    hx, hy = (0.5 * v for v in per_axis(pixel, "pixel"))
     total = (
-        _corner_primitive(x + h, y + h)
-        - _corner_primitive(x + h, y - h)
-        - _corner_primitive(x - h, y + h)
-        + _corner_primitive(x - h, y - h)
+        _corner_primitive(x + hx, y + hy)
+        - _corner_primitive(x + hx, y - hy)
+        - _corner_primitive(x - hx, y + hy)
+        + _corner_primitive(x - hx, y - hy)
     )
     return total / (np.pi * modulus)
 
 
-def hockney_kernel(n: int, pixel: float, modulus: float, rows: slice = slice(None)) -> np.ndarray:
-    """The pixel influence function on the ``2n x 2n`` zero-padding grid (Hockney 1970).
+def hockney_kernel(
+    n: int | tuple[int, int],
+    pixel: float | tuple[float, float],
+    modulus: float,
+    rows: slice = slice(None),
+) -> np.ndarray:
+    """The pixel influence function on the ``2nx x 2ny`` zero-padding grid (Hockney 1970).
 
-    Entry ``[i, j]`` is the displacement at offset ``(i, j) * pixel`` with offsets taken
-    periodically in ``[-n, n)`` (numpy's ``fftfreq`` order).  Circular convolution of a
-    pressure zero-padded from ``n x n`` to ``2n x 2n`` with this kernel, read back on the
-    first ``n x n`` block, is the exact non-periodic (free-boundary) convolution, because
-    no offset between two footprint pixels exceeds ``n - 1``.  ``rows`` selects the rows
-    to evaluate (a rank's slab).
+    ``n`` and ``pixel`` are one value for a square grid of square pixels, or the pairs
+    ``(nx, ny)`` and ``(a, b)``.  Entry ``[i, j]`` is the displacement at offset
+    ``(i a, j b)`` with offsets taken periodically in ``[-nx, nx) x [-ny, ny)`` (numpy's
+    ``fftfreq`` order).  Circular convolution of a pressure zero-padded from ``nx x ny`` to
+    ``2nx x 2ny`` with this kernel, read back on the first ``nx x ny`` block, is the exact
+    non-periodic (free-boundary) convolution, because no offset between two footprint
+    pixels exceeds ``nx - 1`` (``ny - 1``).  ``rows`` selects the rows to evaluate (a rank's
+    slab).
     """
-    offsets = fft_order(2 * n) * pixel
-    return love_pixel_displacement(offsets[rows, None], offsets[None, :], pixel, modulus)
+    (nx, ny), (a, b) = per_axis(n, "grid"), per_axis(pixel, "pixel")
+    x = fft_order(2 * nx)[rows] * a
+    y = fft_order(2 * ny) * b
+    return love_pixel_displacement(x[:, None], y[None, :], (a, b), modulus)

@@ -1,6 +1,6 @@
-"""The square periodic grid and its distribution over MPI ranks in row slabs.
+"""The periodic grid (square or rectangular) and its distribution over MPI ranks in row slabs.
 
-Every field lives on an ``n x n`` grid of side ``length``.  Under MPI each rank owns the
+Every field lives on an ``nx x ny`` grid of sides ``Lx x Ly``.  Under MPI each rank owns the
 contiguous rows ``grid.rows`` (the first ``n % size`` ranks one row more), which is the
 layout of both PETSc's default ownership (with local sizes set per row) and mpi4py-fft's
 slab decomposition.  Reductions go through :meth:`Grid.sum` so that every observable is
@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from mpi4py import MPI
 
-from .validation import positive
+from .validation import per_axis, positive
 
 
 def block_rows(n: int, size: int, rank: int) -> slice:
@@ -34,53 +34,125 @@ def fundamental_wavevector(length: float) -> float:
     return 2 * np.pi / length
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Grid:
-    """An ``n x n`` periodic grid of side ``length`` split in row slabs over ``comm``.
+    """An ``nx x ny`` periodic grid of sides ``Lx x Ly`` split in row slabs over ``comm``.
+
+    ``Grid(n, L)`` is the square grid; ``Grid((nx, ny), (Lx, Ly))`` a rectangle, whose pixels
+    ``Lx/nx x Ly/ny`` need not be square.  Axis 0 (``x``, rows, ``nx`` points) is the one
+    split over MPI ranks; axis 1 (``y``) holds the half spectrum.
 
     Attributes
     ----------
-    n
-        Pixels per side.
-    length
-        Side of the square cell (any length unit; all outputs use the same unit).
+    shape
+        Pixels ``(nx, ny)``, the shape of every field.
+    lengths
+        Sides ``(Lx, Ly)`` (any length unit; all outputs use the same unit).
     comm
         The MPI communicator of the run.
     """
 
-    n: int
-    length: float
-    comm: MPI.Intracomm = field(default_factory=lambda: MPI.COMM_WORLD, compare=False)
+    shape: tuple[int, int]
+    lengths: tuple[float, float]
+    comm: MPI.Intracomm = field(compare=False)
 
-    def __post_init__(self) -> None:
-        if self.n < 2:
-            raise ValueError(f"grid needs at least 2 pixels per side, got {self.n}")
-        positive("length", self.length)
+    def __init__(
+        self,
+        n: int | tuple[int, int],
+        length: float | tuple[float, float],
+        comm: MPI.Intracomm | None = None,
+    ) -> None:
+        nx, ny = (int(v) for v in per_axis(n, "grid"))
+        lx, ly = (float(v) for v in per_axis(length, "length"))
+        if min(nx, ny) < 2:
+            raise ValueError(f"grid needs at least 2 pixels per side, got {nx} x {ny}")
+        positive("length", lx)
+        positive("length", ly)
+        object.__setattr__(self, "shape", (nx, ny))
+        object.__setattr__(self, "lengths", (lx, ly))
+        object.__setattr__(self, "comm", comm if comm is not None else MPI.COMM_WORLD)
+
+    @property
+    def square(self) -> bool:
+        """Whether the cell is square with as many pixels on both sides."""
+        return self.shape[0] == self.shape[1] and self.lengths[0] == self.lengths[1]
+
+    @property
+    def n(self) -> int:
+        """Pixels per side of a square grid (:attr:`shape` for any grid)."""
+        if not self.square:
+            raise ValueError(f"grid.n is for square grids; this one is {self.describe()}")
+        return self.shape[0]
+
+    @property
+    def length(self) -> float:
+        """Side of a square cell (:attr:`lengths` for any grid)."""
+        if not self.square:
+            raise ValueError(f"grid.length is for square grids; this one is {self.describe()}")
+        return self.lengths[0]
+
+    @property
+    def spacing(self) -> tuple[float, float]:
+        """Pixel sides ``(Lx/nx, Ly/ny)``."""
+        return self.lengths[0] / self.shape[0], self.lengths[1] / self.shape[1]
 
     @property
     def pixel(self) -> float:
-        """Pixel size ``a = L/n``."""
-        return self.length / self.n
+        """Pixel size ``a`` of square pixels (:attr:`spacing` for any grid)."""
+        ax, ay = self.spacing
+        if not np.isclose(ax, ay, rtol=1e-12, atol=0.0):
+            raise ValueError(f"pixels are {ax:g} x {ay:g}, not square: use grid.spacing")
+        return ax
+
+    @property
+    def pixel_area(self) -> float:
+        """``Lx Ly / (nx ny)``, the area one pixel stands for."""
+        return self.area / self.size
+
+    @property
+    def area(self) -> float:
+        """The nominal area ``Lx Ly``."""
+        return self.lengths[0] * self.lengths[1]
 
     @property
     def q0(self) -> float:
-        """The fundamental wavevector ``2 pi / L``: the spacing of the periodic spectrum."""
-        return fundamental_wavevector(self.length)
+        """The smallest non-zero wavevector ``2 pi / max(Lx, Ly)`` of the periodic spectrum."""
+        return fundamental_wavevector(max(self.lengths))
+
+    @property
+    def dq(self) -> tuple[float, float]:
+        """The spacings ``(2 pi/Lx, 2 pi/Ly)`` of the spectrum along each axis."""
+        return fundamental_wavevector(self.lengths[0]), fundamental_wavevector(self.lengths[1])
 
     @property
     def size(self) -> int:
-        """Number of grid points ``n^2``."""
-        return self.n * self.n
+        """Number of grid points ``nx ny``."""
+        return self.shape[0] * self.shape[1]
+
+    @property
+    def half(self) -> int:
+        """Columns of the half spectrum, ``ny//2 + 1``."""
+        return self.shape[1] // 2 + 1
 
     @property
     def rows(self) -> slice:
         """The global rows this rank owns."""
-        return block_rows(self.n, self.comm.size, self.comm.rank)
+        return block_rows(self.shape[0], self.comm.size, self.comm.rank)
 
     @property
     def local_shape(self) -> tuple[int, int]:
         r = self.rows
-        return (r.stop - r.start, self.n)
+        return (r.stop - r.start, self.shape[1])
+
+    def describe(self) -> str:
+        """``nx x ny`` points on ``Lx x Ly``, for messages and headers."""
+        (nx, ny), (lx, ly) = self.shape, self.lengths
+        return f"{nx}x{ny} on {lx:g} x {ly:g}"
+
+    def padded(self) -> Grid:
+        """The ``2nx x 2ny`` grid of sides ``2Lx x 2Ly`` of zero padding (same comm)."""
+        (nx, ny), (lx, ly) = self.shape, self.lengths
+        return Grid((2 * nx, 2 * ny), (2 * lx, 2 * ly), self.comm)
 
     def sum(self, *values: float) -> np.ndarray:
         """Sum scalars over all ranks (one reduction for all of them)."""
@@ -114,10 +186,23 @@ class Grid:
         if self.comm.size == 1:
             return np.array(local, copy=True)
         counts = self.comm.gather(local.size, root=0)
-        full = np.empty((self.n, self.n)) if self.comm.rank == 0 else None
+        full = np.empty(self.shape) if self.comm.rank == 0 else None
         self.comm.Gatherv(
             np.ascontiguousarray(local, dtype=float),
             [full, counts] if self.comm.rank == 0 else None,
             root=0,
         )
         return full
+
+
+def grid_for(
+    shape: tuple[int, ...], length: float | tuple[float, float], comm: MPI.Intracomm | None = None
+) -> Grid:
+    """The grid of a height map of ``shape``: sides ``length = (Lx, Ly)``, or one length ``Lx``
+    with square pixels (``Ly = Lx ny/nx``)."""
+    if len(shape) != 2:
+        raise ValueError(f"heights must be a 2-D array, got shape {tuple(shape)}")
+    nx, ny = (int(v) for v in shape)
+    if isinstance(length, (tuple, list, np.ndarray)):
+        return Grid((nx, ny), per_axis(length, "length"), comm)
+    return Grid((nx, ny), (float(length), float(length) * ny / nx), comm)

@@ -2,7 +2,7 @@
 
 :class:`FourierOperator` applies ``y = IFFT(kernel * FFT(x))`` to the row-slab PETSc Vecs of
 a :class:`~petsc_contact.grid.Grid` (the periodic geometry).  :class:`PaddedOperator` does
-the same on a ``2n x 2n`` zero-padded copy of an ``n x n`` field and reads back the first
+the same on a ``2nx x 2ny`` zero-padded copy of an ``nx x ny`` field and reads back the first
 block: the free-boundary convolution of the punch (Hockney 1970).  Either object serves as
 the context of a Python ``Mat`` (``mult``) and of a Python ``PC`` (``apply``), so one class
 gives TAO both the exact Hessian and the Fourier preconditioner.
@@ -154,7 +154,7 @@ class FourierOperator(SpectralOperator):
     def set_inverse(self, op: FourierOperator, support: float) -> None:
         """Become the inverse of ``op + support I`` on the same grid, in place.
 
-        ``support`` is in ``op``'s normalised units (kernel over ``n^2``); with ``N = n^2``
+        ``support`` is in ``op``'s normalised units (kernel over ``N = nx ny``); with it
         the normalised multiplier is ``N^-2/(op.multiplier + support)``, so a zero entry
         of ``op`` gives ``inf`` when ``support`` is 0 (the caller sets that entry).
         """
@@ -178,18 +178,18 @@ class FourierOperator(SpectralOperator):
 
 
 class PaddedOperator(SpectralOperator):
-    """Free-boundary convolution of an ``n x n`` field by zero padding to ``2n x 2n``.
+    """Free-boundary convolution of an ``nx x ny`` field by zero padding to ``2nx x 2ny``.
 
     Parameters
     ----------
     grid
-        The ``n x n`` footprint grid (its row slabs are the Vec layout).
+        The ``nx x ny`` footprint grid (its row slabs are the Vec layout).
     kernel_rows
-        ``f(rows) -> array`` giving rows ``rows`` of the real ``2n x 2n`` kernel in numpy's
+        ``f(rows) -> array`` giving rows ``rows`` of the real ``2nx x 2ny`` kernel in numpy's
         ``fftfreq`` offset order (e.g. :func:`~petsc_contact.greens.hockney_kernel`).
         It must be even in both offsets, so that its spectrum is real.
     fft
-        FFT backend of the padded ``2n x 2n`` grid; pass one to share it between operators.
+        FFT backend of the padded ``2nx x 2ny`` grid; pass one to share it between operators.
 
     Notes
     -----
@@ -199,7 +199,7 @@ class PaddedOperator(SpectralOperator):
 
     def __init__(self, grid: Grid, kernel_rows: Any, fft: FFT | None = None) -> None:
         self.grid = grid
-        self.padded = Grid(2 * grid.n, 2 * grid.length, grid.comm)
+        self.padded = grid.padded()
         self.fft = fft if fft is not None else make_fft(self.padded)
         self.fft.real[...] = kernel_rows(self.padded.rows)
         self.fft.forward()
@@ -207,7 +207,7 @@ class PaddedOperator(SpectralOperator):
         self.multiplier = twice(self.normalised(self.fft.spectrum.real))
         self._single = single_entries(self.padded, self.fft)
         self._centre = float(kernel_rows(slice(0, 1))[0, 0])
-        self.exchange = RowExchange(grid.comm, grid.n, self.padded.n)
+        self.exchange = RowExchange(grid.comm, grid.shape, self.padded.shape[0])
         self.applications = 0
         self.fft.real[...] = 0.0  # the padding stays zero: applications write only the block
 
@@ -219,15 +219,15 @@ class PaddedOperator(SpectralOperator):
 
     def _forward(self, x: np.ndarray) -> None:
         """Pad ``x`` (``P x``) and transform it."""
-        n = self.grid.n
-        self.exchange.to_padded(x.reshape(self.grid.local_shape), self.fft.real[:, :n])
+        ny = self.grid.shape[1]
+        self.exchange.to_padded(x.reshape(self.grid.local_shape), self.fft.real[:, :ny])
         self.fft.forward()
 
     def _backward(self, out: np.ndarray) -> None:
         """Transform back and keep the footprint block (``P^T``)."""
         self.fft.backward()
-        n = self.grid.n
-        self.exchange.to_footprint(self.fft.result[:, :n], out.reshape(self.grid.local_shape))
+        ny = self.grid.shape[1]
+        self.exchange.to_footprint(self.fft.result[:, :ny], out.reshape(self.grid.local_shape))
 
     def diagonal(self) -> float:
         """The constant diagonal entry (the kernel at zero offset)."""
@@ -235,29 +235,31 @@ class PaddedOperator(SpectralOperator):
 
 
 class RowExchange:
-    """Move the first ``n`` rows between the ``n``-row and ``m``-row slab layouts of a comm.
+    """Move the footprint's ``nx`` rows (``ny`` values each) between the ``nx``-row and
+    ``m``-row slab layouts of a comm.
 
     Row ``i`` of the footprint is row ``i`` of the padded grid; each rank owns
     :func:`~petsc_contact.grid.block_rows` of both.  With one rank this is a copy.
     """
 
-    def __init__(self, comm: Any, n: int, m: int) -> None:
+    def __init__(self, comm: Any, shape: tuple[int, int], m: int) -> None:
         self.comm = comm
         size = comm.size
+        n, width = shape
         mine_f = block_rows(n, size, comm.rank)
         mine_p = block_rows(m, size, comm.rank)
 
         def overlap(a: slice, b: slice) -> int:
             return max(0, min(a.stop, b.stop, n) - max(a.start, b.start))
 
-        self.send = [overlap(mine_f, block_rows(m, size, q)) * n for q in range(size)]
-        self.recv = [overlap(block_rows(n, size, q), mine_p) * n for q in range(size)]
-        self.rows_in = sum(self.recv) // n  # footprint rows present in my padded slab
-        self._padded_rows = np.empty((self.rows_in, n))  # reused by every exchange
-        self._footprint_rows = np.empty((mine_f.stop - mine_f.start, n))
+        self.send = [overlap(mine_f, block_rows(m, size, q)) * width for q in range(size)]
+        self.recv = [overlap(block_rows(n, size, q), mine_p) * width for q in range(size)]
+        self.rows_in = sum(self.recv) // width  # footprint rows present in my padded slab
+        self._padded_rows = np.empty((self.rows_in, width))  # reused by every exchange
+        self._footprint_rows = np.empty((mine_f.stop - mine_f.start, width))
 
     def to_padded(self, footprint: np.ndarray, padded: np.ndarray) -> None:
-        """Write my footprint rows into the padded slabs (``padded`` is my ``[:, :n]`` view)."""
+        """Write my footprint rows into the padded slabs (``padded`` is my ``[:, :ny]`` view)."""
         if self.comm.size == 1:
             padded[: footprint.shape[0]] = footprint
             return
@@ -278,7 +280,7 @@ class RowExchange:
 
 def shell_matrix(petsc: Any, op: ShellInterface) -> Any:
     """A PETSc Python ``Mat`` of the grid's row-slab layout whose ``mult`` is ``op``."""
-    n_local = op.grid.local_shape[0] * op.grid.n
+    n_local = op.grid.local_shape[0] * op.grid.shape[1]
     mat = petsc.Mat().createPython(
         ((n_local, op.grid.size), (n_local, op.grid.size)), context=op, comm=op.grid.comm
     )

@@ -28,34 +28,6 @@ import numpy as np
 from .grid import Grid
 
 
-def load_heights(path: str) -> np.ndarray:
-    """Read a measured or saved height map (``.npy``, or a whitespace/comma text matrix).
-
-    ``.npy`` files are memory-mapped, so under MPI each rank reads only its rows.
-    Raises ``ValueError``/``OSError`` with a one-line reason for anything unusable.
-    """
-    if not os.path.isfile(path):
-        raise OSError(f"heights file '{path}' does not exist")
-    if not os.access(path, os.R_OK):
-        raise OSError(f"heights file '{path}' is not readable")
-    try:
-        if path.endswith(".npy"):
-            h = np.load(path, mmap_mode="r", allow_pickle=False)
-        else:
-            h = np.loadtxt(path, delimiter="," if path.endswith(".csv") else None, ndmin=2)
-    except Exception as exc:
-        raise OSError(f"cannot read heights from '{path}': {exc}") from None
-    if h.ndim != 2:
-        raise ValueError(f"heights must be a 2-D array, '{path}' has shape {h.shape}")
-    if h.shape[0] != h.shape[1]:
-        raise ValueError(f"heights must be square (n x n), '{path}' has shape {h.shape}")
-    if h.shape[0] < 2:
-        raise ValueError(f"heights need at least 2 x 2 points, '{path}' has shape {h.shape}")
-    if not np.issubdtype(h.dtype, np.number) or np.iscomplexobj(h):
-        raise ValueError(f"heights must be real numbers, '{path}' holds {h.dtype}")
-    return h
-
-
 def load_table(path: str, columns: int) -> np.ndarray:
     """A small numeric table: comma- or whitespace-separated, ``#`` comments, and at most one
     header line (a first row that is not numbers).  Raises ``ValueError`` with the line."""
@@ -193,7 +165,7 @@ class StepWriter:
     def _create(self, attributes: dict[str, Any], heights: np.ndarray | None) -> None:
         import h5py
 
-        n = self.grid.n
+        nx, ny = self.grid.shape
         if os.path.exists(state_path(self.path)):  # a fresh run: an old state is not ours
             os.remove(state_path(self.path))
         f = self.file = h5py.File(self.partial, "w")
@@ -205,10 +177,10 @@ class StepWriter:
         for name in self.fields:
             d = f.create_dataset(
                 name,
-                shape=(0, n, n),
-                maxshape=(None, n, n),
+                shape=(0, nx, ny),
+                maxshape=(None, nx, ny),
                 dtype=bool if name == "contact" else np.float64,
-                chunks=(1, min(n, 256), min(n, 256)),
+                chunks=(1, min(nx, 256), min(ny, 256)),
                 compression="gzip",
                 compression_opts=4,
                 shuffle=True,
@@ -255,7 +227,7 @@ class StepWriter:
                 d[self.steps] = value
             for key, value in gathered.items():
                 d = f[key]
-                d.resize((self.steps + 1, self.grid.n, self.grid.n))
+                d.resize((self.steps + 1, *self.grid.shape))
                 d[self.steps] = value
             f.flush()
             if full_state is not None:

@@ -21,7 +21,7 @@ import numpy as np
 from . import _petsc
 from .continuation import ConvergedStep, LoadPath
 from .fft import make_fft
-from .grid import Grid
+from .grid import grid_for
 from .output import check_finite
 from .problem import PeriodicProblem, verify
 from .solve import BoundSolver, Monitor
@@ -96,7 +96,7 @@ def sweep(
 
 def periodic_contact(
     heights: np.ndarray,
-    length: float,
+    length: float | tuple[float, float],
     modulus: float,
     pressures: Sequence[float],
     options: _petsc.OptionsArg = None,
@@ -109,9 +109,10 @@ def periodic_contact(
     Parameters
     ----------
     heights
-        The full ``n x n`` height map (every rank passes the same array or memory map).
+        The full ``nx x ny`` height map (every rank passes the same array or memory map).
     length, modulus
-        Cell side ``L`` and contact modulus ``E*``.
+        Cell sides ``(Lx, Ly)``, or the side ``Lx`` with square pixels (``L`` for a square
+        map), and the contact modulus ``E*``.
     pressures
         Nominal pressures ``p0`` (same unit as ``modulus``), solved in order, warm-started.
     options
@@ -132,7 +133,7 @@ def periodic_contact(
     from mpi4py import MPI
 
     with _petsc.scoped_options(options):
-        grid = Grid(int(heights.shape[0]), float(length), comm or MPI.COMM_WORLD)
+        grid = grid_for(heights.shape, length, comm or MPI.COMM_WORLD)
         local = grid.scatter(heights)
         check_finite(grid, local)
         problem = PeriodicProblem(grid, make_fft(grid), local, modulus)

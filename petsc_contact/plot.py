@@ -77,16 +77,25 @@ def plot_ensemble(path: str, summary: dict[str, np.ndarray], modulus: float) -> 
 
 
 def plot_field(
-    path: str, values: np.ndarray, length: float, title: str, label: str, contact: bool = False
+    path: str,
+    values: np.ndarray,
+    lengths: float | tuple[float, float],
+    title: str,
+    label: str,
+    contact: bool = False,
+    unit: str = "",
 ) -> None:
-    """A map of one field over the cell ``[0, L]^2`` (physical axes) with a colour bar."""
+    """A map of one field over the cell ``[0, Lx] x [0, Ly]`` (physical axes, equal aspect)
+    with a colour bar; ``unit`` labels the axes."""
+    lx, ly = lengths if isinstance(lengths, tuple) else (lengths, lengths)
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(5.6, 4.6), constrained_layout=True)
     cmap = "Greys" if contact else "viridis"
     image = ax.imshow(
-        values.T, origin="lower", extent=(0, length, 0, length), cmap=cmap, interpolation="nearest"
+        values.T, origin="lower", extent=(0, lx, 0, ly), cmap=cmap, interpolation="nearest"
     )
-    ax.set(xlabel="x", ylabel="y", title=title)
+    suffix = f" ({unit})" if unit else ""
+    ax.set(xlabel="x" + suffix, ylabel="y" + suffix, title=title)
     fig.colorbar(image, ax=ax, label=label)
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -164,14 +164,13 @@ def verify(info: SolveInfo, obs: dict[str, float], scale_length: float) -> str:
     return residual_verdict(obs["kkt_residual"], tol)
 
 
-def schur_limit(n: int) -> int:
-    """Largest bound set for the Schur preconditioner on an ``n x n`` grid.
+def schur_limit(size: int) -> int:
+    """Largest bound set for the Schur preconditioner on a grid of ``size = n^2`` points.
 
     Its dense LU (``~1.8e-11 m^3`` s here) should cost at most about ten FFT round trips
     (``~2.7e-10 n^2 log2(n^2)`` s): ``m <= (150 n^2 log2 n^2)^(1/3)``, 880 at 512^2 and
     2400 at 2048^2, and never more than :data:`SCHUR_MAX`.
     """
-    size = n * n
     return int(min(SCHUR_MAX, (150 * size * np.log2(max(size, 2))) ** (1 / 3)))
 
 
@@ -194,11 +193,12 @@ class PeriodicProblem:
         self.modulus = float(modulus)
         self.heights = np.ascontiguousarray(heights - grid.mean(heights), dtype=float)
         self.h_rms = grid.rms(self.heights)
-        self.scale_length = self.h_rms if self.h_rms > 0 else grid.length
+        self.scale_length = self.h_rms if self.h_rms > 0 else max(grid.lengths)
         q = wavevector_magnitude(grid, fft)
         self.stiffness = FourierOperator(grid, fft, periodic_stiffness(q, modulus))
         self.hessian = self.stiffness.scaled(1.0)
-        self.preconditioner = MeanModePreconditioner(grid, fft, self.hessian, schur_limit(grid.n))
+        limit = schur_limit(grid.size)
+        self.preconditioner = MeanModePreconditioner(grid, fft, self.hessian, limit)
         self.pixel_stiffness = self.stiffness.diagonal()
         kh = self.stiffness.apply_array(self.heights, np.empty(grid.local_shape))
         self.elastic_pressure_rms = grid.rms(kh)  # rms(K h) ~ E* h'_rms / 2

@@ -9,8 +9,8 @@ held at their bound, the solution of ``H_FF z_F = r_F``, ``z_B = 0`` is
 ``lambda`` being the reactions on ``B`` and ``c`` the rigid shift (``H`` annihilates constants,
 so ``r + lambda`` must have zero sum).  ``G_BB`` is a dense ``m x m`` block of the real-space
 compliance ``G(i - i', j - j')``, read from one column of ``G``: the operator is periodic and
-even in both offsets, so the quarter ``(n/2 + 1)^2`` of that column (:func:`quarter`) holds
-every entry.
+even in both offsets, so the quarter ``(nx/2 + 1) x (ny/2 + 1)`` of that column
+(:func:`quarter`) holds every entry.
 Applied as the conjugate-gradient preconditioner, it makes each step exact on the current
 contact set; it costs two FFT round trips and an ``(m + 1)^2`` LU factorisation per set.
 """
@@ -33,7 +33,7 @@ class ContactSchur:
     grid
         The row-slab layout.
     quarter
-        ``G`` at offsets ``0 .. n/2`` in both directions, on every rank (:func:`quarter`).
+        ``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, on every rank (:func:`quarter`).
     bound
         This rank's slab of the bound-set mask (``True`` on ``B``).
     """
@@ -41,12 +41,15 @@ class ContactSchur:
     def __init__(self, grid: Grid, quarter: np.ndarray, bound: np.ndarray) -> None:
         self.grid = grid
         self.local = np.flatnonzero(bound)
-        n = grid.n
-        rows, cols = np.divmod(self.local, n)
+        nx, ny = grid.shape
+        rows, cols = np.divmod(self.local, ny)
         rows = rows + grid.rows.start
         both = _allgather(np.stack([rows, cols], axis=1), grid.comm)
         self.offset = 0 if grid.comm.size == 1 else int(grid.comm.exscan(len(self.local)) or 0)
-        di, dj = (_fold(both[:, k][:, None] - both[:, k][None, :], n) for k in (0, 1))
+        di, dj = (
+            _fold(both[:, k][:, None] - both[:, k][None, :], period)
+            for k, period in ((0, nx), (1, ny))
+        )
         m = len(both)
         system = np.zeros((m + 1, m + 1))
         system[:m, :m] = quarter[di, dj]
@@ -64,13 +67,13 @@ class ContactSchur:
 
 
 def quarter(grid: Grid, column: np.ndarray) -> np.ndarray:
-    """``G`` at offsets ``0 .. n/2`` in both directions, on every rank.
+    """``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, on every rank.
 
     ``column`` is this rank's slab of ``G e_0``, the response to a unit value at pixel
-    ``(0, 0)``; by periodicity and evenness ``G(i, j) = G(min(i, n - i), min(j, n - j))``.
+    ``(0, 0)``; by periodicity and evenness ``G(i, j) = G(min(i, nx - i), min(j, ny - j))``.
     """
-    half = grid.n // 2 + 1
-    mine = column[: max(0, min(grid.rows.stop, half) - grid.rows.start), :half]
+    half_x, half_y = (m // 2 + 1 for m in grid.shape)
+    mine = column[: max(0, min(grid.rows.stop, half_x) - grid.rows.start), :half_y]
     return _allgather(np.ascontiguousarray(mine), grid.comm)
 
 

@@ -123,7 +123,7 @@ def punch_stiffness_exact(
     if grid.sum(np.count_nonzero(contact))[0] == 0:
         return 0.0, 0
     y, its = restricted_solve(grid, compliance, inverse, contact)
-    return grid.pixel**2 * float(grid.sum(y.sum())[0]), its
+    return grid.pixel_area * float(grid.sum(y.sum())[0]), its
 
 
 def sweep_stiffness(pressure: np.ndarray, mean_gap: np.ndarray) -> np.ndarray:

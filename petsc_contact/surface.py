@@ -1,8 +1,10 @@
 """Self-affine random surfaces with a roll-off (paper Eq. 5) and their statistics.
 
 Conventions (docs/formulation.md): for the DFT ``H(q) = sum_x h(x) exp(-i q.x)``,
-``C(q) = a^4 |H(q)|^2 / ((2 pi)^2 A0)`` so that ``h_rms^2 = sum_q C(q) (2 pi / L)^2``, the
-discrete form of ``integral d^2q C(q)``.
+``C(q) = (ax ay)^2 |H(q)|^2 / ((2 pi)^2 A0)`` so that
+``h_rms^2 = sum_q C(q) (2 pi)^2/(Lx Ly)``, the discrete form of ``integral d^2q C(q)``.
+On a rectangle the ratios ``L/lambda_r`` and ``L/lambda_1`` refer to the longer side
+``L = max(Lx, Ly)``, whose wavevector ``q0 = 2 pi/L`` is the spectrum's smallest.
 
 Generation is Fourier filtering of Gaussian white noise: the DFT of real white noise has
 Hermitian symmetry, complex Gaussian coefficients (Gaussian real and imaginary parts, uniform
@@ -33,10 +35,17 @@ def psd_shape(q: np.ndarray, q0: float, qr: float, q1: float, hurst: float) -> n
     return np.where((q >= q0 * (1 - 1e-12)) & (q < q1), shape, 0.0)
 
 
+def nyquist_ratio(grid: Grid) -> float:
+    """The largest ``L/lambda_1`` the grid resolves: ``lambda_1`` two of its longer pixel sides
+    (``n/2`` on a square grid)."""
+    return max(grid.lengths) / (2 * max(grid.spacing))
+
+
 def check_spectrum_parameters(
-    n: int, hurst: float, rolloff_ratio: float, cutoff_ratio: float
+    nyquist: float, hurst: float, rolloff_ratio: float, cutoff_ratio: float
 ) -> None:
-    """Raise ``ValueError`` with a one-line reason for an impossible spectrum."""
+    """Raise ``ValueError`` with a one-line reason for an impossible spectrum (``nyquist`` is
+    :func:`nyquist_ratio`)."""
     if not 0.0 <= hurst <= 1.0:
         raise ValueError(f"Hurst exponent must be in [0, 1], got {hurst}")
     if not 1.0 <= rolloff_ratio <= cutoff_ratio:
@@ -44,23 +53,24 @@ def check_spectrum_parameters(
             "need 1 <= L/lambda_r <= L/lambda_1, got "
             f"L/lambda_r = {rolloff_ratio}, L/lambda_1 = {cutoff_ratio}"
         )
-    if cutoff_ratio > n / 2:
-        raise ValueError(f"L/lambda_1 = {cutoff_ratio} exceeds the Nyquist limit n/2 = {n // 2}")
+    if cutoff_ratio > nyquist * (1 + 1e-12):
+        raise ValueError(f"L/lambda_1 = {cutoff_ratio} exceeds the Nyquist limit {nyquist:g}")
 
 
 def white_noise(grid: Grid, seed: int) -> np.ndarray:
     """Unit-variance Gaussian white noise on this rank's rows, independent of the rank count."""
     rows = range(grid.rows.start, grid.rows.stop)
     return np.array(
-        [np.random.default_rng([seed, i]).standard_normal(grid.n) for i in rows]
+        [np.random.default_rng([seed, i]).standard_normal(grid.shape[1]) for i in rows]
     ).reshape(grid.local_shape)
 
 
 def spectrum_sums(grid: Grid, fft: FFT, shape: np.ndarray) -> tuple[float, float]:
-    """``(sum C, sum q^2 C) (2 pi/L)^2`` over the full spectrum for a half-spectrum ``C``."""
+    """``(sum C, sum q^2 C) (2 pi)^2/(Lx Ly)`` over the full spectrum for a half-spectrum
+    ``C``."""
     w = half_spectrum_weights(grid, fft) * shape
     q2 = wavevector_magnitude(grid, fft) ** 2
-    dq2 = grid.q0**2
+    dq2 = grid.dq[0] * grid.dq[1]
     s0, s2 = grid.sum(w.sum(), (w * q2).sum())
     return s0 * dq2, s2 * dq2
 
@@ -100,7 +110,7 @@ def self_affine(
     numpy.ndarray
         Heights, mean zero, shape ``grid.local_shape``.
     """
-    check_spectrum_parameters(grid.n, hurst, rolloff_ratio, cutoff_ratio)
+    check_spectrum_parameters(nyquist_ratio(grid), hurst, rolloff_ratio, cutoff_ratio)
     if rms_height is not None and rms_slope is None:
         target, slope = non_negative("rms target", rms_height), False
     elif rms_slope is not None and rms_height is None:
@@ -115,7 +125,7 @@ def self_affine(
     c0 = target**2 / (s2 if slope else s0)
     fft.real[...] = white_noise(grid, seed)
     fft.forward()
-    fft.spectrum *= np.sqrt(c0 * shape * grid.q0**2 * grid.size) / grid.size
+    fft.spectrum *= np.sqrt(c0 * shape * grid.dq[0] * grid.dq[1] * grid.size) / grid.size
     fft.backward()
     h = fft.result.copy()
     if exact and target > 0:
@@ -128,8 +138,7 @@ def fourier_power(grid: Grid, fft: FFT, h: np.ndarray) -> np.ndarray:
     """``C(q)`` of a realisation on the local half-spectrum block (docs/formulation.md)."""
     fft.real[...] = h
     fft.forward()
-    a = grid.pixel
-    return np.abs(fft.spectrum) ** 2 * a**4 * grid.q0**2 / (2 * np.pi) ** 4
+    return np.abs(fft.spectrum) ** 2 * grid.pixel_area**2 / ((2 * np.pi) ** 2 * grid.area)
 
 
 def rms_of(grid: Grid, fft: FFT, h: np.ndarray, slope: bool = False) -> float:
@@ -159,7 +168,8 @@ def radial_psd(
     q = wavevector_magnitude(grid, fft)
     w = half_spectrum_weights(grid, fft) * np.ones_like(q)
     q0 = grid.q0
-    qmax = np.pi / grid.pixel * np.sqrt(2)
+    ax, ay = grid.spacing
+    qmax = np.pi * np.hypot(1 / ax, 1 / ay)
     if bins is None:
         index = np.rint(q / q0).astype(int)
         nbins = int(np.rint(qmax / q0)) + 2

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 
@@ -19,3 +21,13 @@ def non_negative(name: str, value: float) -> float:
     if not (np.isfinite(v) and v >= 0):
         raise ValueError(f"{name} must be non-negative and finite, got {value}")
     return v
+
+
+def per_axis(value: Any, name: str) -> tuple[Any, Any]:
+    """``(v, v)`` for one value, ``(x, y)`` for a pair: a grid or pixel size given once for a
+    square or per axis for a rectangle."""
+    if isinstance(value, (tuple, list, np.ndarray)):
+        if len(value) != 2:
+            raise ValueError(f"{name} needs one value or two (x, y), got {tuple(value)}")
+        return value[0], value[1]
+    return value, value

@@ -91,15 +91,31 @@ def test_not_converged_exit_status(tmp_path):
 
 def _bad_inputs(tmp):
     np.save(tmp / "nan.npy", np.full((8, 8), np.nan))
-    np.save(tmp / "rect.npy", np.zeros((8, 6)))
     np.save(tmp / "cube.npy", np.zeros((4, 4, 4)))
     (tmp / "junk.npy").write_text("not an array")
-    ok = np.random.default_rng(0).standard_normal((16, 16))
+    (tmp / "points.xyz").write_text("0 0 1\n0 1 2\n")
+    ok = 1e-3 * np.random.default_rng(0).standard_normal((16, 16))
     np.save(tmp / "ok.npy", ok)
+    holes = ok.copy()
+    holes[3, 4] = np.nan
+    np.save(tmp / "holes.npy", holes)
     base = ["--pressures", "1e-3"]
     return {
-        "NaN": ["--heights", str(tmp / "nan.npy"), *base],
-        "square": ["--heights", str(tmp / "rect.npy"), *base],
+        "every height is undefined": ["--heights", str(tmp / "nan.npy"), *base],
+        "--fill-undefined": ["--heights", str(tmp / "holes.npy"), *base],
+        "format": ["--heights", str(tmp / "points.xyz"), *base],
+        "need lengths with a unit": [
+            "--heights",
+            str(tmp / "ok.npy"),
+            "--height-unit",
+            "nm",
+            *base,
+        ],
+        "unknown length unit": ["--heights", str(tmp / "ok.npy"), "--length", "3parsec", *base],
+        "applies to a --heights file": [
+            *"--grid 16 --hurst 0.7 --rms-slope 0.1 --detrend slope".split(),
+            *base,
+        ],
         "2-D": ["--heights", str(tmp / "cube.npy"), *base],
         "does not exist": ["--heights", str(tmp / "missing.npy"), *base],
         "cannot read": ["--heights", str(tmp / "junk.npy"), *base],
@@ -375,10 +391,10 @@ def test_modules_import_only_from_layers_above():
     import pathlib
 
     layers = [
-        "validation grid fft kernels",
-        "theory greens surface observables continuation reference",
+        "validation units grid fft kernels",
+        "theory greens surface observables continuation reference preparation",
         "_petsc operator schur solve cg stiffness",
-        "step output plot",
+        "step output plot topography",
         "problem punch",
         "periodic compare ensemble scenes",
         "cli",
@@ -455,8 +471,8 @@ def test_study_runs_in_resumable_pieces(tmp_path):
     base = ["study", "--figure", "1", "--shrink", "128", "--data", str(data), "--quiet"]
     r = cli(*base, "--minutes", "0.00001")
     assert r.returncode == 75, r.stderr
-    assert (data / "fig1" / "periodic_r1.h5.partial").exists()
-    assert (data / "fig1" / "periodic_r1.h5.state.npz").exists()  # the state, beside it
+    assert (data / "fig1" / "punch.h5.partial").exists()  # the smallest grid first
+    assert (data / "fig1" / "punch.h5.state.npz").exists()  # the state, beside it
     r = cli(*base, "--minutes", "10")
     assert r.returncode == 0, r.stderr
     files = sorted((data / "fig1").glob("*.h5"))
@@ -469,3 +485,15 @@ def test_study_runs_in_resumable_pieces(tmp_path):
     r = cli(*base, "--minutes", "10")
     assert r.returncode == 0 and [f.stat().st_mtime_ns for f in files] == stamps
     assert sum(f.stat().st_size for f in files) < 2e6  # scalars only
+
+
+def test_study_computes_a_shared_run_once():
+    """Fig. 3's largest ratio is the same run as Fig. 2's H = 0.3: listed for both figures,
+    kept once (in fig2/)."""
+    from petsc_contact.cli.study import pieces
+
+    todo = pieces()
+    assert len({p.argv for p in todo}) == len(todo)
+    shared = [p for p in todo if "fig3" in p.used_by]
+    assert [p.name for p in shared] == [f"H0.3_seed{k}" for k in (1, 2, 3, 4)]
+    assert all(p.figure == "fig2" and p.grid == 8192 for p in shared)

@@ -134,6 +134,22 @@ def test_load_control_reaches_force(rough):
     assert check.scalars["force"] == pytest.approx(1e-4, rel=1e-6)
 
 
+def test_load_control_on_a_few_pixels():
+    """At forces that touch 4-6 pixels of a 256^2 punch, Newton stops within the solve's
+    resolution (TAO accepting its warm start) instead of running out of steps: converged,
+    the force within 1e-4 of the target, in a handful of Newton steps."""
+    grid = Grid(256, 1.0)
+    h = self_affine(
+        grid, make_fft(grid), hurst=0.7, rolloff_ratio=1, cutoff_ratio=128, seed=1, rms_slope=0.1
+    )
+    steps = punch_contact(h, 1.0, 1.0, forces=[1e-6, 3e-6])
+    for f, step in zip([1e-6, 3e-6], steps, strict=True):
+        s = step.scalars
+        assert step.converged, s["verification"]
+        assert s["force"] == pytest.approx(f, rel=1e-4)
+        assert s["newton_iterations"] <= 10 and s["area_fraction"] * 256**2 <= 8
+
+
 @pytest.mark.parametrize("solver", [[], ["-tao_type", "tron"]])
 def test_edge_singularity_at_high_load(rough, solver):
     """Pressed 200 h_rms beyond first touch: full contact, the corner carries the peak

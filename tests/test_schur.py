@@ -47,4 +47,4 @@ def test_large_bound_sets_keep_the_fourier_form():
     free[: pre.schur_max + 1] = False
     assert not pre.adapt(pre.schur_max + 1, free)
     assert pre.schur is None and pre.mean_mode >= pre.base_mean_mode > 0
-    assert schur_limit(512) < schur_limit(2048) <= 4096
+    assert schur_limit(512**2) < schur_limit(2048**2) <= 4096

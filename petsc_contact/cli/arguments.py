@@ -17,7 +17,6 @@ DEMO = {
     "rolloff_ratio": 2.0,
     "cutoff_ratio": 64.0,
     "seed": 1,
-    "length": 1.0,
     "modulus": 1.0,
     "pressures": "3e-5,1e-4,3e-4,1e-3,3e-3,1e-2,2e-2,3e-2",
 }
@@ -76,6 +75,18 @@ def _float_list(text: str) -> list[float]:
         ) from None
 
 
+def _grid_shape(text: str) -> int | tuple[int, int]:
+    """``N`` (square) or ``NX,NY`` / ``NXxNY`` (rectangle)."""
+    parts = [v for v in re.split(r"[,x]", text) if v.strip()]
+    try:
+        sizes = [int(v) for v in parts]
+    except ValueError:
+        sizes = []
+    if len(sizes) not in (1, 2) or min(sizes) < 2:
+        raise argparse.ArgumentTypeError(f"expected N or NX,NY with at least 2, got '{text}'")
+    return sizes[0] if len(sizes) == 1 else (sizes[0], sizes[1])
+
+
 def _sweep_spec(text: str) -> list[float]:
     values = _float_list(text)
     if len(values) not in (1, 3) or values[0] < 2 or values[0] != int(values[0]):
@@ -104,9 +115,30 @@ def _surface_arguments(p: argparse.ArgumentParser) -> None:
     s.add_argument(
         "--heights",
         metavar="FILE",
-        help="height map: .npy, or a text/.csv matrix; square n x n, length units",
+        help="height map: .npy, .npz, text/.csv, .h5/.nc, or an instrument file (.di, .opd, "
+        ".sur, .x3p, .plu, .nid, .ibw, .gwy, .datx, ...; docs/measured.md); nx x ny",
     )
-    s.add_argument("--grid", type=int, metavar="N", help="generate an N x N surface")
+    s.add_argument(
+        "--height-unit",
+        metavar="UNIT",
+        help="unit of the heights in FILE when it has none (m, mm, um, nm, A, pm); they are "
+        "converted to the unit of --length",
+    )
+    s.add_argument(
+        "--detrend",
+        choices=("none", "height", "slope", "curvature"),
+        default="none",
+        help="remove the map's mean, plane or quadratic before contact (default none)",
+    )
+    s.add_argument(
+        "--fill-undefined",
+        choices=("error", "mean", "harmonic"),
+        default="error",
+        help="what to do with undefined (NaN) heights (default error)",
+    )
+    s.add_argument(
+        "--grid", type=_grid_shape, metavar="N|NX,NY", help="generate an N x N (or NX x NY) surface"
+    )
     s.add_argument("--hurst", type=float, metavar="H", help="Hurst exponent (0..1)")
     s.add_argument("--rms-slope", type=float, metavar="S", help="target rms slope h'_rms")
     s.add_argument("--rms-height", type=float, metavar="R", help="target rms height h_rms")
@@ -121,7 +153,8 @@ def _surface_arguments(p: argparse.ArgumentParser) -> None:
         "--cutoff-ratio",
         type=float,
         metavar="L/lambda_1",
-        help="system size over short-wavelength cut-off (default N/2)",
+        help="system size over short-wavelength cut-off (default: the Nyquist limit, N/2; "
+        "on a rectangle L is the longer side)",
     )
     s.add_argument("--seed", type=int, default=0, metavar="K", help="random seed (default 0)")
     s.add_argument(
@@ -137,11 +170,11 @@ def _run_arguments(
     d = defaults or {}
     p.add_argument(
         "--length",
-        type=float,
-        default=d.get("length", 1.0),
-        metavar="L",
-        help=("side Lp of the square punch footprint" if punch else "side of the periodic cell")
-        + " (default %(default)s)",
+        default=d.get("length"),
+        metavar="L|LX,LY",
+        help=("sides of the punch footprint" if punch else "sides of the periodic cell")
+        + ", with an optional unit (100um, 2mm,1mm); one value: square pixels "
+        "(default: the file's size, else 1)",
     )
     p.add_argument(
         "--modulus",
@@ -393,10 +426,9 @@ def _compare_parser(sub: Any) -> None:
     _surface_arguments(cmp_)
     cmp_.add_argument(
         "--length",
-        type=float,
-        default=1.0,
-        metavar="L",
-        help="side of the periodic cell (default %(default)s)",
+        default=None,
+        metavar="L|LX,LY",
+        help="sides of the periodic cell, with an optional unit (default: the file's size, else 1)",
     )
     cmp_.add_argument(
         "--modulus",

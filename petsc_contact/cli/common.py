@@ -22,33 +22,8 @@ class InputError(Exception):
     """Bad user input: reported as one line, exit status 2."""
 
 
-def _generated(args: argparse.Namespace) -> bool:
-    if args.heights is not None:
-        given = [
-            o
-            for o in ("grid", "hurst", "rms_slope", "rms_height")
-            if getattr(args, o) is not None and args.command != "demo"
-        ]
-        if given:
-            raise InputError(
-                "--heights excludes the surface generation options "
-                f"(--{given[0].replace('_', '-')})"
-            )
-        return False
-    missing = [o for o in ("grid", "hurst") if getattr(args, o) is None]
-    if missing:
-        raise InputError(
-            "give --heights FILE, or --grid N --hurst H and --rms-slope or "
-            "--rms-height to generate a surface"
-        )
-    if (args.rms_slope is None) == (args.rms_height is None):
-        raise InputError("give exactly one of --rms-slope and --rms-height")
-    return True
-
-
-def _check_numbers(args: argparse.Namespace) -> None:
-    for option in ("length", "modulus"):
-        positive(f"--{option}", getattr(args, option))
+def check_numbers(args: argparse.Namespace) -> None:
+    positive("--modulus", args.modulus)
     if getattr(args, "sweep", None) is not None:
         return
     name = next(
@@ -88,6 +63,7 @@ def run_record(
     from ..output import file_digest, petsc_options, versions
 
     params = {k: v for k, v in vars(args).items() if k not in ("quiet",)} | resolved
+    lengths, unit = resolved["length"], resolved["length_unit"]
     attrs: dict[str, Any] = {
         "geometry": "punch" if args.command == "punch" else "periodic",
         "command_line": " ".join(["petsc-contact", *argv]),
@@ -95,12 +71,16 @@ def run_record(
         "petsc_options": petsc_options(petsc),
         "versions": versions(petsc),
         "mpi_size": petsc.COMM_WORLD.getSize(),
-        "length": args.length,
+        "length": lengths[0],
+        "lengths": np.array(lengths),
+        "length_unit": unit,
         "modulus": args.modulus,
         "units": (
-            "SI-free: lengths in the unit of --length and the heights, pressures and "
-            "stiffness per area in the unit of --modulus"
-        ),
+            f"lengths and heights in {unit}"
+            if unit
+            else "lengths and heights in the unit of --length (none given)"
+        )
+        + ", pressures and stiffness per area in the unit of --modulus",
         **realised,
     }
     if args.heights is not None:
@@ -112,71 +92,9 @@ def run_record(
             hurst=args.hurst,
             rolloff_ratio=args.rolloff_ratio,
             cutoff_ratio=params["cutoff_ratio"],
-            grid=args.grid,
+            grid=np.array(args.grid) if isinstance(args.grid, tuple) else args.grid,
         )
     return attrs
-
-
-def _scene(
-    args: argparse.Namespace, full: np.ndarray | None
-) -> tuple[Any, Any, np.ndarray, dict[str, Any]]:
-    """The grid, its FFT, this rank's slab of the heights (read, or generated) and the
-    parameters the options left to their defaults (``cutoff_ratio``)."""
-    from ..fft import make_fft
-    from ..grid import Grid
-
-    grid = Grid(args.grid if full is None else int(full.shape[0]), args.length)
-    fft = make_fft(grid)
-    resolved = {}
-    if full is None:
-        resolved["cutoff_ratio"] = (
-            args.cutoff_ratio if args.cutoff_ratio is not None else grid.n / 2
-        )
-    return grid, fft, _surface(args, full, grid, fft, resolved.get("cutoff_ratio")), resolved
-
-
-def _surface(
-    args: argparse.Namespace, full: np.ndarray | None, grid: Any, fft: Any, cutoff: Any
-) -> np.ndarray:
-    """This rank's slab of the heights: read, or generated (paper Eq. 5)."""
-    from ..output import check_finite
-    from ..surface import self_affine
-
-    if full is None:
-        return self_affine(
-            grid,
-            fft,
-            hurst=args.hurst,
-            rolloff_ratio=args.rolloff_ratio,
-            cutoff_ratio=cutoff,
-            seed=args.seed,
-            rms_height=args.rms_height,
-            rms_slope=args.rms_slope,
-            exact=args.exact_rms,
-        )
-    heights = grid.scatter(full)
-    check_finite(grid, heights)
-    return heights
-
-
-def prepare_scene(
-    args: argparse.Namespace, petsc_args: list[str], check_type: bool = True
-) -> tuple[Any, Any, Any, np.ndarray, dict[str, Any]]:
-    """Check the input, then PETSc, the grid, its FFT and this rank's heights."""
-    from .. import _petsc
-    from ..output import check_writable, load_heights
-    from ..solve import check_tao_type
-
-    _check_numbers(args)
-    full = None if _generated(args) else load_heights(args.heights)
-    check_writable(args.output)
-    if getattr(args, "plot", None):
-        check_writable(args.plot)
-    petsc = _petsc.init(petsc_args)
-    if check_type:
-        check_tao_type(petsc)
-    grid, fft, heights, resolved = _scene(args, full)
-    return petsc, grid, fft, heights, resolved
 
 
 def say(message: str, kind: str = "error") -> None:

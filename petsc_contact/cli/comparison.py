@@ -6,7 +6,8 @@ import argparse
 from collections.abc import Sequence
 from typing import Any
 
-from .common import EXIT_NOT_CONVERGED, InputError, prepare_scene, run_record
+from .common import EXIT_NOT_CONVERGED, InputError, run_record
+from .scene import prepare_scene
 
 
 def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:

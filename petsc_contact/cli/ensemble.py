@@ -11,8 +11,9 @@ from typing import Any
 import numpy as np
 
 from ..output import ENSEMBLE, annotate, atomic_h5, ensemble_entry, write_attributes
-from .common import EXIT_INTERRUPTED, EXIT_PAUSED, InputError, prepare_scene, swept
+from .common import EXIT_INTERRUPTED, EXIT_PAUSED, InputError, swept
 from .runs import run
+from .scene import prepare_scene
 
 
 def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:

@@ -12,14 +12,8 @@ from typing import Any
 import numpy as np
 
 from ..step import FIELD_NAMES
-from .common import (
-    EXIT_INTERRUPTED,
-    EXIT_NOT_CONVERGED,
-    EXIT_PAUSED,
-    prepare_scene,
-    run_record,
-    swept,
-)
+from .common import EXIT_INTERRUPTED, EXIT_NOT_CONVERGED, EXIT_PAUSED, InputError, run_record, swept
+from .scene import prepare_scene
 
 PERIODIC_COLUMNS = (("p0", "nominal_pressure", "{:>11.4e}"), ("mean_gap", "mean_gap", "{:>12.6e}"))
 
@@ -69,12 +63,14 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
     attributes["fft_backend"] = plan.fft_backend
     root = grid.comm.rank == 0
     show = root and not args.quiet
+    unit = resolved["length_unit"]
     try:
         writer, done, start = _open_writer(args, grid, attributes, heights, len(plan.loads), show)
         table = _finished_rows(args.output, done) if done and root else []
         if show:
             print(
-                f"# {args.command} {grid.n}x{grid.n}, L = {args.length:g}, E* = {args.modulus:g}, "
+                f"# {args.command} {grid.describe()}{' ' + unit if unit else ''}, "
+                f"E* = {args.modulus:g}, "
                 f"h_rms = {realised['rms_height']:.4g}, h'_rms = {realised['rms_slope']:.4g}"
                 f"{plan.intro}",
                 flush=True,
@@ -213,7 +209,9 @@ def _periodic_plan(args: argparse.Namespace, grid: Any, fft: Any, heights: np.nd
 def _punch_plan(args: argparse.Namespace, grid: Any, heights: np.ndarray) -> Plan:
     from ..punch import PHARR_BETA, PunchProblem, PunchSolver
 
-    mask = grid.scatter(_disk(grid.n)) > 0 if args.footprint == "disk" else None
+    if args.footprint == "disk" and not grid.square:
+        raise InputError("--footprint disk needs a square grid")
+    mask = grid.scatter(_disk(grid.shape[0])) > 0 if args.footprint == "disk" else None
     beta = 1.0 if args.footprint == "disk" else PHARR_BETA
     problem = PunchProblem(grid, heights, args.modulus, mask, args.flat_stiffness, beta)
     solver = PunchSolver(problem)

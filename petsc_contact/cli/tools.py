@@ -30,7 +30,9 @@ def run_plot(args: argparse.Namespace) -> int:
         if not -steps <= args.step < steps:
             raise InputError(f"--step {args.step} is out of range: the file has {steps} steps")
         values = data[args.step] if data.ndim == 3 else data[...]
-        length = float(f.attrs.get("length", 1.0))
+        side = float(f.attrs.get("length", 1.0))
+        lx, ly = (float(v) for v in f.attrs.get("lengths", (side, side)))
+        length_unit = str(f.attrs.get("length_unit", ""))
         step = args.step % steps
         load = f["nominal_pressure"][step] if "nominal_pressure" in f else np.nan
         per_step = data.ndim == 3
@@ -38,9 +40,12 @@ def run_plot(args: argparse.Namespace) -> int:
     out = args.output or f"{stem}_{args.field}_step{step}.png"
     check_writable(out)
     title = f"{args.field}, step {step}" + (f", p0 = {load:.3g}" if per_step else "")
-    unit = {"length": "in the unit of --length", "pressure": "in the unit of --modulus"}
+    unit = {
+        "length": f"({length_unit})" if length_unit else "in the unit of --length",
+        "pressure": "in the unit of --modulus",
+    }
     label = f"{args.field} {unit.get(ENTRIES[args.field].units, '(1: in contact)')}"
-    plot_field(out, values, length, title, label, args.field == "contact")
+    plot_field(out, values, (lx, ly), title, label, args.field == "contact", length_unit)
     print(f"# wrote {out}")
     return 0
 

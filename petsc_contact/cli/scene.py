@@ -1,0 +1,175 @@
+"""The scene of a run: the surface (generated, or a measured map read, filled, detrended and
+put in one length unit), its grid and its FFT."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+import numpy as np
+
+from .common import InputError, check_numbers, say
+
+FILE_ONLY = {"height_unit": None, "detrend": "none", "fill_undefined": "error"}
+
+
+def _generated(args: argparse.Namespace) -> bool:
+    if args.heights is not None:
+        given = [
+            o
+            for o in ("grid", "hurst", "rms_slope", "rms_height")
+            if getattr(args, o) is not None and args.command != "demo"
+        ]
+        if given:
+            raise InputError(
+                "--heights excludes the surface generation options "
+                f"(--{given[0].replace('_', '-')})"
+            )
+        return False
+    extra = [o for o, default in FILE_ONLY.items() if getattr(args, o, default) != default]
+    if extra:
+        raise InputError(f"--{extra[0].replace('_', '-')} applies to a --heights file")
+    missing = [o for o in ("grid", "hurst") if getattr(args, o) is None]
+    if missing:
+        raise InputError(
+            "give --heights FILE, or --grid N --hurst H and --rms-slope or "
+            "--rms-height to generate a surface"
+        )
+    if (args.rms_slope is None) == (args.rms_height is None):
+        raise InputError("give exactly one of --rms-slope and --rms-height")
+    return True
+
+
+def _units(args: argparse.Namespace, topo: Any, lengths: Any) -> tuple[Any, float]:
+    """The run's lengths (with their unit) and the factor that puts the file's heights in it.
+
+    Contradictions are input errors: a height unit other than the file's, sides other than
+    the file's, or heights with a unit when the lengths have none."""
+    from ..units import Lengths, factor, unit_name
+
+    given = unit_name(args.height_unit) if args.height_unit else None
+    if given and topo.unit and given != topo.unit:
+        raise InputError(f"--height-unit {given} contradicts the file's unit {topo.unit}")
+    heights_unit = given or topo.unit
+    if lengths is None:
+        lengths = Lengths(topo.lengths, topo.unit) if topo.lengths else Lengths((1.0,), None)
+    elif topo.lengths and topo.unit and lengths.unit:
+        mine = np.array(lengths.values) * factor(lengths.unit, topo.unit)
+        if len(mine) == 1:
+            mine = np.array([mine[0], mine[0] * topo.heights.shape[1] / topo.heights.shape[0]])
+        if not np.allclose(mine, topo.lengths, rtol=1e-6):
+            theirs = Lengths(topo.lengths, topo.unit).describe()
+            raise InputError(f"--length {lengths.describe()} contradicts the file's {theirs}")
+    if heights_unit and not lengths.unit:
+        raise InputError(f"heights in {heights_unit} need lengths with a unit, e.g. --length 100um")
+    return lengths, factor(heights_unit, lengths.unit)
+
+
+def measured(args: argparse.Namespace, given: Any) -> tuple[np.ndarray, Any]:
+    """The prepared map of ``--heights`` (filled, detrended, in the lengths' unit) and the
+    lengths; warns about implausible slopes and, for periodic runs, edge mismatch."""
+    from ..grid import grid_for
+    from ..preparation import detrend, fill_undefined
+    from ..topography import read_topography
+
+    topo = read_topography(args.heights)
+    lengths, scale = _units(args, topo, given)
+    spacing = grid_for(topo.heights.shape, lengths.pair).spacing
+    full = fill_undefined(topo.heights, args.fill_undefined)
+    full = detrend(full, spacing, args.detrend)
+    if scale != 1.0:
+        full = np.asarray(full, dtype=float) * scale
+    _warn(args, full, spacing)
+    return full, lengths
+
+
+def _warn(args: argparse.Namespace, full: np.ndarray, spacing: tuple[float, float]) -> None:
+    from ..preparation import EDGE_MISMATCH_LIMIT, SLOPE_RANGE, edge_mismatch, rms_slope
+
+    slope = rms_slope(full, spacing)
+    if slope > 0 and not SLOPE_RANGE[0] <= slope <= SLOPE_RANGE[1]:
+        say(
+            f"the map's rms slope is {slope:.3g}, outside {SLOPE_RANGE[0]:g}..{SLOPE_RANGE[1]:g}:"
+            " are the units right (--length, --height-unit)?",
+            "warning",
+        )
+    mismatch = edge_mismatch(full)
+    if args.command != "punch" and mismatch > EDGE_MISMATCH_LIMIT:
+        say(
+            f"the map's opposite edges differ by {mismatch:.3g} times its typical neighbour "
+            "step, so treated as periodic it has a step at its edges; consider --detrend "
+            "slope, or the free-boundary geometry (petsc-contact punch)",
+            "warning",
+        )
+
+
+def _scene(
+    args: argparse.Namespace, full: np.ndarray | None, lengths: Any
+) -> tuple[Any, Any, np.ndarray, dict[str, Any]]:
+    """The grid, its FFT, this rank's slab of the heights (read, or generated) and the
+    parameters the options left to their defaults (lengths, ``cutoff_ratio``)."""
+    from ..fft import make_fft
+    from ..grid import grid_for
+    from ..output import check_finite
+    from ..surface import nyquist_ratio
+
+    shape = full.shape if full is not None else _shape(args.grid)
+    grid = grid_for(shape, lengths.pair)
+    fft = make_fft(grid)
+    resolved: dict[str, Any] = {"length": list(grid.lengths), "length_unit": lengths.unit or ""}
+    if full is None:
+        cutoff = args.cutoff_ratio if args.cutoff_ratio is not None else nyquist_ratio(grid)
+        resolved["cutoff_ratio"] = cutoff
+        return grid, fft, _generate(args, grid, fft, cutoff), resolved
+    heights = grid.scatter(full)
+    check_finite(grid, heights)
+    return grid, fft, heights, resolved
+
+
+def _shape(grid: int | tuple[int, int]) -> tuple[int, int]:
+    return grid if isinstance(grid, tuple) else (grid, grid)
+
+
+def _generate(args: argparse.Namespace, grid: Any, fft: Any, cutoff: float) -> np.ndarray:
+    """This rank's slab of a generated surface (paper Eq. 5)."""
+    from ..surface import self_affine
+
+    return self_affine(
+        grid,
+        fft,
+        hurst=args.hurst,
+        rolloff_ratio=args.rolloff_ratio,
+        cutoff_ratio=cutoff,
+        seed=args.seed,
+        rms_height=args.rms_height,
+        rms_slope=args.rms_slope,
+        exact=args.exact_rms,
+    )
+
+
+def prepare_scene(
+    args: argparse.Namespace, petsc_args: list[str], check_type: bool = True
+) -> tuple[Any, Any, Any, np.ndarray, dict[str, Any]]:
+    """Check the input, then PETSc, the grid, its FFT and this rank's heights."""
+    from .. import _petsc
+    from ..output import check_writable
+    from ..solve import check_tao_type
+    from ..units import Lengths, parse_lengths
+
+    check_numbers(args)
+    try:
+        given = parse_lengths(args.length) if args.length is not None else None
+    except ValueError as exc:
+        raise InputError(f"--length: {exc}") from None
+    if _generated(args):
+        full, lengths = None, given or Lengths((1.0,), None)
+    else:
+        full, lengths = measured(args, given)
+    check_writable(args.output)
+    if getattr(args, "plot", None):
+        check_writable(args.plot)
+    petsc = _petsc.init(petsc_args)
+    if check_type:
+        check_tao_type(petsc)
+    grid, fft, heights, resolved = _scene(args, full, lengths)
+    return petsc, grid, fft, heights, resolved

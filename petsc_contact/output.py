@@ -77,6 +77,10 @@ def versions(petsc: Any | None = None) -> dict[str, str]:
             out[mod] = str(__import__(mod).__version__)
         except Exception:
             out[mod] = "not available"
+    try:  # the instrument reader, when installed (its own __version__ is not its release)
+        out["SurfaceTopography"] = metadata.version("SurfaceTopography")
+    except metadata.PackageNotFoundError:
+        out["SurfaceTopography"] = "not available"
     try:
         out["petsc_contact"] = metadata.version("petsc-contact")
     except metadata.PackageNotFoundError:
@@ -432,6 +436,13 @@ EXPERIMENT = _entries(
     measured_stiffness=("pressure/length", "K* = dp/ds (second-order differences)"),
     stiffness=("pressure/length", "K = K*/(1 - K* d/E') (paper Eq. C3; NaN where K* d/E' >= 1)"),
 )
+THEORY = _entries(
+    wavevector=("1/length", "mean |q| of each radial bin of the map's spectrum"),
+    psd=("length^4", "radially averaged PSD C(q) of the map (h_rms^2 = 2 pi int q C dq)"),
+    nominal_pressure=("pressure", "nominal pressures of the predictions"),
+    mean_gap=("length", "Persson's mean separation u_bar(p) from the map's spectrum"),
+    stiffness=("pressure/length", "Persson's interfacial stiffness K(p) = -dp/du_bar"),
+)
 ENTRIES = {**SOLVE_COLUMNS, **PERIODIC_COLUMNS, **PUNCH_COLUMNS, **FIELDS}  # by name
 GEOMETRIES = {
     "periodic": {**SOLVE_COLUMNS, **PERIODIC_COLUMNS, **FIELDS},
@@ -510,6 +521,13 @@ def schema_markdown() -> str:
         COMPARE,
     )
     table("experiment", "Attributes: `block_modulus`, `thickness`, `table`, `formula`.", EXPERIMENT)
+    table(
+        "theory",
+        "Persson's theory from a map's spectrum. Attributes: the run record (as above) and "
+        "`u0`, `beta` (p = beta E* exp(-u_bar/u0)), `hurst_fit`, `fit_range`, "
+        "`crossover_pressure`, `crossover_pressure_appendix`.",
+        THEORY,
+    )
     return "\n".join(lines).rstrip() + "\n"
 
 
@@ -521,6 +539,8 @@ RUN_ATTRIBUTES = (
     "versions",
     "mpi_size",
     "length",
+    "lengths",
+    "length_unit",
     "modulus",
     "units",
     "rms_height",

@@ -76,6 +76,37 @@ def plot_ensemble(path: str, summary: dict[str, np.ndarray], modulus: float) -> 
     _finish(fig, list(axes[0]), path)
 
 
+def plot_theory(path: str, result: Any, modulus: float) -> None:
+    """Two panels: the map's spectrum with its fitted power law, and Persson's ``K(p)`` with
+    the finite-size crossover ``p_c`` (both variants) marked."""
+    plt = _pyplot()
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.8), constrained_layout=True)
+    ax1.loglog(result.wavevector, result.psd, ".", ms=3, label="map")
+    lo, hi = result.fit_range
+    q = np.geomspace(lo, hi, 20)
+    inside = (result.wavevector >= lo) & (result.wavevector <= hi)
+    anchor = np.exp(
+        np.mean(
+            np.log(result.psd[inside] * result.wavevector[inside] ** (2 + 2 * result.hurst_fit))
+        )
+    )
+    ax1.loglog(
+        q, anchor * q ** (-2 - 2 * result.hurst_fit), "k-", label=f"H = {result.hurst_fit:.2f}"
+    )
+    ax1.set(xlabel="$q$", ylabel="$C(q)$", title="spectrum")
+    ax1.legend()
+    p = result.nominal_pressure / modulus
+    ax2.loglog(p, result.stiffness * result.rms_height / modulus, "-", label="Persson")
+    for value, style, name in (
+        (result.crossover_pressure, "--", "$p_c$ (Eq. 13)"),
+        (result.crossover_pressure_appendix, ":", r"$p_c$ ($q_r \approx \pi/L$)"),
+    ):
+        ax2.axvline(value / modulus, color="k", ls=style, label=name)
+    ax2.set(xlabel="$p_0/E^*$", ylabel=r"$K h_\mathrm{rms}/E^*$", title="interfacial stiffness")
+    ax2.legend()
+    _finish(fig, (ax1, ax2), path)
+
+
 def plot_field(
     path: str,
     values: np.ndarray,

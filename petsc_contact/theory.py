@@ -98,6 +98,17 @@ def finite_size_stiffness(
     )
 
 
+CONVENTIONS = ("printed", "appendix")
+
+
+def rolloff_wavevector(length: float, rolloff_ratio: float, convention: str = "printed") -> float:
+    """``q_r``: ``2 pi/lambda_r`` as printed, or the paper's appendix approximation
+    ``q_r ~ pi/L`` (for ``L = lambda_r``; ``pi L/lambda_r / L`` in general), half of it."""
+    if convention not in CONVENTIONS:
+        raise ValueError(f"convention must be one of {', '.join(CONVENTIONS)}, got '{convention}'")
+    return (2 if convention == "printed" else 1) * np.pi * rolloff_ratio / length
+
+
 def crossover_pressure(
     modulus: float,
     h_rms: float,
@@ -105,20 +116,29 @@ def crossover_pressure(
     length: float,
     rolloff_ratio: float,
     gamma: float = GAMMA,
+    convention: str = "printed",
 ) -> float:
-    """``p_c`` of paper Eq. 13, implemented as printed::
+    """``p_c`` of paper Eq. 13::
 
         p_c / E* = h_rms/(2 pi lambda_r) lambda_r^2/L^2 s^(-1/2H) (theta gamma)^((1+H)/H)
+                 = h_rms/(q_r L^2) s^(-1/2H) (theta gamma)^((1+H)/H)
 
-    Note: with the paper's quoted ``q_r h_rms`` this gives values about
-    5 times below the ``p_c`` the paper quotes; see docs/figures.md for what the package finds.
+    ``convention="printed"`` is the formula as printed (``q_r = 2 pi/lambda_r``).
+    ``"appendix"`` uses the appendix's approximations ``q_r ~ pi/L`` and ``theta ~ 1``
+    (:func:`rolloff_wavevector`).  Given the paper's quoted ``q_r h_rms`` instead of
+    ``h_rms`` (``h_rms = (q_r h_rms)/q_r`` with the same ``q_r``), the appendix convention is
+    about 5 times the printed one and reproduces the paper's quoted ``p_c``
+    (docs/paper.md).
     """
     s = roll_off_factor(hurst, rolloff_ratio)
+    q_r = rolloff_wavevector(length, rolloff_ratio, convention)
+    th = theta(hurst, gamma) if convention == "printed" else 1.0
     return float(
         modulus
-        * _size_factor(h_rms, length, rolloff_ratio)
+        * h_rms
+        / (q_r * length**2)
         * s ** (-1.0 / (2 * hurst))
-        * (theta(hurst, gamma) * gamma) ** ((1 + hurst) / hurst)
+        * (th * gamma) ** ((1 + hurst) / hurst)
     )
 
 

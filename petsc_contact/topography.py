@@ -8,9 +8,11 @@ carries them.  Read without any optional package:
 - ``.npy`` (memory-mapped, so that under MPI each rank reads only its rows) and ``.npz``
   (the array ``heights``, or the only 2-D array);
 - text matrices (``.txt``, ``.dat``, ``.csv``; whitespace or commas, ``#`` comments);
-- HDF5 and NetCDF-4 (``.h5``, ``.hdf5``, ``.nc``): the dataset ``heights``, or the only 2-D
-  dataset; attributes ``length`` (one value or two) and ``unit`` are read when present.
-  This includes the package's own output files, whose ``heights`` are the input surface.
+- HDF5 (``.h5``, ``.hdf5``): the dataset ``heights``, or the only 2-D dataset; attributes
+  ``length`` (one value or two) and ``unit`` are read when present.  This includes the
+  package's own output files, whose ``heights`` are the input surface;
+- NetCDF (``.nc``): through SurfaceTopography when it is installed (its NetCDF files carry
+  the physical sizes and unit), else as HDF5 (NetCDF-4) or through scipy (NetCDF-3).
 
 Every other extension (``.di``, ``.opd``, ``.sur``, ``.x3p``, ``.plu``, ``.nid``, ``.ibw``,
 ``.gwy``, ``.datx``, ... about 40 formats) is read by SurfaceTopography, the field's
@@ -21,7 +23,9 @@ one-line error naming the install step.
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass
+from importlib import metadata
 from typing import Any
 
 import numpy as np
@@ -29,7 +33,8 @@ import numpy as np
 from .units import unit_name
 
 TEXT = (".txt", ".dat", ".csv", ".asc")
-HDF5 = (".h5", ".hdf5", ".nc", ".nc4")
+HDF5 = (".h5", ".hdf5")
+NETCDF = (".nc", ".nc4")
 INSTALL_HINT = (
     "pip install 'numpy<2' 'numba>=0.59' SurfaceTopography==1.18.2 into the venv "
     "(the README's set-up does this)"
@@ -70,7 +75,7 @@ def read_topography(path: str) -> Topography:
             topo = _numpy(path)
         elif ext in TEXT:
             topo = Topography(_text(path), reader="text")
-        elif ext in HDF5:
+        elif ext in HDF5 or (ext in NETCDF and not surface_topography_available()):
             topo = _hdf5(path)
         else:
             topo = _surface_topography(path)
@@ -79,6 +84,13 @@ def read_topography(path: str) -> Topography:
     except Exception as exc:  # a reader's own failure: one line, with the file
         raise OSError(f"cannot read heights from '{path}': {_one_line(exc)}") from None
     return _checked(topo, path)
+
+
+def surface_topography_available() -> bool:
+    """Whether SurfaceTopography can be imported (without importing it)."""
+    import importlib.util
+
+    return importlib.util.find_spec("SurfaceTopography") is not None
 
 
 def _numpy(path: str) -> Topography:
@@ -135,7 +147,8 @@ def _hdf5(path: str) -> Topography:
             dataset = _pick_dataset(arrays, path)
         heights = np.asarray(dataset[()], dtype=float)
         attrs = {**dict(f.attrs), **dict(dataset.attrs)}
-    return Topography(heights, _lengths(attrs.get("length")), _unit(attrs.get("unit")), "hdf5")
+    sides = _lengths(attrs.get("lengths", attrs.get("length")), heights.shape)
+    return Topography(heights, sides, _unit(attrs.get("unit") or attrs.get("length_unit")), "hdf5")
 
 
 def _is_map(item: Any) -> bool:
@@ -161,11 +174,14 @@ def _netcdf3(path: str) -> Topography:
     return Topography(heights, reader="netcdf")
 
 
-def _lengths(value: Any) -> tuple[float, float] | None:
+def _lengths(value: Any, shape: tuple[int, ...]) -> tuple[float, float] | None:
+    """Sides from an attribute: two values, or one (``Lx``, square pixels)."""
     if value is None:
         return None
     v = np.atleast_1d(np.asarray(value, dtype=float))
-    return (float(v[0]), float(v[-1])) if v.size in (1, 2) else None
+    if v.size == 1:
+        return float(v[0]), float(v[0]) * shape[1] / shape[0]
+    return (float(v[0]), float(v[1])) if v.size == 2 else None
 
 
 def _unit(value: Any) -> str | None:
@@ -177,7 +193,6 @@ def _unit(value: Any) -> str | None:
 def _surface_topography(path: str) -> Topography:
     """An instrument file through SurfaceTopography (its first channel)."""
     try:
-        import SurfaceTopography as st
         from SurfaceTopography import open_topography
     except ImportError:
         ext = os.path.splitext(path)[1] or "(no extension)"
@@ -185,20 +200,26 @@ def _surface_topography(path: str) -> Topography:
             f"format {ext} of '{path}' needs SurfaceTopography: {INSTALL_HINT}"
         ) from None
     try:
-        reader = open_topography(path)
+        with warnings.catch_warnings(), np.errstate(all="ignore"):  # its sniffers' noise
+            warnings.simplefilter("ignore")
+            reader = open_topography(path)
+            channel = reader.default_channel
+            sized = channel.physical_sizes is not None  # else: a stand-in, not reported
+            topo = reader.topography(
+                channel_index=channel.index, physical_sizes=None if sized else (1.0, 1.0)
+            )
     except Exception as exc:
         raise ValueError(f"unknown or unreadable format: '{path}' ({_one_line(exc)})") from None
-    channel = reader.default_channel
-    topo = reader.topography(channel_index=channel.index)
     if topo.dim != 2:
         raise ValueError(f"'{path}' holds a line scan, not a map")
     heights = np.ma.filled(np.ma.asarray(topo.heights(), dtype=float), np.nan)
     unit = topo.unit
+    sides = tuple(float(s) for s in topo.physical_sizes) if sized else None
     return Topography(
         heights,
-        tuple(float(s) for s in topo.physical_sizes),  # type: ignore[arg-type]
-        _unit(unit) if isinstance(unit, str) else None,
-        f"SurfaceTopography {st.__version__}",
+        sides,  # type: ignore[arg-type]
+        _unit(unit) if isinstance(unit, str) and sized else None,
+        f"SurfaceTopography {metadata.version('SurfaceTopography')}",
     )
 
 

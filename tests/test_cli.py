@@ -93,7 +93,7 @@ def _bad_inputs(tmp):
     np.save(tmp / "nan.npy", np.full((8, 8), np.nan))
     np.save(tmp / "cube.npy", np.zeros((4, 4, 4)))
     (tmp / "junk.npy").write_text("not an array")
-    (tmp / "points.xyz").write_text("0 0 1\n0 1 2\n")
+    (tmp / "scan.foo").write_bytes(b"\x00\x13 not a format anybody reads \xff")
     ok = 1e-3 * np.random.default_rng(0).standard_normal((16, 16))
     np.save(tmp / "ok.npy", ok)
     holes = ok.copy()
@@ -103,7 +103,7 @@ def _bad_inputs(tmp):
     return {
         "every height is undefined": ["--heights", str(tmp / "nan.npy"), *base],
         "--fill-undefined": ["--heights", str(tmp / "holes.npy"), *base],
-        "format": ["--heights", str(tmp / "points.xyz"), *base],
+        "format": ["--heights", str(tmp / "scan.foo"), *base],
         "need lengths with a unit": [
             "--heights",
             str(tmp / "ok.npy"),
@@ -396,7 +396,7 @@ def test_modules_import_only_from_layers_above():
         "_petsc operator schur solve cg stiffness",
         "step output plot topography",
         "problem punch",
-        "periodic compare ensemble scenes",
+        "periodic compare ensemble scenes predictions",
         "cli",
     ]
     rank = {m: i for i, layer in enumerate(layers) for m in layer.split()}

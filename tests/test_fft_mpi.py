@@ -11,11 +11,12 @@ from petsc_contact.fft import make_fft, wavevector_magnitude
 from petsc_contact.grid import Grid
 from petsc_contact.operator import FourierOperator
 
-n, expected = int(sys.argv[1]), sys.argv[2]
-grid = Grid(n, 2.0, MPI.COMM_WORLD)
+nx, ny = (int(v) for v in sys.argv[1].split(","))
+expected = sys.argv[2]
+grid = Grid((nx, ny), (2.0, 2.0 * ny / nx), MPI.COMM_WORLD)
 fft = make_fft(grid)
 assert type(fft).__name__ == expected, type(fft).__name__
-full = np.random.default_rng(3).standard_normal((n, n))
+full = np.random.default_rng(3).standard_normal((nx, ny))
 fft.real[...] = full[grid.rows]
 fft.forward()
 rows, cols = fft.spectral_index
@@ -24,14 +25,14 @@ got = fft.spectrum.T if fft.transposed else fft.spectrum
 assert np.abs(got - ref).max() <= 1e-12 * np.abs(ref).max()
 q = wavevector_magnitude(grid, fft)  # the layout the multipliers follow
 q = q.T if fft.transposed else q
-i, j = np.meshgrid(np.fft.fftfreq(n, 1 / n)[rows], np.arange(n // 2 + 1)[cols], indexing="ij")
-assert np.allclose(q, np.pi * np.hypot(i, j))
+i, j = np.meshgrid(np.fft.fftfreq(nx, 1 / nx)[rows], np.arange(ny // 2 + 1)[cols], indexing="ij")
+assert np.allclose(q, np.hypot(np.pi * i, 2 * np.pi / grid.lengths[1] * j))  # 2 pi/L per index
 fft.backward()
-assert np.abs(fft.result / n**2 - full[grid.rows]).max() <= 1e-13
+assert np.abs(fft.result / grid.size - full[grid.rows]).max() <= 1e-13
 out = np.empty(grid.local_shape)
 fft.forward_from(full[grid.rows])
 fft.backward_into(out)
-assert np.abs(out / n**2 - full[grid.rows]).max() <= 1e-13
+assert np.abs(out / grid.size - full[grid.rows]).max() <= 1e-13
 # an operator's quadratic form from its spectrum (Parseval with the half-spectrum
 # multiplicities of this layout) equals x.Kx in real space
 op = FourierOperator(grid, fft, wavevector_magnitude(grid, fft))
@@ -44,11 +45,20 @@ assert abs(quadratic / grid.sum(np.vdot(x, out))[0] - 1) <= 1e-13
 
 @pytest.mark.parametrize(
     "ranks, n, backend",
-    [(2, 64, "FFTWMPI"), (3, 96, "FFTWMPI"), (3, 30, "FFTWMPI"), (3, 64, "SlabFFT")],
+    [
+        (2, "64,64", "FFTWMPI"),
+        (3, "96,96", "FFTWMPI"),
+        (3, "30,30", "FFTWMPI"),
+        (3, "64,64", "SlabFFT"),
+        (2, "64,18", "FFTWMPI"),
+        (3, "30,47", "FFTWMPI"),
+        (3, "64,20", "SlabFFT"),
+    ],
 )
 def test_parallel_fft_matches_numpy(ranks, n, backend):
     """FFTW-MPI (spectrum transposed) where FFTW's row split is the grid's; mpi4py-fft when
     it is not (n = 64 on 3 ranks: FFTW splits 22/22/20, the grid 22/21/21).  Rounding of a
-    2-D FFT is ~eps log n relative to the largest coefficient."""
+    2-D FFT is ~eps log n relative to the largest coefficient.  Rectangles too, odd ``ny``
+    included."""
     r = python("-c", SCRIPT, str(n), backend, mpi=ranks, timeout=120)
     assert r.returncode == 0, r.stdout + r.stderr

@@ -339,6 +339,13 @@ COMMANDS = {  # name: (one-line help, description)
         "block of thickness d and effective modulus E' (paper "
         "section III): K* = dp/ds, K = K*/(1 - K* d/E').",
     ),
+    "theory": (
+        "Persson's theory and the finite-size p_c from a map's spectrum",
+        "What theory predicts for a height map (measured, or generated): the radially "
+        "averaged spectrum, Persson's mean gap u(p) and stiffness K(p), the exponential "
+        "law's u0 and beta, and the finite-size crossover p_c (paper Eq. 13) with a Hurst "
+        "exponent fitted to the spectrum.",
+    ),
     "demo": (
         "the default scene (periodic 512^2, H=0.7, slope 0.1)",
         "The default scene: periodic 512 x 512 self-affine "
@@ -374,8 +381,37 @@ def build_parser() -> argparse.ArgumentParser:
     _demo_parser(sub)
     _plot_parser(sub)
     _study_parser(sub)
+    _theory_parser(sub)
     _command(sub, "schema")
     return parser
+
+
+def _theory_parser(sub: Any) -> None:
+    p = _command(sub, "theory")
+    _surface_arguments(p)
+    p.add_argument(
+        "--length",
+        default=None,
+        metavar="L|LX,LY",
+        help="sides of the map, with an optional unit (default: the file's size, else 1)",
+    )
+    p.add_argument(
+        "--modulus",
+        type=float,
+        default=1.0,
+        metavar="ESTAR",
+        help="contact modulus E* (default %(default)s)",
+    )
+    p.add_argument(
+        "--sweep",
+        type=_sweep_spec,
+        default=[40],
+        metavar="N[,PMIN,PMAX]",
+        help="N log-spaced pressures of the predictions (default 40, from 1e-7 E* to 0.1 E*)",
+    )
+    p.add_argument("--output", required=True, metavar="OUT.h5", help="HDF5 results")
+    p.add_argument("--plot", metavar="PNG", help="spectrum and K(p) with p_c marked")
+    p.add_argument("--quiet", action="store_true", help="no table on standard output")
 
 
 def _study_parser(sub: Any) -> None:

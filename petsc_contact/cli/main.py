@@ -15,6 +15,7 @@ from .comparison import run_compare
 from .ensemble import run_ensemble
 from .runs import run
 from .study import run_study, study_plan
+from .theory import run_theory
 from .tools import run_experiment, run_plot
 
 
@@ -56,6 +57,8 @@ def _dispatch(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[st
         return 0
     if args.command == "plot":
         return run_plot(args)
+    if args.command == "theory":
+        return run_theory(args, argv, petsc_args)
     if args.command == "study":
         if args.list:
             print(study_plan(args))

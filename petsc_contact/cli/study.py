@@ -22,6 +22,9 @@ PAPER_GRID = 8192
 HURSTS = (0.3, 0.5, 0.7)
 SEEDS = (1, 2, 3, 4)
 FIG3_RATIOS = (512, 768, 2048, 4096)  # lambda_r/lambda_1, L = lambda_r
+# Figs. 2 and 3: four loads per decade from below the smallest resolved contact, so that at
+# least four resolved points lie below the crossover p_c (about 2e-6 E* on 1024^2)
+FINITE_SIZE_SWEEP = "25,1e-8,1e-2"
 
 
 @dataclass(frozen=True)
@@ -70,7 +73,7 @@ def pieces(shrink: int = 1) -> list[Piece]:
         Piece(
             "fig2",
             f"H{h}_seed{k}",
-            ("periodic", *_surface(n, h, 1, n / 2, k), "--sweep", "12,1e-7,1e-2"),
+            ("periodic", *_surface(n, h, 1, n / 2, k), "--sweep", FINITE_SIZE_SWEEP),
         )
         for h in HURSTS
         for k in SEEDS
@@ -81,7 +84,7 @@ def pieces(shrink: int = 1) -> list[Piece]:
             Piece(
                 "fig3",
                 f"ratio{ratio}_seed{k}",
-                ("periodic", *_surface(m, 0.3, 1, m / 2, k), "--sweep", "12,1e-7,1e-2"),
+                ("periodic", *_surface(m, 0.3, 1, m / 2, k), "--sweep", FINITE_SIZE_SWEEP),
             )
             for k in SEEDS
         ]

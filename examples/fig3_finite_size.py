@@ -5,8 +5,42 @@ import argparse
 import numpy as np
 
 from petsc_contact import scenes, theory
+from petsc_contact.paper_study import piece_files
 
 PAPER_ALPHA = {0.3: 0.72, 0.5: 0.66, 0.7: 0.59}
+
+
+def _computed(args: argparse.Namespace, cutoff: float) -> tuple[np.ndarray, dict]:
+    p = np.geomspace(args.pressures[0], args.pressures[1], int(args.pressures[2]))
+    results = {
+        f"H{h}": scenes.ensemble_curves(
+            args.grid, h, 1.0, cutoff, range(args.seeds), p, points=args.fit_points
+        )
+        for h in args.hursts
+    }
+    return p, results
+
+
+def _from_data(args: argparse.Namespace, cutoff: float) -> tuple[np.ndarray, dict]:
+    """Read the study's complete pieces of every H present (no solve)."""
+    import h5py
+
+    results = {}
+    for h in list(args.hursts):
+        paths = piece_files(args.data, "fig2", hurst=f"{h}")
+        if not paths:
+            print(f"# H = {h}: no complete piece in {args.data} yet")
+            args.hursts.remove(h)
+            continue
+        with h5py.File(paths[0]) as f:
+            n = int(f.attrs["grid"])
+        curves = scenes.curves_from_files(paths)
+        p_c = scenes.crossover(curves["h_rms"], h, 1.0)
+        results[f"H{h}"] = curves | scenes.finite_size_fit(curves, n * n, p_c, args.fit_points)
+        args.grid, args.seeds = n, len(paths)
+    if not results:
+        raise SystemExit(f"no complete Fig. 2 piece in {args.data}")
+    return next(iter(results.values()))["nominal_pressure"][0], results
 
 
 def main() -> None:
@@ -24,15 +58,15 @@ def main() -> None:
         help="log-spaced p0/E*",
     )
     ap.add_argument("--fit-points", type=int, default=4)
+    ap.add_argument(
+        "--data",
+        metavar="DIR",
+        help="redraw from the study's files (petsc-contact study --figure 2), e.g. data/paper",
+    )
     ap.add_argument("--output", default="fig3")
     args = ap.parse_args()
     cutoff = args.cutoff_ratio or args.grid / 4
-    p = np.geomspace(args.pressures[0], args.pressures[1], int(args.pressures[2]))
-    results = {}
-    for h in args.hursts:
-        results[f"H{h}"] = scenes.ensemble_curves(
-            args.grid, h, 1.0, cutoff, range(args.seeds), p, points=args.fit_points
-        )
+    p, results = (_from_data if args.data else _computed)(args, cutoff)
     scenes.save(
         f"{args.output}.h5",
         {"nominal_pressure": p, **results},
@@ -54,10 +88,14 @@ def main() -> None:
         r = results[f"H{h}"]
         h_rms = r["h_rms"].mean()
         k = r["stiffness_mean"] * h_rms
-        ok = r["fitted"]  # resolved contact (scenes.resolved), the points fits may use
+        ok = r["resolved"]  # at least 16 contact pixels in every seed (scenes.resolved)
         (line,) = ax.loglog(p[ok], k[ok], "o", mfc="none", label=f"H = {h}")
+        spread = np.nanstd(r["stiffness"] * r["h_rms"][:, None], axis=0, ddof=1)
+        ax.fill_between(
+            p[ok], (k - spread)[ok], (k + spread)[ok], color=line.get_color(), alpha=0.2
+        )
         ax.loglog(p[~ok], k[~ok], ".", color=line.get_color(), alpha=0.5)
-        low = np.sort(p[r["fitted"]])[: args.fit_points]
+        low = p[r["fitted"]]
         ax.loglog(
             low,
             r["prefactor"] * low ** r["alpha"] * h_rms,
@@ -70,6 +108,7 @@ def main() -> None:
             f"{h:>4} {r['alpha']:>9.3f} +- {r['alpha_error']:.3f} {paper:>12} {1 / (1 + h):>8.3f}"
         )
     ax.plot([], [], ".", color="gray", label="< 16 contact pixels (not fitted)")
+    ax.fill_between([], [], [], color="gray", alpha=0.2, label="spread over seeds (std)")
     ax.set(
         xlabel="$p_0/E^*$",
         ylabel=r"$K h_\mathrm{rms}/E^*$",

@@ -9,6 +9,49 @@ import argparse
 import numpy as np
 
 from petsc_contact import scenes
+from petsc_contact.paper_study import FIG3_RATIOS, piece_files
+
+
+def _computed(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]:
+    """Run the sweeps here (``--grid``, ``--ratios``, ``--seeds``)."""
+    ratios = args.ratios or [args.grid / 32, args.grid / 16, args.grid / 8, args.grid / 4]
+    p = np.geomspace(args.pressures[0], args.pressures[1], int(args.pressures[2]))
+    results = {
+        f"ratio{r:g}": scenes.ensemble_curves(
+            args.grid, args.hurst, 1.0, r, range(args.seeds), p, points=args.fit_points
+        )
+        for r in ratios
+    }
+    return ratios, p, results
+
+
+def _from_data(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]:
+    """Read the study's complete pieces of every ratio present (no solve)."""
+    import h5py
+
+    ratios, results = [], {}
+    for r in FIG3_RATIOS:
+        paths = piece_files(args.data, "fig3", cutoff_ratio=f"{r:g}")
+        if not paths:
+            print(f"# lambda_r/lambda_1 = {r}: no complete piece in {args.data} yet")
+            continue
+        with h5py.File(paths[0]) as f:
+            n, hurst = int(f.attrs["grid"]), float(f.attrs["hurst"])
+        if hurst != args.hurst:
+            raise SystemExit(f"the study's Fig. 3 pieces have H = {hurst}, not {args.hurst}")
+        curves = scenes.curves_from_files(paths)
+        p_c = scenes.crossover(curves["h_rms"], hurst, 1.0)
+        try:
+            fit = scenes.finite_size_fit(curves, n * n, p_c, args.fit_points)
+        except ValueError as exc:
+            print(f"# lambda_r/lambda_1 = {r}: not fitted ({exc})")
+            continue
+        results[f"ratio{r:g}"] = curves | fit
+        ratios.append(float(r))
+        print(f"# lambda_r/lambda_1 = {r}: {len(paths)} seeds on {n}^2")
+    if not ratios:
+        raise SystemExit(f"no complete Fig. 3 piece in {args.data}")
+    return ratios, results[f"ratio{ratios[0]:g}"]["nominal_pressure"][0], results
 
 
 def main() -> None:
@@ -27,18 +70,16 @@ def main() -> None:
         "--pressures", type=float, nargs=3, default=[1e-8, 1e-3, 16], metavar=("PMIN", "PMAX", "N")
     )
     ap.add_argument("--fit-points", type=int, default=4)
+    ap.add_argument(
+        "--data",
+        metavar="DIR",
+        help="redraw from the study's files (petsc-contact study --figure 3), e.g. data/paper",
+    )
     ap.add_argument("--output", default="fig4")
     args = ap.parse_args()
-    ratios = args.ratios or [args.grid / 32, args.grid / 16, args.grid / 8, args.grid / 4]
-    p = np.geomspace(args.pressures[0], args.pressures[1], int(args.pressures[2]))
-    results, alpha, error = {}, [], []
-    for r in ratios:
-        res = scenes.ensemble_curves(
-            args.grid, args.hurst, 1.0, r, range(args.seeds), p, points=args.fit_points
-        )
-        results[f"ratio{r:g}"] = res
-        alpha.append(res["alpha"])
-        error.append(res["alpha_error"])
+    ratios, p, results = (_from_data if args.data else _computed)(args)
+    alpha = np.array([results[f"ratio{r:g}"]["alpha"] for r in ratios])
+    error = np.array([results[f"ratio{r:g}"]["alpha_error"] for r in ratios])
     exponent = 1 / (1 + args.hurst)  # the paper's 0.77 at H = 0.3
     x = (1.0 / np.array(ratios)) ** exponent
     alpha, error = np.array(alpha), np.array(error)
@@ -78,7 +119,9 @@ def main() -> None:
     ax.set(
         xlabel=rf"$(\lambda_1/\lambda_r)^{{{exponent:.2f}}}$",
         ylabel=r"$\alpha$",
-        title=f"H = {args.hurst}, {args.grid}$^2$, $L = \\lambda_r$",
+        title=f"H = {args.hurst}, "
+        + (r"$n = 2\lambda_r/\lambda_1$" if args.data else f"{args.grid}$^2$")
+        + r", $L = \lambda_r$",
     )
     ax.legend(fontsize=8, loc="lower left")
     ax.grid(alpha=0.3)
@@ -86,17 +129,28 @@ def main() -> None:
     for r in ratios:
         res = results[f"ratio{r:g}"]
         k = np.nanmean(res["stiffness"] * res["h_rms"][:, None], axis=0)
-        fitted = res["fitted"]
-        line = inset.loglog(p[fitted], k[fitted], "o-", ms=2, lw=0.8, label=f"{r:g}")
-        inset.loglog(p[~fitted], k[~fitted], "x", ms=3, color=line[0].get_color())
+        ok, fitted = res["resolved"], res["fitted"]
+        line = inset.loglog(p[ok], k[ok], "-", lw=0.8, label=f"{r:g}")
+        inset.loglog(p[~ok], k[~ok], "x", ms=3, color=line[0].get_color())
+        inset.loglog(p[fitted], k[fitted], "o", ms=2.5, color=line[0].get_color())
     inset.set_xlabel("$p/E^*$", fontsize=7)
     inset.set_ylabel(r"$K h_\mathrm{rms}/E^*$", fontsize=7)
     inset.tick_params(labelsize=6)
     inset.legend(fontsize=5, title=r"$\lambda_r/\lambda_1$", title_fontsize=5)
     fig.savefig(f"{args.output}.png", dpi=120)
     for r, a, e in zip(ratios, alpha, error, strict=True):
-        print(f"lambda_r/lambda_1 = {r:g}: alpha = {a:.3f} +- {e:.3f}")
-    print(f"extrapolated alpha = {a0:.3f} +- {a0_err:.3f}; 1/(1+H) = {1 / (1 + args.hurst):.3f}")
+        res = results[f"ratio{r:g}"]
+        print(
+            f"lambda_r/lambda_1 = {r:g}: alpha = {a:.3f} +- {e:.3f} "
+            f"({res['below_crossover']} of {args.fit_points} fitted loads below p_c = "
+            f"{res['crossover']:.2g})"
+        )
+    if len(x) > 2:
+        print(
+            f"extrapolated alpha = {a0:.3f} +- {a0_err:.3f}; 1/(1+H) = {1 / (1 + args.hurst):.3f}"
+        )
+    else:
+        print("the extrapolation needs three ratios or more (drawn, but without an error)")
     print(f"wrote {args.output}.png and {args.output}.h5")
 
 

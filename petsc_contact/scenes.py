@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from . import theory
 from .fft import make_fft
 from .grid import Grid, fundamental_wavevector
 from .output import atomic_h5, write_attributes
@@ -105,16 +106,12 @@ def ensemble_curves(
     min_contact_pixels: int = MIN_CONTACT_PIXELS,
     progress: bool = True,
 ) -> dict[str, Any]:
-    """Stiffness curves of several seeds, their mean, and power-law fits of the lowest points.
+    """Stiffness curves of several seeds, their mean, and power-law fits of the lowest points
+    (:func:`finite_size_fit`).
 
-    Returns arrays ``seeds x pressures`` (``mean_gap``, ``stiffness``, ...), the realised
-    ``h_rms`` per seed, ``alpha`` (fit of the seed-averaged ``K``), ``alpha_error`` (its
-    standard error combined with the standard error of the per-seed fits) and ``alphas``.
-    Points whose contact has fewer than ``min_contact_pixels`` pixels (in any seed) are left
-    out of the fits: a contact of a few pixels does not resolve its own stiffness.
+    Returns arrays ``seeds x pressures`` (``mean_gap``, ``stiffness``, ...) and the realised
+    ``h_rms`` per seed, with the fit's entries.
     """
-    from .ensemble import ensemble_statistics, power_law_fit
-
     rows, h_rms = [], []
     for seed in seeds:
         h, rms = surface(n, hurst, rolloff_ratio, cutoff_ratio, seed, rms_slope)
@@ -128,23 +125,92 @@ def ensemble_curves(
             )
     out: dict[str, Any] = {k: np.array([r[k] for r in rows]) for k in rows[0]}
     out["h_rms"] = np.array(h_rms)
-    p = np.asarray(pressures, dtype=float)
-    mean_k = ensemble_statistics(out["stiffness"])["mean"]
-    resolved = np.all(out["area_fraction"] * n * n >= min_contact_pixels, axis=0)
-    out["fitted"] = resolved
-    fit = power_law_fit(p[resolved], mean_k[resolved], points)
-    alphas = np.array(
-        [power_law_fit(p[resolved], k[resolved], points).alpha for k in out["stiffness"]]
+    p_c = crossover(out["h_rms"], hurst, rolloff_ratio)
+    return out | finite_size_fit(out, n * n, p_c, points, min_contact_pixels)
+
+
+def crossover(h_rms: np.ndarray, hurst: float, rolloff_ratio: float) -> float:
+    """The seeds' mean ``p_c`` (paper Eq. 13, appendix convention) for ``E* = L = 1``."""
+    return float(
+        np.mean(
+            [
+                theory.crossover_pressure(1.0, h, hurst, 1.0, rolloff_ratio, convention="appendix")
+                for h in h_rms
+            ]
+        )
     )
+
+
+def finite_size_fit(
+    curves: dict[str, Any],
+    points_per_map: int,
+    crossover: float,
+    fit_points: int = 4,
+    min_contact_pixels: int = MIN_CONTACT_PIXELS,
+) -> dict[str, Any]:
+    """``alpha`` of ``K ~ p^alpha`` from the lowest ``fit_points`` resolved loads below the
+    crossover.
+
+    ``curves`` holds ``nominal_pressure`` (per load, or seeds x loads), ``area_fraction`` and
+    ``stiffness`` (seeds x loads).  A load is resolved when every seed has at least
+    ``min_contact_pixels`` contact pixels (:func:`resolved`); the fit takes the lowest
+    ``fit_points`` resolved loads below ``crossover``, or, when fewer lie there, the lowest
+    ``fit_points`` resolved ones (``below_crossover`` counts those under it).  Returns
+    ``alpha`` (fit of the seed-averaged ``K``), ``alpha_error`` (its standard error combined
+    with the standard error of the per-seed fits), ``alphas``, ``prefactor``,
+    ``stiffness_mean``, ``fitted`` (the loads used) and ``resolved``.
+    """
+    from .ensemble import ensemble_statistics, power_law_fit
+
+    p = np.asarray(curves["nominal_pressure"], dtype=float)
+    p = p[0] if p.ndim == 2 else p
+    stiffness = np.asarray(curves["stiffness"], dtype=float)
+    mean_k = ensemble_statistics(stiffness)["mean"]
+    ok = np.all(np.asarray(curves["area_fraction"]) * points_per_map >= min_contact_pixels, axis=0)
+    ok &= np.all(np.isfinite(stiffness), axis=0)
+    below = ok & (p < crossover)
+    window = below if np.count_nonzero(below) >= fit_points else ok
+    fitted = np.zeros_like(ok)
+    fitted[np.flatnonzero(window)[:fit_points]] = True
+    fit = power_law_fit(p[fitted], mean_k[fitted], fit_points)
+    alphas = np.array([power_law_fit(p[fitted], k[fitted], fit_points).alpha for k in stiffness])
     spread = alphas.std(ddof=1) / np.sqrt(alphas.size) if alphas.size > 1 else 0.0
-    out.update(
-        stiffness_mean=mean_k,
-        alpha=fit.alpha,
-        alphas=alphas,
-        alpha_error=float(np.hypot(np.nan_to_num(fit.alpha_error), spread)),
-        prefactor=fit.prefactor,
-    )
+    return {
+        "stiffness_mean": mean_k,
+        "resolved": ok,
+        "fitted": fitted,
+        "below_crossover": int(np.count_nonzero(fitted & (p < crossover))),
+        "crossover": crossover,
+        "alpha": fit.alpha,
+        "alphas": alphas,
+        "alpha_error": float(np.hypot(np.nan_to_num(fit.alpha_error), spread)),
+        "prefactor": fit.prefactor,
+    }
+
+
+def curves_from_files(paths: Sequence[str]) -> dict[str, Any]:
+    """A study's periodic sweeps of several seeds (``petsc-contact study`` files) as the
+    arrays of :func:`ensemble_curves` (steps that did not converge are ``nan``)."""
+    import h5py
+
+    rows: list[dict[str, np.ndarray]] = []
+    h_rms = []
+    for path in paths:
+        with h5py.File(path, "r") as f:
+            if not f.attrs.get("complete", False):
+                raise ValueError(f"'{path}' is not complete")
+            ok = f["converged"][:].astype(bool)
+            row = {k: f[k][:].astype(float) for k in _CURVE_KEYS}
+            for k in _CURVE_KEYS[1:]:
+                row[k][~ok] = np.nan
+            rows.append(row | {"converged": ok})
+            h_rms.append(float(f.attrs["rms_height"]))
+    out: dict[str, Any] = {k: np.array([r[k] for r in rows]) for k in rows[0]}
+    out["h_rms"] = np.array(h_rms)
     return out
+
+
+_CURVE_KEYS = ("nominal_pressure", "mean_gap", "area_fraction", "stiffness")
 
 
 def punch_curve(

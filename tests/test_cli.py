@@ -396,7 +396,7 @@ def test_modules_import_only_from_layers_above():
         "_petsc operator schur solve cg stiffness",
         "step output plot topography",
         "problem punch",
-        "periodic compare ensemble scenes predictions",
+        "periodic compare ensemble scenes predictions paper_study",
         "cli",
     ]
     rank = {m: i for i, layer in enumerate(layers) for m in layer.split()}
@@ -490,7 +490,7 @@ def test_study_runs_in_resumable_pieces(tmp_path):
 def test_study_computes_a_shared_run_once():
     """Fig. 3's largest ratio is the same run as Fig. 2's H = 0.3: listed for both figures,
     kept once (in fig2/)."""
-    from petsc_contact.cli.study import pieces
+    from petsc_contact.paper_study import pieces
 
     todo = pieces()
     assert len({p.argv for p in todo}) == len(todo)

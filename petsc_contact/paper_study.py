@@ -1,0 +1,121 @@
+"""The paper's study as a list of runs: which surfaces, loads and grids each figure needs.
+
+Each :class:`Piece` is one ``periodic`` or ``punch`` command line and the file it writes,
+``DATA/figN/NAME.h5``; ``petsc-contact study`` runs them in resumable pieces and the figure
+scripts read them back (:func:`piece_files`).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+PAPER_GRID = 8192
+HURSTS = (0.3, 0.5, 0.7)
+SEEDS = (1, 2, 3, 4)
+FIG3_RATIOS = (512, 768, 2048, 4096)  # lambda_r/lambda_1, L = lambda_r
+# Figs. 2 and 3: four loads per decade from below the smallest resolved contact, so that at
+# least four resolved points lie below the crossover p_c (about 2e-6 E* on 1024^2)
+FINITE_SIZE_SWEEP = "25,1e-8,1e-2"
+
+
+@dataclass(frozen=True)
+class Piece:
+    """One run of the study: its figure, its file name and its command line."""
+
+    figure: str  # "fig1", "fig2" or "fig3": where the file is kept
+    name: str
+    argv: tuple[str, ...]
+    used_by: tuple[str, ...] = ()  # further figures drawn from the same file
+
+    @property
+    def grid(self) -> int:
+        """The run's grid size, the measure of its cost."""
+        return int(self.argv[self.argv.index("--grid") + 1])
+
+    def path(self, data: str) -> str:
+        return os.path.join(data, self.figure, f"{self.name}.h5")
+
+
+def _surface(grid: int, hurst: float, rolloff: float, cutoff: float, seed: int) -> list[str]:
+    return [
+        *f"--grid {grid} --hurst {hurst} --rms-slope 0.1 --rolloff-ratio {rolloff:g}".split(),
+        *f"--cutoff-ratio {cutoff:g} --seed {seed}".split(),
+    ]
+
+
+def pieces(shrink: int = 1) -> list[Piece]:
+    """The study at the paper's parameters (grids divided by ``shrink`` for a quick look)."""
+    n = PAPER_GRID // shrink
+    sweep = ["--sweep", "16,1e-7,3e-1"]
+    out = [
+        Piece("fig1", f"periodic_r{r}", ("periodic", *_surface(n, 0.7, r, n / 2, 1), *sweep))
+        for r in (1, 8)
+    ]
+    punch_n = n // 4  # L_p/lambda_1 = 1024 at the paper's size: roughness down to two pixels
+    forces = ",".join(f"{f:.3g}" for f in np.geomspace(1e-6, 3e-1, 16))
+    out.append(
+        Piece(
+            "fig1",
+            "punch",
+            ("punch", *_surface(punch_n, 0.7, 1, punch_n / 2, 1), "--forces", forces),
+        )
+    )
+    out += [
+        Piece(
+            "fig2",
+            f"H{h}_seed{k}",
+            ("periodic", *_surface(n, h, 1, n / 2, k), "--sweep", FINITE_SIZE_SWEEP),
+        )
+        for h in HURSTS
+        for k in SEEDS
+    ]
+    for ratio in FIG3_RATIOS:
+        m = max(2 * ratio // shrink, 16)  # roughness down to two pixels: n = 2 L/lambda_1
+        out += [
+            Piece(
+                "fig3",
+                f"ratio{ratio}_seed{k}",
+                ("periodic", *_surface(m, 0.3, 1, m / 2, k), "--sweep", FINITE_SIZE_SWEEP),
+            )
+            for k in SEEDS
+        ]
+    return _once(out)
+
+
+def _once(todo: list[Piece]) -> list[Piece]:
+    """Each distinct run once: a piece whose command line an earlier piece already has (Fig. 3's
+    largest ratio is Fig. 2's H = 0.3) is that earlier piece, now used by both figures."""
+    first: dict[tuple[str, ...], Piece] = {}
+    for piece in todo:
+        seen = first.setdefault(piece.argv, piece)
+        if seen is not piece:
+            first[piece.argv] = replace(seen, used_by=(*seen.used_by, piece.figure))
+    return list(first.values())
+
+
+def complete(path: str) -> bool:
+    """Whether a piece's file exists and says it is complete."""
+    if not os.path.exists(path):
+        return False
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        return bool(f.attrs.get("complete", False))
+
+
+def piece_files(data: str, figure: str, **where: str) -> list[str]:
+    """The complete files of ``figure``'s pieces whose command line has every
+    ``--option value`` of ``where`` (``hurst="0.3"``, ``cutoff_ratio="512"``)."""
+    out = []
+    for piece in pieces():
+        if figure not in (piece.figure, *piece.used_by):
+            continue
+        options = dict(zip(piece.argv[1::2], piece.argv[2::2], strict=False))
+        if all(options.get(f"--{k.replace('_', '-')}") == v for k, v in where.items()):
+            path = piece.path(data)
+            if complete(path):
+                out.append(path)
+    return out

@@ -87,9 +87,30 @@ def versions(petsc: Any | None = None) -> dict[str, str]:
         from . import __version__
 
         out["petsc_contact"] = __version__
+    out["petsc_contact_commit"] = source_commit()
     if petsc is not None:
         out["petsc"] = ".".join(map(str, petsc.Sys.getVersion()))
     return out
+
+
+def source_commit() -> str:
+    """The git commit of the package's source (``+dirty`` with local changes), or
+    ``unknown`` outside a git checkout."""
+    import subprocess
+
+    folder = os.path.dirname(os.path.abspath(__file__))
+    try:
+        run = [
+            subprocess.run(
+                ["git", "-C", folder, *args], capture_output=True, text=True, timeout=10
+            )
+            for args in (["rev-parse", "HEAD"], ["status", "--porcelain", "--", "."])
+        ]
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    if run[0].returncode != 0:
+        return "unknown"
+    return run[0].stdout.strip() + ("+dirty" if run[1].stdout.strip() else "")
 
 
 def petsc_options(petsc: Any) -> str:

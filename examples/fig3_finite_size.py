@@ -5,7 +5,7 @@ import argparse
 import numpy as np
 
 from petsc_contact import scenes, theory
-from petsc_contact.paper_study import piece_files
+from petsc_contact.paper_study import add_redraw_options, piece_files
 
 PAPER_ALPHA = {0.3: 0.72, 0.5: 0.66, 0.7: 0.59}
 
@@ -57,13 +57,7 @@ def main() -> None:
         metavar=("PMIN", "PMAX", "N"),
         help="log-spaced p0/E*",
     )
-    ap.add_argument("--fit-points", type=int, default=4)
-    ap.add_argument(
-        "--data",
-        metavar="DIR",
-        help="redraw from the study's files (petsc-contact study --figure 2), e.g. data/paper",
-    )
-    ap.add_argument("--output", default="fig3")
+    add_redraw_options(ap, 2, "fig3")
     args = ap.parse_args()
     cutoff = args.cutoff_ratio or args.grid / 4
     p, results = (_from_data if args.data else _computed)(args, cutoff)

@@ -9,7 +9,7 @@ import argparse
 import numpy as np
 
 from petsc_contact import scenes
-from petsc_contact.paper_study import FIG3_RATIOS, piece_files
+from petsc_contact.paper_study import FIG3_RATIOS, add_redraw_options, piece_files
 
 
 def _computed(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]:
@@ -69,13 +69,7 @@ def main() -> None:
     ap.add_argument(
         "--pressures", type=float, nargs=3, default=[1e-8, 1e-3, 16], metavar=("PMIN", "PMAX", "N")
     )
-    ap.add_argument("--fit-points", type=int, default=4)
-    ap.add_argument(
-        "--data",
-        metavar="DIR",
-        help="redraw from the study's files (petsc-contact study --figure 3), e.g. data/paper",
-    )
-    ap.add_argument("--output", default="fig4")
+    add_redraw_options(ap, 3, "fig4")
     args = ap.parse_args()
     ratios, p, results = (_from_data if args.data else _computed)(args)
     alpha = np.array([results[f"ratio{r:g}"]["alpha"] for r in ratios])

@@ -101,9 +101,7 @@ def source_commit() -> str:
     folder = os.path.dirname(os.path.abspath(__file__))
     try:
         run = [
-            subprocess.run(
-                ["git", "-C", folder, *args], capture_output=True, text=True, timeout=10
-            )
+            subprocess.run(["git", "-C", folder, *args], capture_output=True, text=True, timeout=10)
             for args in (["rev-parse", "HEAD"], ["status", "--porcelain", "--", "."])
         ]
     except (OSError, subprocess.SubprocessError):

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -104,6 +105,19 @@ def complete(path: str) -> bool:
 
     with h5py.File(path, "r") as f:
         return bool(f.attrs.get("complete", False))
+
+
+def add_redraw_options(parser: Any, figure: int, output: str) -> None:
+    """A figure script's ``--fit-points``, ``--data DIR`` (redraw the paper's Fig. ``figure``
+    from the study's files) and ``--output`` options."""
+    parser.add_argument("--fit-points", type=int, default=4)
+    parser.add_argument(
+        "--data",
+        metavar="DIR",
+        help=f"redraw from the study's files (petsc-contact study --figure {figure}), "
+        "e.g. data/paper",
+    )
+    parser.add_argument("--output", default=output)
 
 
 def piece_files(data: str, figure: str, **where: str) -> list[str]:

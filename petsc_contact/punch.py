@@ -397,11 +397,9 @@ def punch_contact(
     -------
     list of Step
     """
-    if (approaches is None) == (forces is None):
-        raise ValueError("give either approaches or forces")
     values = [float(v) for v in (approaches if approaches is not None else forces or [])]
-    if not values:
-        raise ValueError("give at least one approach or force")
+    if (approaches is None) == (forces is None) or not values:
+        raise ValueError("give either approaches or forces, at least one of them")
     from mpi4py import MPI
 
     with _petsc.scoped_options(options):

@@ -386,14 +386,13 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _theory_parser(sub: Any) -> None:
-    p = _command(sub, "theory")
-    _surface_arguments(p)
+def _cell_arguments(p: argparse.ArgumentParser, what: str) -> None:
+    """``--length`` and ``--modulus`` of the commands without load sweeps."""
     p.add_argument(
         "--length",
         default=None,
         metavar="L|LX,LY",
-        help="sides of the map, with an optional unit (default: the file's size, else 1)",
+        help=f"sides of {what}, with an optional unit (default: the file's size, else 1)",
     )
     p.add_argument(
         "--modulus",
@@ -402,6 +401,12 @@ def _theory_parser(sub: Any) -> None:
         metavar="ESTAR",
         help="contact modulus E* (default %(default)s)",
     )
+
+
+def _theory_parser(sub: Any) -> None:
+    p = _command(sub, "theory")
+    _surface_arguments(p)
+    _cell_arguments(p, "the map")
     p.add_argument(
         "--sweep",
         type=_sweep_spec,
@@ -460,19 +465,7 @@ def _geometry_parsers(sub: Any) -> None:
 def _compare_parser(sub: Any) -> None:
     cmp_ = _command(sub, "compare")
     _surface_arguments(cmp_)
-    cmp_.add_argument(
-        "--length",
-        default=None,
-        metavar="L|LX,LY",
-        help="sides of the periodic cell, with an optional unit (default: the file's size, else 1)",
-    )
-    cmp_.add_argument(
-        "--modulus",
-        type=float,
-        default=1.0,
-        metavar="ESTAR",
-        help="contact modulus E* (default %(default)s)",
-    )
+    _cell_arguments(cmp_, "the periodic cell")
     cmp_.add_argument(
         "--pressure",
         type=float,

@@ -6,6 +6,7 @@ import numpy as np
 
 from petsc_contact import scenes, theory
 from petsc_contact.ensemble import power_law_fit
+from petsc_contact.paper_study import piece_files
 
 
 def crossover_from_simulation(
@@ -21,6 +22,48 @@ def crossover_from_simulation(
     return (fit.prefactor * u0) ** (1 / (1 - fit.alpha)), u0
 
 
+def _solved(
+    args: argparse.Namespace, ratio: float, p: np.ndarray, cutoff: float
+) -> tuple[dict, float, int, float]:
+    h, h_rms = scenes.surface(args.grid, args.hurst, ratio, cutoff, args.seed)
+    return scenes.stiffness_curve(h, p), h_rms, args.grid, cutoff
+
+
+def _read(
+    args: argparse.Namespace, ratio: float, p: np.ndarray, cutoff: float
+) -> tuple[dict, float, int, float]:
+    """The study's sweep of this roll-off (its own loads, grid and cut-off)."""
+    import h5py
+
+    paths = piece_files(args.data, "fig1", rolloff_ratio=f"{ratio:g}")
+    if not paths:
+        raise SystemExit(f"no complete Fig. 1 sweep for L/lambda_r = {ratio:g} in {args.data}")
+    with h5py.File(paths[0]) as f:
+        n, cutoff = int(f.attrs["grid"]), float(f.attrs["cutoff_ratio"])
+    curves = scenes.curves_from_files(paths)
+    curve = {k: v[0] for k, v in curves.items() if k != "h_rms"}
+    return scenes.with_sweep_stiffness(curve), float(curves["h_rms"][0]), n, cutoff
+
+
+def _solved_punch(args: argparse.Namespace) -> tuple[dict, float, int]:
+    n = args.punch_grid or args.grid // 2
+    hp, hp_rms = scenes.surface(n, args.hurst, 1.0, n / 4, args.seed)
+    approaches = np.geomspace(1e-2, 30.0, 18) * hp_rms  # to well over 10% contact area
+    return scenes.punch_curve(hp, approaches), hp_rms, n
+
+
+def _read_punch(args: argparse.Namespace) -> tuple[dict, float, int]:
+    import h5py
+
+    paths = piece_files(args.data, "fig1", command="punch")
+    if not paths:
+        raise SystemExit(f"no complete Fig. 1 punch in {args.data}")
+    with h5py.File(paths[0]) as f:
+        keys = "approach force nominal_pressure area_fraction interfacial_stiffness".split()
+        punch = {k: f[k][:] for k in keys} | {"converged": f["converged"][:].astype(bool)}
+        return punch, float(f.attrs["rms_height"]), int(f.attrs["grid"])
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--grid", type=int, default=512)
@@ -32,19 +75,26 @@ def main() -> None:
         "--pressures", type=float, nargs=3, default=[1e-7, 5e-2, 16], metavar=("PMIN", "PMAX", "N")
     )
     ap.add_argument("--punch-grid", type=int, default=None, help="default grid/2")
+    ap.add_argument(
+        "--data",
+        metavar="DIR",
+        help="redraw from the study's files (petsc-contact study --figure 1), e.g. data/paper",
+    )
     ap.add_argument("--output", default="fig1")
     args = ap.parse_args()
     cutoff = args.cutoff_ratio or args.grid / 4
     p = np.geomspace(args.pressures[0], args.pressures[1], int(args.pressures[2]))
-    data, summary = {"nominal_pressure": p}, {}
+    data, summary = {}, {}
     for ratio in args.rolloff_ratios:
-        h, h_rms = scenes.surface(args.grid, args.hurst, ratio, cutoff, args.seed)
-        curve = scenes.stiffness_curve(h, p)
+        curve, h_rms, n, cutoff = (_read if args.data else _solved)(args, ratio, p, cutoff)
+        p = curve["nominal_pressure"]
         q, c = scenes.ideal_spectrum(1.0, args.hurst, ratio, cutoff, h_rms)
         curve["persson_stiffness"] = theory.persson_stiffness(p, q, c, 1.0)
         curve["persson_mean_gap"] = theory.persson_mean_gap(p, q, c, 1.0)
-        pc_formula = theory.crossover_pressure(1.0, h_rms, args.hurst, 1.0, ratio)
-        curve["resolved"] = scenes.resolved(curve["area_fraction"], args.grid)
+        pc_formula = theory.crossover_pressure(
+            1.0, h_rms, args.hurst, 1.0, ratio, convention="appendix"
+        )
+        curve["resolved"] = scenes.resolved(curve["area_fraction"], n)
         ok = curve["resolved"]
         pc_sim, u0 = crossover_from_simulation(
             p[ok], curve["stiffness"][ok], curve["area_fraction"][ok]
@@ -53,25 +103,22 @@ def main() -> None:
         data[f"ratio{ratio:g}"] = curve
         summary[ratio] = (h_rms, pc_formula, pc_sim, u0)
         print(
-            f"# L/lambda_r = {ratio:g}: {int(curve['converged'].sum())}/{p.size} converged",
+            f"# L/lambda_r = {ratio:g}, {n}^2: {int(curve['converged'].sum())}/{p.size} converged",
             flush=True,
         )
-    n_punch = args.punch_grid or args.grid // 2
-    hp, hp_rms = scenes.surface(n_punch, args.hurst, 1.0, n_punch / 4, args.seed)
-    approaches = np.geomspace(1e-2, 30.0, 18) * hp_rms  # to well over 10% contact area
-    punch = scenes.punch_curve(hp, approaches)
-    punch["h_rms"] = hp_rms
+    data["nominal_pressure"] = p
+    punch, hp_rms, n_punch = (_read_punch if args.data else _solved_punch)(args)
     top = punch["area_fraction"][punch["converged"]].max(initial=0.0)
     print(
-        f"# punch {n_punch}^2: {int(punch['converged'].sum())}/{approaches.size} converged, "
-        f"up to {top:.0%} of the footprint in contact",
+        f"# punch {n_punch}^2: {int(punch['converged'].sum())}/{punch['converged'].size} "
+        f"converged, up to {top:.0%} of the footprint in contact",
         flush=True,
     )
-    data["punch"] = punch
+    data["punch"] = punch | {"h_rms": hp_rms}
     scenes.save(
         f"{args.output}.h5",
         data,
-        grid=args.grid,
+        grid=n,
         hurst=args.hurst,
         cutoff_ratio=cutoff,
         seed=args.seed,
@@ -117,7 +164,7 @@ def main() -> None:
     ax.set(
         xlabel="$p_0/E^*$",
         ylabel=r"$K h_\mathrm{rms}/E^*$",
-        title=f"Fig. 1: H = {args.hurst}, {args.grid}$^2$ (lines: Persson; x: -dp/du)",
+        title=f"Fig. 1: H = {args.hurst}, {n}$^2$ (lines: Persson; x: -dp/du)",
     )
     ax.legend(fontsize=7, loc="upper left")
     ax.grid(alpha=0.3, which="both")
@@ -127,7 +174,8 @@ def main() -> None:
     for ratio, (hr, pcf, pcs, u0) in summary.items():
         print(
             f"L/lambda_r = {ratio:g}: q_r h_rms = {2 * np.pi * ratio * hr:.3g}, "
-            f"p_c/E* formula (paper Eq. 13) {pcf:.2e}, simulation crossover {pcs:.2e}, "
+            f"p_c/E* formula (paper Eq. 13, q_r ~ pi/L) {pcf:.2e}, simulation crossover "
+            f"{pcs:.2e}, "
             f"u0/h_rms = {u0 / hr:.3f}"
         )
     print(f"wrote {args.output}.png and {args.output}.h5")

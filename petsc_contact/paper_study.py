@@ -120,12 +120,12 @@ def add_redraw_options(parser: Any, figure: int, output: str) -> None:
     parser.add_argument("--output", default=output)
 
 
-def piece_files(data: str, figure: str, **where: str) -> list[str]:
-    """The complete files of ``figure``'s pieces whose command line has every
+def piece_files(data: str, figure: str, command: str = "periodic", **where: str) -> list[str]:
+    """The complete files of ``figure``'s ``command`` pieces whose command line has every
     ``--option value`` of ``where`` (``hurst="0.3"``, ``cutoff_ratio="512"``)."""
     out = []
     for piece in pieces():
-        if figure not in (piece.figure, *piece.used_by):
+        if figure not in (piece.figure, *piece.used_by) or piece.argv[0] != command:
             continue
         options = dict(zip(piece.argv[1::2], piece.argv[2::2], strict=False))
         if all(options.get(f"--{k.replace('_', '-')}") == v for k, v in where.items()):

@@ -70,6 +70,12 @@ def stiffness_curve(
     for k in ("mean_gap", "area_fraction", "stiffness"):
         col[k][~ok] = np.nan
     col["converged"] = ok
+    return with_sweep_stiffness(col)
+
+
+def with_sweep_stiffness(col: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Add ``stiffness_sweep``, ``-dp/du_bar`` along the sweep (``nan`` where not converged)."""
+    ok = col["converged"].astype(bool)
     good = ok & np.isfinite(col["mean_gap"])
     col["stiffness_sweep"] = np.full(ok.size, np.nan)
     if good.sum() >= 3:

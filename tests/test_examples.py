@@ -52,6 +52,44 @@ def test_example_runs(tmp_path, script, args):
         assert len(f.keys()) > 0
 
 
+def test_figure_1_redraws_from_study_files(tmp_path):
+    """Fig. 1 from the study's two sweeps and punch at a toy size (grids divided by 128)."""
+    data = tmp_path / "paper"
+    env = {
+        "PYTHONPATH": str(ROOT),
+        "PATH": "/usr/bin:/bin",
+        "OMPI_ALLOW_RUN_AS_ROOT": "1",
+        "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+    }
+    study = ["-m", "petsc_contact.cli", "study", "--figure", "1", "--shrink", "128", "--data"]
+    r = subprocess.run(
+        [sys.executable, *study, str(data), "--quiet"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env=env,
+    )
+    assert r.returncode == 0, r.stderr
+    r = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "examples" / "fig1_stiffness.py"),
+            "--data",
+            str(data),
+            "--output",
+            str(tmp_path / "f1"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+    )
+    assert r.returncode == 0, r.stderr
+    assert "64^2: 16/16 converged" in r.stdout and "punch 16^2: 16/16" in r.stdout
+    with h5py.File(tmp_path / "f1.h5") as f:
+        assert f["ratio8"]["stiffness"].shape == (16,) and f["punch"]["force"].shape == (16,)
+
+
 def test_figures_redraw_from_study_files(tmp_path):
     """The study's files at a toy size (grids divided by 64) redraw Figs. 2 and 3 of the paper
     (scripts fig3 and fig4 with --data) without solving anything; the shared H = 0.3 run

@@ -13,7 +13,10 @@ from typing import Any
 
 import numpy as np
 
+from .surface import psd_shape
+
 PAPER_GRID = 8192
+RMS_SLOPE = 0.1
 HURSTS = (0.3, 0.5, 0.7)
 SEEDS = (1, 2, 3, 4)
 FIG3_RATIOS = (512, 768, 2048, 4096)  # lambda_r/lambda_1, L = lambda_r
@@ -42,9 +45,18 @@ class Piece:
 
 def _surface(grid: int, hurst: float, rolloff: float, cutoff: float, seed: int) -> list[str]:
     return [
-        *f"--grid {grid} --hurst {hurst} --rms-slope 0.1 --rolloff-ratio {rolloff:g}".split(),
-        *f"--cutoff-ratio {cutoff:g} --seed {seed}".split(),
+        *f"--grid {grid} --hurst {hurst} --rms-slope {RMS_SLOPE}".split(),
+        *f"--rolloff-ratio {rolloff:g} --cutoff-ratio {cutoff:g} --seed {seed}".split(),
     ]
+
+
+def rms_height_per_slope(hurst: float, rolloff_ratio: float, cutoff_ratio: float) -> float:
+    """``h_rms / h'_rms`` of paper Eq. 5's continuum spectrum on a unit cell (the expected
+    ratio of a generated surface)."""
+    q0 = 2 * np.pi
+    q = np.geomspace(q0, q0 * cutoff_ratio, 4000)
+    c = psd_shape(q, q0, q0 * rolloff_ratio, q0 * cutoff_ratio * (1 + 1e-12), hurst)
+    return float(np.sqrt(np.trapz(q * c, q) / np.trapz(q**3 * c, q)))
 
 
 def pieces(shrink: int = 1) -> list[Piece]:
@@ -56,12 +68,15 @@ def pieces(shrink: int = 1) -> list[Piece]:
         for r in (1, 8)
     ]
     punch_n = n // 4  # L_p/lambda_1 = 1024 at the paper's size: roughness down to two pixels
-    forces = ",".join(f"{f:.3g}" for f in np.geomspace(1e-6, 3e-1, 16))
+    # displacement control (one solve a step; load control costs several Newton solves),
+    # from 0.01 to 10 rms heights beyond first touch: to well over 10% contact area
+    h_rms = RMS_SLOPE * rms_height_per_slope(0.7, 1, punch_n / 2)
+    approaches = ",".join(f"{d:.4g}" for d in np.geomspace(1e-2, 10.0, 16) * h_rms)
     out.append(
         Piece(
             "fig1",
             "punch",
-            ("punch", *_surface(punch_n, 0.7, 1, punch_n / 2, 1), "--forces", forces),
+            ("punch", *_surface(punch_n, 0.7, 1, punch_n / 2, 1), "--approaches", approaches),
         )
     )
     out += [

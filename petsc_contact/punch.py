@@ -257,6 +257,7 @@ class PunchSolver:
         self.problem = problem
         self.x = np.zeros(int(np.prod(problem.grid.local_shape)))
         self.solver = BoundSolver(problem.grid, problem.hessian, problem.preconditioner)
+        self.last: tuple[float, float, float] | None = None  # (δ, F, dF/dδ) of the last step
 
     @property
     def k_flat(self) -> float:
@@ -289,12 +290,15 @@ class PunchSolver:
         step, x_new = solve_step(self.solver, pb, self.x, monitor, stiffness, fields)
         if step.converged:
             self.x = x_new
+            s = step.scalars
+            self.last = (float(delta), s["force"], s["total_stiffness"])
         step.state = self.x.reshape(pb.grid.local_shape) * pb.pressure_scale
         return step
 
     def restart_from(self, pressure: np.ndarray) -> None:
         """Start the next solve from this local pressure slab (a resumed run's state)."""
         self.x = (np.asarray(pressure, dtype=float) / self.problem.pressure_scale).reshape(-1)
+        self.last = None
 
     def at_force(
         self,
@@ -306,10 +310,12 @@ class PunchSolver:
     ) -> Step:
         """Find ``δ`` with ``F(δ) = force`` (relative tolerance ``rtol``) and solve there.
 
-        Safeguarded Newton on the increasing, convex ``F(δ)`` with the exact ``dF/dδ``,
-        bracketed from below by ``force / K_flat`` (a rough punch is never stiffer than
-        the flat one; the 1% of β is within the bracket's slack).  The step's scalars add
-        ``target_force`` and ``newton_iterations``.
+        Safeguarded Newton on the increasing, convex ``F(δ)`` with the exact ``dF/dδ``.  It
+        starts from the last converged step, whose approach brackets the root and whose
+        tangent is the first Newton step (on a convex ``F`` that step lands above the root,
+        and Newton then descends to it monotonically); a first solve starts from
+        ``force / K_flat`` (a rough punch is never stiffer than the flat one).  The step's
+        scalars add ``target_force`` and ``newton_iterations``.
 
         Newton also stops when TAO accepts its warm start at the new approach without an
         iteration: the solve's tolerance then cannot tell the two approaches apart, and the
@@ -320,6 +326,10 @@ class PunchSolver:
         positive("force", force)
         lo, hi = 0.0, np.inf
         delta = force / self.k_flat_analytic
+        if self.last is not None:
+            d0, f0, k0 = self.last
+            lo, hi = (d0, hi) if f0 < force else (lo, d0)
+            delta = d0 + (force - f0) / k0 if k0 > 0 else delta
         total_its, total_time = 0, 0.0
         for newton in range(1, MAX_NEWTON + 1):
             step = self.at_approach(delta, fields, monitor, stiffness)

@@ -150,6 +150,16 @@ def test_load_control_on_a_few_pixels():
         assert s["newton_iterations"] <= 10 and s["area_fraction"] * 256**2 <= 8
 
 
+def test_load_control_continues_from_the_last_step(rough):
+    """Each force starts Newton from the last step's tangent: a few Newton steps, and the
+    same approach as a solver that starts afresh (to the force tolerance over K)."""
+    steps = punch_contact(rough, 1.0, 1.0, forces=[1e-4, 2e-4, 4e-4])
+    for f, step in zip([2e-4, 4e-4], steps[1:], strict=True):
+        (fresh,) = punch_contact(rough, 1.0, 1.0, forces=[f])
+        assert step.scalars["newton_iterations"] <= 4 < fresh.scalars["newton_iterations"]
+        assert step.scalars["approach"] == pytest.approx(fresh.scalars["approach"], rel=1e-5)
+
+
 @pytest.mark.parametrize("solver", [[], ["-tao_type", "tron"]])
 def test_edge_singularity_at_high_load(rough, solver):
     """Pressed 200 h_rms beyond first touch: full contact, the corner carries the peak

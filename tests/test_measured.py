@@ -68,6 +68,54 @@ def test_instrument_files_through_surface_topography(tmp_path):
     assert np.allclose(topo.heights, h)
 
 
+def _x3p(path, heights, spacing):
+    """A minimal ISO 25178-72 (X3P) file: a zip of main.xml and the heights in metres,
+    stored y-major as the format wants."""
+    import zipfile
+
+    nx, ny = heights.shape
+    axis = "<{0}><AxisType>I</AxisType><DataType>D</DataType><Increment>{1}</Increment></{0}>"
+    xml = (
+        "<ISO5436_2><Record1><Revision>ISO5436 - 2000</Revision><FeatureType>SUR</FeatureType>"
+        f"<Axes>{axis.format('CX', spacing[0])}{axis.format('CY', spacing[1])}"
+        "<CZ><AxisType>A</AxisType><DataType>D</DataType></CZ></Axes></Record1>"
+        f"<Record3><MatrixDimension><SizeX>{nx}</SizeX><SizeY>{ny}</SizeY><SizeZ>1</SizeZ>"
+        "</MatrixDimension><DataLink><PointDataLink>bindata/data.bin</PointDataLink>"
+        "</DataLink></Record3></ISO5436_2>"
+    )
+    with zipfile.ZipFile(path, "w") as z:
+        z.writestr("main.xml", xml)
+        z.writestr("bindata/data.bin", np.ascontiguousarray(heights.T, dtype="<f8").tobytes())
+
+
+@pytest.mark.skipif(not surface_topography_available(), reason="SurfaceTopography not installed")
+def test_an_instrument_file_on_the_command_line(tmp_path):
+    """An X3P file (sizes and heights in metres) runs as it is: the lengths and unit come
+    from the file, and the answer is that of the same map given as .npy with its units."""
+    h = _map((40, 24), amplitude=2e-9)  # metres: a few nm on a 4 um x 2.4 um map
+    _x3p(tmp_path / "scan.x3p", h, (1e-7, 1e-7))
+    np.save(tmp_path / "scan.npy", h * 1e9)
+    out = ["--pressures", "1e-3", "--quiet", "--output"]
+    r = cli("periodic", "--heights", str(tmp_path / "scan.x3p"), *out, str(tmp_path / "a.h5"))
+    assert r.returncode == 0, r.stderr
+    r = cli(
+        "periodic",
+        "--heights",
+        str(tmp_path / "scan.npy"),
+        "--height-unit",
+        "nm",
+        "--length",
+        "4e-6m,2.4e-6m",
+        *out,
+        str(tmp_path / "b.h5"),
+    )
+    assert r.returncode == 0, r.stderr
+    with h5py.File(tmp_path / "a.h5") as a, h5py.File(tmp_path / "b.h5") as b:
+        assert a.attrs["length_unit"] == "m"
+        assert list(a.attrs["lengths"]) == pytest.approx([4e-6, 2.4e-6])
+        assert a["mean_gap"][0] == pytest.approx(b["mean_gap"][0], rel=1e-12)
+
+
 def test_unreadable_files_say_why(tmp_path):
     (tmp_path / "scan.xyz").write_text("0 0 1\n1 0 2\n")
     (tmp_path / "bad.h5").write_bytes(b"\x89HDF\r\n\x1a\nnot really")

@@ -212,10 +212,12 @@ class StepWriter:
         f.flush()
 
     def _entry(self, name: str) -> Entry:
+        """The schema entry of ``name``, its ``length`` in the run's unit when it has one."""
         try:
-            return self.schema[name]
+            entry = self.schema[name]
         except KeyError:
             raise KeyError(f"no schema entry for dataset '{name}' (petsc_contact.output)") from None
+        return in_unit(entry, str(self.file.attrs.get("length_unit", "")))
 
     def _open_partial(self) -> int:
         """Open the ``.partial`` file for appending; the number of steps it holds."""
@@ -349,8 +351,9 @@ def h5_dtype(value: Any) -> Any:
 
 # -- the schema: every dataset any command writes, its units and its meaning ------------------
 #
-# Units are symbolic, because the package has no unit system of its own: ``length`` is the
-# unit of ``--length`` and of the heights, ``pressure`` the unit of ``--modulus``; ``1`` is
+# Units are symbolic: ``length`` is the unit of ``--length`` and of the heights (written as
+# that unit, ``um``, in a file whose run has one: :func:`in_unit`), ``pressure`` the unit of
+# ``--modulus``; ``1`` is
 # dimensionless, ``s`` seconds of wall time, ``count`` a number of things, ``text`` a string
 # and ``bool`` a flag.
 
@@ -480,17 +483,26 @@ def ensemble_entry(name: str) -> Entry:
     raise KeyError(f"no schema entry for ensemble dataset '{name}'")
 
 
+def in_unit(entry: Entry, length_unit: str) -> Entry:
+    """``entry`` with the symbolic ``length`` of its units replaced by ``length_unit`` (``um``,
+    so ``pressure/length`` becomes ``pressure/um``); unchanged when the run has no unit."""
+    if not length_unit:
+        return entry
+    return Entry(re.sub(r"\blength\b", length_unit, entry.units), entry.description)
+
+
 def describe(dataset: Any, entry: Entry) -> None:
     """Attach ``units`` and ``description`` to an h5py dataset."""
     dataset.attrs["units"] = entry.units
     dataset.attrs["description"] = entry.description
 
 
-def annotate(group: Any, lookup: Callable[[str], Entry]) -> None:
-    """Describe every dataset directly in ``group``; ``KeyError`` for one the schema lacks."""
+def annotate(group: Any, lookup: Callable[[str], Entry], length_unit: str = "") -> None:
+    """Describe every dataset directly in ``group`` (lengths in ``length_unit`` when given);
+    ``KeyError`` for one the schema lacks."""
     for name, item in group.items():
         if hasattr(item, "shape"):
-            describe(item, lookup(name))
+            describe(item, in_unit(lookup(name), length_unit))
 
 
 def schema_markdown() -> str:
@@ -501,8 +513,9 @@ def schema_markdown() -> str:
         "Generated from `petsc_contact/output.py` by",
         "`petsc-contact schema > docs/output-schema.md`; a test fails when this page and the",
         "code disagree. Every dataset carries the `units` and `description` attributes listed",
-        "here. Units are symbolic: `length` is the unit of `--length` and of the heights,",
-        "`pressure` the unit of `--modulus`; `1` is dimensionless, `s` seconds of wall time.",
+        "here. Units are symbolic: `length` is the unit of `--length` and of the heights (a",
+        "file whose run has a length unit writes that unit instead: `pressure/um`), `pressure`",
+        "the unit of `--modulus`; `1` is dimensionless, `s` seconds of wall time.",
         "",
         "Every file of `periodic`, `demo`, `punch` and `compare` also records, as root",
         "attributes, what reproduces it: " + ", ".join(f"`{a}`" for a in RUN_ATTRIBUTES) + ".",

@@ -204,6 +204,8 @@ def test_measured_rectangle_in_units(tmp_path):
     with h5py.File(tmp_path / "a.h5") as a, h5py.File(tmp_path / "b.h5") as b:
         assert a.attrs["length_unit"] == "um" and list(a.attrs["lengths"]) == [96.0, 64.0]
         assert "um" in a.attrs["units"] and a["pressure"].shape == (2, 48, 32)
+        assert a["mean_gap"].attrs["units"] == "um" and b["mean_gap"].attrs["units"] == "length"
+        assert a["elastic_energy"].attrs["units"] == "pressure*um"
         assert np.allclose(a["heights"][...], b["heights"][...], rtol=1e-15)
         assert np.allclose(a["mean_gap"][:], b["mean_gap"][:], rtol=1e-12)
     r = cli("plot", str(tmp_path / "a.h5"), "--field", "contact")

@@ -29,7 +29,7 @@ def run_theory(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[s
         for name in THEORY:
             f[name] = getattr(result, name)
         write_attributes(f, attributes)
-        annotate(f, THEORY.__getitem__)
+        annotate(f, THEORY.__getitem__, resolved["length_unit"])
     if not args.quiet:
         _print(result)
     if args.plot:

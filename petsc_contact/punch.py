@@ -318,10 +318,9 @@ class PunchSolver:
         scalars add ``target_force`` and ``newton_iterations``.
 
         Newton also stops when TAO accepts its warm start at the new approach without an
-        iteration: the solve's tolerance then cannot tell the two approaches apart, and the
-        force (stored next to ``target_force``) is as close to the target as the solve
-        resolves.  This happens on contacts of a few pixels, where the gradient tolerance
-        (an rms over the whole footprint) allows force errors of about ``1e-5``.
+        iteration: the solve cannot tell the two approaches apart, and the force (stored next
+        to ``target_force``) is as close to the target as the solve resolves, on contacts of
+        a few pixels about ``1e-5`` (the gradient tolerance is an rms over the footprint).
         """
         positive("force", force)
         lo, hi = 0.0, np.inf

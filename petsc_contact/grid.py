@@ -10,6 +10,7 @@ the same on every rank.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from mpi4py import MPI
@@ -195,14 +196,20 @@ class Grid:
         return full
 
 
+def sides(shape: tuple[int, ...], length: Any) -> tuple[float, float]:
+    """``(Lx, Ly)`` of a map of ``shape``: ``length`` given per axis, or one length ``Lx``
+    with square pixels (``Ly = Lx ny/nx``).  The package's one rule for a single length."""
+    if isinstance(length, (tuple, list, np.ndarray)) and len(length) != 1:
+        lx, ly = per_axis(length, "length")
+        return float(lx), float(ly)
+    lx = float(np.ravel(length)[0])
+    return lx, lx * shape[1] / shape[0]
+
+
 def grid_for(
     shape: tuple[int, ...], length: float | tuple[float, float], comm: MPI.Intracomm | None = None
 ) -> Grid:
-    """The grid of a height map of ``shape``: sides ``length = (Lx, Ly)``, or one length ``Lx``
-    with square pixels (``Ly = Lx ny/nx``)."""
+    """The grid of a height map of ``shape`` with sides :func:`sides`."""
     if len(shape) != 2:
         raise ValueError(f"heights must be a 2-D array, got shape {tuple(shape)}")
-    nx, ny = (int(v) for v in shape)
-    if isinstance(length, (tuple, list, np.ndarray)):
-        return Grid((nx, ny), per_axis(length, "length"), comm)
-    return Grid((nx, ny), (float(length), float(length) * ny / nx), comm)
+    return Grid((int(shape[0]), int(shape[1])), sides(shape, length), comm)

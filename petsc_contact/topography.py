@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from .grid import sides
 from .units import unit_name
 
 TEXT = (".txt", ".dat", ".csv", ".asc")
@@ -179,9 +180,7 @@ def _lengths(value: Any, shape: tuple[int, ...]) -> tuple[float, float] | None:
     if value is None:
         return None
     v = np.atleast_1d(np.asarray(value, dtype=float))
-    if v.size == 1:
-        return float(v[0]), float(v[0]) * shape[1] / shape[0]
-    return (float(v[0]), float(v[1])) if v.size == 2 else None
+    return sides(shape, v) if v.size in (1, 2) else None
 
 
 def _unit(value: Any) -> str | None:

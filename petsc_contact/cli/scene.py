@@ -45,6 +45,7 @@ def _units(args: argparse.Namespace, topo: Any, lengths: Any) -> tuple[Any, floa
 
     Contradictions are input errors: a height unit other than the file's, sides other than
     the file's, or heights with a unit when the lengths have none."""
+    from ..grid import sides
     from ..units import Lengths, factor, unit_name
 
     given = unit_name(args.height_unit) if args.height_unit else None
@@ -54,9 +55,7 @@ def _units(args: argparse.Namespace, topo: Any, lengths: Any) -> tuple[Any, floa
     if lengths is None:
         lengths = Lengths(topo.lengths, topo.unit) if topo.lengths else Lengths((1.0,), None)
     elif topo.lengths and topo.unit and lengths.unit:
-        mine = np.array(lengths.values) * factor(lengths.unit, topo.unit)
-        if len(mine) == 1:
-            mine = np.array([mine[0], mine[0] * topo.heights.shape[1] / topo.heights.shape[0]])
+        mine = np.array(sides(topo.heights.shape, lengths.values)) * factor(lengths.unit, topo.unit)
         if not np.allclose(mine, topo.lengths, rtol=1e-6):
             theirs = Lengths(topo.lengths, topo.unit).describe()
             raise InputError(f"--length {lengths.describe()} contradicts the file's {theirs}")
@@ -84,8 +83,12 @@ def measured(args: argparse.Namespace, given: Any) -> tuple[np.ndarray, Any]:
 
 
 def _warn(args: argparse.Namespace, full: np.ndarray, spacing: tuple[float, float]) -> None:
+    from mpi4py import MPI
+
     from ..preparation import EDGE_MISMATCH_LIMIT, SLOPE_RANGE, edge_mismatch, rms_slope
 
+    if MPI.COMM_WORLD.rank != 0:  # only rank 0 speaks: the others skip the passes over the map
+        return
     slope = rms_slope(full, spacing)
     if slope > 0 and not SLOPE_RANGE[0] <= slope <= SLOPE_RANGE[1]:
         say(

@@ -71,13 +71,14 @@ def restricted_solve(
     a_ctx, m_ctx = Restricted(op, mask), Restricted(pc, mask)
     petsc = _petsc.petsc()
     mat = shell_matrix(petsc, a_ctx)
+    # a PC of its own: one taken from ksp.getPC() keeps its Python context alive after
+    # ksp.destroy() (petsc4py 3.18), two field-sized arrays leaked per solve
+    pcobj = petsc.PC().createPython(m_ctx, comm=grid.comm)
     ksp = petsc.KSP().create(comm=grid.comm)
     try:
         ksp.setType("cg")
+        ksp.setPC(pcobj)  # before the operators, which the KSP hands on to its PC
         ksp.setOperators(mat)
-        pcobj = ksp.getPC()
-        pcobj.setType("python")
-        pcobj.setPythonContext(m_ctx)
         ksp.setTolerances(rtol=rtol, atol=0.0, max_it=10 * grid.size)
         ksp.setOptionsPrefix("stiffness_")
         ksp.setFromOptions()
@@ -93,6 +94,7 @@ def restricted_solve(
             v.destroy()
     finally:
         ksp.destroy()
+        pcobj.destroy()
         mat.destroy()
     if reason <= 0:
         raise RuntimeError(f"stiffness solve did not converge (KSP reason {reason})")

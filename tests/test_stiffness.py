@@ -64,3 +64,18 @@ def test_stiffness_limits():
     assert steps[0].scalars["stiffness"] == np.inf
     with pytest.raises(ValueError):
         sweep_stiffness([1.0, 2.0], [0.1, 0.05])
+
+
+def test_stiffness_solves_release_their_operators():
+    """Each stiffness solve holds two field-sized arrays in its restricted operator and
+    preconditioner; PETSc must give both back, or a long sweep grows by two fields a step."""
+    import gc
+
+    from petsc_contact.stiffness import Restricted
+
+    x = np.arange(32) / 32
+    h = np.repeat(DELTA * np.cos(2 * np.pi * x)[:, None], 32, axis=1)
+    steps = periodic_contact(h, 1.0, MODULUS, [0.2 * P_STAR, 0.4 * P_STAR], stiffness=True)
+    assert all(s.converged and s.scalars["stiffness"] > 0 for s in steps)
+    gc.collect()
+    assert not [o for o in gc.get_objects() if isinstance(o, Restricted)]

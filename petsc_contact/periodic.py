@@ -25,7 +25,7 @@ from .grid import grid_for
 from .output import check_finite
 from .problem import PeriodicProblem, verify
 from .solve import BoundSolver, Monitor
-from .step import VERIFY_FACTOR, Step, solve_step
+from .step import VERIFY_FACTOR, Step, collect, solve_step
 
 __all__ = [
     "VERIFY_FACTOR",  # re-exported with Step and verify: scripts import them from here
@@ -129,6 +129,7 @@ def periodic_contact(
     Returns
     -------
     list of Step
+        One per load, in order; only the last keeps ``state``, the field to go on from.
     """
     from mpi4py import MPI
 
@@ -137,4 +138,4 @@ def periodic_contact(
         local = grid.scatter(heights)
         check_finite(grid, local)
         problem = PeriodicProblem(grid, make_fft(grid), local, modulus)
-        return list(sweep(problem, pressures, fields, stiffness=stiffness))
+        return collect(sweep(problem, pressures, fields, stiffness=stiffness))

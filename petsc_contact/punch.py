@@ -41,7 +41,7 @@ from .operator import PaddedOperator
 from .output import check_finite
 from .reference import flat_punch
 from .solve import BoundSolver, Monitor, SolveInfo
-from .step import Step, contact_fields, residual_verdict, solve_step
+from .step import Step, collect, contact_fields, residual_verdict, solve_step
 from .stiffness import punch_stiffness_exact
 from .validation import non_negative, positive
 
@@ -405,6 +405,7 @@ def punch_contact(
     Returns
     -------
     list of Step
+        One per load, in order; only the last keeps ``state``, the field to go on from.
     """
     values = [float(v) for v in (approaches if approaches is not None else forces or [])]
     if (approaches is None) == (forces is None) or not values:
@@ -419,8 +420,8 @@ def punch_contact(
         problem = PunchProblem(grid, local, modulus, mask, flat, beta)
         with PunchSolver(problem) as solver:
             if forces is not None:
-                return [solver.at_force(v, fields, monitor=monitor) for v in values]
-            return [solver.at_approach(v, fields, monitor) for v in values]
+                return collect(solver.at_force(v, fields, monitor=monitor) for v in values)
+            return collect(solver.at_approach(v, fields, monitor) for v in values)
 
 
 def punch_steps(*args: Any, **kwargs: Any) -> Iterator[Step]:

@@ -8,6 +8,7 @@ bound-constrained QP that TAO minimises, and the observables and verdict of its 
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -34,6 +35,7 @@ class Step:
     gap: np.ndarray | None = None
     pressure: np.ndarray | None = None
     state: np.ndarray | None = None  # local gap/pressure the next step starts from
+    # (:func:`collect` keeps it on a list's last step only)
     contact: np.ndarray | None = None  # local mask of the pixels in contact
 
     def field(self, name: str) -> np.ndarray | None:
@@ -46,6 +48,18 @@ class Step:
     @property
     def converged(self) -> bool:
         return bool(self.scalars["converged"])
+
+
+def collect(steps: Iterable[Step]) -> list[Step]:
+    """The steps as a list, each ``state`` dropped once the next step is solved: a list of
+    a long sweep would otherwise hold one full field per step (13 GB for 25 steps of
+    8192^2).  The last step keeps its state, the one to go on from."""
+    out: list[Step] = []
+    for step in steps:
+        if out:
+            out[-1].state = None
+        out.append(step)
+    return out
 
 
 def contact_fields(

@@ -200,6 +200,15 @@ def test_contact_fields_are_projected(rough):
         step.field("heights")
 
 
+def test_list_keeps_the_last_state_only(rough):
+    """A returned sweep holds one field per step only when asked (``fields``); the last step
+    keeps the gap to go on from, whose mean is its mean gap."""
+    steps = periodic_contact(rough, 1.0, 1.0, [3e-3, 1e-2, 3e-2])
+    assert [s.state is None for s in steps] == [True, True, False]
+    assert steps[-1].state.min() >= 0.0
+    assert steps[-1].state.mean() == pytest.approx(steps[-1].scalars["mean_gap"], rel=1e-12)
+
+
 def test_options_forms_and_unused(rough):
     """A list, a string and a dict select the same solver; a misspelt option is reported;
     anything else is refused with the reason."""

@@ -64,7 +64,7 @@ def _read_punch(args: argparse.Namespace) -> tuple[dict, float, int]:
         return punch, float(f.attrs["rms_height"]), int(f.attrs["grid"])
 
 
-def main() -> None:
+def _arguments() -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--grid", type=int, default=512)
     ap.add_argument("--hurst", type=float, default=0.7)
@@ -81,10 +81,15 @@ def main() -> None:
         help="redraw from the study's files (petsc-contact study --figure 1), e.g. data/paper",
     )
     ap.add_argument("--output", default="fig1")
-    args = ap.parse_args()
+    return ap.parse_args()
+
+
+def _periodic_curves(args: argparse.Namespace) -> tuple[dict, int]:
+    """Each roll-off's K(p) with Persson's theory, the resolution mask, both crossovers and
+    the Hertz slope at its lowest resolved loads."""
     cutoff = args.cutoff_ratio or args.grid / 4
     p = np.geomspace(args.pressures[0], args.pressures[1], int(args.pressures[2]))
-    data, summary = {}, {}
+    data, n = {}, args.grid
     for ratio in args.rolloff_ratios:
         curve, h_rms, n, cutoff = (_read if args.data else _solved)(args, ratio, p, cutoff)
         p = curve["nominal_pressure"]
@@ -94,68 +99,82 @@ def main() -> None:
         pc_formula = theory.crossover_pressure(
             1.0, h_rms, args.hurst, 1.0, ratio, convention="appendix"
         )
-        curve["resolved"] = scenes.resolved(curve["area_fraction"], n)
-        ok = curve["resolved"]
+        curve["resolved"] = ok = scenes.resolved(curve["area_fraction"], n)
         pc_sim, u0 = crossover_from_simulation(
             p[ok], curve["stiffness"][ok], curve["area_fraction"][ok]
         )
-        curve.update(h_rms=h_rms, pc_formula=pc_formula, pc_simulation=pc_sim, u0=u0)
+        curve.update(
+            h_rms=h_rms,
+            pc_formula=pc_formula,
+            pc_simulation=pc_sim,
+            u0=u0,
+            lowest_slope=lowest_slope(p[ok], curve["stiffness"][ok]),
+        )
         data[f"ratio{ratio:g}"] = curve
-        summary[ratio] = (h_rms, pc_formula, pc_sim, u0)
         print(
             f"# L/lambda_r = {ratio:g}, {n}^2: {int(curve['converged'].sum())}/{p.size} converged",
             flush=True,
         )
     data["nominal_pressure"] = p
-    punch, hp_rms, n_punch = (_read_punch if args.data else _solved_punch)(args)
-    top = punch["area_fraction"][punch["converged"]].max(initial=0.0)
-    print(
-        f"# punch {n_punch}^2: {int(punch['converged'].sum())}/{punch['converged'].size} "
-        f"converged, up to {top:.0%} of the footprint in contact",
-        flush=True,
-    )
-    data["punch"] = punch | {"h_rms": hp_rms}
-    scenes.save(
-        f"{args.output}.h5",
-        data,
-        grid=n,
-        hurst=args.hurst,
-        cutoff_ratio=cutoff,
-        seed=args.seed,
-        punch_grid=n_punch,
-        gamma=theory.GAMMA,
-    )
+    return data, n
+
+
+def lowest_slope(p: np.ndarray, k: np.ndarray) -> float:
+    """``d ln K/d ln p`` between the two lowest loads given (Hertz: 1/3)."""
+    good = np.isfinite(k) & (k > 0)
+    if np.count_nonzero(good) < 2:
+        return float("nan")
+    (p0, p1), (k0, k1) = p[good][:2], k[good][:2]
+    return float(np.log(k1 / k0) / np.log(p1 / p0))
+
+
+def single_patch_limit(curve: dict) -> float:
+    """The largest load below which every resolved contact is one patch (NaN: none is)."""
+    ok = curve["resolved"]
+    p, patches = curve["nominal_pressure"][ok], curve["contact_patches"][ok]
+    several = np.flatnonzero(patches != 1)
+    last = (several[0] if several.size else p.size) - 1
+    return float(p[last]) if last >= 0 else float("nan")
+
+
+def _draw(args: argparse.Namespace, data: dict, n: int) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    p, punch = data["nominal_pressure"], data["punch"]
     fig, ax = plt.subplots(figsize=(6, 4.6), constrained_layout=True)
     inset = ax.inset_axes([0.62, 0.1, 0.35, 0.33])
     for ratio in args.rolloff_ratios:
         d = data[f"ratio{ratio:g}"]
-        hr = d["h_rms"]
-        ok = d["resolved"]
+        hr, ok = d["h_rms"], d["resolved"]
+        k = d["stiffness"] * hr
         (line,) = ax.loglog(
-            p[ok],
-            d["stiffness"][ok] * hr,
-            "o",
-            mfc="none",
-            label=f"$L/\\lambda_r$ = {ratio:g} (exact)",
+            p[ok], k[ok], "o", mfc="none", label=f"$L/\\lambda_r$ = {ratio:g} (exact)"
         )
+        color = line.get_color()
         # fewer than 16 contact pixels: not resolved, drawn small and never fitted
-        ax.loglog(p[~ok], d["stiffness"][~ok] * hr, ".", color=line.get_color(), alpha=0.5)
-        ax.loglog(p, d["stiffness_sweep"] * hr, "x", color=line.get_color(), ms=4)
-        ax.loglog(p, d["persson_stiffness"] * hr, "-", color=line.get_color(), lw=1)
-        ax.axvline(d["pc_formula"], color=line.get_color(), ls=":", lw=1)
-        inset.semilogy(d["mean_gap"] / hr, p, "o", ms=2, color=line.get_color())
-        inset.semilogy(d["persson_mean_gap"] / hr, p, "-", lw=1, color=line.get_color())
+        ax.loglog(p[~ok], k[~ok], ".", color=color, alpha=0.5)
+        single = ok & (d["contact_patches"] == 1)  # one asperity carries the load
+        ax.loglog(p[single], k[single], "o", color=color)
+        ax.loglog(p, d["stiffness_sweep"] * hr, "x", color=color, ms=4)
+        ax.loglog(p, d["persson_stiffness"] * hr, "-", color=color, lw=1)
+        ax.axvline(d["pc_formula"], color=color, ls=":", lw=1)
+        first = np.flatnonzero(ok & np.isfinite(k) & (k > 0))[:1]
+        if first.size:  # single asperities at the lowest resolved loads: K ~ p^(1/3)
+            ph = p[first[0]] * np.geomspace(1 / 30, 10, 8)
+            ax.loglog(ph, k[first[0]] * (ph / p[first[0]]) ** (1 / 3), "-.", color=color, lw=1)
+        inset.semilogy(d["mean_gap"] / hr, p, "o", ms=2, color=color)
+        inset.semilogy(d["persson_mean_gap"] / hr, p, "-", lw=1, color=color)
+    ax.plot([], [], "o", color="gray", label="one contact patch")
     ax.plot([], [], ".", color="gray", label="< 16 contact pixels (not fitted)")
+    ax.plot([], [], "-.", color="gray", label=r"Hertz, $K \propto p^{1/3}$")
     ax.loglog(p, p / theory.GAMMA, "k--", lw=1, label=r"$K = p/(\gamma h_\mathrm{rms})$")
     ok = punch["converged"] & (punch["nominal_pressure"] > 0)
     ax.loglog(
         punch["nominal_pressure"][ok],
-        punch["interfacial_stiffness"][ok] * hp_rms,
+        punch["interfacial_stiffness"][ok] * punch["h_rms"],
         "s",
         mfc="none",
         color="gray",
@@ -171,12 +190,39 @@ def main() -> None:
     inset.set(xlabel=r"$\bar u/h_\mathrm{rms}$", ylabel="$p_0/E^*$")
     inset.tick_params(labelsize=6)
     fig.savefig(f"{args.output}.png", dpi=120)
-    for ratio, (hr, pcf, pcs, u0) in summary.items():
+
+
+def main() -> None:
+    args = _arguments()
+    data, n = _periodic_curves(args)
+    punch, hp_rms, n_punch = (_read_punch if args.data else _solved_punch)(args)
+    top = punch["area_fraction"][punch["converged"]].max(initial=0.0)
+    print(
+        f"# punch {n_punch}^2: {int(punch['converged'].sum())}/{punch['converged'].size} "
+        f"converged, up to {top:.0%} of the footprint in contact",
+        flush=True,
+    )
+    data["punch"] = punch | {"h_rms": hp_rms}
+    scenes.save(
+        f"{args.output}.h5",
+        data,
+        grid=n,
+        hurst=args.hurst,
+        cutoff_ratio=args.cutoff_ratio or args.grid / 4,
+        seed=args.seed,
+        punch_grid=n_punch,
+        gamma=theory.GAMMA,
+    )
+    _draw(args, data, n)
+    for ratio in args.rolloff_ratios:
+        d = data[f"ratio{ratio:g}"]
+        hr = d["h_rms"]
         print(
             f"L/lambda_r = {ratio:g}: q_r h_rms = {2 * np.pi * ratio * hr:.3g}, "
-            f"p_c/E* formula (paper Eq. 13, q_r ~ pi/L) {pcf:.2e}, simulation crossover "
-            f"{pcs:.2e}, "
-            f"u0/h_rms = {u0 / hr:.3f}"
+            f"p_c/E* formula (paper Eq. 13, q_r ~ pi/L) {d['pc_formula']:.2e}, simulation "
+            f"crossover {d['pc_simulation']:.2e}, u0/h_rms = {d['u0'] / hr:.3f}, "
+            f"d ln K/d ln p at the lowest resolved loads {d['lowest_slope']:.2f} (Hertz 1/3), "
+            f"one contact patch up to p0/E* = {single_patch_limit(d):.2g}"
         )
     print(f"wrote {args.output}.png and {args.output}.h5")
 

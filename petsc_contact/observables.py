@@ -26,6 +26,48 @@ def natural_residual(gap: np.ndarray, pressure: np.ndarray, pixel_stiffness: flo
     return np.minimum(pixel_stiffness * gap, pressure)
 
 
+def contact_patches(grid: Grid, contact: np.ndarray, periodic: bool = True) -> int:
+    """Number of contact patches: clusters of contact pixels joined through their edges
+    (4-connected), across the cell's edges when ``periodic`` (same on every rank).
+
+    Each rank labels its row slab and sends its boundary rows and columns; rank 0 joins
+    the labels that touch across slabs (and across the periodic edges).
+    """
+    from scipy import ndimage
+
+    labels, count = ndimage.label(contact)
+    ends = (labels[:1], labels[-1:], labels[:, :1].T, labels[:, -1:].T)
+    gathered = grid.comm.gather((count, ends), root=0)
+    total = 0
+    if gathered is not None:
+        slabs = [(n, e) for n, e in gathered if e[0].size]  # ranks with rows
+        offsets = np.cumsum([0] + [n for n, _ in slabs])
+        rows = [
+            [np.where(a > 0, a + o, 0) for a in e]
+            for (_, e), o in zip(slabs, offsets[:-1], strict=True)
+        ]
+        touching = [(rows[i][1], rows[i + 1][0]) for i in range(len(rows) - 1)]
+        if periodic:
+            touching += [(rows[-1][1], rows[0][0])] + [(r[2], r[3]) for r in rows]
+        total = int(offsets[-1]) - _joined(touching)
+    return int(grid.comm.bcast(total, root=0))
+
+
+def _joined(touching: list[tuple[np.ndarray, np.ndarray]]) -> int:
+    """How many labels disappear when the labels facing each other in ``touching`` (pairs
+    of equal-shape arrays, 0 for no contact) are merged."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    edges = np.concatenate([np.stack([a.ravel(), b.ravel()], 1) for a, b in touching] or [[]])
+    edges = edges.reshape(-1, 2)
+    edges = edges[(edges > 0).all(axis=1)]
+    nodes, index = np.unique(edges, return_inverse=True)
+    index = index.reshape(-1, 2)
+    graph = coo_matrix((np.ones(len(index)), (index[:, 0], index[:, 1])), (nodes.size,) * 2)
+    return int(nodes.size - connected_components(graph, directed=False)[0])
+
+
 def step_observables(
     grid: Grid,
     gap: np.ndarray,
@@ -39,8 +81,9 @@ def step_observables(
     Returns
     -------
     dict
-        ``mean_gap``; ``area_fraction``; ``contact_pressure_mean`` (mean of the pressure
-        on contact pixels, zero elsewhere: force balance says it equals ``p0``);
+        ``mean_gap``; ``area_fraction``; ``contact_patches``; ``contact_pressure_mean``
+        (mean of the pressure on contact pixels, zero elsewhere: force balance says it
+        equals ``p0``);
         ``elastic_energy`` per apparent area, ``1/2 mean((g + h)(p - p0))``;
         ``max_pressure``; ``min_gap``; ``min_pressure`` (over all pixels; negative values
         are tension); ``complementarity`` ``sum(p+ g) / (sum(p+) h_rms)`` as Tamaas reports
@@ -67,6 +110,7 @@ def step_observables(
     return {
         "mean_gap": g_sum / n,
         "area_fraction": n_contact / n,
+        "contact_patches": contact_patches(grid, contact),
         "contact_pressure_mean": pc_sum / n,
         "elastic_energy": 0.5 * work / n,
         "max_pressure": grid.max(float(p_contact.max(initial=0.0))),

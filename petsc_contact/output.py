@@ -244,8 +244,11 @@ class StepWriter:
         if self.root:
             f = self.file
             for key, value in scalars.items():
-                if key not in f:
-                    d = f.create_dataset(key, shape=(0,), maxshape=(None,), dtype=h5_dtype(value))
+                if key not in f:  # new, or new since the version a resumed run began with
+                    dtype = h5_dtype(value)
+                    d = f.create_dataset(
+                        key, (0,), dtype, maxshape=(None,), fillvalue=MISSING.get(dtype)
+                    )
                     describe(d, self._entry(key))
                 d = f[key]
                 d.resize((self.steps + 1,))
@@ -336,6 +339,9 @@ def _same(a: Any, b: Any) -> bool:
     return a == b
 
 
+MISSING = {np.float64: np.nan, np.int64: -1}  # the earlier steps' value of a new column
+
+
 def h5_dtype(value: Any) -> Any:
     """HDF5 dtype of one per-step scalar."""
     import h5py
@@ -391,6 +397,11 @@ SOLVE_COLUMNS = _entries(
     max_pressure=("pressure", "largest contact pressure"),
     min_gap=("length", "smallest gap (negative: the bound is violated)"),
     area_fraction=("1", "fraction of the pixels in contact (punch: of the footprint)"),
+    contact_patches=(
+        "count",
+        "contact patches: clusters of contact pixels joined through their edges "
+        "(periodic: across the cell's edges)",
+    ),
     nominal_pressure=("pressure", "nominal pressure p0 (punch: F / Lp^2)"),
 )
 PERIODIC_COLUMNS = _entries(

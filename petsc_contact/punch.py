@@ -37,6 +37,7 @@ import numpy as np
 from . import _petsc
 from .greens import hockney_kernel
 from .grid import Grid, grid_for
+from .observables import contact_patches
 from .operator import PaddedOperator
 from .output import check_finite
 from .reference import flat_punch
@@ -235,6 +236,7 @@ def punch_observables(
         "force": force,
         "nominal_pressure": force / area,
         "area_fraction": n_contact / problem.footprint_pixels,
+        "contact_patches": contact_patches(grid, contact, periodic=False),
         "max_pressure": grid.max(float(pressure.max(initial=0.0))),
         "min_gap": grid.min(float(np.where(fp, gap, np.inf).min(initial=np.inf))),
         "complementarity": pg / (p_sum * ell) if p_sum > 0 else 0.0,

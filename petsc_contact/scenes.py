@@ -20,6 +20,9 @@ from .punch import punch_contact
 from .stiffness import sweep_stiffness
 from .surface import psd_shape, rms_of, self_affine
 
+# a sweep's columns in the figures (contact_patches: NaN in files of versions before it)
+_CURVE_KEYS = ("nominal_pressure", "mean_gap", "area_fraction", "stiffness", "contact_patches")
+
 
 def surface(
     n: int,
@@ -63,11 +66,8 @@ def stiffness_curve(
     """
     steps = periodic_contact(heights, length, modulus, pressures, options=options, stiffness=True)
     ok = np.array([s.converged for s in steps])
-    col = {
-        k: np.array([s.scalars[k] for s in steps], dtype=float)
-        for k in ("nominal_pressure", "mean_gap", "area_fraction", "stiffness")
-    }
-    for k in ("mean_gap", "area_fraction", "stiffness"):
+    col = {k: np.array([s.scalars[k] for s in steps], dtype=float) for k in _CURVE_KEYS}
+    for k in _CURVE_KEYS[1:]:
         col[k][~ok] = np.nan
     col["converged"] = ok
     return with_sweep_stiffness(col)
@@ -206,7 +206,10 @@ def curves_from_files(paths: Sequence[str]) -> dict[str, Any]:
             if not f.attrs.get("complete", False):
                 raise ValueError(f"'{path}' is not complete")
             ok = f["converged"][:].astype(bool)
-            row = {k: f[k][:].astype(float) for k in _CURVE_KEYS}
+            row = {k: f[k][:].astype(float) for k in _CURVE_KEYS if k in f}
+            if "contact_patches" not in f:  # files of versions before the count
+                row["contact_patches"] = np.full(ok.size, np.nan)
+            row["contact_patches"][row["contact_patches"] < 0] = np.nan
             for k in _CURVE_KEYS[1:]:
                 row[k][~ok] = np.nan
             rows.append(row | {"converged": ok})
@@ -214,9 +217,6 @@ def curves_from_files(paths: Sequence[str]) -> dict[str, Any]:
     out: dict[str, Any] = {k: np.array([r[k] for r in rows]) for k in rows[0]}
     out["h_rms"] = np.array(h_rms)
     return out
-
-
-_CURVE_KEYS = ("nominal_pressure", "mean_gap", "area_fraction", "stiffness")
 
 
 def punch_curve(

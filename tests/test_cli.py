@@ -497,3 +497,22 @@ def test_study_computes_a_shared_run_once():
     shared = [p for p in todo if "fig3" in p.used_by]
     assert [p.name for p in shared] == [f"H0.3_seed{k}" for k in (1, 2, 3, 4)]
     assert all(p.figure == "fig2" and p.grid == 8192 for p in shared)
+
+
+def test_resumed_file_marks_a_new_column_missing_before_it(tmp_path):
+    """A run resumed by a version that records one more scalar: the steps written before
+    read NaN (floats) or -1 (counts) in that column, never a plausible 0."""
+    from petsc_contact.grid import Grid
+    from petsc_contact.output import StepWriter
+
+    grid, out = Grid(4, 1.0), str(tmp_path / "r.h5")
+    first = StepWriter(out, grid, {"geometry": "periodic"}, None)
+    first.append({"mean_gap": 1.0, "converged": True})
+    first.abandon()
+    again = StepWriter.reopen(out, grid)
+    again.append({"mean_gap": 0.5, "converged": True, "contact_patches": 3, "stiffness": 2.0})
+    again.finish()
+    with h5py.File(out) as f:
+        assert list(f["contact_patches"][:]) == [-1, 3]
+        assert np.isnan(f["stiffness"][0]) and f["stiffness"][1] == 2.0
+        assert list(f["mean_gap"][:]) == [1.0, 0.5]

@@ -43,7 +43,7 @@ def _from_data(args: argparse.Namespace, cutoff: float) -> tuple[np.ndarray, dic
     return next(iter(results.values()))["nominal_pressure"][0], results
 
 
-def main() -> None:
+def _arguments() -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--grid", type=int, default=512)
     ap.add_argument("--cutoff-ratio", type=float, default=None, help="L/lambda_1 (default grid/4)")
@@ -58,19 +58,11 @@ def main() -> None:
         help="log-spaced p0/E*",
     )
     add_redraw_options(ap, 2, "fig3")
-    args = ap.parse_args()
-    cutoff = args.cutoff_ratio or args.grid / 4
-    p, results = (_from_data if args.data else _computed)(args, cutoff)
-    scenes.save(
-        f"{args.output}.h5",
-        {"nominal_pressure": p, **results},
-        grid=args.grid,
-        cutoff_ratio=cutoff,
-        rolloff_ratio=1.0,
-        rms_slope=0.1,
-        seeds=list(range(args.seeds)),
-        fit_points=args.fit_points,
-    )
+    return ap.parse_args()
+
+
+def _draw(args: argparse.Namespace, p: np.ndarray, results: dict) -> None:
+    """The figure, and the fitted alphas against the paper's and 1/(1+H) on stdout."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -111,6 +103,23 @@ def main() -> None:
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3, which="both")
     fig.savefig(f"{args.output}.png", dpi=120)
+
+
+def main() -> None:
+    args = _arguments()
+    cutoff = args.cutoff_ratio or args.grid / 4
+    p, results = (_from_data if args.data else _computed)(args, cutoff)
+    scenes.save(
+        f"{args.output}.h5",
+        {"nominal_pressure": p, **results},
+        grid=args.grid,
+        cutoff_ratio=cutoff,
+        rolloff_ratio=1.0,
+        rms_slope=0.1,
+        seeds=list(range(args.seeds)),
+        fit_points=args.fit_points,
+    )
+    _draw(args, p, results)
     print("theta(H): " + ", ".join(f"{h}: {float(theory.theta(h)):.3f}" for h in args.hursts))
     print(f"wrote {args.output}.png and {args.output}.h5")
 

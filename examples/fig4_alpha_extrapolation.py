@@ -54,7 +54,7 @@ def _from_data(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]
     return ratios, results[f"ratio{ratios[0]:g}"]["nominal_pressure"][0], results
 
 
-def main() -> None:
+def _arguments() -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--grid", type=int, default=512)
     ap.add_argument("--hurst", type=float, default=0.3)
@@ -70,45 +70,53 @@ def main() -> None:
         "--pressures", type=float, nargs=3, default=[1e-8, 1e-3, 16], metavar=("PMIN", "PMAX", "N")
     )
     add_redraw_options(ap, 3, "fig4")
-    args = ap.parse_args()
-    ratios, p, results = (_from_data if args.data else _computed)(args)
+    return ap.parse_args()
+
+
+def extrapolation(hurst: float, ratios: list[float], results: dict) -> dict:
+    """``alpha`` against ``x = (lambda_1/lambda_r)^(1/(1+H))``, weighted by its errors, and
+    the straight line through them to ``x = 0`` (``alpha_0`` with an error from three
+    ratios on)."""
     alpha = np.array([results[f"ratio{r:g}"]["alpha"] for r in ratios])
     error = np.array([results[f"ratio{r:g}"]["alpha_error"] for r in ratios])
-    exponent = 1 / (1 + args.hurst)  # the paper's 0.77 at H = 0.3
+    exponent = 1 / (1 + hurst)  # the paper's 0.77 at H = 0.3
     x = (1.0 / np.array(ratios)) ** exponent
-    alpha, error = np.array(alpha), np.array(error)
     w = 1.0 / np.maximum(error, 1e-3) ** 2
     coef, cov = (
         np.polyfit(x, alpha, 1, w=np.sqrt(w), cov="unscaled")
         if len(x) > 2
         else (np.polyfit(x, alpha, 1), np.full((2, 2), np.nan))
     )
-    a0, a0_err = coef[1], float(np.sqrt(cov[1, 1]))
-    scenes.save(
-        f"{args.output}.h5",
-        {
-            "nominal_pressure": p,
-            "ratio": np.array(ratios),
-            "x": x,
-            "alpha": alpha,
-            "alpha_error": error,
-            **results,
-        },
-        hurst=args.hurst,
-        grid=args.grid,
-        extrapolated_alpha=a0,
-        extrapolated_alpha_error=a0_err,
-        theory_alpha=1 / (1 + args.hurst),
-    )
+    return {
+        "x": x,
+        "alpha": alpha,
+        "alpha_error": error,
+        "exponent": exponent,
+        "coefficients": coef,
+        "extrapolated_alpha": coef[1],
+        "extrapolated_alpha_error": float(np.sqrt(cov[1, 1])),
+    }
+
+
+def _draw(
+    args: argparse.Namespace, ratios: list[float], p: np.ndarray, results: dict, fit: dict
+) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    x, exponent = fit["x"], fit["exponent"]
+    a0, a0_err = fit["extrapolated_alpha"], fit["extrapolated_alpha_error"]
     fig, ax = plt.subplots(figsize=(5.5, 4.2), constrained_layout=True)
-    ax.errorbar(x, alpha, error, fmt="o", label="simulations")
+    ax.errorbar(x, fit["alpha"], fit["alpha_error"], fmt="o", label="simulations")
     xs = np.linspace(0, x.max() * 1.05, 50)
-    ax.plot(xs, np.polyval(coef, xs), "--", label=f"linear fit: {a0:.3f} $\\pm$ {a0_err:.3f}")
+    ax.plot(
+        xs,
+        np.polyval(fit["coefficients"], xs),
+        "--",
+        label=f"linear fit: {a0:.3f} $\\pm$ {a0_err:.3f}",
+    )
     ax.plot([0], [exponent], "ks", label="theory 1/(1+H)")
     ax.set(
         xlabel=rf"$(\lambda_1/\lambda_r)^{{{exponent:.2f}}}$",
@@ -119,7 +127,10 @@ def main() -> None:
     )
     ax.legend(fontsize=8, loc="lower left")
     ax.grid(alpha=0.3)
-    inset = ax.inset_axes([0.6, 0.58, 0.37, 0.37])
+    low = min(np.nanmin(fit["alpha"] - fit["alpha_error"]), exponent) - 0.05
+    high = max(np.nanmax(fit["alpha"] + fit["alpha_error"]), exponent)
+    ax.set_ylim(low, high + 0.7 * (high - low))  # the top third is the inset's, above the data
+    inset = ax.inset_axes([0.45, 0.64, 0.52, 0.33])
     for r in ratios:
         res = results[f"ratio{r:g}"]
         k = np.nanmean(res["stiffness"] * res["h_rms"][:, None], axis=0)
@@ -132,16 +143,38 @@ def main() -> None:
     inset.tick_params(labelsize=6)
     inset.legend(fontsize=5, title=r"$\lambda_r/\lambda_1$", title_fontsize=5)
     fig.savefig(f"{args.output}.png", dpi=120)
-    for r, a, e in zip(ratios, alpha, error, strict=True):
+
+
+def main() -> None:
+    args = _arguments()
+    ratios, p, results = (_from_data if args.data else _computed)(args)
+    fit = extrapolation(args.hurst, ratios, results)
+    scenes.save(
+        f"{args.output}.h5",
+        {
+            "nominal_pressure": p,
+            "ratio": np.array(ratios),
+            **{k: fit[k] for k in ("x", "alpha", "alpha_error")},
+            **results,
+        },
+        hurst=args.hurst,
+        grid=args.grid,
+        extrapolated_alpha=fit["extrapolated_alpha"],
+        extrapolated_alpha_error=fit["extrapolated_alpha_error"],
+        theory_alpha=fit["exponent"],
+    )
+    _draw(args, ratios, p, results, fit)
+    for r, a, e in zip(ratios, fit["alpha"], fit["alpha_error"], strict=True):
         res = results[f"ratio{r:g}"]
         print(
             f"lambda_r/lambda_1 = {r:g}: alpha = {a:.3f} +- {e:.3f} "
             f"({res['below_crossover']} of {args.fit_points} fitted loads below p_c = "
             f"{res['crossover']:.2g})"
         )
-    if len(x) > 2:
+    if len(ratios) > 2:
         print(
-            f"extrapolated alpha = {a0:.3f} +- {a0_err:.3f}; 1/(1+H) = {1 / (1 + args.hurst):.3f}"
+            f"extrapolated alpha = {fit['extrapolated_alpha']:.3f} +- "
+            f"{fit['extrapolated_alpha_error']:.3f}; 1/(1+H) = {fit['exponent']:.3f}"
         )
     else:
         print("the extrapolation needs three ratios or more (drawn, but without an error)")

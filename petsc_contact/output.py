@@ -225,7 +225,13 @@ class StepWriter:
 
         self.file = h5py.File(self.partial, "a")
         self.schema = GEOMETRIES.get(str(self.file.attrs.get("geometry", "")), {})
-        return int(self.file["converged"].shape[0]) if "converged" in self.file else 0
+        steps = int(self.file["converged"].shape[0]) if "converged" in self.file else 0
+        # the steps from here on may be computed by another version than the file's record
+        earlier = json.loads(str(self.file.attrs.get("resumed", "[]")) or "[]")
+        when = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+        resumed = {"after_step": steps, "time": when, "petsc_contact_commit": source_commit()}
+        self.file.attrs["resumed"] = json.dumps([*earlier, resumed])
+        return steps
 
     def append(
         self,
@@ -532,7 +538,9 @@ def schema_markdown() -> str:
         "attributes, what reproduces it: " + ", ".join(f"`{a}`" for a in RUN_ATTRIBUTES) + ".",
         "A run writes `OUT.h5.partial` and renames it to `OUT.h5` when it ends; until then the",
         "state a `--resume` starts from is kept beside it in `OUT.h5.state.npz` (array `state`,",
-        "the gap or pressure field, and `after_step`), never in the results file.",
+        "the gap or pressure field, and `after_step`), never in the results file. A resumed",
+        "file adds `resumed`: a JSON list with, for each resume, `after_step`, `time` and the",
+        "`petsc_contact_commit` that computed the steps from there on.",
         "",
     ]
 

@@ -47,7 +47,11 @@ recurrence restarts.
 Convergence follows TAO's tolerances on the projected gradient ``r = P_F g``:
 ``||r|| <= gatol`` or ``||r|| <= grtol ||r_0||`` (reason ``CONVERGED_GATOL``/``GRTOL``);
 ``-tao_max_it`` gives ``DIVERGED_MAXITS``; a direction of non-positive curvature with no bound
-ahead gives ``DIVERGED_USER`` (the quadratic is unbounded below).
+ahead gives ``DIVERGED_USER`` (the quadratic is unbounded below).  When the recurrence meets
+the tolerance but the exactly evaluated residual stays above it, twice in a row without
+falling below 0.9 times its best, the iterate stands at the floor that double precision
+leaves: the solve stops with ``CONVERGED_STEPTOL`` and the residual it reached, which the
+package's verification then accepts (within 10 times the tolerance) or flags.
 """
 
 from __future__ import annotations
@@ -61,6 +65,9 @@ from . import kernels
 from .kernels import Bound
 
 REFRESH_EVERY = 50
+# STALLS confirmations in a row whose exact residual is not below STALL_RATIO times the best
+# before it: the iteration stands at the rounding floor
+STALL_RATIO, STALLS = 0.9, 2
 GROWTH = 8  # a step may put at most max(GROWTH m, MIN_GROWTH, EXPECTED_GROWTH m_e)
 MIN_GROWTH = 64  # new variables on the bound
 EXPECTED_GROWTH = 1
@@ -187,6 +194,7 @@ class _Run:
         self.rz_old = self.rd = 0.0
         self.rnorm0: float | None = None
         self.since_refresh = 0
+        self.confirming, self.confirmed, self.stalls = False, np.inf, 0  # see _test
         self.d[...] = 0.0
         self.f = self._evaluate()
 
@@ -233,15 +241,29 @@ class _Run:
         tao.monitor(its=it, f=self.f, res=rnorm, cnorm=0.0, step=0.0)
         if tao.getConvergedReason() != 0:  # a monitor stopped the solve
             return _STOP
-        if rnorm <= self.gatol or rnorm <= self.grtol * self.rnorm0:
+        if self.confirming:  # the exactly evaluated residual after the recurrence's
+            self.confirming = False
+            stalled = rnorm > STALL_RATIO * self.confirmed and not self._met(rnorm)
+            self.stalls = self.stalls + 1 if stalled else 0
+            if self.stalls >= STALLS:
+                # the recurrence keeps meeting the tolerance and the exact residual does not
+                # move: the iterate has stopped at the rounding floor (reason STEPTOL; the
+                # caller's verification judges the residual it reached)
+                return self._stop(reasons.CONVERGED_STEPTOL)
+            self.confirmed = min(self.confirmed, rnorm)
+        if self._met(rnorm):
             if self.since_refresh > 0:  # confirm on an exactly evaluated gradient
                 self._refresh()
+                self.confirming = True
                 return _RETEST
             gatol_met = rnorm <= self.gatol
             return self._stop(reasons.CONVERGED_GATOL if gatol_met else reasons.CONVERGED_GRTOL)
         if it >= self.max_it:
             return self._stop(reasons.DIVERGED_MAXITS)
         return _GO
+
+    def _met(self, rnorm: float) -> bool:
+        return rnorm <= self.gatol or rnorm <= self.grtol * (self.rnorm0 or 0.0)
 
     def _direction(self, rr: float, bound_count: int) -> int:
         """The preconditioner follows a changed set; ``z = P_F M r``, then the direction

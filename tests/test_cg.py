@@ -54,3 +54,28 @@ def test_bound_qp_with_aij_hessian(petsc, python_type):
     tao.destroy()
     for v in (a, bvec, lower, upper, x):
         v.destroy()
+
+
+def test_stops_at_the_rounding_floor(monkeypatch):
+    """Asked for a residual double precision cannot reach (the package's floor switched
+    off), the default CG stops at the floor with CONVERGED_STEPTOL within a few confirmations,
+    instead of running to its iteration limit; the verification then flags the step."""
+    from petsc_contact import periodic_contact, problem
+    from petsc_contact.fft import make_fft
+    from petsc_contact.grid import Grid
+    from petsc_contact.surface import self_affine
+
+    grid = Grid(128, 1.0)
+    h = self_affine(
+        grid, make_fft(grid), hurst=0.7, rolloff_ratio=1, cutoff_ratio=64, seed=1, rms_slope=0.1
+    )
+    p0 = 1e-9  # the exact residual stops near 70 eps rms(K h)/p0 ~ 1e-6 here
+    (fine,) = periodic_contact(h, 1.0, 1.0, [p0])  # with the floor: converged
+    assert fine.converged and fine.scalars["tao_reason"] == "CONVERGED_GATOL"
+    assert fine.scalars["tolerance"] > 1e-8  # raised to the floor
+    monkeypatch.setattr(problem.PeriodicProblem, "tolerance_floor", lambda self: 0.0)
+    (stuck,) = periodic_contact(h, 1.0, 1.0, [p0], options=["-tao_max_it", "2000"])
+    assert stuck.scalars["tao_reason"] == "CONVERGED_STEPTOL"
+    assert stuck.scalars["iterations"] < 200
+    assert not stuck.converged and "residual" in stuck.scalars["verification"]
+    assert stuck.scalars["mean_gap"] == pytest.approx(fine.scalars["mean_gap"], rel=1e-12)

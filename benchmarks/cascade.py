@@ -16,12 +16,12 @@ import argparse
 import numpy as np
 from mpi4py import MPI
 
-from petsc_contact import _petsc
-from petsc_contact.fft import make_fft
-from petsc_contact.grid import Grid
-from petsc_contact.periodic import sweep
-from petsc_contact.problem import PeriodicProblem
-from petsc_contact.surface import self_affine
+from petsc_contact.backend import _petsc
+from petsc_contact.conventions.fft import make_fft
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.geometries.periodic import PeriodicProblem
+from petsc_contact.physics.surface import self_affine
+from petsc_contact.workflows.periodic_sweep import sweep
 
 
 def resample(field: np.ndarray, m: int) -> np.ndarray:

@@ -16,9 +16,9 @@ import time
 
 import numpy as np
 
-from petsc_contact import _petsc
-from petsc_contact.fft import make_fft
-from petsc_contact.grid import Grid
+from petsc_contact.backend import _petsc
+from petsc_contact.conventions.fft import make_fft
+from petsc_contact.conventions.grid import Grid
 
 
 def best_of(fn, repeats: int = 5, inner: int = 10) -> float:

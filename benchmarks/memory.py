@@ -17,7 +17,9 @@ CHILD = r"""
 import json, resource, sys, time
 import numpy as np
 import petsc_contact
-from petsc_contact import periodic_contact, punch_contact, scenes, _petsc
+from petsc_contact import periodic_contact, punch_contact
+from petsc_contact.backend import _petsc
+from petsc_contact.workflows import scenes
 _petsc.init([])
 geometry, n, solver, loads = sys.argv[1], int(sys.argv[2]), sys.argv[3], int(sys.argv[4])
 opts = [] if solver == "cg" else ["-tao_type", solver]

@@ -32,10 +32,10 @@ import numpy as np
 from mpi4py import MPI
 
 from petsc_contact import periodic_contact
-from petsc_contact.fft import SerialFFT, SlabFFT, make_fft
-from petsc_contact.grid import Grid
-from petsc_contact.operator import FourierOperator
-from petsc_contact.surface import self_affine
+from petsc_contact.backend.operator import FourierOperator
+from petsc_contact.conventions.fft import SerialFFT, SlabFFT, make_fft
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.physics.surface import self_affine
 
 
 def median_time(fn, repeats: int = 5, batch: int = 10) -> float:

@@ -33,11 +33,11 @@ import time
 import numpy as np
 
 from petsc_contact import periodic_contact
-from petsc_contact.fft import SerialFFT, make_fft
-from petsc_contact.grid import Grid
-from petsc_contact.operator import FourierOperator
-from petsc_contact.problem import PeriodicProblem
-from petsc_contact.surface import self_affine
+from petsc_contact.backend.operator import FourierOperator
+from petsc_contact.conventions.fft import SerialFFT, make_fft
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.geometries.periodic import PeriodicProblem
+from petsc_contact.physics.surface import self_affine
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 PEERS = os.path.join(HERE, "peers")

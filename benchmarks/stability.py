@@ -15,12 +15,12 @@ import time
 import numpy as np
 from mpi4py import MPI
 
-from petsc_contact import _petsc
-from petsc_contact.compare import DEFAULT_SOLVERS, compare
-from petsc_contact.fft import make_fft
-from petsc_contact.grid import Grid
-from petsc_contact.problem import PeriodicProblem
-from petsc_contact.surface import self_affine
+from petsc_contact.backend import _petsc
+from petsc_contact.conventions.fft import make_fft
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.geometries.periodic import PeriodicProblem
+from petsc_contact.physics.surface import self_affine
+from petsc_contact.workflows.compare import DEFAULT_SOLVERS, compare
 
 
 def rough(n: int, hurst: float = 0.7, slope: float = 0.1, seed: int = 1) -> np.ndarray:

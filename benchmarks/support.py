@@ -15,12 +15,12 @@ import argparse
 
 from mpi4py import MPI
 
-from petsc_contact import _petsc
-from petsc_contact.fft import make_fft
-from petsc_contact.grid import Grid
-from petsc_contact.problem import PeriodicProblem
-from petsc_contact.solve import BoundSolver
-from petsc_contact.surface import self_affine
+from petsc_contact.backend import _petsc
+from petsc_contact.backend.solve import BoundSolver
+from petsc_contact.conventions.fft import make_fft
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.geometries.periodic import PeriodicProblem
+from petsc_contact.physics.surface import self_affine
 
 
 def main() -> None:

@@ -4,9 +4,10 @@ import argparse
 
 import numpy as np
 
-from petsc_contact import scenes, theory
-from petsc_contact.ensemble import power_law_fit
-from petsc_contact.paper_study import piece_files
+from petsc_contact.physics import theory
+from petsc_contact.workflows import scenes
+from petsc_contact.workflows.ensemble import power_law_fit
+from petsc_contact.workflows.paper_study import piece_files
 
 
 def crossover_from_simulation(

@@ -4,7 +4,8 @@ import argparse
 
 import numpy as np
 
-from petsc_contact import scenes, theory
+from petsc_contact.physics import theory
+from petsc_contact.workflows import scenes
 
 
 def main() -> None:

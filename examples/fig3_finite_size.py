@@ -4,8 +4,9 @@ import argparse
 
 import numpy as np
 
-from petsc_contact import scenes, theory
-from petsc_contact.paper_study import add_redraw_options, piece_files
+from petsc_contact.physics import theory
+from petsc_contact.workflows import scenes
+from petsc_contact.workflows.paper_study import add_redraw_options, piece_files
 
 PAPER_ALPHA = {0.3: 0.72, 0.5: 0.66, 0.7: 0.59}
 

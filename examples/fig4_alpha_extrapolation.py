@@ -8,8 +8,8 @@ import argparse
 
 import numpy as np
 
-from petsc_contact import scenes
-from petsc_contact.paper_study import FIG3_RATIOS, add_redraw_options, piece_files
+from petsc_contact.workflows import scenes
+from petsc_contact.workflows.paper_study import FIG3_RATIOS, add_redraw_options, piece_files
 
 
 def _computed(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]:

@@ -5,10 +5,10 @@ import argparse
 import numpy as np
 from mpi4py import MPI
 
-from petsc_contact import scenes
-from petsc_contact.fft import make_fft
-from petsc_contact.grid import Grid, fundamental_wavevector
-from petsc_contact.surface import radial_psd
+from petsc_contact.conventions.fft import make_fft
+from petsc_contact.conventions.grid import Grid, fundamental_wavevector
+from petsc_contact.physics.surface import radial_psd
+from petsc_contact.workflows import scenes
 
 
 def spectra(grid_n: int, hurst: float, ratio: float, cutoff: float, seed: int) -> dict:

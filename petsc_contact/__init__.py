@@ -1,11 +1,13 @@
 """petsc-contact: non-adhesive contact of rough elastic solids with PETSc/TAO.
 
-Modules: :mod:`surface` (self-affine surfaces, paper Eq. 5), :mod:`greens` (elastic
-kernels), :mod:`operator` (FFT shell Mats), :mod:`problem` (the periodic QP), :mod:`punch`
-(the punch), :mod:`solve` (the TAO driver), :mod:`cg` (the constrained CG TAO types),
-:mod:`periodic` (load sweeps), :mod:`stiffness`, :mod:`theory`, :mod:`observables`,
-:mod:`output` (HDF5), :mod:`cli`.
-PETSc is found and initialised lazily (:func:`petsc_contact._petsc.init`).
+The folders are the layers, and imports run from the later to the earlier ones
+(docs/architecture.md): ``conventions`` (grid, FFTs, units, input checks), ``reference``
+(analytic solutions), ``physics`` (pure numpy), ``io`` (HDF5, height maps, plots),
+``backend`` (PETSc: operators, TAO driver, the package's TAO types, stiffness solves),
+``geometries`` (the contact core: periodic and punch), ``workflows`` (sweeps, compare,
+ensembles, figures, the paper's study) and ``cli``.  The module paths from before the folders
+still import, with a ``DeprecationWarning`` (:mod:`petsc_contact._moved`).
+PETSc is found and initialised lazily (:func:`petsc_contact.backend._petsc.init`).
 """
 
 import os
@@ -19,8 +21,11 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 __version__ = "0.1.0"
 
-from .grid import Grid
-from .periodic import periodic_contact
-from .punch import punch_contact
+from ._moved import install as _install_old_paths
+from .conventions.grid import Grid
+from .workflows.periodic_sweep import periodic_contact
+from .workflows.punch_sweep import punch_contact
+
+_install_old_paths()
 
 __all__ = ["Grid", "periodic_contact", "punch_contact", "__version__"]

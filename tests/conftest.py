@@ -33,6 +33,6 @@ def python(*args: str, mpi: int = 0, timeout: float = 300) -> subprocess.Complet
 
 @pytest.fixture(scope="session")
 def petsc():
-    from petsc_contact import _petsc
+    from petsc_contact.backend import _petsc
 
     return _petsc.init([])

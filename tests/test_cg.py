@@ -32,7 +32,7 @@ def test_bound_qp_with_aij_hessian(petsc, python_type):
 
     tao = petsc.TAO().create(comm=petsc.COMM_SELF)
     tao.setType("python")
-    tao.setPythonType(f"petsc_contact.cg.{python_type}")
+    tao.setPythonType(f"petsc_contact.backend.cg.{python_type}")
     tao.setObjectiveGradient(objgrad, None)
     tao.setHessian(lambda *args: None, a, a)
     tao.setVariableBounds(lower, upper)
@@ -60,10 +60,11 @@ def test_stops_at_the_rounding_floor(monkeypatch):
     """Asked for a residual double precision cannot reach (the package's floor switched
     off), the default CG stops at the floor with CONVERGED_STEPTOL within a few confirmations,
     instead of running to its iteration limit; the verification then flags the step."""
-    from petsc_contact import periodic_contact, problem
-    from petsc_contact.fft import make_fft
-    from petsc_contact.grid import Grid
-    from petsc_contact.surface import self_affine
+    from petsc_contact import periodic_contact
+    from petsc_contact.conventions.fft import make_fft
+    from petsc_contact.conventions.grid import Grid
+    from petsc_contact.geometries import periodic as problem
+    from petsc_contact.physics.surface import self_affine
 
     grid = Grid(128, 1.0)
     h = self_affine(

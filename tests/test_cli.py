@@ -351,7 +351,7 @@ def test_output_schema_document_is_current():
     """docs/output-schema.md is what ``petsc-contact schema`` prints (generated from the code)."""
     import pathlib
 
-    from petsc_contact.output import schema_markdown
+    from petsc_contact.io.output import schema_markdown
 
     page = pathlib.Path(__file__).parent.parent / "docs" / "output-schema.md"
     assert page.read_text() == schema_markdown()
@@ -387,34 +387,45 @@ def _datasets(group):
 
 
 def test_modules_import_only_from_layers_above():
-    """The layering the README's layout states: a module imports only from its own layer
-    or the layers above it (physics never from the PETSc edge, the edge never from the
-    geometries or workflows)."""
+    """The layering docs/architecture.md states: the package's folders are its layers, and a
+    module imports only from its own folder or the folders before it (physics never from the
+    PETSc backend, the backend never from the geometries or workflows)."""
     import ast
     import pathlib
 
     layers = [
-        "validation units grid fft kernels",
-        "theory greens surface observables continuation reference preparation",
-        "_petsc operator schur solve cg stiffness",
-        "step output plot topography",
-        "problem punch",
-        "periodic compare ensemble scenes predictions paper_study",
+        "conventions",
+        "reference",
+        "physics",
+        "io",
+        "backend",
+        "geometries",
+        "workflows",
         "cli",
     ]
-    rank = {m: i for i, layer in enumerate(layers) for m in layer.split()}
+    rank = {name: i for i, name in enumerate(layers)}
     package = pathlib.Path(__file__).parent.parent / "petsc_contact"
-    for path in package.rglob("*.py"):
-        if path.name == "__init__.py" and path.parent == package:
-            continue
-        parts = path.relative_to(package).with_suffix("").parts
-        mine = rank[parts[0]]
+    folders = {p.name for p in package.iterdir() if (p / "__init__.py").exists()}
+    assert folders == set(layers), "every folder of the package is a layer"
+    checked = 0
+    for path in package.glob("*/*.py"):
+        folder = path.parent.name
         for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.ImportFrom) and node.level and node.module:
-                target = node.module.split(".")[0]
-                if node.level == 1 and len(parts) > 1:  # inside a subpackage
-                    continue
-                assert rank.get(target, -1) <= mine, f"{path.name} imports {target}"
+            if not isinstance(node, ast.ImportFrom):
+                continue
+            if node.level == 1 or (
+                node.level == 0 and not (node.module or "").startswith("petsc_contact.")
+            ):
+                continue  # its own folder, or outside the package
+            if node.level == 2 and node.module is None:  # from .. import a, b
+                targets = [a.name for a in node.names if a.name in rank]
+            else:
+                module = node.module if node.level == 0 else f"petsc_contact.{node.module}"
+                targets = [module.split(".")[1]]
+            for target in targets:
+                assert rank[target] <= rank[folder], f"{folder}/{path.name} imports {target}"
+            checked += 1
+    assert checked > 50
 
 
 def test_unused_petsc_option_is_reported(tmp_path):
@@ -493,7 +504,7 @@ def test_study_runs_in_resumable_pieces(tmp_path):
 def test_study_computes_a_shared_run_once():
     """Fig. 3's largest ratio is the same run as Fig. 2's H = 0.3: listed for both figures,
     kept once (in fig2/)."""
-    from petsc_contact.paper_study import pieces
+    from petsc_contact.workflows.paper_study import pieces
 
     todo = pieces()
     assert len({p.argv for p in todo}) == len(todo)
@@ -505,8 +516,8 @@ def test_study_computes_a_shared_run_once():
 def test_resumed_file_marks_a_new_column_missing_before_it(tmp_path):
     """A run resumed by a version that records one more scalar: the steps written before
     read NaN (floats) or -1 (counts) in that column, never a plausible 0."""
-    from petsc_contact.grid import Grid
-    from petsc_contact.output import StepWriter
+    from petsc_contact.conventions.grid import Grid
+    from petsc_contact.io.output import StepWriter
 
     grid, out = Grid(4, 1.0), str(tmp_path / "r.h5")
     first = StepWriter(out, grid, {"geometry": "periodic"}, None)

@@ -31,7 +31,7 @@ def test_compare_command(tmp_path):
         assert f.attrs["reference_natural_residual"] < 1e-11
         # what reproduces the run: versions, seed, each solver's options and options file
         assert "petsc4py" in f.attrs["versions"] and f.attrs["seed"] == 2
-        assert f["pk"].attrs["petsc_options"].endswith("petsc_contact.cg.PolonskyKeer")
+        assert f["pk"].attrs["petsc_options"].endswith("petsc_contact.backend.cg.PolonskyKeer")
         opts_group = f[str(ROOT / "options" / "bnls.opts").replace("/", "_")]
         assert "-tao_type bnls" in opts_group.attrs["options_file_text"]
         for name in ("cg", "pk", "tron"):

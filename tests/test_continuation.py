@@ -10,13 +10,13 @@ import pytest
 from mpi4py import MPI
 
 from petsc_contact import periodic_contact
-from petsc_contact.continuation import MAX_EXTRAPOLATION, ConvergedStep, LoadPath
-from petsc_contact.fft import make_fft, wavevector_magnitude
-from petsc_contact.greens import held_compliance, periodic_compliance
-from petsc_contact.grid import Grid
-from petsc_contact.periodic import sweep
-from petsc_contact.problem import PeriodicProblem
-from petsc_contact.surface import self_affine
+from petsc_contact.conventions.fft import make_fft, wavevector_magnitude
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.geometries.periodic import PeriodicProblem
+from petsc_contact.physics.continuation import MAX_EXTRAPOLATION, ConvergedStep, LoadPath
+from petsc_contact.physics.greens import held_compliance, periodic_compliance
+from petsc_contact.physics.surface import self_affine
+from petsc_contact.workflows.periodic_sweep import sweep
 
 U0 = 0.3  # log-slope of the synthetic exponential curve p = exp(-u/U0)
 
@@ -141,7 +141,7 @@ def test_wrong_support_changes_the_path_not_the_answer(petsc, paper_band, factor
     assert problem.interfacial_stiffness == pytest.approx(factor * problem.stiffness_estimate(p0))
     x0 = problem.initial_gap().reshape(-1) / problem.scale_length
     problem.start(x0)
-    from petsc_contact.solve import BoundSolver
+    from petsc_contact.backend.solve import BoundSolver
 
     with BoundSolver(grid, problem.hessian, problem.preconditioner) as solver:
         x, info = solver.solve(problem.objective_gradient, problem.start_point)

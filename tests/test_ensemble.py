@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from conftest import cli
 
-from petsc_contact.ensemble import ensemble_statistics, power_law_fit
+from petsc_contact.workflows.ensemble import ensemble_statistics, power_law_fit
 
 
 def test_power_law_fit_exact_and_noisy():

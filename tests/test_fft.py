@@ -4,8 +4,8 @@ from conftest import python
 
 SCRIPT = r"""
 import pyfftw
-from petsc_contact.fft import SerialFFT, _Wisdom
-from petsc_contact.grid import Grid
+from petsc_contact.conventions.fft import SerialFFT, _Wisdom
+from petsc_contact.conventions.grid import Grid
 _Wisdom.load(pyfftw)
 before = pyfftw.export_wisdom()
 SerialFFT(Grid(96, 1.0), threads=1)

@@ -7,9 +7,9 @@ SCRIPT = r"""
 import sys
 import numpy as np
 from mpi4py import MPI
-from petsc_contact.fft import make_fft, wavevector_magnitude
-from petsc_contact.grid import Grid
-from petsc_contact.operator import FourierOperator
+from petsc_contact.conventions.fft import make_fft, wavevector_magnitude
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.backend.operator import FourierOperator
 
 nx, ny = (int(v) for v in sys.argv[1].split(","))
 expected = sys.argv[2]

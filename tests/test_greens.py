@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from petsc_contact.fft import make_fft, wavevector_magnitude
-from petsc_contact.greens import periodic_compliance, periodic_stiffness
-from petsc_contact.grid import Grid
-from petsc_contact.operator import FourierOperator
+from petsc_contact.backend.operator import FourierOperator
+from petsc_contact.conventions.fft import make_fft, wavevector_magnitude
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.physics.greens import periodic_compliance, periodic_stiffness
 
 
 @pytest.fixture(scope="module")

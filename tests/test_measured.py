@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from conftest import cli
 
-from petsc_contact.preparation import detrend, edge_mismatch, fill_undefined, rms_slope
-from petsc_contact.topography import read_topography, surface_topography_available
-from petsc_contact.units import factor, parse_lengths
+from petsc_contact.conventions.units import factor, parse_lengths
+from petsc_contact.io.topography import read_topography, surface_topography_available
+from petsc_contact.physics.preparation import detrend, edge_mismatch, fill_undefined, rms_slope
 
 
 def _map(shape=(48, 32), seed=0, amplitude=1e-3):

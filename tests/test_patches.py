@@ -6,8 +6,8 @@ from conftest import python
 from mpi4py import MPI
 
 from petsc_contact import periodic_contact, punch_contact
-from petsc_contact.grid import Grid
-from petsc_contact.observables import contact_patches
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.physics.observables import contact_patches
 
 
 def count(mask, periodic=True):
@@ -54,8 +54,8 @@ def test_punch_counts_without_wrapping():
 SCRIPT = r"""
 import numpy as np
 from mpi4py import MPI
-from petsc_contact.grid import Grid
-from petsc_contact.observables import contact_patches
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.physics.observables import contact_patches
 rng = np.random.default_rng(3)
 for shape in [(16, 16), (30, 47), (7, 5)]:
     for fraction in (0.3, 0.5, 0.6):

@@ -4,15 +4,15 @@ import numpy as np
 import pytest
 
 from petsc_contact import periodic_contact
-from petsc_contact.fft import make_fft, wavevector_magnitude
-from petsc_contact.greens import periodic_stiffness
-from petsc_contact.grid import Grid
-from petsc_contact.operator import FourierOperator
+from petsc_contact.backend.operator import FourierOperator
+from petsc_contact.conventions.fft import make_fft, wavevector_magnitude
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.physics.greens import periodic_stiffness
+from petsc_contact.physics.surface import self_affine
 from petsc_contact.reference import westergaard as wave_solution
-from petsc_contact.surface import self_affine
 
 TIGHT = ["-tao_gatol", "1e-11"]
-PK = ["-tao_type", "python", "-tao_python_type", "petsc_contact.cg.PolonskyKeer"]
+PK = ["-tao_type", "python", "-tao_python_type", "petsc_contact.backend.cg.PolonskyKeer"]
 SOLVERS = {"default": [], "tron": ["-tao_type", "tron"], "bnls": ["-tao_type", "bnls"], "pk": PK}
 N_WAVE = 256
 DELTA, LENGTH, MODULUS = 0.01, 1.0, 2.0

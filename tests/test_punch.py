@@ -3,13 +3,14 @@
 import numpy as np
 import pytest
 
-from petsc_contact.fft import make_fft
-from petsc_contact.greens import hockney_kernel, love_pixel_displacement
-from petsc_contact.grid import Grid
-from petsc_contact.operator import PaddedOperator
-from petsc_contact.punch import flat_punch_stiffness, interfacial_stiffness, punch_contact
+from petsc_contact.backend.operator import PaddedOperator
+from petsc_contact.conventions.fft import make_fft
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.geometries.punch import flat_punch_stiffness, interfacial_stiffness
+from petsc_contact.physics.greens import hockney_kernel, love_pixel_displacement
+from petsc_contact.physics.surface import self_affine
 from petsc_contact.reference import flat_punch, hertz
-from petsc_contact.surface import self_affine
+from petsc_contact.workflows.punch_sweep import punch_contact
 
 N = 128  # footprint pixels per side for the analytic comparisons
 

@@ -2,10 +2,10 @@
 
 import numpy as np
 
-from petsc_contact.fft import make_fft
-from petsc_contact.grid import Grid
-from petsc_contact.problem import PeriodicProblem, schur_limit
-from petsc_contact.surface import self_affine
+from petsc_contact.conventions.fft import make_fft
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.geometries.periodic import PeriodicProblem, schur_limit
+from petsc_contact.physics.surface import self_affine
 
 
 def problem(n=48, p0=1e-3):

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from petsc_contact import periodic_contact
-from petsc_contact.fft import make_fft
-from petsc_contact.grid import Grid
-from petsc_contact.surface import self_affine
+from petsc_contact.conventions.fft import make_fft
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.physics.surface import self_affine
 
 N = 64
 

@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 from petsc_contact import periodic_contact
-from petsc_contact.fft import make_fft
-from petsc_contact.grid import Grid
+from petsc_contact.backend.stiffness import sweep_stiffness
+from petsc_contact.conventions.fft import make_fft
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.physics.surface import self_affine
 from petsc_contact.reference import westergaard
-from petsc_contact.stiffness import sweep_stiffness
-from petsc_contact.surface import self_affine
 
 N, DELTA, LENGTH, MODULUS = 256, 0.01, 1.0, 2.0
 P_STAR = np.pi * MODULUS * DELTA / LENGTH
@@ -71,7 +71,7 @@ def test_stiffness_solves_release_their_operators():
     preconditioner; PETSc must give both back, or a long sweep grows by two fields a step."""
     import gc
 
-    from petsc_contact.stiffness import Restricted
+    from petsc_contact.backend.stiffness import Restricted
 
     x = np.arange(32) / 32
     h = np.repeat(DELTA * np.cos(2 * np.pi * x)[:, None], 32, axis=1)

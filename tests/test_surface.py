@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from petsc_contact.fft import make_fft, wavevector_magnitude
-from petsc_contact.grid import Grid
-from petsc_contact.surface import psd_shape, radial_psd, rms_of, self_affine
+from petsc_contact.conventions.fft import make_fft, wavevector_magnitude
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.physics.surface import psd_shape, radial_psd, rms_of, self_affine
 
 
 def make(n=128, **kw):

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from petsc_contact import theory
+from petsc_contact.physics import theory
 
 
 @pytest.mark.parametrize("hurst", [0.3, 0.5, 0.7, 0.9])
@@ -100,7 +100,7 @@ def test_block_correction_recovers_interfacial_stiffness():
 def test_hertz_regime_against_the_punch_solver():
     """K ~ p^(1/3): theory.hertz_stiffness is dF/dδ = 2 E* a of a sphere per apparent area,
     which the punch solver reproduces (1% on 128^2, see test_punch.test_hertz)."""
-    from petsc_contact.punch import punch_contact
+    from petsc_contact.workflows.punch_sweep import punch_contact
 
     p = np.array([1e-4, 8e-4])
     k = theory.hertz_stiffness(p, 2.0, 1.0, 1.0)
@@ -117,7 +117,7 @@ def test_hertz_regime_against_the_punch_solver():
 def _eq5(points, rolloff_ratio, norm_points=1_000_000):
     """Paper Eq. 5 with H = 0.7, L/lambda_1 = 4096 on ``points`` log-spaced wavevectors,
     normalised to h_rms = 1 by a fine quadrature (the same for every ``points``)."""
-    from petsc_contact.surface import psd_shape
+    from petsc_contact.physics.surface import psd_shape
 
     q0 = 2 * np.pi
 
@@ -164,11 +164,11 @@ def test_prediction_from_a_map_matches_the_prescribed_spectrum():
     where the continuum spectrum describes the discrete one) u0 and K(p) agree within 5%
     (0.97-0.99 and 1.01-1.04 over six seeds); at L = lambda_r the map's few lowest modes
     put u0 about 20% lower (docs/measured.md)."""
-    from petsc_contact.fft import make_fft
-    from petsc_contact.grid import Grid
-    from petsc_contact.predictions import predict
-    from petsc_contact.scenes import ideal_spectrum
-    from petsc_contact.surface import self_affine
+    from petsc_contact.conventions.fft import make_fft
+    from petsc_contact.conventions.grid import Grid
+    from petsc_contact.physics.surface import self_affine
+    from petsc_contact.workflows.predictions import predict
+    from petsc_contact.workflows.scenes import ideal_spectrum
 
     grid = Grid(512, 1.0)
     fft = make_fft(grid)

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from ..validation import non_negative, positive
+from ..conventions.validation import non_negative, positive
 
 EXIT_NOT_CONVERGED = 1
 EXIT_BAD_INPUT = 2
@@ -60,7 +60,7 @@ def run_record(
     resolved: dict[str, Any],
 ) -> dict[str, Any]:
     """What reproduces the run: every option (defaults resolved), versions, PETSc options."""
-    from ..output import file_digest, petsc_options, versions
+    from ..io.output import file_digest, petsc_options, versions
 
     params = {k: v for k, v in vars(args).items() if k not in ("quiet",)} | resolved
     lengths, unit = resolved["length"], resolved["length_unit"]

@@ -12,9 +12,9 @@ from .scene import prepare_scene
 
 def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
     """``petsc-contact compare``: every solver on one scene, error against time."""
-    from ..compare import DEFAULT_SOLVERS, compare, solver_options, write_compare
-    from ..problem import PeriodicProblem
-    from ..surface import rms_of
+    from ..geometries.periodic import PeriodicProblem
+    from ..physics.surface import rms_of
+    from ..workflows.compare import DEFAULT_SOLVERS, compare, solver_options, write_compare
 
     if not args.time_limit >= 0 or args.stall_iterations < 0:
         raise InputError("--time-limit and --stall-iterations must not be negative")
@@ -56,7 +56,7 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
 
 def _print_trajectory(trajectory: Any) -> None:
     """One row of the ``compare`` table, printed as the solver finishes."""
-    from ..compare import table_rows
+    from ..workflows.compare import table_rows
 
     ((name, reason, ok, its, t, eg, ep, r, c),) = table_rows([trajectory])
     print(

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from ..output import ENSEMBLE, annotate, atomic_h5, ensemble_entry, write_attributes
+from ..io.output import ENSEMBLE, annotate, atomic_h5, ensemble_entry, write_attributes
 from .common import EXIT_INTERRUPTED, EXIT_PAUSED, InputError, swept
 from .runs import run
 from .scene import prepare_scene
@@ -20,8 +20,8 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
     """One periodic run per seed (each resumable), then statistics over seeds in OUT.h5."""
     import h5py
 
-    from ..ensemble import ensemble_statistics
-    from ..output import check_writable
+    from ..io.output import check_writable
+    from ..workflows.ensemble import ensemble_statistics
 
     if args.heights is not None:
         raise InputError("ensemble needs a generated surface (--grid, --hurst, ...), not --heights")
@@ -54,7 +54,7 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
     if MPI.COMM_WORLD.rank == 0:
         summary = _write_ensemble(args, files, ensemble_statistics, h5py, record)
         if args.plot:
-            from ..plot import plot_ensemble
+            from ..io.plot import plot_ensemble
 
             plot_ensemble(args.plot, summary, args.modulus)
         if not args.quiet:
@@ -68,7 +68,7 @@ def _ensemble_loads(args: argparse.Namespace, petsc_args: list[str]) -> list[flo
     ``1e-4`` to ``0.9`` times the full-contact pressure of the first seed's surface."""
     if len(args.sweep) == 3:
         return swept(args.sweep, args.sweep[1], args.sweep[2])
-    from ..problem import PeriodicProblem
+    from ..geometries.periodic import PeriodicProblem
 
     first = argparse.Namespace(**{**vars(args), "seed": args.seeds[0]})
     _, grid, fft, heights, _ = prepare_scene(first, petsc_args)
@@ -80,8 +80,8 @@ def _ensemble_record(
     args: argparse.Namespace, argv: Sequence[str], pressures: list[float]
 ) -> dict[str, Any]:
     """What reproduces an ensemble: its command, options, versions and PETSc options."""
-    from .. import _petsc
-    from ..output import petsc_options, versions
+    from ..backend import _petsc
+    from ..io.output import petsc_options, versions
 
     petsc = _petsc.petsc()
     return {

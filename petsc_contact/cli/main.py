@@ -8,7 +8,7 @@ import sys
 from collections.abc import Sequence
 from typing import Any
 
-from ..output import schema_markdown
+from ..io.output import schema_markdown
 from .arguments import build_parser, is_petsc_option, split_arguments
 from .common import EXIT_BAD_INPUT, EXIT_INTERRUPTED, InputError, say
 from .comparison import run_compare
@@ -71,7 +71,7 @@ def _report_unused(petsc_args: list[str]) -> None:
     """Warn about the user's PETSc options that nothing read (a misspelt ``-tao_typo``)."""
     if not petsc_args or "petsc4py.PETSc" not in sys.modules:
         return
-    from .. import _petsc
+    from ..backend import _petsc
 
     names = [a[1:] for a in petsc_args if is_petsc_option(a)]
     unused = _petsc.unused_options(names)

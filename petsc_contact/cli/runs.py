@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from ..step import FIELD_NAMES
+from ..geometries.step import FIELD_NAMES
 from .common import EXIT_INTERRUPTED, EXIT_NOT_CONVERGED, EXIT_PAUSED, InputError, run_record, swept
 from .scene import prepare_scene
 
@@ -49,7 +49,7 @@ def _disk(n: int) -> np.ndarray:
 def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
     """Run ``periodic``, ``demo`` or ``punch``; write the HDF5 file (and plot)."""
     petsc, grid, fft, heights, resolved = prepare_scene(args, petsc_args)
-    from ..surface import rms_of
+    from ..physics.surface import rms_of
 
     realised = {
         "rms_height": rms_of(grid, fft, heights),
@@ -98,7 +98,7 @@ def _open_writer(
     show: bool,
 ) -> tuple[Any, int, np.ndarray | None]:
     """The step writer, the steps already done and the state to start from (``--resume``)."""
-    from ..output import StepWriter, read_resume
+    from ..io.output import StepWriter, read_resume
 
     fields = FIELD_NAMES if args.fields else ()
     done, state = read_resume(args.output, attributes["parameters"]) if args.resume else (0, None)
@@ -148,7 +148,7 @@ def _conclude(
 ) -> int:
     """Plot, report the steps that did not converge, and return the exit status."""
     if args.plot and root:
-        from ..plot import plot_punch, plot_sweep
+        from ..io.plot import plot_punch, plot_sweep
 
         if args.command == "punch":
             plot_punch(args.plot, table)
@@ -182,8 +182,8 @@ class Plan:
 
 
 def _periodic_plan(args: argparse.Namespace, grid: Any, fft: Any, heights: np.ndarray) -> Plan:
-    from ..periodic import sweep
-    from ..problem import PeriodicProblem
+    from ..geometries.periodic import PeriodicProblem
+    from ..workflows.periodic_sweep import sweep
 
     problem = PeriodicProblem(grid, fft, heights, args.modulus)
     p_full = problem.full_contact_pressure()
@@ -207,7 +207,8 @@ def _periodic_plan(args: argparse.Namespace, grid: Any, fft: Any, heights: np.nd
 
 
 def _punch_plan(args: argparse.Namespace, grid: Any, heights: np.ndarray) -> Plan:
-    from ..punch import PHARR_BETA, PunchProblem, PunchSolver
+    from ..geometries.punch import PHARR_BETA, PunchProblem
+    from ..workflows.punch_sweep import PunchSolver
 
     if args.footprint == "disk" and not grid.square:
         raise InputError("--footprint disk needs a square grid")

@@ -45,8 +45,8 @@ def _units(args: argparse.Namespace, topo: Any, lengths: Any) -> tuple[Any, floa
 
     Contradictions are input errors: a height unit other than the file's, sides other than
     the file's, or heights with a unit when the lengths have none."""
-    from ..grid import sides
-    from ..units import Lengths, factor, unit_name
+    from ..conventions.grid import sides
+    from ..conventions.units import Lengths, factor, unit_name
 
     given = unit_name(args.height_unit) if args.height_unit else None
     if given and topo.unit and given != topo.unit:
@@ -67,9 +67,9 @@ def _units(args: argparse.Namespace, topo: Any, lengths: Any) -> tuple[Any, floa
 def measured(args: argparse.Namespace, given: Any) -> tuple[np.ndarray, Any]:
     """The prepared map of ``--heights`` (filled, detrended, in the lengths' unit) and the
     lengths; warns about implausible slopes and, for periodic runs, edge mismatch."""
-    from ..grid import grid_for
-    from ..preparation import detrend, fill_undefined
-    from ..topography import read_topography
+    from ..conventions.grid import grid_for
+    from ..io.topography import read_topography
+    from ..physics.preparation import detrend, fill_undefined
 
     topo = read_topography(args.heights)
     lengths, scale = _units(args, topo, given)
@@ -85,7 +85,7 @@ def measured(args: argparse.Namespace, given: Any) -> tuple[np.ndarray, Any]:
 def _warn(args: argparse.Namespace, full: np.ndarray, spacing: tuple[float, float]) -> None:
     from mpi4py import MPI
 
-    from ..preparation import EDGE_MISMATCH_LIMIT, SLOPE_RANGE, edge_mismatch, rms_slope
+    from ..physics.preparation import EDGE_MISMATCH_LIMIT, SLOPE_RANGE, edge_mismatch, rms_slope
 
     if MPI.COMM_WORLD.rank != 0:  # only rank 0 speaks: the others skip the passes over the map
         return
@@ -111,10 +111,10 @@ def _scene(
 ) -> tuple[Any, Any, np.ndarray, dict[str, Any]]:
     """The grid, its FFT, this rank's slab of the heights (read, or generated) and the
     parameters the options left to their defaults (lengths, ``cutoff_ratio``)."""
-    from ..fft import make_fft
-    from ..grid import grid_for
-    from ..output import check_finite
-    from ..surface import nyquist_ratio
+    from ..conventions.fft import make_fft
+    from ..conventions.grid import grid_for
+    from ..io.output import check_finite
+    from ..physics.surface import nyquist_ratio
 
     shape = full.shape if full is not None else _shape(args.grid)
     grid = grid_for(shape, lengths.pair)
@@ -135,7 +135,7 @@ def _shape(grid: int | tuple[int, int]) -> tuple[int, int]:
 
 def _generate(args: argparse.Namespace, grid: Any, fft: Any, cutoff: float) -> np.ndarray:
     """This rank's slab of a generated surface (paper Eq. 5)."""
-    from ..surface import self_affine
+    from ..physics.surface import self_affine
 
     return self_affine(
         grid,
@@ -154,10 +154,10 @@ def prepare_scene(
     args: argparse.Namespace, petsc_args: list[str], check_type: bool = True
 ) -> tuple[Any, Any, Any, np.ndarray, dict[str, Any]]:
     """Check the input, then PETSc, the grid, its FFT and this rank's heights."""
-    from .. import _petsc
-    from ..output import check_writable
-    from ..solve import check_tao_type
-    from ..units import Lengths, parse_lengths
+    from ..backend import _petsc
+    from ..backend.solve import check_tao_type
+    from ..conventions.units import Lengths, parse_lengths
+    from ..io.output import check_writable
 
     check_numbers(args)
     try:

@@ -13,7 +13,7 @@ import os
 import time
 from collections.abc import Sequence
 
-from ..paper_study import Piece, complete, pieces
+from ..workflows.paper_study import Piece, complete, pieces
 from .common import EXIT_INTERRUPTED, EXIT_PAUSED
 
 

@@ -7,8 +7,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..output import THEORY, annotate, atomic_h5, write_attributes
-from ..predictions import Prediction, predict
+from ..io.output import THEORY, annotate, atomic_h5, write_attributes
+from ..workflows.predictions import Prediction, predict
 from .common import run_record, swept
 from .scene import prepare_scene
 
@@ -33,7 +33,7 @@ def run_theory(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[s
     if not args.quiet:
         _print(result)
     if args.plot:
-        from ..plot import plot_theory
+        from ..io.plot import plot_theory
 
         plot_theory(args.plot, result, args.modulus)
     print(f"# wrote {args.output}" + (f" and {args.plot}" if args.plot else ""))

@@ -7,8 +7,8 @@ import os
 
 import numpy as np
 
-from ..output import EXPERIMENT, annotate, atomic_h5
-from ..validation import positive
+from ..conventions.validation import positive
+from ..io.output import EXPERIMENT, annotate, atomic_h5
 from .common import InputError
 
 
@@ -16,8 +16,8 @@ def run_plot(args: argparse.Namespace) -> int:
     """``petsc-contact plot``: one field of one step as a map."""
     import h5py
 
-    from ..output import ENTRIES, check_writable
-    from ..plot import plot_field
+    from ..io.output import ENTRIES, check_writable
+    from ..io.plot import plot_field
 
     if not os.path.isfile(args.file):
         raise InputError(f"'{args.file}' does not exist")
@@ -52,8 +52,8 @@ def run_plot(args: argparse.Namespace) -> int:
 
 def run_experiment(args: argparse.Namespace) -> int:
     """``petsc-contact experiment``: Eq. C3 on a measured ``p(s)`` table."""
-    from ..output import check_writable, load_table
-    from ..theory import block_corrected_stiffness
+    from ..io.output import check_writable, load_table
+    from ..physics.theory import block_corrected_stiffness
 
     for name in ("modulus", "thickness"):
         positive(f"--{name}", getattr(args, name))
@@ -80,7 +80,7 @@ def run_experiment(args: argparse.Namespace) -> int:
         for row in zip(p, disp, k_star, k, strict=True):
             print(" ".join(f"{v:>12.5g}" for v in row))
     if args.plot:
-        from ..plot import plot_experiment
+        from ..io.plot import plot_experiment
 
         plot_experiment(args.plot, p, k_star, k)
     return 0

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..validation import positive
+from ..conventions.validation import positive
 
 SQUARE_BETA = 1.012
 

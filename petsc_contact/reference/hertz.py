@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from ..validation import non_negative, positive
+from ..conventions.validation import non_negative, positive
 
 
 def contact_radius(approach: float, radius: float) -> float:

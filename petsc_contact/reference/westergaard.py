@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..validation import positive
+from ..conventions.validation import positive
 
 
 def full_contact_pressure(amplitude: float, wavelength: float, modulus: float) -> float:

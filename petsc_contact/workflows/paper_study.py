@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from .surface import psd_shape
+from ..physics.surface import psd_shape
 
 PAPER_GRID = 8192
 RMS_SLOPE = 0.1

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .grid import fft_order
-from .validation import per_axis, positive
+from ..conventions.grid import fft_order
+from ..conventions.validation import per_axis, positive
 
 
 def periodic_stiffness(q: np.ndarray, modulus: float) -> np.ndarray:

@@ -18,14 +18,14 @@ from typing import Any
 
 import numpy as np
 
-from . import _petsc
-from .continuation import ConvergedStep, LoadPath
-from .fft import make_fft
-from .grid import grid_for
-from .output import check_finite
-from .problem import PeriodicProblem, verify
-from .solve import BoundSolver, Monitor
-from .step import VERIFY_FACTOR, Step, collect, solve_step
+from ..backend import _petsc
+from ..backend.solve import BoundSolver, Monitor
+from ..conventions.fft import make_fft
+from ..conventions.grid import grid_for
+from ..geometries.periodic import PeriodicProblem, verify
+from ..geometries.step import VERIFY_FACTOR, Step, collect, solve_step
+from ..io.output import check_finite
+from ..physics.continuation import ConvergedStep, LoadPath
 
 __all__ = [
     "VERIFY_FACTOR",  # re-exported with Step and verify: scripts import them from here
@@ -35,7 +35,7 @@ __all__ = [
     "sweep",
     "verify",
 ]
-from .validation import positive
+from ..conventions.validation import positive
 
 
 def check_pressures(pressures: Sequence[float]) -> list[float]:
@@ -60,13 +60,13 @@ def sweep(
 
     Each step starts from the last converged gap, extrapolated along the load path, and its
     preconditioner is held by the interfacial stiffness the path predicts
-    (:class:`~petsc_contact.continuation.LoadPath`; Persson's estimate for the first step).
+    (:class:`~petsc_contact.physics.continuation.LoadPath`; Persson's estimate for the first step).
 
     Parameters
     ----------
     stiffness
         Add ``stiffness``, the exact ``-dp0/du_bar`` with the contact set held fixed
-        (:func:`~petsc_contact.stiffness.periodic_stiffness_exact`), and its CG iterations.
+        (:func:`~petsc_contact.backend.stiffness.periodic_stiffness_exact`), and its CG iterations.
     start
         Local gap slab to start from (e.g. a resumed run's last state); default: first touch.
 

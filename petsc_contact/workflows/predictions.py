@@ -3,8 +3,8 @@ exponential law's ``u0`` and ``beta``, and the finite-size crossover ``p_c``.
 
 This is the comparison the paper's experiment section makes, and an experimentalist's
 first question about a measured surface.  The map's radially averaged spectrum
-(:func:`~petsc_contact.surface.radial_psd`, the map taken as periodic) feeds Persson's
-integrals (:mod:`~petsc_contact.theory`), with ``C`` held at its first bin's value down to
+(:func:`~petsc_contact.physics.surface.radial_psd`, the map taken as periodic) feeds Persson's
+integrals (:mod:`~petsc_contact.physics.theory`), with ``C`` held at its first bin's value down to
 ``q0 = 2 pi/L`` (the first bin's mean ``|q|`` lies above ``q0``, and Persson's integrals
 weigh the lowest wavevectors most).  ``p_c`` (paper Eq. 13) needs a Hurst exponent:
 it is fitted to the spectrum's power law ``C ~ q^(-2-2H)`` between ``2 q0`` and half the
@@ -17,10 +17,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import theory
-from .fft import FFT
-from .grid import Grid
-from .surface import radial_psd, rms_of
+from ..conventions.fft import FFT
+from ..conventions.grid import Grid
+from ..physics import theory
+from ..physics.surface import radial_psd, rms_of
 
 ROUNDING = 1e-24  # C(q) below this times its largest value is rounding noise (eps^2 ~ 5e-32)
 

@@ -5,7 +5,8 @@ about the curve ``u_bar(p0)`` shortens the next solve in two ways, neither of wh
 change its answer (the solver and its verification decide that):
 
 - **The preconditioner's support.**  The open surface is held by the contact spots with
-  the interfacial stiffness ``K = -dp0/du_bar`` (:func:`~petsc_contact.greens.held_compliance`).
+  the interfacial stiffness ``K = -dp0/du_bar``
+  (:func:`~petsc_contact.physics.greens.held_compliance`).
   Its local log-slope ``u0 = -du_bar/d(ln p0) = p0/K`` changes slowly along a sweep (it is
   constant in the exponential regime, paper Eq. 3), so ``K(p0) ~ p0/u0`` with ``u0`` from
   the last step: its exact stiffness if it was computed, else the secant through the last

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from scipy.linalg import lu_factor, lu_solve
 
-from .grid import Grid
+from ..conventions.grid import Grid
 
 
 class ContactSchur:

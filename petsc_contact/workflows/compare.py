@@ -30,20 +30,20 @@ from typing import Any
 
 import numpy as np
 
-from . import _petsc
-from .observables import natural_residual
-from .output import COMPARE, annotate, atomic_h5, write_attributes
-from .periodic import sweep
-from .problem import PeriodicProblem
-from .solve import BoundSolver, SolveInfo
-from .step import residual_verdict
+from ..backend import _petsc
+from ..backend.solve import BoundSolver, SolveInfo
+from ..geometries.periodic import PeriodicProblem
+from ..geometries.step import residual_verdict
+from ..io.output import COMPARE, annotate, atomic_h5, write_attributes
+from ..physics.observables import natural_residual
+from .periodic_sweep import sweep
 
 REFERENCE_GATOL = 1e-12
 STALL_GAIN = 0.9  # a new low of the natural residual must be 10% below the best so far
 DEFAULT_SOLVERS = ("cg", "pk", "tron", "bnls", "bntr", "bqnls", "blmvm", "bncg", "gpcg")
 ALIASES = {
-    "cg": ["-tao_type", "python", "-tao_python_type", "petsc_contact.cg.PreconditionedCG"],
-    "pk": ["-tao_type", "python", "-tao_python_type", "petsc_contact.cg.PolonskyKeer"],
+    "cg": ["-tao_type", "python", "-tao_python_type", "petsc_contact.backend.cg.PreconditionedCG"],
+    "pk": ["-tao_type", "python", "-tao_python_type", "petsc_contact.backend.cg.PolonskyKeer"],
 }
 
 
@@ -298,7 +298,7 @@ def table_rows(trajectories: Sequence[Trajectory]) -> list[tuple[Any, ...]]:
 
 def plot_compare(path: str, trajectories: Sequence[Trajectory], reference: dict[str, Any]) -> None:
     """Pressure error and natural residual against wall time, log-log, one line per solver."""
-    from .plot import _finish, _pyplot
+    from ..io.plot import _finish, _pyplot
 
     plt = _pyplot()
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)

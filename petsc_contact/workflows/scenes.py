@@ -11,14 +11,14 @@ from typing import Any
 
 import numpy as np
 
-from . import theory
-from .fft import make_fft
-from .grid import Grid, fundamental_wavevector
-from .output import atomic_h5, write_attributes
-from .periodic import periodic_contact
-from .punch import punch_contact
-from .stiffness import sweep_stiffness
-from .surface import psd_shape, rms_of, self_affine
+from ..backend.stiffness import sweep_stiffness
+from ..conventions.fft import make_fft
+from ..conventions.grid import Grid, fundamental_wavevector
+from ..io.output import atomic_h5, write_attributes
+from ..physics import theory
+from ..physics.surface import psd_shape, rms_of, self_affine
+from .periodic_sweep import periodic_contact
+from .punch_sweep import punch_contact
 
 # a sweep's columns in the figures (contact_patches: NaN in files of versions before it)
 _CURVE_KEYS = ("nominal_pressure", "mean_gap", "area_fraction", "stiffness", "contact_patches")

@@ -1,7 +1,7 @@
 """One load step of either geometry: the problem it needs, the driver, what it yields.
 
-Both geometries (:class:`~petsc_contact.problem.PeriodicProblem`,
-:class:`~petsc_contact.punch.PunchProblem`) are a :class:`ContactProblem`: a scaled
+Both geometries (:class:`~petsc_contact.geometries.periodic.PeriodicProblem`,
+:class:`~petsc_contact.geometries.punch.PunchProblem`) are a :class:`ContactProblem`: a scaled
 bound-constrained QP that TAO minimises, and the observables and verdict of its solution.
 :func:`solve_step` is the one step driver both go through.
 """
@@ -14,9 +14,9 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from .grid import Grid
-from .operator import SpectralOperator
-from .solve import BoundSolver, Monitor, SolveInfo
+from ..backend.operator import SpectralOperator
+from ..backend.solve import BoundSolver, Monitor, SolveInfo
+from ..conventions.grid import Grid
 
 FIELD_NAMES = ("gap", "pressure", "contact")
 VERIFY_FACTOR = 10.0  # a step's natural residual may exceed the tolerance asked for by this

@@ -2,8 +2,8 @@
 
 Select them like any TAO type::
 
-    -tao_type python -tao_python_type petsc_contact.cg.PreconditionedCG   (the default)
-    -tao_type python -tao_python_type petsc_contact.cg.PolonskyKeer
+    -tao_type python -tao_python_type petsc_contact.backend.cg.PreconditionedCG   (the default)
+    -tao_type python -tao_python_type petsc_contact.backend.cg.PolonskyKeer
 
 Both minimise a convex quadratic ``f(x)`` with ``x >= lower`` (upper bounds are honoured
 too) using only TAO's objective/gradient callback and the Hessian ``Mat``: an active-set
@@ -30,17 +30,17 @@ conjugate gradient in the spirit of Polonsky & Keer (Wear 231, 206 (1999)).
   re-evaluated through TAO's callback after a projection, periodically, and before
   convergence is declared, so the reported residual is never an accumulated one.  A Hessian
   whose Python context is a :class:`SplitHessian` (the package's FFT operators,
-  :mod:`petsc_contact.operator`) is applied
+  :mod:`petsc_contact.backend.operator`) is applied
   in those two halves, and the second only when ``H d`` is used: a projected step needs
   ``d.Hd`` but not ``H d``.  Any other Hessian is multiplied and dotted.
-- The element-wise work runs in fused single-pass loops (:mod:`petsc_contact.kernels`).
+- The element-wise work runs in fused single-pass loops (:mod:`petsc_contact.backend.kernels`).
 
 :class:`PreconditionedCG` applies a preconditioner restricted to ``F`` (``z = P_F M P_F r``);
 the package gives it the Fourier compliance, the inverse of the periodic stiffness, which
 makes the iteration count almost independent of the grid.  A preconditioner whose context
 is a :class:`ContactPreconditioner` is told every new free set before it is applied; when
 :meth:`~ContactPreconditioner.adapt` returns ``True`` the operator depends on the set (the
-package's exact Schur form for small contact sets, :mod:`petsc_contact.schur`) and the
+package's exact Schur form for small contact sets, :mod:`petsc_contact.backend.schur`) and the
 recurrence restarts.
 :class:`PolonskyKeer` is the unpreconditioned method (``M = I``).
 

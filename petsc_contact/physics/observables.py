@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from .grid import Grid
+from ..conventions.grid import Grid
 
 
 def contact_mask(gap: np.ndarray, pressure: np.ndarray, pixel_stiffness: float) -> np.ndarray:

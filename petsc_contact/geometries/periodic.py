@@ -23,18 +23,18 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import erf
 
-from . import kernels
-from .fft import FFT, wavevector_magnitude
-from .greens import mean_mode_compliance, periodic_stiffness
-from .grid import Grid
-from .observables import step_observables
-from .operator import FourierOperator
-from .schur import ContactSchur, quarter
-from .solve import SolveInfo
+from ..backend import kernels
+from ..backend.operator import FourierOperator
+from ..backend.schur import ContactSchur, quarter
+from ..backend.solve import SolveInfo
+from ..backend.stiffness import periodic_stiffness_exact
+from ..conventions.fft import FFT, wavevector_magnitude
+from ..conventions.grid import Grid
+from ..conventions.validation import non_negative, positive
+from ..physics.greens import mean_mode_compliance, periodic_stiffness
+from ..physics.observables import step_observables
+from ..physics.theory import linear_stiffness
 from .step import Step, contact_fields, residual_verdict
-from .stiffness import periodic_stiffness_exact
-from .theory import linear_stiffness
-from .validation import non_negative, positive
 
 ROUNDING_FACTOR = 1000.0  # see PeriodicProblem.rounding_floor
 SCHUR_MAX = 4096  # the most bound variables for the Schur form (dense matrix: 134 MB)
@@ -45,7 +45,7 @@ class MeanModePreconditioner(FourierOperator):
     ``q = 0`` entry adapted to the contact set.
 
     On the open pixels the contact spots hold the surface like a layer of springs of the
-    interfacial stiffness ``K_i`` (:func:`~petsc_contact.greens.held_compliance`), so the
+    interfacial stiffness ``K_i`` (:func:`~petsc_contact.physics.greens.held_compliance`), so the
     multiplier is ``1/(E*|q|/2 + K_i)`` (scaled like the Hessian), with ``K_i`` an estimate
     for the current load.  The free compliance ``2/(E*|q|)`` misses exactly that support:
     at long wavelengths it over-predicts the response of the open surface, most of all for
@@ -58,11 +58,11 @@ class MeanModePreconditioner(FourierOperator):
 
     With at most :attr:`schur_max` variables at the bound it is instead the exact inverse of
     the Hessian on the free set, built on the unsupported inverse ``1/K``
-    (:class:`~petsc_contact.schur.ContactSchur`: two FFT round trips and a dense solve of
+    (:class:`~petsc_contact.backend.schur.ContactSchur`: two FFT round trips and a dense solve of
     the contact pixels' bordered system per application), which
     makes each CG step exact on the current contact set; :func:`schur_limit` keeps its LU
     factorisation, once per contact set, within about ten FFT round trips.
-    Called by :class:`~petsc_contact.cg.PolonskyKeer` through :meth:`adapt`.
+    Called by :class:`~petsc_contact.backend.cg.PolonskyKeer` through :meth:`adapt`.
     """
 
     def __init__(self, grid: Grid, fft: FFT, hessian: FourierOperator, schur_max: int) -> None:
@@ -284,7 +284,7 @@ class PeriodicProblem:
 
     def held_compliance(self, interfacial_stiffness: float) -> FourierOperator:
         """The compliance held by ``interfacial_stiffness``, ``1/(E* q/2 + K_i)``
-        (:func:`~petsc_contact.greens.held_compliance`): the preconditioner of the exact
+        (:func:`~petsc_contact.physics.greens.held_compliance`): the preconditioner of the exact
         stiffness solve.  One operator, recomputed in place (no field-sized temporaries).
         """
         positive("interfacial stiffness", interfacial_stiffness)
@@ -358,7 +358,7 @@ class PeriodicProblem:
         (``L/lambda_1 = n/4``): after 250 iterations the residual stood at 5e-13, 9e-13,
         2e-12 and 5e-12 for n = 256 ... 2048, which is 3 to 7.5 times ``eps k h_rms / p0``;
         this returns 30 times that.  Used for the reference solves of
-        :func:`~petsc_contact.compare.compare`, which at ``1e-12`` ran to the iteration
+        :func:`~petsc_contact.workflows.compare.compare`, which at ``1e-12`` ran to the iteration
         limit from 2048^2 on.
         """
         return float(30 * np.finfo(float).eps * self.pixel_stiffness * self.h_rms / p0)

@@ -30,8 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from .grid import sides
-from .units import unit_name
+from ..conventions.grid import sides
+from ..conventions.units import unit_name
 
 TEXT = (".txt", ".dat", ".csv", ".asc")
 HDF5 = (".h5", ".hdf5")

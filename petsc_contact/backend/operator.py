@@ -1,11 +1,11 @@
 """Fourier-diagonal operators as PETSc shell matrices and preconditioners.
 
 :class:`FourierOperator` applies ``y = IFFT(kernel * FFT(x))`` to the row-slab PETSc Vecs of
-a :class:`~petsc_contact.grid.Grid` (the periodic geometry).  :class:`PaddedOperator` does
-the same on a ``2nx x 2ny`` zero-padded copy of an ``nx x ny`` field and reads back the first
-block: the free-boundary convolution of the punch (Hockney 1970).  Either object serves as
-the context of a Python ``Mat`` (``mult``) and of a Python ``PC`` (``apply``), so one class
-gives TAO both the exact Hessian and the Fourier preconditioner.
+a :class:`~petsc_contact.conventions.grid.Grid` (the periodic geometry).
+:class:`PaddedOperator` does the same on a ``2nx x 2ny`` zero-padded copy of an ``nx x ny``
+field and reads back the first block: the free-boundary convolution of the punch (Hockney
+1970).  Either object serves as the context of a Python ``Mat`` (``mult``) and of a Python
+``PC`` (``apply``), so one class gives TAO both the exact Hessian and the Fourier preconditioner.
 """
 
 from __future__ import annotations
@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
+from ..conventions.fft import FFT, half_spectrum_weights, make_fft, single_entries
+from ..conventions.grid import Grid, block_rows
 from . import kernels
-from .fft import FFT, half_spectrum_weights, make_fft, single_entries
-from .grid import Grid, block_rows
 
 
 def twice(values: np.ndarray) -> np.ndarray:
@@ -186,7 +186,7 @@ class PaddedOperator(SpectralOperator):
         The ``nx x ny`` footprint grid (its row slabs are the Vec layout).
     kernel_rows
         ``f(rows) -> array`` giving rows ``rows`` of the real ``2nx x 2ny`` kernel in numpy's
-        ``fftfreq`` offset order (e.g. :func:`~petsc_contact.greens.hockney_kernel`).
+        ``fftfreq`` offset order (e.g. :func:`~petsc_contact.physics.greens.hockney_kernel`).
         It must be even in both offsets, so that its spectrum is real.
     fft
         FFT backend of the padded ``2nx x 2ny`` grid; pass one to share it between operators.
@@ -239,7 +239,7 @@ class RowExchange:
     ``m``-row slab layouts of a comm.
 
     Row ``i`` of the footprint is row ``i`` of the padded grid; each rank owns
-    :func:`~petsc_contact.grid.block_rows` of both.  With one rank this is a copy.
+    :func:`~petsc_contact.conventions.grid.block_rows` of both.  With one rank this is a copy.
     """
 
     def __init__(self, comm: Any, shape: tuple[int, int], m: int) -> None:

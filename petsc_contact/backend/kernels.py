@@ -113,9 +113,10 @@ def scale_spectrum(values: np.ndarray, multiplier: np.ndarray, single: np.ndarra
     """Multiply a spectrum by a real multiplier; return ``sum(w k |s|^2)`` before it.
 
     ``values`` is the float view of the (contiguous, complex) spectrum block, ``multiplier``
-    holds each real entry ``k`` twice in the same layout (:func:`~petsc_contact.operator.twice`),
+    holds each real entry ``k`` twice in the same layout
+    (:func:`~petsc_contact.backend.operator.twice`),
     and ``single`` the complex indices of the entries of multiplicity ``w = 1``
-    (:func:`~petsc_contact.fft.single_entries`; all others have ``w = 2``).  With a
+    (:func:`~petsc_contact.conventions.fft.single_entries`; all others have ``w = 2``).  With a
     normalised kernel the sum over all ranks is the quadratic form ``x.Kx`` of the
     transformed field (Parseval).  Flat loops of floats: numba vectorises these, and not a
     loop over complex entries.

@@ -19,8 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from ..conventions.grid import Grid
 from . import _petsc
-from .grid import Grid
 from .operator import ShellInterface, shell_matrix
 
 STIFFNESS_RTOL = 1e-6  # K to 2e-8 relative of a 1e-8 solve (docs/performance.md)

@@ -57,8 +57,8 @@ class Lengths:
 
     @property
     def pair(self) -> float | tuple[float, float]:
-        """A single length as a float, two as a tuple (what :class:`~petsc_contact.grid.Grid`
-        and the Python API take)."""
+        """A single length as a float, two as a tuple (what
+        :class:`~petsc_contact.conventions.grid.Grid` and the Python API take)."""
         return self.values[0] if len(self.values) == 1 else (self.values[0], self.values[1])
 
     def describe(self) -> str:

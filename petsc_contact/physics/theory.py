@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import integrate, special
 
-from .reference import hertz
+from ..reference import hertz
 
 Values = np.ndarray | float  # one value, or an array of them (the result has its shape)
 GAMMA = 0.4  # Persson's gamma (and the paper's u0 = gamma h_rms)

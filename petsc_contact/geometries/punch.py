@@ -21,34 +21,25 @@ Per step: approach, force ``F = a^2 sum(p)``, nominal pressure ``F / (Lx Ly)``, 
 series (paper Eq. 2), ``1/K_int = 1/K_tot - 1/K_flat``, ``K = K_int / (Lx Ly)``.  ``K_flat`` is
 the flat punch of the same footprint computed on the same grid (default: discretisation
 errors cancel) or Pharr, Oliver & Brotzen's ``β 2 E* sqrt(A/π)``, ``β = 1.012`` (square).
-
-Load control (``forces=``) wraps the displacement-controlled solve in a safeguarded Newton
-iteration on ``δ`` that uses the exact ``dF/dδ``; ``F(δ)`` is increasing and convex.
 """
 
 from __future__ import annotations
 
-import warnings
-from collections.abc import Iterator, Sequence
 from typing import Any
 
 import numpy as np
 
-from . import _petsc
-from .greens import hockney_kernel
-from .grid import Grid, grid_for
-from .observables import contact_patches
-from .operator import PaddedOperator
-from .output import check_finite
-from .reference import flat_punch
-from .solve import BoundSolver, Monitor, SolveInfo
-from .step import Step, collect, contact_fields, residual_verdict, solve_step
-from .stiffness import punch_stiffness_exact
-from .validation import non_negative, positive
+from ..backend.operator import PaddedOperator
+from ..backend.solve import SolveInfo
+from ..backend.stiffness import punch_stiffness_exact
+from ..conventions.grid import Grid
+from ..conventions.validation import non_negative, positive
+from ..physics.greens import hockney_kernel
+from ..physics.observables import contact_patches
+from ..reference import flat_punch
+from .step import Step, contact_fields, residual_verdict
 
 PHARR_BETA = flat_punch.SQUARE_BETA
-FORCE_RTOL = 1e-6
-MAX_NEWTON = 60
 
 
 def flat_punch_stiffness(modulus: float, area: float, beta: float = PHARR_BETA) -> float:
@@ -250,183 +241,3 @@ def verify_punch(info: SolveInfo, obs: dict[str, Any]) -> str:
     if info.reason_code <= 0:
         return f"TAO did not converge ({info.reason})"
     return residual_verdict(obs["kkt_residual"], info.tolerance)
-
-
-class PunchSolver:
-    """Displacement- and load-controlled solves of one :class:`PunchProblem` (warm-started)."""
-
-    def __init__(self, problem: PunchProblem) -> None:
-        self.problem = problem
-        self.x = np.zeros(int(np.prod(problem.grid.local_shape)))
-        self.solver = BoundSolver(problem.grid, problem.hessian, problem.preconditioner)
-        self.last: tuple[float, float, float] | None = None  # (δ, F, dF/dδ) of the last step
-
-    @property
-    def k_flat(self) -> float:
-        """The flat-punch stiffness in use (:attr:`PunchProblem.k_flat`)."""
-        return self.problem.k_flat
-
-    @property
-    def k_flat_analytic(self) -> float:
-        return self.problem.k_flat_analytic
-
-    def close(self) -> None:
-        self.solver.close()
-
-    def __enter__(self) -> PunchSolver:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-    def at_approach(
-        self,
-        delta: float,
-        fields: bool = False,
-        monitor: Monitor | None = None,
-        stiffness: bool = False,
-    ) -> Step:
-        """Solve at approach ``δ`` from the last converged pressure."""
-        pb = self.problem
-        pb.set_approach(delta)
-        step, x_new = solve_step(self.solver, pb, self.x, monitor, stiffness, fields)
-        if step.converged:
-            self.x = x_new
-            s = step.scalars
-            self.last = (float(delta), s["force"], s["total_stiffness"])
-        step.state = self.x.reshape(pb.grid.local_shape) * pb.pressure_scale
-        return step
-
-    def restart_from(self, pressure: np.ndarray) -> None:
-        """Start the next solve from this local pressure slab (a resumed run's state)."""
-        self.x = (np.asarray(pressure, dtype=float) / self.problem.pressure_scale).reshape(-1)
-        self.last = None
-
-    def at_force(
-        self,
-        force: float,
-        fields: bool = False,
-        rtol: float = FORCE_RTOL,
-        monitor: Monitor | None = None,
-        stiffness: bool = False,
-    ) -> Step:
-        """Find ``δ`` with ``F(δ) = force`` (relative tolerance ``rtol``) and solve there.
-
-        Safeguarded Newton on the increasing, convex ``F(δ)`` with the exact ``dF/dδ``.  It
-        starts from the last converged step, whose approach brackets the root and whose
-        tangent is the first Newton step (on a convex ``F`` that step lands above the root,
-        and Newton then descends to it monotonically); a first solve starts from
-        ``force / K_flat`` (a rough punch is never stiffer than the flat one).  The step's
-        scalars add ``target_force`` and ``newton_iterations``.
-
-        Newton also stops when TAO accepts its warm start at the new approach without an
-        iteration: the solve cannot tell the two approaches apart, and the force (stored next
-        to ``target_force``) is as close to the target as the solve resolves, on contacts of
-        a few pixels about ``1e-5`` (the gradient tolerance is an rms over the footprint).
-        """
-        positive("force", force)
-        lo, hi = 0.0, np.inf
-        delta = force / self.k_flat_analytic
-        if self.last is not None:
-            d0, f0, k0 = self.last
-            lo, hi = (d0, hi) if f0 < force else (lo, d0)
-            delta = d0 + (force - f0) / k0 if k0 > 0 else delta
-        total_its, total_time = 0, 0.0
-        for newton in range(1, MAX_NEWTON + 1):
-            step = self.at_approach(delta, fields, monitor, stiffness)
-            s = step.scalars
-            total_its += s["iterations"]
-            total_time += s["solve_time"]
-            if not step.converged:
-                break
-            f, k = s["force"], s["total_stiffness"]
-            if abs(f - force) <= rtol * force or (newton > 1 and s["iterations"] == 0):
-                break  # on target, or as close as the solve resolves (module docstring)
-            if f < force:
-                lo = delta
-            else:
-                hi = delta
-            guess = delta + (force - f) / k if k > 0 else np.inf
-            if not lo < guess < hi:
-                guess = (
-                    2 * lo + self.problem.scale_length if not np.isfinite(hi) else 0.5 * (lo + hi)
-                )
-            delta = guess
-        else:
-            s["converged"] = False
-            s["verification"] = f"force not reached in {MAX_NEWTON} Newton steps"
-        s.update(
-            target_force=force,
-            newton_iterations=newton,
-            iterations=total_its,
-            solve_time=total_time,
-        )
-        return step
-
-
-def punch_contact(
-    heights: np.ndarray,
-    length: float | tuple[float, float],
-    modulus: float,
-    approaches: Sequence[float] | None = None,
-    forces: Sequence[float] | None = None,
-    options: _petsc.OptionsArg = None,
-    fields: bool = False,
-    footprint: np.ndarray | None = None,
-    flat: str = "grid",
-    beta: float = PHARR_BETA,
-    comm: Any = None,
-    monitor: Monitor | None = None,
-) -> list[Step]:
-    """Press a rigid punch with face ``heights`` into a free elastic half-space.
-
-    Parameters
-    ----------
-    heights
-        Full ``n x n`` height map of the punch face (every rank passes the same array).
-    length, modulus
-        Footprint sides ``(Lx, Ly)``, or the side ``Lx`` with square pixels (``Lp`` for a
-        square patch), and the contact modulus ``E*``.
-    approaches, forces
-        Exactly one of them: rigid approaches ``δ`` beyond first touch (displacement
-        control), or total forces ``F`` (load control).  Solved in order, warm-started.
-    options
-        PETSc options for this call (a list, a string or a dict; see
-        :func:`~petsc_contact.periodic.periodic_contact`).
-    fields
-        Keep the local ``gap`` and ``pressure`` slabs of every step.
-    footprint
-        Optional full ``n x n`` boolean mask of the punch (e.g. a disk); default square.
-    flat, beta
-        The flat-punch stiffness of paper Eq. 2 (:class:`PunchProblem`).
-    comm
-        mpi4py communicator (default ``COMM_WORLD``).
-    monitor
-        Called as ``monitor(iteration, f, gnorm)`` at every TAO iteration; ``True`` stops.
-
-    Returns
-    -------
-    list of Step
-        One per load, in order; only the last keeps ``state``, the field to go on from.
-    """
-    values = [float(v) for v in (approaches if approaches is not None else forces or [])]
-    if (approaches is None) == (forces is None) or not values:
-        raise ValueError("give either approaches or forces, at least one of them")
-    from mpi4py import MPI
-
-    with _petsc.scoped_options(options):
-        grid = grid_for(heights.shape, length, comm or MPI.COMM_WORLD)
-        local = grid.scatter(heights)
-        check_finite(grid, local)
-        mask = None if footprint is None else grid.scatter(footprint).astype(bool)
-        problem = PunchProblem(grid, local, modulus, mask, flat, beta)
-        with PunchSolver(problem) as solver:
-            if forces is not None:
-                return collect(solver.at_force(v, fields, monitor=monitor) for v in values)
-            return collect(solver.at_approach(v, fields, monitor) for v in values)
-
-
-def punch_steps(*args: Any, **kwargs: Any) -> Iterator[Step]:
-    """Deprecated: the steps of :func:`punch_contact` (same arguments), one by one."""
-    warnings.warn("punch_steps is deprecated; use punch_contact", DeprecationWarning, stacklevel=2)
-    yield from punch_contact(*args, **kwargs)

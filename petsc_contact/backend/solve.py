@@ -5,7 +5,7 @@ The solver type and every tolerance come from the PETSc options database (``-tao
 before ``setFromOptions``, so options always win.
 
 The default is ``-tao_type python`` with the package's Fourier-preconditioned active-set
-conjugate gradient (:class:`petsc_contact.cg.PreconditionedCG`, the fastest robust choice
+conjugate gradient (:class:`petsc_contact.backend.cg.PreconditionedCG`, the fastest robust choice
 measured, docs/solvers.md); any other Python type is chosen with ``-tao_python_type``.
 A Python type that has ``set_preconditioner`` receives the Fourier preconditioner.
 
@@ -30,8 +30,8 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from ..conventions.grid import Grid
 from . import _petsc
-from .grid import Grid
 from .operator import SpectralOperator, shell_matrix
 
 BOUND_TYPES = (
@@ -53,7 +53,7 @@ J0_TYPES = ("bqnls", "bqnkls", "bqnktr", "bqnktl")
 KSP_TYPES = ("tron", "gpcg", "bnls", "bntr", "bntl", "bqpip")
 KSP_PC_TYPES = ("tron", "bnls", "bntr", "bntl")  # preconditioned through the Hessian's Pmat
 DEFAULT_TYPE = "python"
-DEFAULT_PYTHON_TYPE = "petsc_contact.cg.PreconditionedCG"
+DEFAULT_PYTHON_TYPE = "petsc_contact.backend.cg.PreconditionedCG"
 DEFAULT_GATOL = 1e-8
 DEFAULT_MAX_IT = 5000
 
@@ -204,8 +204,8 @@ class BoundSolver:
         ``monitor(iteration, f, gnorm)`` is called every iteration (the iterate is
         :attr:`x`); returning ``True`` stops the solve with ``DIVERGED_USER``.
         ``gatol_floor`` raises TAO's absolute tolerance to what double precision can resolve
-        (see :meth:`~petsc_contact.problem.PeriodicProblem.rounding_floor`); the tolerance
-        actually used is reported in :class:`SolveInfo`.
+        (see :meth:`~petsc_contact.geometries.periodic.PeriodicProblem.rounding_floor`);
+        the tolerance actually used is reported in :class:`SolveInfo`.
         """
         self._load(x0, lower, upper)
         counts = {"objgrad": 0}

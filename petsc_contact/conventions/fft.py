@@ -9,7 +9,8 @@ One interface, three backends chosen by the communicator size:
   transpose per direction and keeps every local transform contiguous (faster than
   mpi4py-fft; docs/parallel.md);
 - several ranks whose row slabs are not FFTW's (FFTW gives every rank ``ceil(nx/P)`` rows but
-  the last; :func:`~petsc_contact.grid.block_rows` spreads the remainder, e.g. 22/21/21 rows
+  the last; :func:`~petsc_contact.conventions.grid.block_rows` spreads the remainder, e.g.
+  22/21/21 rows
   for n = 64 on 3 ranks), or without ``libfftw3_mpi``: the slab-decomposed parallel FFT of
   Debian's ``mpi4py-fft`` (FFTW underneath).
 
@@ -23,7 +24,7 @@ spectrum) and ``result`` (output of :meth:`backward`).  Both transforms are unno
 ``backward(forward(x)) = nx ny x``.
 
 :meth:`forward_from` and :meth:`backward_into` are the hot path of every operator (one round
-trip with a spectral multiplier between them, :mod:`petsc_contact.operator`).  The serial
+trip with a spectral multiplier between them, :mod:`petsc_contact.backend.operator`).  The serial
 backend runs FFTW directly on the caller's arrays when they are as aligned as its plans
 (PETSc's Vec arrays are: 16 bytes), which saves two copies of the field per application;
 otherwise it copies.
@@ -395,7 +396,7 @@ def wavevectors(grid: Grid, fft: FFT) -> tuple[np.ndarray, np.ndarray]:
     """Local components ``(qx, qy)`` of the half-spectrum block, broadcastable to its shape.
 
     ``q = 2 pi (i/Lx, j/Ly)`` with ``i`` in numpy's FFT order
-    (:func:`~petsc_contact.grid.fft_order`) and ``j = 0 .. ny//2``.
+    (:func:`~petsc_contact.conventions.grid.fft_order`) and ``j = 0 .. ny//2``.
     """
     rows, cols = fft.spectral_index
     dqx, dqy = grid.dq

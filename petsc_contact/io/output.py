@@ -3,7 +3,7 @@
 A run writes ``OUT.h5.partial`` and renames it to ``OUT.h5`` when it ends (atomic on POSIX),
 so a killed run never damages an earlier ``OUT.h5``, and every finished load step is already
 on disk, flushed, in the ``.partial`` file.  Only rank 0 touches the file; distributed fields
-are gathered to it (see :meth:`petsc_contact.grid.Grid.gather`).  This module owns the
+are gathered to it (see :meth:`petsc_contact.conventions.grid.Grid.gather`).  This module owns the
 schema: every dataset any command writes, with its units and description (the tables below,
 rendered as ``docs/output-schema.md``).
 """
@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from .grid import Grid
+from ..conventions.grid import Grid
 
 
 def load_table(path: str, columns: int) -> np.ndarray:
@@ -84,7 +84,7 @@ def versions(petsc: Any | None = None) -> dict[str, str]:
     try:
         out["petsc_contact"] = metadata.version("petsc-contact")
     except metadata.PackageNotFoundError:
-        from . import __version__
+        from .. import __version__
 
         out["petsc_contact"] = __version__
     out["petsc_contact_commit"] = source_commit()
@@ -216,7 +216,9 @@ class StepWriter:
         try:
             entry = self.schema[name]
         except KeyError:
-            raise KeyError(f"no schema entry for dataset '{name}' (petsc_contact.output)") from None
+            raise KeyError(
+                f"no schema entry for dataset '{name}' (petsc_contact.io.output)"
+            ) from None
         return in_unit(entry, str(self.file.attrs.get("length_unit", "")))
 
     def _open_partial(self) -> int:
@@ -527,7 +529,7 @@ def schema_markdown() -> str:
     lines = [
         "# Output schema",
         "",
-        "Generated from `petsc_contact/output.py` by",
+        "Generated from `petsc_contact/io/output.py` by",
         "`petsc-contact schema > docs/output-schema.md`; a test fails when this page and the",
         "code disagree. Every dataset carries the `units` and `description` attributes listed",
         "here. Units are symbolic: `length` is the unit of `--length` and of the heights (a",

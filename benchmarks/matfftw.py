@@ -32,6 +32,54 @@ def best_of(fn, repeats: int = 5, inner: int = 10) -> float:
     return best
 
 
+class MatFFTW:
+    """PETSc's ``MATFFTW`` of an ``n x n`` grid with its three FFTW-layout Vecs (ctypes)."""
+
+    def __init__(self, petsc, n: int, comm) -> None:
+        from mpi4py import MPI
+
+        self.lib = lib = ctypes.CDLL(_petsc.library_path())
+        int_t = ctypes.c_int64 if np.dtype(petsc.IntType).itemsize == 8 else ctypes.c_int32
+        vp = ctypes.c_void_p
+        lib.MatCreateFFT.argtypes = [vp, int_t, ctypes.POINTER(int_t), ctypes.c_char_p]
+        lib.MatCreateFFT.argtypes += [ctypes.POINTER(vp)]
+        for name in (
+            "VecScatterPetscToFFTW",
+            "VecScatterFFTWToPetsc",
+            "MatMult",
+            "MatMultTranspose",
+        ):
+            getattr(lib, name).argtypes = [vp, vp, vp]
+        lib.MatCreateVecsFFTW.argtypes = [vp] + [ctypes.POINTER(vp)] * 3
+        lib.MatDestroy.argtypes = lib.VecDestroy.argtypes = [ctypes.POINTER(vp)]
+        self.mat = vp()
+        dims = (int_t * 2)(n, n)
+        if lib.MatCreateFFT(vp(MPI._handleof(comm)), 2, dims, b"fftw", ctypes.byref(self.mat)):
+            raise RuntimeError("MatCreateFFT failed")
+        self.x, self.y, self.z = vp(), vp(), vp()
+        vecs = (ctypes.byref(self.x), ctypes.byref(self.y), ctypes.byref(self.z))
+        if lib.MatCreateVecsFFTW(self.mat, *vecs):
+            raise RuntimeError("MatCreateVecsFFTW failed")
+
+    def round_trip(self, vin, vout) -> None:
+        """Scatter in, forward, backward, scatter out: one operator application's FFTs."""
+        lib, vp = self.lib, ctypes.c_void_p
+        lib.VecScatterPetscToFFTW(self.mat, vp(vin.handle), self.x)
+        lib.MatMult(self.mat, self.x, self.y)
+        lib.MatMultTranspose(self.mat, self.y, self.z)
+        lib.VecScatterFFTWToPetsc(self.mat, self.z, vp(vout.handle))
+
+    def scatters(self, vin, vout) -> None:
+        vp = ctypes.c_void_p
+        self.lib.VecScatterPetscToFFTW(self.mat, vp(vin.handle), self.x)
+        self.lib.VecScatterFFTWToPetsc(self.mat, self.z, vp(vout.handle))
+
+    def destroy(self) -> None:
+        for v in (self.x, self.y, self.z):
+            self.lib.VecDestroy(ctypes.byref(v))
+        self.lib.MatDestroy(ctypes.byref(self.mat))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grid", type=int, default=2048)
@@ -41,51 +89,12 @@ def main() -> None:
 
     comm = MPI.COMM_WORLD
     n = args.grid
-    lib = ctypes.CDLL("libpetsc_real.so.3.18")
-    int_t = ctypes.c_int64 if np.dtype(petsc.IntType).itemsize == 8 else ctypes.c_int32
-    vp = ctypes.c_void_p
-    lib.MatCreateFFT.argtypes = [
-        vp,
-        int_t,
-        ctypes.POINTER(int_t),
-        ctypes.c_char_p,
-        ctypes.POINTER(vp),
-    ]
-    for name in ("VecScatterPetscToFFTW", "VecScatterFFTWToPetsc", "MatMult", "MatMultTranspose"):
-        getattr(lib, name).argtypes = [vp, vp, vp]
-    lib.MatCreateVecsFFTW.argtypes = [
-        vp,
-        ctypes.POINTER(vp),
-        ctypes.POINTER(vp),
-        ctypes.POINTER(vp),
-    ]
-    mat = vp()
-    dims = (int_t * 2)(n, n)
-    handle = MPI._handleof(comm)
-    rc = lib.MatCreateFFT(vp(handle), 2, dims, b"fftw", ctypes.byref(mat))
-    if rc:
-        raise RuntimeError(f"MatCreateFFT failed ({rc})")
-    x, y, z = vp(), vp(), vp()
-    if lib.MatCreateVecsFFTW(mat, ctypes.byref(x), ctypes.byref(y), ctypes.byref(z)):
-        raise RuntimeError("MatCreateVecsFFTW failed")
+    matfftw = MatFFTW(petsc, n, comm)
     grid = Grid(n, 1.0, comm)
-    rows = grid.local_shape[0] * n
-    vin = petsc.Vec().createMPI((rows, n * n), comm=comm)
+    vin = petsc.Vec().createMPI((grid.local_shape[0] * n, n * n), comm=comm)
     vout = vin.duplicate()
     vin.setRandom()
-
-    def petsc_round_trip() -> None:
-        lib.VecScatterPetscToFFTW(mat, vp(vin.handle), x)
-        lib.MatMult(mat, x, y)
-        lib.MatMultTranspose(mat, y, z)
-        lib.VecScatterFFTWToPetsc(mat, z, vp(vout.handle))
-
-    def scatter_only() -> None:
-        lib.VecScatterPetscToFFTW(mat, vp(vin.handle), x)
-        lib.VecScatterFFTWToPetsc(mat, z, vp(vout.handle))
-
     fft = make_fft(grid)
-    fft.real[...] = vin.array_r.reshape(grid.local_shape)
 
     def package_round_trip() -> None:
         fft.real[...] = vin.array_r.reshape(grid.local_shape)
@@ -93,20 +102,23 @@ def main() -> None:
         fft.backward()
         vout.array[...] = fft.result.reshape(-1)
 
-    t_petsc = comm.allreduce(best_of(petsc_round_trip), op=MPI.MAX)
-    t_scatter = comm.allreduce(best_of(scatter_only), op=MPI.MAX)
-    t_pkg = comm.allreduce(best_of(package_round_trip), op=MPI.MAX)
-    lib.MatDestroy.argtypes = lib.VecDestroy.argtypes = [ctypes.POINTER(vp)]
-    for v in (x, y, z):
-        lib.VecDestroy(ctypes.byref(v))
-    lib.MatDestroy(ctypes.byref(mat))
+    times = [
+        comm.allreduce(best_of(fn), op=MPI.MAX)
+        for fn in (
+            lambda: matfftw.round_trip(vin, vout),
+            lambda: matfftw.scatters(vin, vout),
+            package_round_trip,
+        )
+    ]
+    matfftw.destroy()
     vin.destroy()
     vout.destroy()
     if comm.rank == 0:
+        t_petsc, t_scatter, t_pkg = (1e3 * t for t in times)
         print(
-            f"n = {n}, ranks = {comm.size}: MATFFTW round trip {t_petsc * 1e3:.1f} ms "
-            f"(of which the two scatters {t_scatter * 1e3:.1f} ms); package backend "
-            f"({type(fft).__name__}) {t_pkg * 1e3:.1f} ms"
+            f"n = {n}, ranks = {comm.size}: MATFFTW round trip {t_petsc:.1f} ms "
+            f"(of which the two scatters {t_scatter:.1f} ms); package backend "
+            f"({type(fft).__name__}) {t_pkg:.1f} ms"
         )
 
 

@@ -122,7 +122,7 @@ def peer(
     return results
 
 
-def main() -> None:
+def parse_args() -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grid", type=int, nargs="+", default=[512])
     ap.add_argument("--types", nargs="+", default=["python", "tron"])
@@ -136,7 +136,56 @@ def main() -> None:
     ap.add_argument("--no-peers", action="store_true", help="skip Tamaas and ContactMechanics")
     ap.add_argument("--repeat", type=int, default=3, help="solves per case; the median is shown")
     ap.add_argument("--surfaces", nargs="+", choices=("easy", "paper"), default=["easy"])
-    args = ap.parse_args()
+    return ap.parse_args()
+
+
+def run_peers(h: np.ndarray, pressures: list[float]) -> dict:
+    """Every peer's runs on ``h``, printed; ``{peer: {p0: result}}``."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "h.npy")
+        np.save(path, h)
+        peers = {}
+        for run in PEER_RUNS:
+            peers.update(peer(run[0], path, pressures, *run[1:]))
+    for name, rows in peers.items():
+        for p0, r in rows.items():
+            flag = "" if r.get("converged", True) else "  NOT CONVERGED"
+            print(
+                f"# {name:>16} p0 {p0:.0e}: {r['time']:8.3f} s, {r['iterations']} its, "
+                f"mean gap {r['mean_gap']:.8e}{flag}"
+            )
+    return peers
+
+
+def ours(h: np.ndarray, tao_type: str, p0: float, repeat: int, rt: float, peers: dict) -> str:
+    """The median of ``repeat`` solves with ``-tao_type tao_type`` as a table row."""
+    runs = []
+    for _ in range(repeat):
+        with FFTClock() as clock:
+            (run,) = periodic_contact(h, 1.0, 1.0, [p0], options=["-tao_type", tao_type])
+        runs.append((run, clock.seconds, clock.transforms))
+    s, fft_seconds, transforms = sorted(runs, key=lambda r: r[0].scalars["solve_time"])[
+        len(runs) // 2
+    ]
+    d = s.scalars
+    ffts = transforms // 2  # round trips (a projected step skips one inverse)
+    peer_time = {
+        k: peers.get(k, {}).get(p0, {}).get("time", np.nan)
+        for k in ("tamaas", "cm-polonsky-keer", "cm-bugnicourt")
+    }
+    cm_best = np.fmin(peer_time["cm-polonsky-keer"], peer_time["cm-bugnicourt"])
+    rel = [d["solve_time"] / peer_time["tamaas"], d["solve_time"] / cm_best]
+    flag = "" if s.converged else "  NOT CONVERGED"
+    return (
+        f"{tao_type:>8} {p0:>7.0e} {d['iterations']:>5d} {ffts:>6d} "
+        f"{d['solve_time']:>8.3f} {d['solve_time'] / (ffts * rt):>6.2f} "
+        f"{d['solve_time'] / fft_seconds:>8.2f} {d['mean_gap']:>14.8e} "
+        f"{rel[0]:>8.3f} {rel[1]:>8.3f}{flag}"
+    )
+
+
+def main() -> None:
+    args = parse_args()
     for n, surface in ((n, s) for s in args.surfaces for n in args.grid):
         grid = Grid(n, 1.0)
         rolloff, cutoff = (2, 64) if surface == "easy" else (1, n // 2)
@@ -158,19 +207,7 @@ def main() -> None:
             f"# n = {n}, {surface} surface (L/lambda_r = {rolloff}, L/lambda_1 = {cutoff}): "
             f"FFT round trip {rt * 1e3:.3f} ms"
         )
-        with tempfile.TemporaryDirectory() as tmp:
-            path = os.path.join(tmp, "h.npy")
-            np.save(path, h)
-            peers = {}
-            for run in () if args.no_peers else PEER_RUNS:
-                peers.update(peer(run[0], path, pressures, *run[1:]))
-        for name, rows in peers.items():
-            for p0, r in rows.items():
-                flag = "" if r.get("converged", True) else "  NOT CONVERGED"
-                print(
-                    f"# {name:>16} p0 {p0:.0e}: {r['time']:8.3f} s, {r['iterations']} its, "
-                    f"mean gap {r['mean_gap']:.8e}{flag}"
-                )
+        peers = {} if args.no_peers else run_peers(h, pressures)
         print(
             f"{'solver':>8} {'p0':>7} {'its':>5} {'FFTs':>6} {'time_s':>8} {'ratio':>6}"
             f" {'in-solve':>8}"
@@ -178,32 +215,7 @@ def main() -> None:
         )
         for t in args.types:
             for p0 in pressures:
-                runs = []
-                for _ in range(args.repeat):
-                    with FFTClock() as clock:
-                        (run,) = periodic_contact(h, 1.0, 1.0, [p0], options=["-tao_type", t])
-                    runs.append((run, clock.seconds, clock.transforms))
-                s, fft_seconds, transforms = sorted(runs, key=lambda r: r[0].scalars["solve_time"])[
-                    len(runs) // 2
-                ]
-                d = s.scalars
-                ffts = transforms // 2  # round trips (a projected step skips one inverse)
-                ratio = d["solve_time"] / (ffts * rt)
-                in_solve = d["solve_time"] / fft_seconds
-                peer_time = {
-                    k: peers.get(k, {}).get(p0, {}).get("time", np.nan)
-                    for k in ("tamaas", "cm-polonsky-keer", "cm-bugnicourt")
-                }
-                cm_best = np.fmin(peer_time["cm-polonsky-keer"], peer_time["cm-bugnicourt"])
-                rel = [d["solve_time"] / peer_time["tamaas"], d["solve_time"] / cm_best]
-                flag = "" if s.converged else "  NOT CONVERGED"
-                print(
-                    f"{t:>8} {p0:>7.0e} {d['iterations']:>5d} {ffts:>6d} "
-                    f"{d['solve_time']:>8.3f} {ratio:>6.2f} {in_solve:>8.2f} "
-                    f"{d['mean_gap']:>14.8e} "
-                    f"{rel[0]:>8.3f} {rel[1]:>8.3f}{flag}",
-                    flush=True,
-                )
+                print(ours(h, t, p0, args.repeat, rt, peers), flush=True)
 
 
 if __name__ == "__main__":

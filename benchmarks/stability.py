@@ -72,7 +72,7 @@ def scenes(n: int) -> list[tuple[str, np.ndarray, float, float, float]]:
     return out
 
 
-def main() -> None:
+def parse_args() -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grid", type=int, default=128)
     ap.add_argument(
@@ -103,7 +103,52 @@ def main() -> None:
         default=True,
         help="run the scenes at --grid (--no-scenes: only the --grids rows)",
     )
-    args = ap.parse_args()
+    return ap.parse_args()
+
+
+def row(name: str, case: tuple, args: argparse.Namespace) -> str:
+    """One scene's table row: every solver's verdict, iterations, time and error."""
+    h, length, modulus, p0 = case
+    grid = Grid(h.shape[0], length)
+    problem = PeriodicProblem(grid, make_fft(grid), h, modulus)
+    try:
+        _, trajs = compare(
+            problem, p0, args.solvers, args.time_limit, stall_iterations=args.stall_iterations
+        )
+    except RuntimeError as exc:
+        cells = [f"reference failed: {exc}"] * len(args.solvers)
+    else:
+        cells = []
+        for t in trajs:
+            err = t.pressure_error[-1] if t.pressure_error else float("nan")
+            mark = "ok" if t.converged else "**FAIL**"
+            cells.append(
+                f"{mark} {t.iterations} its, {t.solve_time:.2g} s, "
+                f"err {err:.0e}" + ("" if t.converged else f" ({t.reason})")
+            )
+    return f"| {name} | " + " | ".join(cells) + " |"
+
+
+def write_markdown(lines: list[str], args: argparse.Namespace) -> None:
+    where = f"{args.grid}^2 unless stated" if args.scenes else "large grids"
+    stall = (
+        f", stopped after {args.stall_iterations} iterations without a 10% lower natural residual"
+        if args.stall_iterations
+        else ""
+    )
+    with open(args.markdown, "a" if args.append else "w") as f:
+        f.write(
+            f"{chr(10) if args.append else ''}Stability matrix, {where}, time limit "
+            f"{args.time_limit:g} s per solver{stall} (`benchmarks/stability.py`). "
+            "Each cell: "
+            "verdict, TAO iterations, wall time, relative pressure error against a "
+            "reference solved at 1e-12 (raised to 30 eps k h_rms / p0 where rounding needs "
+            "it).\n\n" + "\n".join(lines) + "\n"
+        )
+
+
+def main() -> None:
+    args = parse_args()
     _petsc.init([])
     cases = scenes(args.grid) if args.scenes else []
     cases += [(f"grid {n}, p0=1e-3", rough(n), 1.0, 1.0, 1e-3) for n in args.grids]
@@ -112,43 +157,12 @@ def main() -> None:
         "| --- |" + " --- |" * len(args.solvers),
     ]
     start = time.perf_counter()
-    for name, h, length, modulus, p0 in cases:
-        grid = Grid(h.shape[0], length)
-        problem = PeriodicProblem(grid, make_fft(grid), h, modulus)
-        try:
-            _, trajs = compare(
-                problem, p0, args.solvers, args.time_limit, stall_iterations=args.stall_iterations
-            )
-            cells = []
-            for t in trajs:
-                err = t.pressure_error[-1] if t.pressure_error else float("nan")
-                mark = "ok" if t.converged else "**FAIL**"
-                cells.append(
-                    f"{mark} {t.iterations} its, {t.solve_time:.2g} s, "
-                    f"err {err:.0e}" + ("" if t.converged else f" ({t.reason})")
-                )
-        except RuntimeError as exc:
-            cells = [f"reference failed: {exc}"] * len(args.solvers)
-        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    for name, *case in cases:
+        lines.append(row(name, tuple(case), args))
         print(lines[-1], flush=True)
     print(f"# {time.perf_counter() - start:.0f} s")
     if args.markdown:
-        where = f"{args.grid}^2 unless stated" if args.scenes else "large grids"
-        with open(args.markdown, "a" if args.append else "w") as f:
-            stall = (
-                f", stopped after {args.stall_iterations} iterations without a 10% lower "
-                "natural residual"
-                if args.stall_iterations
-                else ""
-            )
-            f.write(
-                f"{chr(10) if args.append else ''}Stability matrix, {where}, time limit "
-                f"{args.time_limit:g} s per solver{stall} (`benchmarks/stability.py`). "
-                "Each cell: "
-                "verdict, TAO iterations, wall time, relative pressure error against a "
-                "reference solved at 1e-12 (raised to 30 eps k h_rms / p0 where rounding needs "
-                "it).\n\n" + "\n".join(lines) + "\n"
-            )
+        write_markdown(lines, args)
 
 
 if __name__ == "__main__":

@@ -193,10 +193,12 @@ def _draw(args: argparse.Namespace, data: dict, n: int) -> None:
         ylabel=r"$K h_\mathrm{rms}/E^*$",
         title=f"Fig. 1: H = {args.hurst}, {n}$^2$ (lines: Persson; x: -dp/du)",
     )
+    ax.set_ylim(top=10)  # K diverges at full contact: the last loads leave the frame
     ax.legend(fontsize=7, loc="upper left")
     ax.grid(alpha=0.3, which="both")
     inset.set(xlabel=r"$\bar u/h_\mathrm{rms}$", ylabel="$p_0/E^*$")
-    inset.tick_params(labelsize=6)
+    inset.tick_params(labelsize=6, labelleft=False, labelright=True)
+    inset.yaxis.set_label_position("right")
     fig.savefig(f"{args.output}.png", dpi=120)
 
 

@@ -48,7 +48,8 @@ def _from_data(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]
             continue
         results[f"ratio{r:g}"] = curves | fit
         ratios.append(float(r))
-        print(f"# lambda_r/lambda_1 = {r}: {len(paths)} seeds on {n}^2")
+        alone = " (one seed: the error is the fit's alone)" if len(paths) == 1 else ""
+        print(f"# lambda_r/lambda_1 = {r}: {len(paths)} seeds on {n}^2{alone}")
     if not ratios:
         raise SystemExit(f"no complete Fig. 3 piece in {args.data}")
     return ratios, results[f"ratio{ratios[0]:g}"]["nominal_pressure"][0], results

@@ -21,11 +21,12 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 __version__ = "0.1.0"
 
-from ._moved import install as _install_old_paths
+from . import _moved
 from .conventions.grid import Grid
 from .workflows.periodic_sweep import periodic_contact
 from .workflows.punch_sweep import punch_contact
 
-_install_old_paths()
+_moved.install()  # the module paths from before the layer folders
+__getattr__ = _moved.old_attribute
 
 __all__ = ["Grid", "periodic_contact", "punch_contact", "__version__"]

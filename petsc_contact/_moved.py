@@ -94,6 +94,14 @@ class _OldPaths(importlib.abc.MetaPathFinder, importlib.abc.Loader):
         """Nothing to run: the stand-in is complete when created."""
 
 
+def old_attribute(name: str) -> types.ModuleType:
+    """``petsc_contact.<old>`` as an attribute of the package (its module ``__getattr__``), as
+    ``import petsc_contact; petsc_contact.grid.Grid`` worked before the folders."""
+    if name not in MOVED:
+        raise AttributeError(f"module {PACKAGE!r} has no attribute {name!r}")
+    return importlib.import_module(f"{PACKAGE}.{name}")
+
+
 def install() -> None:
     """Make the old paths importable (once per process)."""
     if not any(isinstance(f, _OldPaths) for f in sys.meta_path):

@@ -37,6 +37,18 @@ def test_the_split_punch_module_offers_both_halves():
     assert old.punch_contact is punch_contact and "verify_punch" in dir(old)
 
 
+def test_an_old_module_is_an_attribute_of_the_package():
+    import petsc_contact
+    from petsc_contact.conventions.grid import Grid
+
+    sys.modules.pop("petsc_contact.grid", None)
+    vars(petsc_contact).pop("grid", None)
+    with pytest.warns(DeprecationWarning, match="conventions.grid"):
+        assert petsc_contact.grid.Grid is Grid
+    with pytest.raises(AttributeError, match="no attribute 'nothing'"):
+        _ = petsc_contact.nothing
+
+
 @pytest.mark.parametrize("old", sorted(MOVED))
 def test_every_old_path_leads_to_an_existing_module(old):
     with pytest.warns(DeprecationWarning):

@@ -487,6 +487,8 @@ def test_study_runs_in_resumable_pieces(tmp_path):
     assert r.returncode == 75, r.stderr
     assert (data / "fig1" / "punch.h5.partial").exists()  # the smallest grid first
     assert (data / "fig1" / "punch.h5.state.npz").exists()  # the state, beside it
+    plan = cli(*base, "--list").stdout.splitlines()
+    assert [line.split()[0] for line in plan] == ["1/16", "todo", "todo"]  # the punch first
     r = cli(*base, "--minutes", "10")
     assert r.returncode == 0, r.stderr
     files = sorted((data / "fig1").glob("*.h5"))
@@ -498,6 +500,7 @@ def test_study_runs_in_resumable_pieces(tmp_path):
         assert np.all(f["converged"][:])
     r = cli(*base, "--minutes", "10")
     assert r.returncode == 0 and [f.stat().st_mtime_ns for f in files] == stamps
+    assert [line.split()[0] for line in cli(*base, "--list").stdout.splitlines()] == ["done"] * 3
     assert sum(f.stat().st_size for f in files) < 2e6  # scalars only
 
 

@@ -13,7 +13,7 @@ import os
 import time
 from collections.abc import Sequence
 
-from ..workflows.paper_study import Piece, complete, pieces
+from ..workflows.paper_study import Piece, complete, finished_steps, pieces
 from .common import EXIT_INTERRUPTED, EXIT_PAUSED
 
 
@@ -57,10 +57,12 @@ def _paused(todo: Sequence[Piece], data: str, done: int) -> int:
 
 
 def study_plan(args: argparse.Namespace) -> str:
-    """One line per piece: its file, and whether it is complete."""
-    todo = chosen(args)
-    return "\n".join(
-        f"{'done' if complete(p.path(args.data)) else 'todo'}  {p.path(args.data)}  "
-        f"petsc-contact {' '.join(p.argv)}"
-        for p in todo
-    )
+    """One line per piece: its state (``done``, ``todo``, or the steps an unfinished piece
+    has kept, ``13/25``), its file and its command line."""
+    lines = []
+    for piece in chosen(args):
+        path = piece.path(args.data)
+        kept = None if complete(path) else finished_steps(path)
+        state = "done" if complete(path) else "todo" if kept is None else f"{kept}/{piece.steps}"
+        lines.append(f"{state:>5}  {path}  petsc-contact {' '.join(piece.argv)}")
+    return "\n".join(lines)

@@ -39,6 +39,15 @@ class Piece:
         """The run's grid size, the measure of its cost."""
         return int(self.argv[self.argv.index("--grid") + 1])
 
+    @property
+    def steps(self) -> int:
+        """The run's load steps: its ``--sweep`` count or its list of loads."""
+        options = dict(zip(self.argv[1::2], self.argv[2::2], strict=False))
+        if "--sweep" in options:
+            return int(options["--sweep"].split(",")[0])
+        loads = options.get("--approaches") or options.get("--pressures") or ""
+        return len(loads.split(","))
+
     def path(self, data: str) -> str:
         return os.path.join(data, self.figure, f"{self.name}.h5")
 
@@ -120,6 +129,21 @@ def complete(path: str) -> bool:
 
     with h5py.File(path, "r") as f:
         return bool(f.attrs.get("complete", False))
+
+
+def finished_steps(path: str) -> int | None:
+    """The steps kept so far in a piece's unfinished file ``path + '.partial'`` (None when
+    there is none, or it cannot be read while a run writes it)."""
+    partial = path + ".partial"
+    if not os.path.exists(partial):
+        return None
+    import h5py
+
+    try:
+        with h5py.File(partial, "r", locking=False) as f:
+            return int(f["converged"].shape[0]) if "converged" in f else 0
+    except (OSError, KeyError):
+        return None
 
 
 def add_redraw_options(parser: Any, figure: int, output: str) -> None:

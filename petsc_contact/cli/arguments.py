@@ -425,7 +425,11 @@ def _study_parser(sub: Any) -> None:
     p.add_argument("--minutes", type=float, default=45.0, help="time budget (default 45)")
     p.add_argument("--data", default=os.path.join("data", "paper"), help="default data/paper")
     p.add_argument("--shrink", type=int, default=1, help="divide every grid (a quick look)")
-    p.add_argument("--list", action="store_true", help="print every piece: done, todo or steps kept (13/25), and stop")
+    p.add_argument(
+        "--list",
+        action="store_true",
+        help="print every piece: done, todo or steps kept (13/25), and stop",
+    )
     p.add_argument("--quiet", action="store_true", help="no tables")
 
 

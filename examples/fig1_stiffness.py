@@ -232,7 +232,7 @@ def main() -> None:
             f"p_c/E* formula (paper Eq. 13, q_r ~ pi/L) {d['pc_formula']:.2e}, simulation "
             f"crossover {d['pc_simulation']:.2e}, u0/h_rms = {d['u0'] / hr:.3f}, "
             f"d ln K/d ln p at the lowest resolved loads {d['lowest_slope']:.2f} (Hertz 1/3), "
-            f"one contact patch up to p0/E* = {single_patch_limit(d):.2g}"
+            f"one contact patch up to p0/E* = {single_patch_limit(d):.2g} (nan: at no load)"
         )
     print(f"wrote {args.output}.png and {args.output}.h5")
 

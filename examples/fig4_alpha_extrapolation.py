@@ -77,18 +77,21 @@ def _arguments() -> argparse.Namespace:
 def extrapolation(hurst: float, ratios: list[float], results: dict) -> dict:
     """``alpha`` against ``x = (lambda_1/lambda_r)^(1/(1+H))``, weighted by its errors, and
     the straight line through them to ``x = 0`` (``alpha_0`` with an error from three
-    ratios on)."""
+    ratios on).  A ratio with one seed so far has no seed spread in its error: it is drawn
+    but left out of the line (``used``)."""
     alpha = np.array([results[f"ratio{r:g}"]["alpha"] for r in ratios])
     error = np.array([results[f"ratio{r:g}"]["alpha_error"] for r in ratios])
+    used = np.array([len(results[f"ratio{r:g}"]["stiffness"]) > 1 for r in ratios])
     exponent = 1 / (1 + hurst)  # the paper's 0.77 at H = 0.3
     x = (1.0 / np.array(ratios)) ** exponent
-    w = 1.0 / np.maximum(error, 1e-3) ** 2
+    w = 1.0 / np.maximum(error[used], 1e-3) ** 2
     coef, cov = (
-        np.polyfit(x, alpha, 1, w=np.sqrt(w), cov="unscaled")
-        if len(x) > 2
-        else (np.polyfit(x, alpha, 1), np.full((2, 2), np.nan))
+        np.polyfit(x[used], alpha[used], 1, w=np.sqrt(w), cov="unscaled")
+        if used.sum() > 2
+        else (np.polyfit(x[used], alpha[used], 1), np.full((2, 2), np.nan))
     )
     return {
+        "used": used,
         "x": x,
         "alpha": alpha,
         "alpha_error": error,
@@ -110,7 +113,18 @@ def _draw(
     x, exponent = fit["x"], fit["exponent"]
     a0, a0_err = fit["extrapolated_alpha"], fit["extrapolated_alpha_error"]
     fig, ax = plt.subplots(figsize=(5.5, 4.2), constrained_layout=True)
-    ax.errorbar(x, fit["alpha"], fit["alpha_error"], fmt="o", label="simulations")
+    used = fit["used"]
+    ax.errorbar(x[used], fit["alpha"][used], fit["alpha_error"][used], fmt="o", label="simulations")
+    if not used.all():
+        ax.errorbar(
+            x[~used],
+            fit["alpha"][~used],
+            fit["alpha_error"][~used],
+            fmt="o",
+            mfc="none",
+            color="C0",
+            label="one seed so far (not fitted)",
+        )
     xs = np.linspace(0, x.max() * 1.05, 50)
     ax.plot(
         xs,
@@ -155,7 +169,7 @@ def main() -> None:
         {
             "nominal_pressure": p,
             "ratio": np.array(ratios),
-            **{k: fit[k] for k in ("x", "alpha", "alpha_error")},
+            **{k: fit[k] for k in ("x", "alpha", "alpha_error", "used")},
             **results,
         },
         hurst=args.hurst,
@@ -172,7 +186,7 @@ def main() -> None:
             f"({res['below_crossover']} of {args.fit_points} fitted loads below p_c = "
             f"{res['crossover']:.2g})"
         )
-    if len(ratios) > 2:
+    if fit["used"].sum() > 2:
         print(
             f"extrapolated alpha = {fit['extrapolated_alpha']:.3f} +- "
             f"{fit['extrapolated_alpha_error']:.3f}; 1/(1+H) = {fit['exponent']:.3f}"

@@ -144,3 +144,28 @@ def test_figures_redraw_from_study_files(tmp_path):
         # 32^2 (lambda_r/lambda_1 = 512 shrunk) has too few resolved loads: skipped, said so
         assert list(f["ratio"][:]) == [768, 2048, 4096]
         assert f["ratio4096"]["stiffness"].shape == (4, 25)  # fig2's H = 0.3 seeds
+
+
+def test_a_ratio_with_one_seed_is_drawn_but_not_fitted():
+    """The alpha extrapolation leaves out a ratio whose error lacks the seed spread: the line
+    through the other three is the one it would be without that ratio."""
+    import importlib.util
+
+    import numpy as np
+
+    spec = importlib.util.spec_from_file_location(
+        "fig4", ROOT / "examples" / "fig4_alpha_extrapolation.py"
+    )
+    fig4 = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(fig4)
+    ratios = [512.0, 768.0, 2048.0, 4096.0]
+    alphas, seeds = [0.70, 0.72, 0.75, 0.95], [4, 4, 4, 1]
+    results = {
+        f"ratio{r:g}": {"alpha": a, "alpha_error": 0.05, "stiffness": np.ones((s, 3))}
+        for r, a, s in zip(ratios, alphas, seeds, strict=True)
+    }
+    fit = fig4.extrapolation(0.3, ratios, results)
+    assert list(fit["used"]) == [True, True, True, False]
+    three = fig4.extrapolation(0.3, ratios[:3], results)
+    assert np.allclose(fit["coefficients"], three["coefficients"])
+    assert np.isfinite(fit["extrapolated_alpha_error"])

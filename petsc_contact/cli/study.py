@@ -62,7 +62,10 @@ def study_plan(args: argparse.Namespace) -> str:
     lines = []
     for piece in chosen(args):
         path = piece.path(args.data)
-        kept = None if complete(path) else finished_steps(path)
-        state = "done" if complete(path) else "todo" if kept is None else f"{kept}/{piece.steps}"
+        if complete(path):
+            state = "done"
+        else:
+            kept = finished_steps(path)
+            state = "todo" if kept is None else f"{kept}/{piece.steps}"
         lines.append(f"{state:>5}  {path}  petsc-contact {' '.join(piece.argv)}")
     return "\n".join(lines)

@@ -15,7 +15,14 @@ def _computed(args: argparse.Namespace, cutoff: float) -> tuple[np.ndarray, dict
     p = np.geomspace(args.pressures[0], args.pressures[1], int(args.pressures[2]))
     results = {
         f"H{h}": scenes.ensemble_curves(
-            args.grid, h, 1.0, cutoff, range(args.seeds), p, points=args.fit_points
+            args.grid,
+            h,
+            1.0,
+            cutoff,
+            range(args.seeds),
+            p,
+            points=args.fit_points,
+            min_contact_pixels=args.min_contact_pixels,
         )
         for h in args.hursts
     }
@@ -37,7 +44,9 @@ def _from_data(args: argparse.Namespace, cutoff: float) -> tuple[np.ndarray, dic
             n = int(f.attrs["grid"])
         curves = scenes.curves_from_files(paths)
         p_c = scenes.crossover(curves["h_rms"], h, 1.0)
-        results[f"H{h}"] = curves | scenes.finite_size_fit(curves, n * n, p_c, args.fit_points)
+        results[f"H{h}"] = curves | scenes.finite_size_fit(
+            curves, n * n, p_c, args.fit_points, args.min_contact_pixels
+        )
         args.grid, args.seeds = n, len(paths)
     if not results:
         raise SystemExit(f"no complete Fig. 2 piece in {args.data}")
@@ -75,7 +84,7 @@ def _draw(args: argparse.Namespace, p: np.ndarray, results: dict) -> None:
         r = results[f"H{h}"]
         h_rms = r["h_rms"].mean()
         k = r["stiffness_mean"] * h_rms
-        ok = r["resolved"]  # at least 16 contact pixels in every seed (scenes.resolved)
+        ok = r["resolved"]  # at least --min-contact-pixels in every seed
         (line,) = ax.loglog(p[ok], k[ok], "o", mfc="none", label=f"H = {h}")
         spread = np.nanstd(r["stiffness"] * r["h_rms"][:, None], axis=0, ddof=1)
         ax.fill_between(
@@ -94,7 +103,9 @@ def _draw(args: argparse.Namespace, p: np.ndarray, results: dict) -> None:
         print(
             f"{h:>4} {r['alpha']:>9.3f} +- {r['alpha_error']:.3f} {paper:>12} {1 / (1 + h):>8.3f}"
         )
-    ax.plot([], [], ".", color="gray", label="< 16 contact pixels (not fitted)")
+    ax.plot(
+        [], [], ".", color="gray", label=f"< {args.min_contact_pixels} contact pixels (not fitted)"
+    )
     ax.fill_between([], [], [], color="gray", alpha=0.2, label="spread over seeds (std)")
     ax.set(
         xlabel="$p_0/E^*$",

@@ -18,7 +18,14 @@ def _computed(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]:
     p = np.geomspace(args.pressures[0], args.pressures[1], int(args.pressures[2]))
     results = {
         f"ratio{r:g}": scenes.ensemble_curves(
-            args.grid, args.hurst, 1.0, r, range(args.seeds), p, points=args.fit_points
+            args.grid,
+            args.hurst,
+            1.0,
+            r,
+            range(args.seeds),
+            p,
+            points=args.fit_points,
+            min_contact_pixels=args.min_contact_pixels,
         )
         for r in ratios
     }
@@ -42,7 +49,9 @@ def _from_data(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]
         curves = scenes.curves_from_files(paths)
         p_c = scenes.crossover(curves["h_rms"], hurst, 1.0)
         try:
-            fit = scenes.finite_size_fit(curves, n * n, p_c, args.fit_points)
+            fit = scenes.finite_size_fit(
+                curves, n * n, p_c, args.fit_points, args.min_contact_pixels
+            )
         except ValueError as exc:
             print(f"# lambda_r/lambda_1 = {r}: not fitted ({exc})")
             continue

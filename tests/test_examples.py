@@ -121,7 +121,12 @@ def test_figures_redraw_from_study_files(tmp_path):
             },
         )
         assert r.returncode == 0, r.stderr
-    for script, figure in (("fig3_finite_size.py", "f2"), ("fig4_alpha_extrapolation.py", "f3")):
+    redraws = (
+        ("fig3_finite_size.py", "f2", []),
+        ("fig4_alpha_extrapolation.py", "f3", []),
+        ("fig4_alpha_extrapolation.py", "f3_any", ["--min-contact-pixels", "1"]),
+    )
+    for script, figure, extra in redraws:
         r = subprocess.run(
             [
                 sys.executable,
@@ -130,6 +135,7 @@ def test_figures_redraw_from_study_files(tmp_path):
                 str(data),
                 "--output",
                 str(tmp_path / figure),
+                *extra,
             ],
             capture_output=True,
             text=True,
@@ -138,12 +144,15 @@ def test_figures_redraw_from_study_files(tmp_path):
         )
         assert r.returncode == 0, r.stderr
         assert "below p_c" in r.stdout or "alpha" in r.stdout
-        assert script.startswith("fig3") or "512: not fitted" in r.stdout
+        assert script.startswith("fig3") or extra or "512: not fitted" in r.stdout
         assert (tmp_path / f"{figure}.png").stat().st_size > 1000
     with h5py.File(tmp_path / "f3.h5") as f:
         # 32^2 (lambda_r/lambda_1 = 512 shrunk) has too few resolved loads: skipped, said so
         assert list(f["ratio"][:]) == [768, 2048, 4096]
         assert f["ratio4096"]["stiffness"].shape == (4, 25)  # fig2's H = 0.3 seeds
+    with h5py.File(tmp_path / "f3_any.h5") as f:
+        # one contact pixel per seed counts as resolved: every ratio is fitted
+        assert list(f["ratio"][:]) == [512, 768, 2048, 4096]
 
 
 def test_a_ratio_with_one_seed_is_drawn_but_not_fitted():

@@ -147,9 +147,19 @@ def finished_steps(path: str) -> int | None:
 
 
 def add_redraw_options(parser: Any, figure: int, output: str) -> None:
-    """A figure script's ``--fit-points``, ``--data DIR`` (redraw the paper's Fig. ``figure``
-    from the study's files) and ``--output`` options."""
+    """A figure script's ``--fit-points``, ``--min-contact-pixels``, ``--data DIR`` (redraw
+    the paper's Fig. ``figure`` from the study's files) and ``--output`` options."""
+    from .scenes import MIN_CONTACT_PIXELS
+
     parser.add_argument("--fit-points", type=int, default=4)
+    parser.add_argument(
+        "--min-contact-pixels",
+        type=int,
+        default=MIN_CONTACT_PIXELS,
+        metavar="N",
+        help="a load is resolved, drawn as such and fitted when every seed has at least N "
+        f"contact pixels (default {MIN_CONTACT_PIXELS}, the study's rule)",
+    )
     parser.add_argument(
         "--data",
         metavar="DIR",

@@ -1,4 +1,4 @@
-"""Fig. 3: finite-size K(p) for H = 0.3, 0.5, 0.7 (L = lambda_r) with power-law fits of alpha."""
+"""The paper's Fig. 2: finite-size K(p) for H = 0.3, 0.5, 0.7 (L = lambda_r), alpha fitted."""
 
 import argparse
 
@@ -110,7 +110,7 @@ def _draw(args: argparse.Namespace, p: np.ndarray, results: dict) -> None:
     ax.set(
         xlabel="$p_0/E^*$",
         ylabel=r"$K h_\mathrm{rms}/E^*$",
-        title=f"Fig. 3: L = $\\lambda_r$, {args.grid}$^2$, {args.seeds} seeds",
+        title=f"paper Fig. 2: L = $\\lambda_r$, {args.grid}$^2$, {args.seeds} seeds",
     )
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3, which="both")

@@ -11,7 +11,9 @@ from petsc_contact.workflows.paper_study import add_redraw_options, piece_files
 PAPER_ALPHA = {0.3: 0.72, 0.5: 0.66, 0.7: 0.59}
 
 
-def _computed(args: argparse.Namespace, cutoff: float) -> tuple[np.ndarray, dict]:
+def _computed(args: argparse.Namespace) -> tuple[np.ndarray, dict]:
+    """Run the sweeps here (``--grid``, ``--cutoff-ratio``, ``--hursts``, ``--seeds``)."""
+    cutoff = args.cutoff_ratio = args.cutoff_ratio or args.grid / 4
     p = np.geomspace(args.pressures[0], args.pressures[1], int(args.pressures[2]))
     results = {
         f"H{h}": scenes.ensemble_curves(
@@ -29,7 +31,7 @@ def _computed(args: argparse.Namespace, cutoff: float) -> tuple[np.ndarray, dict
     return p, results
 
 
-def _from_data(args: argparse.Namespace, cutoff: float) -> tuple[np.ndarray, dict]:
+def _from_data(args: argparse.Namespace) -> tuple[np.ndarray, dict]:
     """Read the study's complete pieces of every H present (no solve)."""
     import h5py
 
@@ -41,13 +43,13 @@ def _from_data(args: argparse.Namespace, cutoff: float) -> tuple[np.ndarray, dic
             args.hursts.remove(h)
             continue
         with h5py.File(paths[0]) as f:
-            n = int(f.attrs["grid"])
+            n, args.cutoff_ratio = int(f.attrs["grid"]), float(f.attrs["cutoff_ratio"])
         curves = scenes.curves_from_files(paths)
         p_c = scenes.crossover(curves["h_rms"], h, 1.0)
         results[f"H{h}"] = curves | scenes.finite_size_fit(
             curves, n * n, p_c, args.fit_points, args.min_contact_pixels
         )
-        args.grid, args.seeds = n, len(paths)
+        args.grid = n
     if not results:
         raise SystemExit(f"no complete Fig. 2 piece in {args.data}")
     return next(iter(results.values()))["nominal_pressure"][0], results
@@ -85,7 +87,9 @@ def _draw(args: argparse.Namespace, p: np.ndarray, results: dict) -> None:
         h_rms = r["h_rms"].mean()
         k = r["stiffness_mean"] * h_rms
         ok = r["resolved"]  # at least --min-contact-pixels in every seed
-        (line,) = ax.loglog(p[ok], k[ok], "o", mfc="none", label=f"H = {h}")
+        (line,) = ax.loglog(
+            p[ok], k[ok], "o", mfc="none", label=f"H = {h} ({len(r['stiffness'])} seeds)"
+        )
         spread = np.nanstd(r["stiffness"] * r["h_rms"][:, None], axis=0, ddof=1)
         ax.fill_between(
             p[ok], (k - spread)[ok], (k + spread)[ok], color=line.get_color(), alpha=0.2
@@ -99,6 +103,7 @@ def _draw(args: argparse.Namespace, p: np.ndarray, results: dict) -> None:
             color=line.get_color(),
             label=rf"$\alpha$ = {r['alpha']:.2f} $\pm$ {r['alpha_error']:.2f}",
         )
+        ax.axvline(r["crossover"], color=line.get_color(), ls=":", lw=1)
         paper = PAPER_ALPHA.get(h, float("nan"))
         print(
             f"{h:>4} {r['alpha']:>9.3f} +- {r['alpha_error']:.3f} {paper:>12} {1 / (1 + h):>8.3f}"
@@ -107,10 +112,11 @@ def _draw(args: argparse.Namespace, p: np.ndarray, results: dict) -> None:
         [], [], ".", color="gray", label=f"< {args.min_contact_pixels} contact pixels (not fitted)"
     )
     ax.fill_between([], [], [], color="gray", alpha=0.2, label="spread over seeds (std)")
+    ax.plot([], [], ":", color="gray", label="$p_c$ (paper Eq. 13)")
     ax.set(
         xlabel="$p_0/E^*$",
         ylabel=r"$K h_\mathrm{rms}/E^*$",
-        title=f"paper Fig. 2: L = $\\lambda_r$, {args.grid}$^2$, {args.seeds} seeds",
+        title=f"paper Fig. 2: L = $\\lambda_r$, {args.grid}$^2$",
     )
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3, which="both")
@@ -119,16 +125,15 @@ def _draw(args: argparse.Namespace, p: np.ndarray, results: dict) -> None:
 
 def main() -> None:
     args = _arguments()
-    cutoff = args.cutoff_ratio or args.grid / 4
-    p, results = (_from_data if args.data else _computed)(args, cutoff)
+    p, results = (_from_data if args.data else _computed)(args)
     scenes.save(
         f"{args.output}.h5",
         {"nominal_pressure": p, **results},
         grid=args.grid,
-        cutoff_ratio=cutoff,
+        cutoff_ratio=args.cutoff_ratio,
         rolloff_ratio=1.0,
         rms_slope=0.1,
-        seeds=list(range(args.seeds)),
+        **({"study_data": args.data} if args.data else {"seeds": list(range(args.seeds))}),
         fit_points=args.fit_points,
     )
     _draw(args, p, results)

@@ -55,7 +55,7 @@ def _from_data(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]
         except ValueError as exc:
             print(f"# lambda_r/lambda_1 = {r}: not fitted ({exc})")
             continue
-        results[f"ratio{r:g}"] = curves | fit
+        results[f"ratio{r:g}"] = curves | fit | {"grid": n}
         ratios.append(float(r))
         alone = " (one seed: the error is the fit's alone)" if len(paths) == 1 else ""
         print(f"# lambda_r/lambda_1 = {r}: {len(paths)} seeds on {n}^2{alone}")
@@ -182,7 +182,7 @@ def main() -> None:
             **results,
         },
         hurst=args.hurst,
-        grid=args.grid,
+        **({"study_data": args.data} if args.data else {"grid": args.grid}),
         extrapolated_alpha=fit["extrapolated_alpha"],
         extrapolated_alpha_error=fit["extrapolated_alpha_error"],
         theory_alpha=fit["exponent"],

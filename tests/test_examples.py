@@ -150,6 +150,8 @@ def test_figures_redraw_from_study_files(tmp_path):
         # 32^2 (lambda_r/lambda_1 = 512 shrunk) has too few resolved loads: skipped, said so
         assert list(f["ratio"][:]) == [768, 2048, 4096]
         assert f["ratio4096"]["stiffness"].shape == (4, 25)  # fig2's H = 0.3 seeds
+        assert list(f["ratio4096"]["seed"][:]) == [1, 2, 3, 4]  # each file's own seed
+        assert f["ratio4096"]["grid"][()] == 8192 // 64
     with h5py.File(tmp_path / "f3_any.h5") as f:
         # one contact pixel per seed counts as resolved: every ratio is fitted
         assert list(f["ratio"][:]) == [512, 768, 2048, 4096]

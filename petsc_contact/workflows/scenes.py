@@ -115,8 +115,8 @@ def ensemble_curves(
     """Stiffness curves of several seeds, their mean, and power-law fits of the lowest points
     (:func:`finite_size_fit`).
 
-    Returns arrays ``seeds x pressures`` (``mean_gap``, ``stiffness``, ...) and the realised
-    ``h_rms`` per seed, with the fit's entries.
+    Returns arrays ``seeds x pressures`` (``mean_gap``, ``stiffness``, ...), the realised
+    ``h_rms`` and the ``seed`` of each surface, with the fit's entries.
     """
     rows, h_rms = [], []
     for seed in seeds:
@@ -130,7 +130,7 @@ def ensemble_curves(
                 flush=True,
             )
     out: dict[str, Any] = {k: np.array([r[k] for r in rows]) for k in rows[0]}
-    out["h_rms"] = np.array(h_rms)
+    out["h_rms"], out["seed"] = np.array(h_rms), np.array(seeds)
     p_c = crossover(out["h_rms"], hurst, rolloff_ratio)
     return out | finite_size_fit(out, n * n, p_c, points, min_contact_pixels)
 
@@ -196,11 +196,12 @@ def finite_size_fit(
 
 def curves_from_files(paths: Sequence[str]) -> dict[str, Any]:
     """A study's periodic sweeps of several seeds (``petsc-contact study`` files) as the
-    arrays of :func:`ensemble_curves` (steps that did not converge are ``nan``)."""
+    arrays of :func:`ensemble_curves` (steps that did not converge are ``nan``), with each
+    file's ``seed``."""
     import h5py
 
     rows: list[dict[str, np.ndarray]] = []
-    h_rms = []
+    h_rms, seeds = [], []
     for path in paths:
         with h5py.File(path, "r") as f:
             if not f.attrs.get("complete", False):
@@ -214,8 +215,9 @@ def curves_from_files(paths: Sequence[str]) -> dict[str, Any]:
                 row[k][~ok] = np.nan
             rows.append(row | {"converged": ok})
             h_rms.append(float(f.attrs["rms_height"]))
+            seeds.append(int(f.attrs["seed"]))
     out: dict[str, Any] = {k: np.array([r[k] for r in rows]) for k in rows[0]}
-    out["h_rms"] = np.array(h_rms)
+    out["h_rms"], out["seed"] = np.array(h_rms), np.array(seeds)
     return out
 
 

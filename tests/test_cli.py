@@ -340,6 +340,7 @@ def test_interrupted_sweep_resumes_without_recomputing(tmp_path):
         assert b.attrs["complete"] and "resume_state" not in b
         (resumed,) = json.loads(b.attrs["resumed"])  # who computed the steps after the cut
         assert resumed["after_step"] == kept and resumed["petsc_contact_commit"]
+        assert resumed["from_saved_state"]
         assert "resumed" not in a.attrs
         assert np.allclose(b["mean_gap"][:], a["mean_gap"][:], rtol=1e-8, atol=0)
         assert np.allclose(b["nominal_pressure"][:], a["nominal_pressure"][:], rtol=1e-9)

@@ -107,6 +107,13 @@ def _open_writer(
         return StepWriter(args.output, grid, attributes, stored, fields), 0, None
     if show:
         print(f"# resuming {args.output}.partial after {done} of {total} steps", flush=True)
+    if state is None:  # its state file is lost: the result is the same, the cost may be more
+        print(
+            f"# {args.output}.partial has no saved state beside it: step {done + 1} starts "
+            "from first touch",
+            file=sys.stderr,
+            flush=True,
+        )
     start = grid.scatter(state) if state is not None else None
     return StepWriter.reopen(args.output, grid, fields), done, start
 

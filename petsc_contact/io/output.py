@@ -231,7 +231,13 @@ class StepWriter:
         # the steps from here on may be computed by another version than the file's record
         earlier = json.loads(str(self.file.attrs.get("resumed", "[]")) or "[]")
         when = time.strftime("%Y-%m-%dT%H:%M:%S%z")
-        resumed = {"after_step": steps, "time": when, "petsc_contact_commit": source_commit()}
+        saved = os.path.exists(state_path(self.path)) or "resume_state" in self.file
+        resumed = {
+            "after_step": steps,
+            "time": when,
+            "petsc_contact_commit": source_commit(),
+            "from_saved_state": saved,  # False: the next step started from first touch
+        }
         self.file.attrs["resumed"] = json.dumps([*earlier, resumed])
         return steps
 
@@ -541,8 +547,10 @@ def schema_markdown() -> str:
         "A run writes `OUT.h5.partial` and renames it to `OUT.h5` when it ends; until then the",
         "state a `--resume` starts from is kept beside it in `OUT.h5.state.npz` (array `state`,",
         "the gap or pressure field, and `after_step`), never in the results file. A resumed",
-        "file adds `resumed`: a JSON list with, for each resume, `after_step`, `time` and the",
-        "`petsc_contact_commit` that computed the steps from there on.",
+        "file adds `resumed`: a JSON list with, for each resume, `after_step`, `time`, the",
+        "`petsc_contact_commit` that computed the steps from there on and `from_saved_state`",
+        "(false when the state file was lost and the next step started from first touch: the",
+        "same result to the solver's tolerance, at a different cost).",
         "",
     ]
 

@@ -36,6 +36,30 @@ def test_ensemble_statistics_skip_failed_steps():
     assert np.array_equal(s["count"], [3, 2])
 
 
+def test_resolution_rule_counts_pixels_and_keeps_unresolved_loads_out_of_the_fit():
+    """A load is resolved when every seed has at least 16 contact pixels, counted from the
+    area fraction whatever its rounding (1536^2 is not a power of two); the fit of exact
+    power laws ``K = c p^0.8`` over the resolved loads below ``p_c`` returns 0.8."""
+    from petsc_contact.workflows.scenes import contact_resolved, finite_size_fit, resolved
+
+    n = 1536
+    pixels = np.array([[8, 15, 16, 40, 90, 200, 500, 2000], [9, 16, 17, 50, 99, 300, 700, 3000]])
+    area = pixels / float(n * n)
+    assert np.array_equal(resolved(area, n), pixels >= 16)
+    assert np.array_equal(contact_resolved(area, n * n, 40), pixels >= 40)
+    p = np.geomspace(1e-8, 1e-4, pixels.shape[1])
+    curves = {
+        "nominal_pressure": p,
+        "area_fraction": area,
+        "stiffness": np.array([2.0, 3.0])[:, None] * p**0.8,
+    }
+    fit = finite_size_fit(curves, n * n, crossover=3e-5)
+    assert np.array_equal(fit["resolved"], pixels.min(axis=0) >= 16)  # the 15-pixel seed
+    assert np.flatnonzero(fit["fitted"]).tolist() == [2, 3, 4, 5]
+    assert fit["below_crossover"] == 4
+    assert fit["alpha"] == pytest.approx(0.8, abs=1e-12)
+
+
 def test_ensemble_command(tmp_path):
     out = tmp_path / "ens.h5"
     args = [

@@ -88,15 +88,24 @@ def with_sweep_stiffness(col: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
 MIN_CONTACT_PIXELS = 16
 
 
-def resolved(area_fraction: np.ndarray, n: int) -> np.ndarray:
-    """Steps whose contact is resolved: at least :data:`MIN_CONTACT_PIXELS` pixels in contact.
+def contact_resolved(
+    area_fraction: np.ndarray, points_per_map: int, min_contact_pixels: int = MIN_CONTACT_PIXELS
+) -> np.ndarray:
+    """Steps whose contact is resolved: at least ``min_contact_pixels``
+    (:data:`MIN_CONTACT_PIXELS`) of the map's ``points_per_map`` pixels in contact.
 
     A contact of a few pixels does not resolve its own stiffness: the flat punch's grid
     stiffness converges like ``1/n`` (docs/figures.md), so a spot a few pixels wide is off by
     tens of percent, and a single asperity of 16 pixels (radius about 2.3 pixels) already by
     a few.  Unresolved steps are drawn apart in the figures and never fitted.
     """
-    return np.asarray(area_fraction) * n * n >= MIN_CONTACT_PIXELS
+    pixels = np.rint(np.asarray(area_fraction, dtype=float) * points_per_map)  # its count
+    return pixels >= min_contact_pixels
+
+
+def resolved(area_fraction: np.ndarray, n: int) -> np.ndarray:
+    """:func:`contact_resolved` on an ``n x n`` map with the study's :data:`MIN_CONTACT_PIXELS`."""
+    return contact_resolved(area_fraction, n * n)
 
 
 def ensemble_curves(
@@ -159,7 +168,7 @@ def finite_size_fit(
 
     ``curves`` holds ``nominal_pressure`` (per load, or seeds x loads), ``area_fraction`` and
     ``stiffness`` (seeds x loads).  A load is resolved when every seed has at least
-    ``min_contact_pixels`` contact pixels (:func:`resolved`); the fit takes the lowest
+    ``min_contact_pixels`` contact pixels (:func:`contact_resolved`); the fit takes the lowest
     ``fit_points`` resolved loads below ``crossover``, or, when fewer lie there, the lowest
     ``fit_points`` resolved ones (``below_crossover`` counts those under it).  Returns
     ``alpha`` (fit of the seed-averaged ``K``), ``alpha_error`` (its standard error combined
@@ -172,7 +181,7 @@ def finite_size_fit(
     p = p[0] if p.ndim == 2 else p
     stiffness = np.asarray(curves["stiffness"], dtype=float)
     mean_k = ensemble_statistics(stiffness)["mean"]
-    ok = np.all(np.asarray(curves["area_fraction"]) * points_per_map >= min_contact_pixels, axis=0)
+    ok = np.all(contact_resolved(curves["area_fraction"], points_per_map, min_contact_pixels), 0)
     ok &= np.all(np.isfinite(stiffness), axis=0)
     below = ok & (p < crossover)
     window = below if np.count_nonzero(below) >= fit_points else ok

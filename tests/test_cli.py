@@ -348,6 +348,29 @@ def test_interrupted_sweep_resumes_without_recomputing(tmp_path):
     assert r.returncode == 0
 
 
+def test_resume_without_its_state_file_starts_from_first_touch(tmp_path):
+    """A paused run whose state file is lost resumes from first touch: it says so, records
+    ``from_saved_state = false``, and its loads agree with an uninterrupted run to the
+    solver's tolerance (the stiffness follows from the same contact set)."""
+    import os
+
+    args = ["periodic", "--grid", "64", "--hurst", "0.7", "--rms-slope", "0.1", "--seed", "2"]
+    args += ["--sweep", "6", "--stiffness", "--scalars-only"]
+    whole = tmp_path / "whole.h5"
+    assert cli(*args, "--output", str(whole)).returncode == 0
+    out = tmp_path / "cut.h5"
+    assert cli(*args, "--output", str(out), "--stop-after", "0").returncode == 75
+    os.remove(f"{out}.state.npz")
+    r = cli(*args, "--output", str(out), "--resume")
+    assert r.returncode == 0, r.stderr
+    assert "no saved state beside it: step 2 starts from first touch" in r.stderr
+    with h5py.File(whole) as a, h5py.File(out) as b:
+        (resumed,) = json.loads(b.attrs["resumed"])
+        assert resumed["after_step"] == 1 and resumed["from_saved_state"] is False
+        for name in ("mean_gap", "stiffness", "area_fraction"):
+            assert np.allclose(b[name][:], a[name][:], rtol=1e-6, atol=0), name
+
+
 def test_output_schema_document_is_current():
     """docs/output-schema.md is what ``petsc-contact schema`` prints (generated from the code)."""
     import pathlib

@@ -6,6 +6,7 @@ import numpy as np
 
 from petsc_contact.physics import theory
 from petsc_contact.workflows import scenes
+from petsc_contact.workflows.ensemble import ensemble_statistics
 from petsc_contact.workflows.paper_study import add_redraw_options, piece_files
 
 PAPER_ALPHA = {0.3: 0.72, 0.5: 0.66, 0.7: 0.59}
@@ -87,10 +88,10 @@ def _draw(args: argparse.Namespace, p: np.ndarray, results: dict) -> None:
         h_rms = r["h_rms"].mean()
         k = r["stiffness_mean"] * h_rms
         ok = r["resolved"]  # at least --min-contact-pixels in every seed
-        (line,) = ax.loglog(
-            p[ok], k[ok], "o", mfc="none", label=f"H = {h} ({len(r['stiffness'])} seeds)"
-        )
-        spread = np.nanstd(r["stiffness"] * r["h_rms"][:, None], axis=0, ddof=1)
+        seeds = len(r["stiffness"])
+        label = f"H = {h} ({seeds} seed{'s' if seeds > 1 else ''})"
+        (line,) = ax.loglog(p[ok], k[ok], "o", mfc="none", label=label)
+        spread = ensemble_statistics(r["stiffness"] * r["h_rms"][:, None])["std"]  # NaN: 1 seed
         ax.fill_between(
             p[ok], (k - spread)[ok], (k + spread)[ok], color=line.get_color(), alpha=0.2
         )

@@ -12,7 +12,15 @@ from typing import Any
 import numpy as np
 
 from ..geometries.step import FIELD_NAMES
-from .common import EXIT_INTERRUPTED, EXIT_NOT_CONVERGED, EXIT_PAUSED, InputError, run_record, swept
+from .common import (
+    EXIT_INTERRUPTED,
+    EXIT_NOT_CONVERGED,
+    EXIT_PAUSED,
+    InputError,
+    run_record,
+    say,
+    swept,
+)
 from .scene import prepare_scene
 
 PERIODIC_COLUMNS = (("p0", "nominal_pressure", "{:>11.4e}"), ("mean_gap", "mean_gap", "{:>12.6e}"))
@@ -108,14 +116,14 @@ def _open_writer(
     if show:
         print(f"# resuming {args.output}.partial after {done} of {total} steps", flush=True)
     if state is None:  # its state file is lost: the result is the same, the cost may be more
-        print(
-            f"# {args.output}.partial has no saved state beside it: step {done + 1} starts "
+        say(
+            f"{args.output}.partial has no saved state beside it: step {done + 1} starts "
             "from first touch",
-            file=sys.stderr,
-            flush=True,
+            "warning",
         )
     start = grid.scatter(state) if state is not None else None
-    return StepWriter.reopen(args.output, grid, fields), done, start
+    writer = StepWriter.reopen(args.output, grid, fields, from_saved_state=state is not None)
+    return writer, done, start
 
 
 def _run_steps(

@@ -164,6 +164,7 @@ class StepWriter:
         fields: tuple[str, ...] = (),
         *,
         resume: bool = False,
+        from_saved_state: bool = True,
     ) -> None:
         self.path = path
         self.partial = path + ".partial"
@@ -173,7 +174,8 @@ class StepWriter:
         self.file: Any = None
         self.schema: dict[str, Entry] = GEOMETRIES.get(attributes.get("geometry", ""), {})
         if resume:
-            self.steps = grid.comm.bcast(self._open_partial() if self.root else 0, root=0)
+            opened = self._open_partial(from_saved_state) if self.root else 0
+            self.steps = grid.comm.bcast(opened, root=0)
         else:
             self.steps = 0
             full = grid.gather(heights) if heights is not None else None
@@ -181,9 +183,12 @@ class StepWriter:
                 self._create(attributes, full)
 
     @classmethod
-    def reopen(cls, path: str, grid: Grid, fields: tuple[str, ...] = ()) -> StepWriter:
-        """Continue writing an interrupted run's ``path + '.partial'`` (see :func:`read_resume`)."""
-        return cls(path, grid, {}, None, fields, resume=True)
+    def reopen(
+        cls, path: str, grid: Grid, fields: tuple[str, ...] = (), from_saved_state: bool = True
+    ) -> StepWriter:
+        """Continue writing an interrupted run's ``path + '.partial'`` (see :func:`read_resume`);
+        ``from_saved_state`` is false when :func:`read_resume` found no state to go on from."""
+        return cls(path, grid, {}, None, fields, resume=True, from_saved_state=from_saved_state)
 
     def _create(self, attributes: dict[str, Any], heights: np.ndarray | None) -> None:
         import h5py
@@ -221,7 +226,7 @@ class StepWriter:
             ) from None
         return in_unit(entry, str(self.file.attrs.get("length_unit", "")))
 
-    def _open_partial(self) -> int:
+    def _open_partial(self, from_saved_state: bool) -> int:
         """Open the ``.partial`` file for appending; the number of steps it holds."""
         import h5py
 
@@ -231,12 +236,11 @@ class StepWriter:
         # the steps from here on may be computed by another version than the file's record
         earlier = json.loads(str(self.file.attrs.get("resumed", "[]")) or "[]")
         when = time.strftime("%Y-%m-%dT%H:%M:%S%z")
-        saved = os.path.exists(state_path(self.path)) or "resume_state" in self.file
         resumed = {
             "after_step": steps,
             "time": when,
             "petsc_contact_commit": source_commit(),
-            "from_saved_state": saved,  # False: the next step started from first touch
+            "from_saved_state": from_saved_state,  # False: the next step began at first touch
         }
         self.file.attrs["resumed"] = json.dumps([*earlier, resumed])
         return steps

@@ -67,13 +67,24 @@ def _read_punch(args: argparse.Namespace) -> tuple[dict, float, int]:
 
 def _arguments() -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--grid", type=int, default=512)
-    ap.add_argument("--hurst", type=float, default=0.7)
-    ap.add_argument("--rolloff-ratios", type=float, nargs="+", default=[1.0, 8.0])
-    ap.add_argument("--cutoff-ratio", type=float, default=None, help="default grid/4")
-    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--grid", type=int, default=512, help="pixels per side (default 512)")
+    ap.add_argument("--hurst", type=float, default=0.7, help="Hurst exponent H (default 0.7)")
     ap.add_argument(
-        "--pressures", type=float, nargs=3, default=[1e-7, 5e-2, 16], metavar=("PMIN", "PMAX", "N")
+        "--rolloff-ratios",
+        type=float,
+        nargs="+",
+        default=[1.0, 8.0],
+        help="L/lambda_r values (default 1 8)",
+    )
+    ap.add_argument("--cutoff-ratio", type=float, default=None, help="default grid/4")
+    ap.add_argument("--seed", type=int, default=1, help="surface seed (default 1)")
+    ap.add_argument(
+        "--pressures",
+        type=float,
+        nargs=3,
+        default=[1e-7, 5e-2, 16],
+        metavar=("PMIN", "PMAX", "N"),
+        help="log-spaced p0/E* (default 1e-7 5e-2 16)",
     )
     ap.add_argument("--punch-grid", type=int, default=None, help="default grid/2")
     ap.add_argument(
@@ -81,7 +92,7 @@ def _arguments() -> argparse.Namespace:
         metavar="DIR",
         help="redraw from the study's files (petsc-contact study --figure 1), e.g. data/paper",
     )
-    ap.add_argument("--output", default="fig1")
+    ap.add_argument("--output", default="fig1", help="prefix of the PNG and HDF5 files")
     return ap.parse_args()
 
 

@@ -58,17 +58,23 @@ def _from_data(args: argparse.Namespace) -> tuple[np.ndarray, dict]:
 
 def _arguments() -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--grid", type=int, default=512)
+    ap.add_argument("--grid", type=int, default=512, help="pixels per side (default 512)")
     ap.add_argument("--cutoff-ratio", type=float, default=None, help="L/lambda_1 (default grid/4)")
-    ap.add_argument("--hursts", type=float, nargs="+", default=[0.3, 0.5, 0.7])
-    ap.add_argument("--seeds", type=int, default=4, help="surfaces per H")
+    ap.add_argument(
+        "--hursts",
+        type=float,
+        nargs="+",
+        default=[0.3, 0.5, 0.7],
+        help="Hurst exponents (default 0.3 0.5 0.7)",
+    )
+    ap.add_argument("--seeds", type=int, default=4, help="surfaces per H (default 4)")
     ap.add_argument(
         "--pressures",
         type=float,
         nargs=3,
         default=[1e-8, 1e-3, 16],
         metavar=("PMIN", "PMAX", "N"),
-        help="log-spaced p0/E*",
+        help="log-spaced p0/E* (default 1e-8 1e-3 16)",
     )
     add_redraw_options(ap, 2, "fig3")
     return ap.parse_args()

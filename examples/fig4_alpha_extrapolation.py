@@ -66,8 +66,8 @@ def _from_data(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]
 
 def _arguments() -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--grid", type=int, default=512)
-    ap.add_argument("--hurst", type=float, default=0.3)
+    ap.add_argument("--grid", type=int, default=512, help="pixels per side (default 512)")
+    ap.add_argument("--hurst", type=float, default=0.3, help="Hurst exponent H (default 0.3)")
     ap.add_argument(
         "--ratios",
         type=float,
@@ -75,9 +75,14 @@ def _arguments() -> argparse.Namespace:
         default=None,
         help="lambda_r/lambda_1 values (default grid/32 ... grid/4; L = lambda_r)",
     )
-    ap.add_argument("--seeds", type=int, default=4)
+    ap.add_argument("--seeds", type=int, default=4, help="surfaces per ratio (default 4)")
     ap.add_argument(
-        "--pressures", type=float, nargs=3, default=[1e-8, 1e-3, 16], metavar=("PMIN", "PMAX", "N")
+        "--pressures",
+        type=float,
+        nargs=3,
+        default=[1e-8, 1e-3, 16],
+        metavar=("PMIN", "PMAX", "N"),
+        help="log-spaced p0/E* (default 1e-8 1e-3 16)",
     )
     add_redraw_options(ap, 3, "fig4")
     return ap.parse_args()

@@ -38,12 +38,12 @@ def panel(ax, data: dict, ratio: float, cutoff: float, title: str) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--grid", type=int, default=1024)
-    ap.add_argument("--hurst", type=float, default=0.7)
+    ap.add_argument("--grid", type=int, default=1024, help="pixels per side (default 1024)")
+    ap.add_argument("--hurst", type=float, default=0.7, help="Hurst exponent H (default 0.7)")
     ap.add_argument("--rolloff-ratio", type=float, default=8.0, help="L/lambda_r of panel (b)")
     ap.add_argument("--cutoff-ratio", type=float, default=None, help="default grid/4")
-    ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--output", default="fig5")
+    ap.add_argument("--seed", type=int, default=1, help="surface seed (default 1)")
+    ap.add_argument("--output", default="fig5", help="prefix of the PNG and HDF5 files")
     args = ap.parse_args()
     cutoff = args.cutoff_ratio or args.grid / 4
     ratios = {"a": 1.0, "b": args.rolloff_ratio}

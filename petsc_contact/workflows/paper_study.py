@@ -7,9 +7,9 @@ scripts read them back (:func:`piece_files`).
 
 from __future__ import annotations
 
+import argparse
 import os
 from dataclasses import dataclass, replace
-from typing import Any
 
 import numpy as np
 
@@ -146,12 +146,14 @@ def finished_steps(path: str) -> int | None:
         return None
 
 
-def add_redraw_options(parser: Any, figure: int, output: str) -> None:
+def add_redraw_options(parser: argparse.ArgumentParser, figure: int, output: str) -> None:
     """A figure script's ``--fit-points``, ``--min-contact-pixels``, ``--data DIR`` (redraw
     the paper's Fig. ``figure`` from the study's files) and ``--output`` options."""
     from .scenes import MIN_CONTACT_PIXELS
 
-    parser.add_argument("--fit-points", type=int, default=4)
+    parser.add_argument(
+        "--fit-points", type=int, default=4, help="the lowest resolved loads fitted (default 4)"
+    )
     parser.add_argument(
         "--min-contact-pixels",
         type=int,
@@ -166,7 +168,9 @@ def add_redraw_options(parser: Any, figure: int, output: str) -> None:
         help=f"redraw from the study's files (petsc-contact study --figure {figure}), "
         "e.g. data/paper",
     )
-    parser.add_argument("--output", default=output)
+    parser.add_argument(
+        "--output", default=output, help=f"prefix of the PNG and HDF5 files (default {output})"
+    )
 
 
 def piece_files(data: str, figure: str, command: str = "periodic", **where: str) -> list[str]:

@@ -359,7 +359,8 @@ def test_resume_without_its_state_file_starts_from_first_touch(tmp_path):
     whole = tmp_path / "whole.h5"
     assert cli(*args, "--output", str(whole)).returncode == 0
     out = tmp_path / "cut.h5"
-    assert cli(*args, "--output", str(out), "--stop-after", "0").returncode == 75
+    r = cli(*args, "--output", str(out), "--stop-after", "0")
+    assert r.returncode == 75 and "the --stop-after limit of 0 minutes has passed" in r.stderr
     os.remove(f"{out}.state.npz")
     r = cli(*args, "--output", str(out), "--resume")
     assert r.returncode == 0, r.stderr

@@ -86,7 +86,8 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
             print(_header(plan.columns), flush=True)
         try:
             if not _run_steps(args, plan, writer, done, start, table, show):
-                writer.abandon(f"stopped after {args.stop_after:g} minutes")
+                limit = f"{args.stop_after:.3g} minutes"
+                writer.abandon(f"paused: the --stop-after limit of {limit} has passed")
                 return EXIT_PAUSED
         except KeyboardInterrupt:
             writer.abandon()

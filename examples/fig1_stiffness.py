@@ -7,7 +7,7 @@ import numpy as np
 from petsc_contact.physics import theory
 from petsc_contact.workflows import scenes
 from petsc_contact.workflows.ensemble import power_law_fit
-from petsc_contact.workflows.paper_study import piece_files
+from petsc_contact.workflows.paper_study import add_pressures_option, log_pressures, piece_files
 
 
 def crossover_from_simulation(
@@ -78,14 +78,7 @@ def _arguments() -> argparse.Namespace:
     )
     ap.add_argument("--cutoff-ratio", type=float, default=None, help="default grid/4")
     ap.add_argument("--seed", type=int, default=1, help="surface seed (default 1)")
-    ap.add_argument(
-        "--pressures",
-        type=float,
-        nargs=3,
-        default=[1e-7, 5e-2, 16],
-        metavar=("PMIN", "PMAX", "N"),
-        help="log-spaced p0/E* (default 1e-7 5e-2 16)",
-    )
+    add_pressures_option(ap, 1e-7, 5e-2, 16)
     ap.add_argument("--punch-grid", type=int, default=None, help="default grid/2")
     ap.add_argument(
         "--data",
@@ -100,7 +93,7 @@ def _periodic_curves(args: argparse.Namespace) -> tuple[dict, int]:
     """Each roll-off's K(p) with Persson's theory, the resolution mask, both crossovers and
     the Hertz slope at its lowest resolved loads."""
     cutoff = args.cutoff_ratio or args.grid / 4
-    p = np.geomspace(args.pressures[0], args.pressures[1], int(args.pressures[2]))
+    p = log_pressures(args)
     data, n = {}, args.grid
     for ratio in list(args.rolloff_ratios):
         try:

@@ -7,7 +7,12 @@ import numpy as np
 from petsc_contact.physics import theory
 from petsc_contact.workflows import scenes
 from petsc_contact.workflows.ensemble import ensemble_statistics
-from petsc_contact.workflows.paper_study import add_redraw_options, piece_files
+from petsc_contact.workflows.paper_study import (
+    add_pressures_option,
+    add_redraw_options,
+    log_pressures,
+    piece_files,
+)
 
 PAPER_ALPHA = {0.3: 0.72, 0.5: 0.66, 0.7: 0.59}
 
@@ -15,7 +20,7 @@ PAPER_ALPHA = {0.3: 0.72, 0.5: 0.66, 0.7: 0.59}
 def _computed(args: argparse.Namespace) -> tuple[np.ndarray, dict]:
     """Run the sweeps here (``--grid``, ``--cutoff-ratio``, ``--hursts``, ``--seeds``)."""
     cutoff = args.cutoff_ratio = args.cutoff_ratio or args.grid / 4
-    p = np.geomspace(args.pressures[0], args.pressures[1], int(args.pressures[2]))
+    p = log_pressures(args)
     results = {
         f"H{h}": scenes.ensemble_curves(
             args.grid,
@@ -68,14 +73,7 @@ def _arguments() -> argparse.Namespace:
         help="Hurst exponents (default 0.3 0.5 0.7)",
     )
     ap.add_argument("--seeds", type=int, default=4, help="surfaces per H (default 4)")
-    ap.add_argument(
-        "--pressures",
-        type=float,
-        nargs=3,
-        default=[1e-8, 1e-3, 16],
-        metavar=("PMIN", "PMAX", "N"),
-        help="log-spaced p0/E* (default 1e-8 1e-3 16)",
-    )
+    add_pressures_option(ap, 1e-8, 1e-3, 16)
     add_redraw_options(ap, 2, "fig3")
     return ap.parse_args()
 

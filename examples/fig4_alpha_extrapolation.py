@@ -9,13 +9,19 @@ import argparse
 import numpy as np
 
 from petsc_contact.workflows import scenes
-from petsc_contact.workflows.paper_study import FIG3_RATIOS, add_redraw_options, piece_files
+from petsc_contact.workflows.paper_study import (
+    FIG3_RATIOS,
+    add_pressures_option,
+    add_redraw_options,
+    log_pressures,
+    piece_files,
+)
 
 
 def _computed(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]:
     """Run the sweeps here (``--grid``, ``--ratios``, ``--seeds``)."""
     ratios = args.ratios or [args.grid / 32, args.grid / 16, args.grid / 8, args.grid / 4]
-    p = np.geomspace(args.pressures[0], args.pressures[1], int(args.pressures[2]))
+    p = log_pressures(args)
     results = {
         f"ratio{r:g}": scenes.ensemble_curves(
             args.grid,
@@ -76,14 +82,7 @@ def _arguments() -> argparse.Namespace:
         help="lambda_r/lambda_1 values (default grid/32 ... grid/4; L = lambda_r)",
     )
     ap.add_argument("--seeds", type=int, default=4, help="surfaces per ratio (default 4)")
-    ap.add_argument(
-        "--pressures",
-        type=float,
-        nargs=3,
-        default=[1e-8, 1e-3, 16],
-        metavar=("PMIN", "PMAX", "N"),
-        help="log-spaced p0/E* (default 1e-8 1e-3 16)",
-    )
+    add_pressures_option(ap, 1e-8, 1e-3, 16)
     add_redraw_options(ap, 3, "fig4")
     return ap.parse_args()
 

@@ -173,6 +173,25 @@ def add_redraw_options(parser: argparse.ArgumentParser, figure: int, output: str
     )
 
 
+def add_pressures_option(parser: argparse.ArgumentParser, low: float, high: float, n: int) -> None:
+    """A figure script's ``--pressures PMIN PMAX N`` option: ``N`` log-spaced ``p0/E*``,
+    read back with :func:`log_pressures`."""
+    parser.add_argument(
+        "--pressures",
+        type=float,
+        nargs=3,
+        default=[low, high, n],
+        metavar=("PMIN", "PMAX", "N"),
+        help=f"log-spaced p0/E* (default {low:.0e} {high:.0e} {n})".replace("e-0", "e-"),
+    )
+
+
+def log_pressures(args: argparse.Namespace) -> np.ndarray:
+    """The loads ``p0/E*`` of :func:`add_pressures_option`'s ``--pressures``."""
+    low, high, n = args.pressures
+    return np.geomspace(low, high, int(n))
+
+
 def piece_files(data: str, figure: str, command: str = "periodic", **where: str) -> list[str]:
     """The complete files of ``figure``'s ``command`` pieces whose command line has every
     ``--option value`` of ``where`` (``hurst="0.3"``, ``cutoff_ratio="512"``)."""

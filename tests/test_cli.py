@@ -132,6 +132,23 @@ def _bad_inputs(tmp):
     }
 
 
+def test_sweep_that_cannot_be_log_spaced_is_a_usage_error(tmp_path):
+    """``--sweep N[,PMIN,PMAX]`` is checked where it is parsed (the same check as the figure
+    scripts' ``--pressures``): no output is started."""
+    out = tmp_path / "out.h5"
+    for spec, expected in {
+        "1": "a whole N >= 2, got 1",
+        "2.5": "a whole N >= 2, got 2.5",
+        "4,1e-3,1e-8": "0 < PMIN < PMAX, got 0.001 and 1e-08",
+        "4,0,1": "0 < PMIN < PMAX, got 0 and 1",
+        "4,1": "expected N or N,PMIN,PMAX",
+    }.items():
+        r = cli("periodic", *"--grid 16 --hurst 0.7 --sweep".split(), spec, "--output", str(out))
+        assert r.returncode == 2 and "argument --sweep:" in r.stderr, r.stderr
+        assert expected in r.stderr.splitlines()[-1], r.stderr
+    assert not out.exists() and not (tmp_path / "out.h5.partial").exists()
+
+
 def test_bad_input_one_line_no_output(tmp_path):
     for expected, args in _bad_inputs(tmp_path).items():
         out = tmp_path / "out.h5"

@@ -180,3 +180,23 @@ def test_a_ratio_with_one_seed_is_drawn_but_not_fitted():
     three = fig4.extrapolation(0.3, ratios[:3], results)
     assert np.allclose(fit["coefficients"], three["coefficients"])
     assert np.isfinite(fit["extrapolated_alpha_error"])
+
+
+@pytest.mark.parametrize(
+    "bad", [["0", "1e-3", "16"], ["1e-3", "1e-8", "16"], ["1e-8", "1e-3", "1.5"]]
+)
+def test_figure_scripts_refuse_loads_that_are_not_log_spaced(bad, capsys):
+    """``--pressures PMIN PMAX N`` of the figure scripts: a zero or reversed range or a
+    fractional count is a usage error naming the option, not a traceback from numpy."""
+    import argparse
+
+    from petsc_contact.workflows.paper_study import add_pressures_option, log_pressures
+
+    parser = argparse.ArgumentParser()
+    add_pressures_option(parser, 1e-8, 1e-3, 16)
+    assert list(log_pressures(parser.parse_args(["--pressures", "1e-6", "1e-2", "5"]))) == (
+        pytest.approx([1e-6, 1e-5, 1e-4, 1e-3, 1e-2])
+    )
+    with pytest.raises(SystemExit) as stop:
+        parser.parse_args(["--pressures", *bad])
+    assert stop.value.code == 2 and "error: --pressures needs " in capsys.readouterr().err

@@ -9,6 +9,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from .. import __version__
+from ..conventions.validation import log_range
 
 DEMO = {
     "grid": 512,
@@ -89,10 +90,12 @@ def _grid_shape(text: str) -> int | tuple[int, int]:
 
 def _sweep_spec(text: str) -> list[float]:
     values = _float_list(text)
-    if len(values) not in (1, 3) or values[0] < 2 or values[0] != int(values[0]):
-        raise argparse.ArgumentTypeError(f"expected N or N,PMIN,PMAX with N >= 2, got '{text}'")
-    if len(values) == 3 and not 0 < values[1] < values[2]:
-        raise argparse.ArgumentTypeError(f"need 0 < PMIN < PMAX, got '{text}'")
+    if len(values) not in (1, 3):
+        raise argparse.ArgumentTypeError(f"expected N or N,PMIN,PMAX, got '{text}'")
+    try:
+        log_range("the sweep", values[0], (values[1], values[2]) if len(values) == 3 else None)
+    except ValueError as bad:
+        raise argparse.ArgumentTypeError(str(bad)) from None
     return values
 
 

@@ -23,6 +23,15 @@ def non_negative(name: str, value: float) -> float:
     return v
 
 
+def log_range(name: str, count: float, bounds: tuple[float, float] | None = None) -> None:
+    """``ValueError`` unless ``count`` log-spaced values (from ``bounds = (low, high)``, when
+    given) exist: a whole ``count >= 2`` and ``0 < low < high``."""
+    if not (count >= 2 and count == int(count)):
+        raise ValueError(f"{name} needs a whole N >= 2, got {count:g}")
+    if bounds is not None and not (0 < bounds[0] < bounds[1] < np.inf):
+        raise ValueError(f"{name} needs 0 < PMIN < PMAX, got {bounds[0]:g} and {bounds[1]:g}")
+
+
 def per_axis(value: Any, name: str) -> tuple[Any, Any]:
     """``(v, v)`` for one value, ``(x, y)`` for a pair: a grid or pixel size given once for a
     square or per axis for a rectangle."""

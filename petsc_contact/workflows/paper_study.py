@@ -10,9 +10,11 @@ from __future__ import annotations
 import argparse
 import os
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
+from ..conventions.validation import log_range
 from ..physics.surface import psd_shape
 
 PAPER_GRID = 8192
@@ -173,6 +175,23 @@ def add_redraw_options(parser: argparse.ArgumentParser, figure: int, output: str
     )
 
 
+class _LogSpacedPressures(argparse.Action):
+    """``--pressures PMIN PMAX N``, refused unless ``0 < PMIN < PMAX`` and ``N >= 2`` is whole."""
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        try:
+            log_range(str(option_string), values[2], (values[0], values[1]))
+        except ValueError as bad:
+            parser.error(str(bad))
+        setattr(namespace, self.dest, values)
+
+
 def add_pressures_option(parser: argparse.ArgumentParser, low: float, high: float, n: int) -> None:
     """A figure script's ``--pressures PMIN PMAX N`` option: ``N`` log-spaced ``p0/E*``,
     read back with :func:`log_pressures`."""
@@ -180,6 +199,7 @@ def add_pressures_option(parser: argparse.ArgumentParser, low: float, high: floa
         "--pressures",
         type=float,
         nargs=3,
+        action=_LogSpacedPressures,
         default=[low, high, n],
         metavar=("PMIN", "PMAX", "N"),
         help=f"log-spaced p0/E* (default {low:.0e} {high:.0e} {n})".replace("e-0", "e-"),

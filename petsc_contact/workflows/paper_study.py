@@ -202,7 +202,7 @@ def add_pressures_option(parser: argparse.ArgumentParser, low: float, high: floa
         action=_LogSpacedPressures,
         default=[low, high, n],
         metavar=("PMIN", "PMAX", "N"),
-        help=f"log-spaced p0/E* (default {low:.0e} {high:.0e} {n})".replace("e-0", "e-"),
+        help=f"log-spaced p0/E* (default {low:g} {high:g} {n})".replace("e-0", "e-"),
     )
 
 

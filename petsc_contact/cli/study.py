@@ -39,7 +39,7 @@ def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
             continue
         left = args.minutes - (time.perf_counter() - began) / 60
         if left <= 0:
-            return _paused(todo, args.data, number - 1)
+            return _paused(todo, number - 1)
         os.makedirs(os.path.dirname(path), exist_ok=True)
         argv = [*piece.argv, "--stiffness", "--scalars-only", "--output", path, "--resume"]
         argv += ["--stop-after", f"{left:.3f}"] + (["--quiet"] if args.quiet else [])
@@ -51,7 +51,7 @@ def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
     return 0
 
 
-def _paused(todo: Sequence[Piece], data: str, done: int) -> int:
+def _paused(todo: Sequence[Piece], done: int) -> int:
     print(f"# study: time is up after {done} of {len(todo)} pieces; run it again to go on")
     return EXIT_PAUSED
 

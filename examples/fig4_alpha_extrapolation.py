@@ -39,20 +39,23 @@ def _computed(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]:
 
 
 def _from_data(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]:
-    """Read the study's complete pieces of every ratio present (no solve)."""
+    """Read the study's complete pieces of every ratio present (no solve), with
+    ``--with-partial`` also those still computing."""
     import h5py
 
     ratios, results = [], {}
     for r in FIG3_RATIOS:
-        paths = piece_files(args.data, "fig3", cutoff_ratio=f"{r:g}")
+        paths = piece_files(args.data, "fig3", partial=args.with_partial, cutoff_ratio=f"{r:g}")
         if not paths:
             print(f"# lambda_r/lambda_1 = {r}: no complete piece in {args.data} yet")
             continue
-        with h5py.File(paths[0]) as f:
+        with h5py.File(paths[0], "r", locking=False) as f:
             n, hurst = int(f.attrs["grid"]), float(f.attrs["hurst"])
         if hurst != args.hurst:
             raise SystemExit(f"the study's Fig. 3 pieces have H = {hurst}, not {args.hurst}")
         curves = scenes.curves_from_files(paths)
+        if any(path.endswith(".partial") for path in paths):
+            print(f"# {r:g}: unfinished pieces read, {curves['stiffness'].shape[1]} loads")
         p_c = scenes.crossover(curves["h_rms"], hurst, 1.0)
         try:
             fit = scenes.finite_size_fit(
@@ -115,9 +118,7 @@ def extrapolation(hurst: float, ratios: list[float], results: dict) -> dict:
     }
 
 
-def _draw(
-    args: argparse.Namespace, ratios: list[float], p: np.ndarray, results: dict, fit: dict
-) -> None:
+def _draw(args: argparse.Namespace, ratios: list[float], results: dict, fit: dict) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -161,6 +162,7 @@ def _draw(
     inset = ax.inset_axes([0.45, 0.64, 0.52, 0.33])
     for r in ratios:
         res = results[f"ratio{r:g}"]
+        p = res["nominal_pressure"][0]  # each ratio its own loads (fewer while one computes)
         k = np.nanmean(res["stiffness"] * res["h_rms"][:, None], axis=0)
         ok, fitted = res["resolved"], res["fitted"]
         line = inset.loglog(p[ok], k[ok], "-", lw=0.8, label=f"{r:g}")
@@ -191,7 +193,7 @@ def main() -> None:
         extrapolated_alpha_error=fit["extrapolated_alpha_error"],
         theory_alpha=fit["exponent"],
     )
-    _draw(args, ratios, p, results, fit)
+    _draw(args, ratios, results, fit)
     for r, a, e in zip(ratios, fit["alpha"], fit["alpha_error"], strict=True):
         res = results[f"ratio{r:g}"]
         print(

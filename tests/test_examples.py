@@ -200,3 +200,57 @@ def test_figure_scripts_refuse_loads_that_are_not_log_spaced(bad, capsys):
     with pytest.raises(SystemExit) as stop:
         parser.parse_args(["--pressures", *bad])
     assert stop.value.code == 2 and "error: --pressures needs " in capsys.readouterr().err
+
+
+def _sweep_file(path, seed, loads, complete):
+    """A Fig. 2 piece's scalars for ``K = p^0.6`` (64^2, every load resolved and below
+    ``p_c``), as the study writes them: all loads when complete, the first ones when not."""
+    import numpy as np
+
+    p = np.geomspace(1e-8, 1e-6, 6)[:loads]
+    with h5py.File(path, "w") as f:
+        f.attrs.update(complete=complete, seed=seed, grid=64, cutoff_ratio=16.0, rms_height=8e-4)
+        f["converged"] = np.ones(p.size, dtype=bool)
+        f["nominal_pressure"], f["mean_gap"] = p, np.full(p.size, 1e-3)
+        f["area_fraction"], f["stiffness"] = 0.01 * (p / 1e-8) ** 0.5, (1 + seed / 10) * p**0.6
+        f["contact_patches"] = np.full(p.size, 3)
+
+
+def test_an_unfinished_study_is_read_over_the_loads_every_seed_has(tmp_path):
+    """``--with-partial``: a piece still computing (``.partial``, 4 of 6 loads) joins the
+    three complete seeds; the script fits them over the 4 loads all four have and says so.
+    Without the option, and for a piece that has kept no step, only complete files count."""
+    from petsc_contact.workflows.paper_study import piece_files
+    from petsc_contact.workflows.scenes import curves_from_files
+
+    fig2 = tmp_path / "paper" / "fig2"
+    fig2.mkdir(parents=True)
+    for seed in (1, 2, 3):
+        _sweep_file(fig2 / f"H0.7_seed{seed}.h5", seed, 6, True)
+    _sweep_file(fig2 / "H0.7_seed4.h5.partial", 4, 4, False)
+    _sweep_file(fig2 / "H0.5_seed1.h5.partial", 1, 0, False)
+    data = str(tmp_path / "paper")
+    assert len(piece_files(data, "fig2", hurst="0.7")) == 3
+    paths = piece_files(data, "fig2", partial=True, hurst="0.7")
+    assert paths[-1].endswith("H0.7_seed4.h5.partial") and len(paths) == 4
+    assert piece_files(data, "fig2", partial=True, hurst="0.5") == []
+    assert curves_from_files(paths)["stiffness"].shape == (4, 4)
+    _sweep_file(tmp_path / "unfinished.h5", 1, 4, False)  # not complete, and not a .partial
+    with pytest.raises(ValueError, match="not complete"):
+        curves_from_files([str(tmp_path / "unfinished.h5")])
+    r = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "examples" / "fig3_finite_size.py"),
+            *("--data", data, "--with-partial", "--output", str(tmp_path / "f2")),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
+    )
+    assert r.returncode == 0, r.stderr
+    assert "H = 0.7: unfinished pieces read, 4 loads; 4 fitted below p_c" in r.stdout
+    with h5py.File(tmp_path / "f2.h5") as f:
+        assert f["H0.7"]["stiffness"].shape == (4, 4)
+        assert f["H0.7"]["alpha"][()] == pytest.approx(0.6, abs=1e-9)

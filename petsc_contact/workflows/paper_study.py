@@ -171,6 +171,12 @@ def add_redraw_options(parser: argparse.ArgumentParser, figure: int, output: str
         "e.g. data/paper",
     )
     parser.add_argument(
+        "--with-partial",
+        action="store_true",
+        help="also read the pieces still computing (NAME.h5.partial), over the loads every "
+        "seed has so far: a look at an unfinished study, not its result",
+    )
+    parser.add_argument(
         "--output", default=output, help=f"prefix of the PNG and HDF5 files (default {output})"
     )
 
@@ -212,9 +218,13 @@ def log_pressures(args: argparse.Namespace) -> np.ndarray:
     return np.geomspace(low, high, int(n))
 
 
-def piece_files(data: str, figure: str, command: str = "periodic", **where: str) -> list[str]:
+def piece_files(
+    data: str, figure: str, command: str = "periodic", *, partial: bool = False, **where: str
+) -> list[str]:
     """The complete files of ``figure``'s ``command`` pieces whose command line has every
-    ``--option value`` of ``where`` (``hurst="0.3"``, ``cutoff_ratio="512"``)."""
+    ``--option value`` of ``where`` (``hurst="0.3"``, ``cutoff_ratio="512"``).  With
+    ``partial``, an unfinished piece's ``NAME.h5.partial`` stands in for it once it has kept
+    a step."""
     out = []
     for piece in pieces():
         if figure not in (piece.figure, *piece.used_by) or piece.argv[0] != command:
@@ -224,4 +234,6 @@ def piece_files(data: str, figure: str, command: str = "periodic", **where: str)
             path = piece.path(data)
             if complete(path):
                 out.append(path)
+            elif partial and (finished_steps(path) or 0) > 0:
+                out.append(path + ".partial")
     return out

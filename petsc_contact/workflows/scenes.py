@@ -206,14 +206,15 @@ def finite_size_fit(
 def curves_from_files(paths: Sequence[str]) -> dict[str, Any]:
     """A study's periodic sweeps of several seeds (``petsc-contact study`` files) as the
     arrays of :func:`ensemble_curves` (steps that did not converge are ``nan``), with each
-    file's ``seed``."""
+    file's ``seed``.  An unfinished piece's ``.partial`` file is read as far as it goes, and
+    then every file only over the loads they all have."""
     import h5py
 
     rows: list[dict[str, np.ndarray]] = []
     h_rms, seeds = [], []
     for path in paths:
-        with h5py.File(path, "r") as f:
-            if not f.attrs.get("complete", False):
+        with h5py.File(path, "r", locking=False) as f:  # a .partial may be open for writing
+            if not (f.attrs.get("complete", False) or path.endswith(".partial")):
                 raise ValueError(f"'{path}' is not complete")
             ok = f["converged"][:].astype(bool)
             row = {k: f[k][:].astype(float) for k in _CURVE_KEYS if k in f}
@@ -225,7 +226,8 @@ def curves_from_files(paths: Sequence[str]) -> dict[str, Any]:
             rows.append(row | {"converged": ok})
             h_rms.append(float(f.attrs["rms_height"]))
             seeds.append(int(f.attrs["seed"]))
-    out: dict[str, Any] = {k: np.array([r[k] for r in rows]) for k in rows[0]}
+    shared = min(r["converged"].size for r in rows)
+    out: dict[str, Any] = {k: np.array([r[k][:shared] for r in rows]) for k in rows[0]}
     out["h_rms"], out["seed"] = np.array(h_rms), np.array(seeds)
     return out
 

@@ -55,7 +55,8 @@ def _from_data(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]
             raise SystemExit(f"the study's Fig. 3 pieces have H = {hurst}, not {args.hurst}")
         curves = scenes.curves_from_files(paths)
         if any(path.endswith(".partial") for path in paths):
-            print(f"# {r:g}: unfinished pieces read, {curves['stiffness'].shape[1]} loads")
+            loads = curves["stiffness"].shape[1]
+            print(f"# lambda_r/lambda_1 = {r}: unfinished pieces read, {loads} loads")
         p_c = scenes.crossover(curves["h_rms"], hurst, 1.0)
         try:
             fit = scenes.finite_size_fit(

@@ -238,6 +238,9 @@ def test_an_unfinished_study_is_read_over_the_loads_every_seed_has(tmp_path):
     _sweep_file(tmp_path / "unfinished.h5", 1, 4, False)  # not complete, and not a .partial
     with pytest.raises(ValueError, match="not complete"):
         curves_from_files([str(tmp_path / "unfinished.h5")])
+    _sweep_file(tmp_path / "shorter.h5", 1, 5, True)  # complete, but one load fewer
+    with pytest.raises(ValueError, match="same loads"):
+        curves_from_files([paths[0], str(tmp_path / "shorter.h5")])
     r = subprocess.run(
         [
             sys.executable,

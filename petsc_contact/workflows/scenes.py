@@ -207,7 +207,8 @@ def curves_from_files(paths: Sequence[str]) -> dict[str, Any]:
     """A study's periodic sweeps of several seeds (``petsc-contact study`` files) as the
     arrays of :func:`ensemble_curves` (steps that did not converge are ``nan``), with each
     file's ``seed``.  An unfinished piece's ``.partial`` file is read as far as it goes, and
-    then every file only over the loads they all have."""
+    then every file only over the loads they all have; files that do not sweep the same loads
+    (complete ones of different lengths, or different values) are a ``ValueError``."""
     import h5py
 
     rows: list[dict[str, np.ndarray]] = []
@@ -227,6 +228,14 @@ def curves_from_files(paths: Sequence[str]) -> dict[str, Any]:
             h_rms.append(float(f.attrs["rms_height"]))
             seeds.append(int(f.attrs["seed"]))
     shared = min(r["converged"].size for r in rows)
+    complete_sizes = {
+        r["converged"].size
+        for r, path in zip(rows, paths, strict=True)
+        if not path.endswith(".partial")
+    }
+    loads = np.array([r["nominal_pressure"][:shared] for r in rows])
+    if len(complete_sizes) > 1 or np.any(loads != loads[0]):
+        raise ValueError(f"the files {list(paths)} do not sweep the same loads")
     out: dict[str, Any] = {k: np.array([r[k][:shared] for r in rows]) for k in rows[0]}
     out["h_rms"], out["seed"] = np.array(h_rms), np.array(seeds)
     return out

@@ -267,7 +267,9 @@ def _finished_rows(path: str, steps: int) -> list[dict[str, Any]]:
     """The per-step scalars already in an interrupted run's partial file (for the plot)."""
     import h5py
 
-    with h5py.File(path + ".partial", "r") as f:
+    from ..io.output import partial_path
+
+    with h5py.File(partial_path(path), "r") as f:
         names = [k for k in f if f[k].ndim == 1 and f[k].shape[0] >= steps]
         rows = [{k: f[k][i] for k in names} for i in range(steps)]
     for row in rows:

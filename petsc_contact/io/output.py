@@ -27,6 +27,13 @@ import numpy as np
 
 from ..conventions.grid import Grid
 
+PARTIAL = ".partial"  # a run's file until it ends: OUT.h5.partial, renamed OUT.h5 at the end
+
+
+def partial_path(path: str) -> str:
+    """The file a run with output ``path`` writes until it ends (``path + '.partial'``)."""
+    return path + PARTIAL
+
 
 def load_table(path: str, columns: int) -> np.ndarray:
     """A small numeric table: comma- or whitespace-separated, ``#`` comments, and at most one
@@ -167,7 +174,7 @@ class StepWriter:
         from_saved_state: bool = True,
     ) -> None:
         self.path = path
-        self.partial = path + ".partial"
+        self.partial = partial_path(path)
         self.grid = grid
         self.fields = fields
         self.root = grid.comm.rank == 0
@@ -316,7 +323,7 @@ def read_resume(path: str, parameters: dict[str, Any]) -> tuple[int, np.ndarray 
     """
     import h5py
 
-    partial = path + ".partial"
+    partial = partial_path(path)
     if not os.path.exists(partial):
         return 0, None
     ignore = ("resume", "quiet", "stop_after")
@@ -628,7 +635,7 @@ def atomic_h5(path: str) -> Iterator[Any]:
     """An HDF5 file written as ``path.partial`` and renamed to ``path`` only when complete."""
     import h5py
 
-    partial = path + ".partial"
+    partial = partial_path(path)
     with h5py.File(partial, "w") as f:
         yield f
     os.replace(partial, path)

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..conventions.validation import log_range
+from ..io.output import partial_path
 from ..physics.surface import psd_shape
 
 PAPER_GRID = 8192
@@ -136,7 +137,7 @@ def complete(path: str) -> bool:
 def finished_steps(path: str) -> int | None:
     """The steps kept so far in a piece's unfinished file ``path + '.partial'`` (None when
     there is none, or it cannot be read while a run writes it)."""
-    partial = path + ".partial"
+    partial = partial_path(path)
     if not os.path.exists(partial):
         return None
     import h5py
@@ -235,5 +236,5 @@ def piece_files(
             if complete(path):
                 out.append(path)
             elif partial and (finished_steps(path) or 0) > 0:
-                out.append(path + ".partial")
+                out.append(partial_path(path))
     return out

@@ -4,7 +4,7 @@ import argparse
 
 import numpy as np
 
-from petsc_contact.io.output import PARTIAL
+from petsc_contact.io.output import is_partial
 from petsc_contact.physics import theory
 from petsc_contact.workflows import scenes
 from petsc_contact.workflows.ensemble import ensemble_statistics
@@ -55,7 +55,7 @@ def _from_data(args: argparse.Namespace) -> tuple[np.ndarray, dict]:
         curves = scenes.curves_from_files(paths)
         p_c = scenes.crossover(curves["h_rms"], h, 1.0)
         fit = scenes.finite_size_fit(curves, n * n, p_c, args.fit_points, args.min_contact_pixels)
-        if any(path.endswith(PARTIAL) for path in paths):
+        if any(map(is_partial, paths)):
             loads, below = curves["stiffness"].shape[1], fit["below_crossover"]
             print(f"# H = {h}: unfinished pieces read, {loads} loads; {below} fitted below p_c")
         results[f"H{h}"], args.grid = curves | fit, n

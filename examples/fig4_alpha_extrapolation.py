@@ -8,7 +8,7 @@ import argparse
 
 import numpy as np
 
-from petsc_contact.io.output import PARTIAL
+from petsc_contact.io.output import is_partial
 from petsc_contact.workflows import scenes
 from petsc_contact.workflows.paper_study import (
     FIG3_RATIOS,
@@ -55,7 +55,7 @@ def _from_data(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]
         if hurst != args.hurst:
             raise SystemExit(f"the study's Fig. 3 pieces have H = {hurst}, not {args.hurst}")
         curves = scenes.curves_from_files(paths)
-        if any(path.endswith(PARTIAL) for path in paths):
+        if any(map(is_partial, paths)):
             loads = curves["stiffness"].shape[1]
             print(f"# lambda_r/lambda_1 = {r}: unfinished pieces read, {loads} loads")
         p_c = scenes.crossover(curves["h_rms"], hurst, 1.0)

@@ -107,7 +107,7 @@ def _open_writer(
     show: bool,
 ) -> tuple[Any, int, np.ndarray | None]:
     """The step writer, the steps already done and the state to start from (``--resume``)."""
-    from ..io.output import StepWriter, read_resume
+    from ..io.output import StepWriter, partial_path, read_resume
 
     fields = FIELD_NAMES if args.fields else ()
     done, state = read_resume(args.output, attributes["parameters"]) if args.resume else (0, None)
@@ -115,10 +115,10 @@ def _open_writer(
         stored = None if args.scalars_only else heights
         return StepWriter(args.output, grid, attributes, stored, fields), 0, None
     if show:
-        print(f"# resuming {args.output}.partial after {done} of {total} steps", flush=True)
+        print(f"# resuming {partial_path(args.output)} after {done} of {total} steps", flush=True)
     if state is None:  # its state file is lost: the result is the same, the cost may be more
         say(
-            f"{args.output}.partial has no saved state beside it: step {done + 1} starts "
+            f"{partial_path(args.output)} has no saved state beside it: step {done + 1} starts "
             "from first touch",
             "warning",
         )

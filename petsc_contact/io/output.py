@@ -35,6 +35,11 @@ def partial_path(path: str) -> str:
     return path + PARTIAL
 
 
+def is_partial(path: str) -> bool:
+    """Whether ``path`` names an unfinished run's file (see :func:`partial_path`)."""
+    return path.endswith(PARTIAL)
+
+
 def load_table(path: str, columns: int) -> np.ndarray:
     """A small numeric table: comma- or whitespace-separated, ``#`` comments, and at most one
     header line (a first row that is not numbers).  Raises ``ValueError`` with the line."""

@@ -14,7 +14,7 @@ import numpy as np
 from ..backend.stiffness import sweep_stiffness
 from ..conventions.fft import make_fft
 from ..conventions.grid import Grid, fundamental_wavevector
-from ..io.output import PARTIAL, atomic_h5, write_attributes
+from ..io.output import atomic_h5, is_partial, write_attributes
 from ..physics import theory
 from ..physics.surface import psd_shape, rms_of, self_affine
 from .periodic_sweep import periodic_contact
@@ -215,7 +215,7 @@ def curves_from_files(paths: Sequence[str]) -> dict[str, Any]:
     h_rms, seeds = [], []
     for path in paths:
         with h5py.File(path, "r", locking=False) as f:  # a .partial may be open for writing
-            if not (f.attrs.get("complete", False) or path.endswith(PARTIAL)):
+            if not (f.attrs.get("complete", False) or is_partial(path)):
                 raise ValueError(f"'{path}' is not complete")
             ok = f["converged"][:].astype(bool)
             row = {k: f[k][:].astype(float) for k in _CURVE_KEYS if k in f}
@@ -229,9 +229,7 @@ def curves_from_files(paths: Sequence[str]) -> dict[str, Any]:
             seeds.append(int(f.attrs["seed"]))
     shared = min(r["converged"].size for r in rows)
     complete_sizes = {
-        r["converged"].size
-        for r, path in zip(rows, paths, strict=True)
-        if not path.endswith(PARTIAL)
+        r["converged"].size for r, path in zip(rows, paths, strict=True) if not is_partial(path)
     }
     loads = np.array([r["nominal_pressure"][:shared] for r in rows])
     if len(complete_sizes) > 1 or np.any(loads != loads[0]):

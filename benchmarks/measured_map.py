@@ -20,9 +20,9 @@ import sys
 
 import h5py
 import numpy as np
+from peer_env import peer_python
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-PEERS = os.path.join(HERE, "peers", ".venv", "bin", "python")
 PRESSURES = "1e-3,1e-2"  # in units of E* (the modulus is 1)
 TIGHT = ["-tao_gatol", "1e-12"]
 
@@ -58,9 +58,12 @@ def _forces() -> str:
 
 
 def cm(heights: str, geometry: str) -> list[dict]:
+    python = peer_python()
+    if python is None:
+        raise SystemExit("ContactMechanics is not installed (see benchmarks/peer_env.py)")
     run = subprocess.run(
         [
-            PEERS,
+            python,
             os.path.join(HERE, "peers", "run_cm_map.py"),
             heights,
             "150,100",

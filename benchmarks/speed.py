@@ -14,8 +14,9 @@ between the FFT benchmark and the solve), and the peers' times in the same run: 
 PolonskyKeerRey (tolerance 1e-8) and ContactMechanics's two constrained CGs, Polonsky-Keer
 (penetration tolerance 1e-8 h_rms) and Bugnicourt (largest gap residual 1e-8 h_rms; run
 displacement controlled at Polonsky-Keer's offset for the load, see
-peers/run_contactmechanics.py), all cold-started like ours, if their venv exists (python3 -m
-venv benchmarks/peers/.venv && benchmarks/peers/.venv/bin/pip install tamaas contactmechanics).
+peers/run_contactmechanics.py), all cold-started like ours, if they are installed (in the
+package's venv: ``.venv/bin/pip install -e '.[peers]'``; or in a venv of their own, see
+peer_env.py).
 All four reach the same mean gap to 1e-8 (printed, so a mismatch shows).  "/cm" is the ratio to
 the faster of ContactMechanics's two solvers for that load.  Type "python" is the default
 solver.
@@ -31,6 +32,7 @@ import tempfile
 import time
 
 import numpy as np
+from peer_env import peer_python
 
 from petsc_contact import periodic_contact
 from petsc_contact.backend.operator import FourierOperator
@@ -94,10 +96,10 @@ PEER_RUNS = (("run_tamaas.py",), ("run_contactmechanics.py", "--bugnicourt"))
 def peer(
     script: str, path: str, pressures: list[float], *extra: str
 ) -> dict[str, dict[float, dict]]:
-    """Run a peer's script in its own venv; results by solver and pressure (empty without
-    the venv)."""
-    python = os.path.join(PEERS, ".venv", "bin", "python")
-    if not os.path.exists(python):
+    """Run a peer's script (:func:`peer_env.peer_python`); results by solver and pressure
+    (empty without the peers)."""
+    python = peer_python()
+    if python is None:
         return {}
     out = subprocess.run(
         [

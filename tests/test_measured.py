@@ -119,12 +119,9 @@ def test_an_instrument_file_on_the_command_line(tmp_path):
 def test_unreadable_files_say_why(tmp_path):
     (tmp_path / "scan.xyz").write_text("0 0 1\n1 0 2\n")
     (tmp_path / "bad.h5").write_bytes(b"\x89HDF\r\n\x1a\nnot really")
-    with h5py.File(tmp_path / "two.h5", "w") as f:
-        f["a"], f["b"] = np.zeros((4, 4)), np.ones((4, 4))
     for name, words in {
-        "scan.xyz": "format",
+        "scan.xyz": "more likely a line scan",
         "bad.h5": "NetCDF",
-        "two.h5": "2 2-D datasets",
         "none.npy": "does not exist",
     }.items():
         with pytest.raises((OSError, ValueError), match=words):

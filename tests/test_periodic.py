@@ -107,7 +107,7 @@ def test_work_equals_energy(rough):
     steps = periodic_contact(rough, 1.0, 1.0, p0s, options=TIGHT)
     u = np.array([s.scalars["mean_gap"] for s in steps])
     energy = np.array([s.scalars["elastic_energy"] for s in steps])
-    work = -np.trapz(p0s, u)
+    work = -np.trapezoid(p0s, u)
     assert energy[-1] - energy[0] == pytest.approx(work, rel=1e-3)
 
 

@@ -51,7 +51,7 @@ def spectrum():
     q0 = 2 * np.pi
     q = np.geomspace(q0, 64 * q0, 6000)
     c = np.where(q < 2 * q0, 1.0, (q / (2 * q0)) ** (-2 - 2 * 0.7))
-    return q, c / (2 * np.pi * np.trapz(q * c, q))
+    return q, c / (2 * np.pi * np.trapezoid(q * c, q))
 
 
 def test_persson_exponential_regime(spectrum):
@@ -127,7 +127,7 @@ def _eq5(points, rolloff_ratio, norm_points=1_000_000):
 
     qf, cf = shape(norm_points)
     q, c = shape(points)
-    return q, c / (2 * np.pi * np.trapz(qf * cf, qf))
+    return q, c / (2 * np.pi * np.trapezoid(qf * cf, qf))
 
 
 @pytest.mark.parametrize("rolloff_ratio", [1.0, 8.0])

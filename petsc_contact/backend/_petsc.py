@@ -1,14 +1,13 @@
-"""Find Debian's petsc4py and initialise PETSc once, with the user's PETSc options.
+"""Initialise PETSc once, with the user's PETSc options, and reach its C library.
 
-Debian installs petsc4py below ``$PETSC_DIR/lib/python3/dist-packages`` and only puts it on
-``sys.path`` when ``PETSC_DIR`` is set before the interpreter starts.  This module adds the
-path itself, so users never set ``PETSC_DIR``.
+petsc4py comes from the venv (``setup.sh`` compiles it against Debian's PETSc and numpy 2)
+or from another distribution (conda-forge's).  :func:`init` says in one line why it cannot
+be imported, naming a numpy/petsc4py mismatch as such.
 """
 
 from __future__ import annotations
 
 import ctypes
-import glob
 import os
 import shlex
 import sys
@@ -18,32 +17,38 @@ from contextlib import contextmanager
 from types import ModuleType
 from typing import Any, TypeAlias
 
-DEBIAN_PETSC_DIRS = ("/usr/lib/petscdir/petsc3.18/x86_64-linux-gnu-real",)
+INSTALL_HINT = (
+    "on Debian 12 run ./setup.sh (it compiles petsc4py against Debian's PETSc); elsewhere "
+    "install petsc4py from conda-forge (README, 'Installing elsewhere')"
+)
 
 
-def _petsc_dirs() -> list[str]:
-    dirs = [os.environ.get("PETSC_DIR", "")]
-    dirs += list(DEBIAN_PETSC_DIRS)
-    dirs += sorted(glob.glob("/usr/lib/petscdir/petsc3.*/x86_64-linux-gnu-real"), reverse=True)
-    return [d for d in dirs if d]
-
-
-def _make_importable() -> None:
+def _petsc4py() -> ModuleType:
     try:
-        import petsc4py  # noqa: F401
-
-        return
+        import petsc4py
     except ImportError:
-        pass
-    for d in _petsc_dirs():
-        site = os.path.join(d, "lib", "python3", "dist-packages")
-        if os.path.isdir(os.path.join(site, "petsc4py")):
-            sys.path.append(site)
-            os.environ.setdefault("PETSC_DIR", d)
-            return
-    raise ImportError(
-        "petsc4py not found: install Debian's python3-petsc4py (see README, set-up command)"
-    )
+        raise ImportError(f"petsc4py is not installed: {INSTALL_HINT}") from None
+    return petsc4py
+
+
+@contextmanager
+def _loading() -> Iterator[None]:
+    """Turn a failure to load petsc4py's compiled module into one clear ImportError, naming a
+    numpy/petsc4py mismatch as such."""
+    try:
+        yield
+    except (ImportError, ValueError, AttributeError) as exc:
+        import numpy as np
+        import petsc4py
+
+        text = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        if "numpy" in text.lower() or "dtype size changed" in text:
+            raise ImportError(
+                f"petsc4py {petsc4py.__version__} was compiled against another numpy than the "
+                f"installed numpy {np.__version__} ({text}): rebuild petsc4py against this "
+                f"numpy ({INSTALL_HINT})"
+            ) from None
+        raise ImportError(f"petsc4py cannot be loaded ({text}): {INSTALL_HINT}") from None
 
 
 def init(petsc_args: list[str] | None = None) -> ModuleType:
@@ -56,14 +61,12 @@ def init(petsc_args: list[str] | None = None) -> ModuleType:
         ``PetscInitialize`` if PETSc is not initialised yet; otherwise they are inserted into
         the global options database, so that later ``setFromOptions`` calls see them.
     """
-    _make_importable()
-    import petsc4py
-
     args = list(petsc_args or [])
     if "petsc4py.PETSc" not in sys.modules:
-        petsc4py.init([sys.argv[0] if sys.argv and sys.argv[0] else "petsc-contact"] + args)
-        from petsc4py import PETSc
-
+        petsc4py = _petsc4py()
+        with _loading():
+            petsc4py.init([sys.argv[0] if sys.argv and sys.argv[0] else "petsc-contact"] + args)
+            from petsc4py import PETSc
         return PETSc
     from petsc4py import PETSc
 

@@ -122,10 +122,22 @@ def _surface_arguments(p: argparse.ArgumentParser) -> None:
         ".sur, .x3p, .plu, .nid, .ibw, .gwy, .datx, ...; docs/measured.md); nx x ny",
     )
     s.add_argument(
+        "--channel",
+        metavar="NAME|INDEX",
+        help="which map of a FILE with several (an instrument channel, an HDF5 dataset, an .npz "
+        "array), by name or index (default: the file's default channel; the run records it)",
+    )
+    s.add_argument(
         "--height-unit",
         metavar="UNIT",
         help="unit of the heights in FILE when it has none (m, mm, um, nm, A, pm); they are "
         "converted to the unit of --length",
+    )
+    s.add_argument(
+        "--override-metadata",
+        action="store_true",
+        help="let --length and --height-unit replace the sides and unit FILE states (else a "
+        "difference is an error); the run records both and what was overridden",
     )
     s.add_argument(
         "--detrend",

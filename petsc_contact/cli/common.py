@@ -14,6 +14,7 @@ from ..conventions.validation import non_negative, positive
 
 EXIT_NOT_CONVERGED = 1
 EXIT_BAD_INPUT = 2
+EXIT_UNAVAILABLE = 69  # a package the run needs cannot be loaded (sysexits' EX_UNAVAILABLE)
 EXIT_PAUSED = 75  # --stop-after reached: the run continues with --resume
 EXIT_INTERRUPTED = 130
 
@@ -52,6 +53,17 @@ def swept(spec: list[float], low: float, high: float) -> list[float]:
     return [float(v) for v in np.geomspace(lo, hi, int(n))]
 
 
+FILE_RECORD = (
+    "heights_reader",
+    "heights_channel",
+    "heights_channel_index",
+    "file_lengths",
+    "file_unit",
+    "metadata_overridden",
+)
+"""What a run records of its ``--heights`` file, beside its path and digest."""
+
+
 def run_record(
     args: argparse.Namespace,
     argv: Sequence[str],
@@ -86,6 +98,7 @@ def run_record(
     if args.heights is not None:
         attrs["heights_file"] = os.path.abspath(args.heights)
         attrs["heights_sha256"] = file_digest(args.heights)
+        attrs.update({k: resolved[k] for k in FILE_RECORD})
     else:
         attrs.update(
             seed=args.seed,

@@ -10,7 +10,7 @@ from typing import Any
 
 from ..io.output import schema_markdown
 from .arguments import build_parser, is_petsc_option, split_arguments
-from .common import EXIT_BAD_INPUT, EXIT_INTERRUPTED, InputError, say
+from .common import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_UNAVAILABLE, InputError, say
 from .comparison import run_compare
 from .ensemble import run_ensemble
 from .runs import run
@@ -33,6 +33,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         status = _dispatch(args, argv, petsc_args)
         _report_unused(petsc_args)
         return status
+    except ImportError as exc:  # before OSError: the installation, not the input
+        say(str(exc))
+        return EXIT_UNAVAILABLE
     except (InputError, ValueError, OSError) as exc:
         say(str(exc))
         return EXIT_BAD_INPUT

@@ -10,7 +10,13 @@ import numpy as np
 
 from .common import InputError, check_numbers, say
 
-FILE_ONLY = {"height_unit": None, "detrend": "none", "fill_undefined": "error"}
+FILE_ONLY = {
+    "height_unit": None,
+    "detrend": "none",
+    "fill_undefined": "error",
+    "channel": None,
+    "override_metadata": False,
+}
 
 
 def _generated(args: argparse.Namespace) -> bool:
@@ -40,17 +46,29 @@ def _generated(args: argparse.Namespace) -> bool:
     return True
 
 
-def _units(args: argparse.Namespace, topo: Any, lengths: Any) -> tuple[Any, float]:
-    """The run's lengths (with their unit) and the factor that puts the file's heights in it.
+def _units(args: argparse.Namespace, topo: Any, lengths: Any) -> tuple[Any, float, list[str]]:
+    """The run's lengths (with their unit), the factor that puts the file's heights in it, and
+    which of the file's metadata ``--override-metadata`` replaced.
 
-    Contradictions are input errors: a height unit other than the file's, sides other than
-    the file's, or heights with a unit when the lengths have none."""
+    Without ``--override-metadata`` contradictions are input errors: a height unit other than
+    the file's, sides other than the file's.  Heights with a unit need lengths with one."""
     from ..conventions.grid import sides
     from ..conventions.units import Lengths, factor, unit_name
 
+    override = args.override_metadata
+    if override and args.height_unit is None and lengths is None:
+        raise InputError(
+            "--override-metadata replaces the file's data with --length or --height-unit"
+        )
+    overridden = []
     given = unit_name(args.height_unit) if args.height_unit else None
     if given and topo.unit and given != topo.unit:
-        raise InputError(f"--height-unit {given} contradicts the file's unit {topo.unit}")
+        if not override:
+            raise InputError(
+                f"--height-unit {given} contradicts the file's unit {topo.unit} (add "
+                "--override-metadata to replace it)"
+            )
+        overridden.append("height_unit")
     heights_unit = given or topo.unit
     if lengths is None:
         lengths = Lengths(topo.lengths, topo.unit) if topo.lengths else Lengths((1.0,), None)
@@ -58,28 +76,50 @@ def _units(args: argparse.Namespace, topo: Any, lengths: Any) -> tuple[Any, floa
         mine = np.array(sides(topo.heights.shape, lengths.values)) * factor(lengths.unit, topo.unit)
         if not np.allclose(mine, topo.lengths, rtol=1e-6):
             theirs = Lengths(topo.lengths, topo.unit).describe()
-            raise InputError(f"--length {lengths.describe()} contradicts the file's {theirs}")
+            if not override:
+                raise InputError(
+                    f"--length {lengths.describe()} contradicts the file's {theirs} (add "
+                    "--override-metadata to replace it)"
+                )
+            overridden.append("length")
     if heights_unit and not lengths.unit:
         raise InputError(f"heights in {heights_unit} need lengths with a unit, e.g. --length 100um")
-    return lengths, factor(heights_unit, lengths.unit)
+    return lengths, factor(heights_unit, lengths.unit), overridden
 
 
-def measured(args: argparse.Namespace, given: Any) -> tuple[np.ndarray, Any]:
-    """The prepared map of ``--heights`` (filled, detrended, in the lengths' unit) and the
-    lengths; warns about implausible slopes and, for periodic runs, edge mismatch."""
+def measured(args: argparse.Namespace, given: Any) -> tuple[np.ndarray, Any, dict[str, Any]]:
+    """The prepared map of ``--heights`` (filled, detrended, in the lengths' unit), the
+    lengths, and what the run records of the file (its reader, channel and metadata, and what
+    was overridden); warns about implausible slopes and, for periodic runs, edge mismatch."""
     from ..conventions.grid import grid_for
     from ..io.topography import read_topography
     from ..physics.preparation import detrend, fill_undefined
 
-    topo = read_topography(args.heights)
-    lengths, scale = _units(args, topo, given)
+    topo = read_topography(args.heights, args.channel)
+    lengths, scale, overridden = _units(args, topo, given)
     spacing = grid_for(topo.heights.shape, lengths.pair).spacing
     full = fill_undefined(topo.heights, args.fill_undefined)
     full = detrend(full, spacing, args.detrend)
     if scale != 1.0:
         full = np.asarray(full, dtype=float) * scale
+    record = {
+        "heights_reader": topo.reader,
+        "heights_channel": topo.channel,
+        "heights_channel_index": topo.channel_index,
+        "file_lengths": list(topo.lengths) if topo.lengths else [],
+        "file_unit": topo.unit or "",
+        "metadata_overridden": overridden,
+    }
+    if not getattr(args, "quiet", False) and grid_comm_rank() == 0:
+        print(f"# {args.heights}: {topo.describe()}", flush=True)
     _warn(args, full, spacing)
-    return full, lengths
+    return full, lengths, record
+
+
+def grid_comm_rank() -> int:
+    from mpi4py import MPI
+
+    return int(MPI.COMM_WORLD.rank)
 
 
 def _warn(args: argparse.Namespace, full: np.ndarray, spacing: tuple[float, float]) -> None:
@@ -164,10 +204,11 @@ def prepare_scene(
         given = parse_lengths(args.length) if args.length is not None else None
     except ValueError as exc:
         raise InputError(f"--length: {exc}") from None
+    record: dict[str, Any] = {}
     if _generated(args):
         full, lengths = None, given or Lengths((1.0,), None)
     else:
-        full, lengths = measured(args, given)
+        full, lengths, record = measured(args, given)
     check_writable(args.output)
     if getattr(args, "plot", None):
         check_writable(args.plot)
@@ -175,4 +216,4 @@ def prepare_scene(
     if check_type:
         check_tao_type(petsc)
     grid, fft, heights, resolved = _scene(args, full, lengths)
-    return petsc, grid, fft, heights, resolved
+    return petsc, grid, fft, heights, resolved | record

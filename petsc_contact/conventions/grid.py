@@ -10,7 +10,7 @@ the same on every rank.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, SupportsFloat
 
 import numpy as np
 from mpi4py import MPI
@@ -155,7 +155,7 @@ class Grid:
         (nx, ny), (lx, ly) = self.shape, self.lengths
         return Grid((2 * nx, 2 * ny), (2 * lx, 2 * ly), self.comm)
 
-    def sum(self, *values: float) -> np.ndarray:
+    def sum(self, *values: SupportsFloat) -> np.ndarray:
         """Sum scalars over all ranks (one reduction for all of them)."""
         local = np.array(values, dtype=float)
         if self.comm.size == 1:

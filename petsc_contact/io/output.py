@@ -630,6 +630,12 @@ RUN_ATTRIBUTES = (
     "grid",
     "heights_file",
     "heights_sha256",
+    "heights_reader",
+    "heights_channel",
+    "heights_channel_index",
+    "file_lengths",
+    "file_unit",
+    "metadata_overridden",
     "created",
     "complete",
 )

@@ -2,31 +2,35 @@
 SurfaceTopography.
 
 :func:`read_topography` returns a :class:`Topography`: the heights (``nx x ny``, NaN where
-the instrument recorded nothing), and the physical sides and height unit when the file
-carries them.  Read without any optional package:
+the instrument recorded nothing), the physical sides and height unit when the file carries
+them, and the channel read.  The readers, in the order they are tried for an extension:
 
 - ``.npy`` (memory-mapped, so that under MPI each rank reads only its rows) and ``.npz``
-  (the array ``heights``, or the only 2-D array);
-- text matrices (``.txt``, ``.dat``, ``.csv``; whitespace or commas, ``#`` comments);
-- HDF5 (``.h5``, ``.hdf5``): the dataset ``heights``, or the only 2-D dataset; attributes
-  ``length`` (one value or two) and ``unit`` are read when present.  This includes the
-  package's own output files, whose ``heights`` are the input surface;
-- NetCDF (``.nc``): through SurfaceTopography when it is installed (its NetCDF files carry
-  the physical sizes and unit), else as HDF5 (NetCDF-4) or through scipy (NetCDF-3).
+  (the array ``heights``, the one named by ``channel``, or the only 2-D array);
+- HDF5 (``.h5``, ``.hdf5``): the dataset ``heights``, the one named by ``channel``, or the
+  only 2-D dataset; attributes ``length`` (one value or two) and ``unit`` are read when
+  present.  This includes the package's own output files, whose ``heights`` are the input;
+- everything else, text included, goes first to SurfaceTopography (about 40 instrument
+  formats, the field's maintained reader: sides, unit, undefined points and channels as it
+  reads them).  A text matrix (``.txt``, ``.dat``, ``.csv``, ``.asc``; whitespace or commas,
+  ``#`` comments) is read by numpy when SurfaceTopography is not installed or cannot parse it;
+  NetCDF (``.nc``) likewise through h5py (NetCDF-4) or scipy (NetCDF-3).
 
-Every other extension (``.di``, ``.opd``, ``.sur``, ``.x3p``, ``.plu``, ``.nid``, ``.ibw``,
-``.gwy``, ``.datx``, ... about 40 formats) is read by SurfaceTopography, the field's
-maintained reader, which the README's set-up installs; without it such a file gives a
-one-line error naming the install step.
+A file the first reader cannot parse goes to the next (a Zygo ``.dat`` is no text matrix,
+an ``.h5`` with several maps is read by SurfaceTopography's channels); when none can, the
+error gives every reader's whole reason.  A file that parses but is no map (a line scan, a
+3-D array, a channel that is not a height) is refused at once.
 """
 
 from __future__ import annotations
 
 import os
+import re
 import warnings
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 from importlib import metadata
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -36,10 +40,24 @@ from ..conventions.units import unit_name
 TEXT = (".txt", ".dat", ".csv", ".asc")
 HDF5 = (".h5", ".hdf5")
 NETCDF = (".nc", ".nc4")
-INSTALL_HINT = (
-    "pip install 'numpy<2' 'numba>=0.59' SurfaceTopography==1.18.2 into the venv "
-    "(the README's set-up does this)"
-)
+NUMPY = (".npy", ".npz")
+INSTALL_HINT = "pip install 'SurfaceTopography>=1.27' into the venv (the README's set-up does this)"
+
+GUESSES = {"HGTReader": (".hgt",)}
+"""SurfaceTopography readers that recognise a file by its size alone (any file of 2 n^2 bytes
+is an elevation tile to ``HGTReader``): trusted only with their own extensions."""
+
+Channel = str | int | None
+"""A channel by name (``"Height"``) or index (``1``, or ``"1"`` when no channel has that
+name); ``None`` is the file's default channel."""
+
+
+class NotAMap(ValueError):
+    """The file was parsed, but what it holds cannot be a contact surface."""
+
+
+class Unparsable(ValueError):
+    """This reader cannot parse the file (the next one may)."""
 
 
 @dataclass(frozen=True)
@@ -53,38 +71,162 @@ class Topography:
     lengths
         Physical sides ``(Lx, Ly)`` from the file, or ``None`` when it has none.
     unit
-        Unit of the sides and heights from the file (the package's spelling), or ``None``.
+        Unit of the heights (and of the sides) from the file (the package's spelling), or
+        ``None``.
     reader
-        What read it (``numpy``, ``text``, ``hdf5``, ``SurfaceTopography x.y``).
+        What read it (``numpy``, ``text``, ``hdf5``, ``netcdf``, ``SurfaceTopography x.y``).
+    channel
+        Name of the channel read (``""`` when the file has one unnamed map).
+    channel_index
+        Its index among the file's channels.
+    channels
+        Names of all the file's channels (one entry for a single map).
+    default_channel
+        Whether the channel read is the file's default (none was asked for).
     """
 
     heights: np.ndarray
     lengths: tuple[float, float] | None = None
     unit: str | None = None
     reader: str = "numpy"
+    channel: str = ""
+    channel_index: int = 0
+    channels: tuple[str, ...] = ("",)
+    default_channel: bool = True
+
+    @property
+    def undefined(self) -> int:
+        """The number of undefined (NaN) heights."""
+        return int(np.count_nonzero(~np.isfinite(self.heights)))
+
+    def describe(self) -> str:
+        """One line: the channel, its reader, shape, sides and undefined points."""
+        nx, ny = self.heights.shape
+        parts = [f"{nx} x {ny}"]
+        if self.lengths is not None:
+            parts.append(f"on {self.lengths[0]:.6g} x {self.lengths[1]:.6g} {self.unit or ''}")
+        if len(self.channels) > 1 or self.channel:
+            which = "the file's default" if self.default_channel else "asked for"
+            parts.append(
+                f"channel {self.channel_index} '{self.channel}' of {len(self.channels)} ({which})"
+            )
+        if self.undefined:
+            parts.append(f"{self.undefined} undefined points ({self.undefined / nx / ny:.1%})")
+        return ", ".join(parts) + f", read by {self.reader}"
 
 
-def read_topography(path: str) -> Topography:
-    """Read ``path`` (see the module docstring); ``OSError``/``ValueError`` with one line."""
+@runtime_checkable
+class SurfaceTopographyMap(Protocol):
+    """What the package uses of a SurfaceTopography ``Topography`` object (2-D, uniform)."""
+
+    @property
+    def dim(self) -> int: ...
+
+    @property
+    def physical_sizes(self) -> Any: ...
+
+    @property
+    def unit(self) -> Any: ...
+
+    def heights(self) -> Any: ...
+
+
+def from_surface_topography(topography: SurfaceTopographyMap, reader: str = "") -> Topography:
+    """A :class:`Topography` from a SurfaceTopography ``Topography`` object: its heights (NaN
+    where its mask says undefined), sides and unit.  ``NotAMap`` for a line scan."""
+    if topography.dim != 2:
+        raise NotAMap(f"a {topography.dim}-D topography (a line scan) is not a map")
+    heights: np.ndarray = np.ma.filled(np.ma.asarray(topography.heights(), dtype=float), np.nan)
+    sizes = topography.physical_sizes
+    lengths = None if sizes is None else (float(sizes[0]), float(sizes[1]))
+    unit = topography.unit
+    return Topography(
+        heights,
+        lengths,
+        _unit(unit) if isinstance(unit, str) else None,
+        reader or f"SurfaceTopography {_version()}",
+    )
+
+
+def map_and_lengths(
+    heights: np.ndarray | SurfaceTopographyMap, length: float | tuple[float, float] | None
+) -> tuple[np.ndarray, float | tuple[float, float]]:
+    """The height array and the sides of what the Python API was given.
+
+    Parameters
+    ----------
+    heights
+        An ``nx x ny`` array, or a SurfaceTopography ``Topography`` (its sides are used, and
+        its mask of undefined points is refused: fill them first).
+    length
+        The sides (``L``, ``(Lx, Ly)``); optional for a topography, whose own sides it must
+        then equal.
+
+    Raises
+    ------
+    ValueError
+        Undefined points, no sides, or sides that contradict the topography's.
+    """
+    if not isinstance(heights, SurfaceTopographyMap):
+        if length is None:
+            raise ValueError("give the sides of the map: length=L or length=(Lx, Ly)")
+        return heights, length
+    topo = from_surface_topography(heights)
+    if topo.undefined:
+        raise ValueError(
+            f"the topography has {topo.undefined} undefined points: fill them first "
+            "(petsc_contact.physics.preparation.fill_undefined, or its "
+            "interpolate_undefined_data())"
+        )
+    if topo.lengths is None:
+        if length is None:
+            raise ValueError("the topography has no physical sizes: give length=")
+        return topo.heights, length
+    if length is not None and not np.allclose(
+        sides(topo.heights.shape, length), topo.lengths, rtol=1e-6
+    ):
+        raise ValueError(f"length={length} contradicts the topography's sides {topo.lengths}")
+    return topo.heights, topo.lengths
+
+
+def read_topography(path: str, channel: Channel = None) -> Topography:
+    """Read ``path`` (see the module docstring).
+
+    Parameters
+    ----------
+    path
+        The file.
+    channel
+        Which map of a file with several (a SurfaceTopography channel, an HDF5 dataset, an
+        ``.npz`` array): a name or an index; ``None`` is the file's default.
+
+    Raises
+    ------
+    OSError
+        The file does not exist or is not readable.
+    ValueError
+        No reader can parse it (with each reader's reason), or it holds no usable map.
+    """
     if not os.path.isfile(path):
         raise OSError(f"heights file '{path}' does not exist")
     if not os.access(path, os.R_OK):
         raise OSError(f"heights file '{path}' is not readable")
-    ext = os.path.splitext(path)[1].lower()
-    try:
-        if ext in (".npy", ".npz"):
-            topo = _numpy(path)
-        elif ext in TEXT:
-            topo = Topography(_text(path), reader="text")
-        elif ext in HDF5 or (ext in NETCDF and not surface_topography_available()):
-            topo = _hdf5(path)
-        else:
-            topo = _surface_topography(path)
-    except (OSError, ValueError):
-        raise
-    except Exception as exc:  # a reader's own failure: one line, with the file
-        raise OSError(f"cannot read heights from '{path}': {_one_line(exc)}") from None
-    return _checked(topo, path)
+    reasons = []
+    for name, reader in _readers(path):
+        try:
+            topo = reader(path, channel)
+        except NotAMap:
+            raise
+        except Unparsable as exc:
+            reasons.append(f"{name}: {exc}")
+            continue
+        except Exception as exc:  # a reader's own failure: the next reader may parse it
+            reasons.append(f"{name}: {_flat(exc)}")
+            continue
+        return _checked(topo, path)
+    if not surface_topography_available():
+        reasons.append(f"SurfaceTopography is not installed ({INSTALL_HINT})")
+    raise ValueError(f"cannot read heights from '{path}': " + "; ".join(reasons))
 
 
 def surface_topography_available() -> bool:
@@ -94,85 +236,162 @@ def surface_topography_available() -> bool:
     return importlib.util.find_spec("SurfaceTopography") is not None
 
 
-def _numpy(path: str) -> Topography:
+Reader = Callable[[str, Channel], Topography]
+
+
+def _readers(path: str) -> list[tuple[str, Reader]]:
+    """The readers to try for ``path``, most specific first."""
+    ext = os.path.splitext(path)[1].lower()
+    st: list[tuple[str, Reader]] = []
+    if surface_topography_available():
+        st = [(f"SurfaceTopography {_version()}", _surface_topography)]
+    if ext in NUMPY:
+        return [("numpy", _numpy), *st]
+    if ext in HDF5:
+        return [("hdf5", _hdf5), *st]
+    if ext in NETCDF:
+        return [*st, ("hdf5/netcdf", _hdf5)]
+    if ext in TEXT:
+        return [(st[0][0], _text_with_metadata), ("text", _text)] if st else [("text", _text)]
+    return st
+
+
+def _version() -> str:
+    return metadata.version("SurfaceTopography")
+
+
+def _flat(exc: BaseException) -> str:
+    """An exception's whole message on one line, without the binary bytes some readers quote."""
+    text = "".join(c if " " <= c <= "~" or c in "µÅ" else " " for c in str(exc))
+    return re.sub(r"\s+", " ", text).strip() or type(exc).__name__
+
+
+def _single(channel: Channel, path: str) -> None:
+    if channel not in (None, 0, "0"):
+        raise NotAMap(f"'{path}' holds one map, it has no channel '{channel}'")
+
+
+def _numpy(path: str, channel: Channel) -> Topography:
     try:
         data = np.load(path, mmap_mode="r", allow_pickle=False)
     except (ValueError, OSError, EOFError) as exc:
-        raise OSError(f"cannot read heights from '{path}': {_one_line(exc)}") from None
+        raise Unparsable(_flat(exc)) from None
     if isinstance(data, np.ndarray):
+        _single(channel, path)
         return Topography(data)
     with data:
-        return Topography(_only_2d(dict(data), path))
+        return _pick(dict(data), channel, path, "numpy")
 
 
-def _one_line(exc: BaseException) -> str:
-    text = str(exc).strip().splitlines()
-    return text[0] if text else type(exc).__name__
-
-
-def _text(path: str) -> np.ndarray:
+def _text(path: str, channel: Channel) -> Topography:
     try:
-        return np.loadtxt(path, delimiter="," if path.endswith(".csv") else None, ndmin=2)
+        heights = np.loadtxt(path, delimiter="," if path.endswith(".csv") else None, ndmin=2)
     except ValueError as exc:
-        raise ValueError(
-            f"'{path}' is not a numeric matrix ({_one_line(exc)}); an x y z point list is not a map"
-        ) from None
+        raise Unparsable(f"not a numeric matrix ({_flat(exc)})") from None
+    except UnicodeDecodeError as exc:
+        raise Unparsable(f"not text ({_flat(exc)})") from None
+    _single(channel, path)
+    return Topography(heights, reader="text")
 
 
-def _only_2d(arrays: dict[str, Any], path: str) -> np.ndarray:
-    """The array ``heights``, or the only 2-D array of a container."""
-    if "heights" in arrays:
-        return np.asarray(arrays["heights"])
+def _text_with_metadata(path: str, channel: Channel) -> Topography:
+    """A text file as SurfaceTopography reads it (sides and unit from a header, x y z lists,
+    line scans), except a bare matrix: with no sides and no unit it keeps the package's
+    orientation (rows are x, as numpy reads it; SurfaceTopography takes columns as x)."""
+    read = _surface_topography(path, channel)
+    if read.lengths is None and read.unit is None:
+        try:
+            bare = _text(path, channel)
+        except Unparsable:
+            return read
+        if bare.heights.shape == read.heights.T.shape:
+            return bare
+    return read
+
+
+def _pick(arrays: dict[str, Any], channel: Channel, path: str, reader: str) -> Topography:
+    """The array named by ``channel``, else ``heights``, else the only 2-D array."""
     maps = [name for name, a in arrays.items() if getattr(a, "ndim", 0) == 2]
-    if len(maps) != 1:
-        raise ValueError(
-            f"'{path}' has no 'heights' array and {len(maps)} 2-D arrays"
-            + (f" ({', '.join(maps)})" if maps else "")
+    if channel is not None:
+        name = maps[_channel_index(maps, channel, path)]
+    elif "heights" in arrays:
+        name = "heights"
+    elif len(maps) == 1:
+        name = maps[0]
+    else:
+        raise Unparsable(
+            f"no 'heights' array and {len(maps)} 2-D arrays"
+            + (f" ({', '.join(maps)}: choose one with --channel)" if maps else "")
         )
-    return np.asarray(arrays[maps[0]])
+    names = tuple(maps) or (name,)
+    return Topography(
+        np.asarray(arrays[name]),
+        reader=reader,
+        channel=name,
+        channel_index=names.index(name) if name in names else 0,
+        channels=names,
+        default_channel=channel is None,
+    )
 
 
-def _hdf5(path: str) -> Topography:
+def _channel_index(names: list[str], channel: Channel, path: str) -> int:
+    """The one channel ``channel`` means: an exact name first, then an index."""
+    hits = [i for i, n in enumerate(names) if n == str(channel)]
+    if len(hits) == 1:
+        return hits[0]
+    index = _index(channel)
+    if not hits and index is not None and 0 <= index < len(names):
+        return index
+    listing = ", ".join(f"{i} '{n}'" for i, n in enumerate(names))
+    problem = "is ambiguous (give its index)" if hits else "does not exist"
+    raise NotAMap(f"channel '{channel}' of '{path}' {problem}; its channels: {listing}")
+
+
+def _index(channel: Channel) -> int | None:
+    if isinstance(channel, int):
+        return channel
+    return int(channel) if isinstance(channel, str) and channel.strip().isdigit() else None
+
+
+def _hdf5(path: str, channel: Channel) -> Topography:
     import h5py
 
     try:
         f = h5py.File(path, "r")
     except OSError:
-        return _netcdf3(path)
+        return _netcdf3(path, channel)
     with f:
+        datasets: dict[str, Any] = {}
+        f.visititems(lambda name, item: datasets.update({name: item}) if _is_map(item) else None)
         if isinstance(f.get("heights"), h5py.Dataset):
-            dataset = f["heights"]
-        else:
-            arrays: list[Any] = []
-            f.visititems(lambda _, item: arrays.append(item) if _is_map(item) else None)
-            dataset = _pick_dataset(arrays, path)
+            datasets.setdefault("heights", f["heights"])
+        picked = _pick(datasets, channel, path, "hdf5")
+        dataset = f[picked.channel]
         heights = np.asarray(dataset[()], dtype=float)
         attrs = {**dict(f.attrs), **dict(dataset.attrs)}
-    sides = _lengths(attrs.get("lengths", attrs.get("length")), heights.shape)
-    return Topography(heights, sides, _unit(attrs.get("unit") or attrs.get("length_unit")), "hdf5")
+    return replace(
+        picked,
+        heights=heights,
+        lengths=_lengths(attrs.get("lengths", attrs.get("length")), heights.shape),
+        unit=_unit(attrs.get("unit") or attrs.get("length_unit")),
+    )
 
 
 def _is_map(item: Any) -> bool:
     return getattr(item, "ndim", 0) == 2 and hasattr(item, "dtype")
 
 
-def _pick_dataset(maps: list[Any], path: str) -> Any:
-    if len(maps) != 1:
-        raise ValueError(f"'{path}' has no 'heights' dataset and {len(maps)} 2-D datasets")
-    return maps[0]
-
-
-def _netcdf3(path: str) -> Topography:
+def _netcdf3(path: str, channel: Channel) -> Topography:
     """A classic (NetCDF-3) file, through scipy."""
     from scipy.io import netcdf_file
 
     try:
         f = netcdf_file(path, "r", mmap=False)
     except Exception:
-        raise ValueError(f"'{path}' is neither HDF5 nor NetCDF") from None
+        raise Unparsable("neither HDF5 nor NetCDF") from None
     with f:
-        heights = _only_2d({k: v[:] for k, v in f.variables.items()}, path).astype(float)
-    return Topography(heights, reader="netcdf")
+        picked = _pick({k: v[:] for k, v in f.variables.items()}, channel, path, "netcdf")
+    return replace(picked, heights=np.asarray(picked.heights, dtype=float))
 
 
 def _lengths(value: Any, shape: tuple[int, ...]) -> tuple[float, float] | None:
@@ -189,45 +408,53 @@ def _unit(value: Any) -> str | None:
     return unit_name(value.decode() if isinstance(value, bytes) else str(value))
 
 
-def _surface_topography(path: str) -> Topography:
-    """An instrument file through SurfaceTopography (its first channel)."""
-    try:
-        from SurfaceTopography import open_topography
-    except ImportError:
-        ext = os.path.splitext(path)[1] or "(no extension)"
-        raise ValueError(
-            f"format {ext} of '{path}' needs SurfaceTopography: {INSTALL_HINT}"
-        ) from None
-    try:
-        with warnings.catch_warnings(), np.errstate(all="ignore"):  # its sniffers' noise
-            warnings.simplefilter("ignore")
+def _surface_topography(path: str, channel: Channel) -> Topography:
+    """An instrument file through SurfaceTopography: the channel asked for, else its default."""
+    from SurfaceTopography import open_topography
+
+    with warnings.catch_warnings(), np.errstate(all="ignore"):  # its sniffers' noise
+        warnings.simplefilter("ignore")
+        try:
             reader = open_topography(path)
-            channel = reader.default_channel
-            sized = channel.physical_sizes is not None  # else: a stand-in, not reported
-            topo = reader.topography(
-                channel_index=channel.index, physical_sizes=None if sized else (1.0, 1.0)
+        except Exception as exc:
+            raise Unparsable(_flat(exc)) from None
+        kind, ext = type(reader).__name__, os.path.splitext(path)[1].lower()
+        if kind in GUESSES and ext not in GUESSES[kind]:
+            raise Unparsable(f"only {kind} takes it, by its size alone: a guess, not a reading")
+        names = [str(c.name) for c in reader.channels]
+        if channel is None:
+            chosen = reader.default_channel
+        else:
+            chosen = reader.channels[_channel_index(names, channel, path)]
+        if chosen.dim != 2:
+            raise NotAMap(f"'{path}' holds a line scan, not a map (channel '{chosen.name}')")
+        if isinstance(chosen.unit, tuple) and chosen.unit[-1] is None:
+            listing = ", ".join(f"{i} '{n}'" for i, n in enumerate(names))
+            raise NotAMap(
+                f"channel {chosen.index} '{chosen.name}' of '{path}' is not a height (its "
+                f"values have no length unit); its channels: {listing}"
             )
-    except Exception as exc:
-        raise ValueError(f"unknown or unreadable format: '{path}' ({_one_line(exc)})") from None
-    if topo.dim != 2:
-        raise ValueError(f"'{path}' holds a line scan, not a map")
-    heights = np.ma.filled(np.ma.asarray(topo.heights(), dtype=float), np.nan)
-    unit = topo.unit
-    sides = tuple(float(s) for s in topo.physical_sizes) if sized else None
-    return Topography(
-        heights,
-        sides,  # type: ignore[arg-type]
-        _unit(unit) if isinstance(unit, str) and sized else None,
-        f"SurfaceTopography {metadata.version('SurfaceTopography')}",
+        sized = chosen.physical_sizes is not None  # else a stand-in, not reported
+        topo = reader.topography(
+            channel_index=chosen.index, physical_sizes=None if sized else (1.0, 1.0)
+        )
+    read = from_surface_topography(topo)
+    return replace(
+        read,
+        lengths=read.lengths if sized else None,
+        channel=str(chosen.name),
+        channel_index=int(chosen.index),
+        channels=tuple(names),
+        default_channel=channel is None,
     )
 
 
 def _checked(topo: Topography, path: str) -> Topography:
     h = topo.heights
     if h.ndim != 2:
-        raise ValueError(f"heights must be a 2-D array, '{path}' has shape {h.shape}")
+        raise NotAMap(f"heights must be a 2-D array, '{path}' has shape {h.shape}")
     if min(h.shape) < 2:
-        raise ValueError(f"heights need at least 2 x 2 points, '{path}' has shape {h.shape}")
+        raise NotAMap(f"heights need at least 2 x 2 points, '{path}' has shape {h.shape}")
     if not np.issubdtype(h.dtype, np.number) or np.iscomplexobj(h):
-        raise ValueError(f"heights must be real numbers, '{path}' holds {h.dtype}")
+        raise NotAMap(f"heights must be real numbers, '{path}' holds {h.dtype}")
     return topo

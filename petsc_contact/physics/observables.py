@@ -59,8 +59,8 @@ def _joined(touching: list[tuple[np.ndarray, np.ndarray]]) -> int:
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    edges = np.concatenate([np.stack([a.ravel(), b.ravel()], 1) for a, b in touching] or [[]])
-    edges = edges.reshape(-1, 2)
+    pairs = [np.stack([a.ravel(), b.ravel()], 1) for a, b in touching]
+    edges = np.concatenate(pairs).reshape(-1, 2) if pairs else np.empty((0, 2), dtype=int)
     edges = edges[(edges > 0).all(axis=1)]
     nodes, index = np.unique(edges, return_inverse=True)
     index = index.reshape(-1, 2)

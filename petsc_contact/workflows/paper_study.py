@@ -68,7 +68,7 @@ def rms_height_per_slope(hurst: float, rolloff_ratio: float, cutoff_ratio: float
     q0 = 2 * np.pi
     q = np.geomspace(q0, q0 * cutoff_ratio, 4000)
     c = psd_shape(q, q0, q0 * rolloff_ratio, q0 * cutoff_ratio * (1 + 1e-12), hurst)
-    return float(np.sqrt(np.trapz(q * c, q) / np.trapz(q**3 * c, q)))
+    return float(np.sqrt(np.trapezoid(q * c, q) / np.trapezoid(q**3 * c, q)))
 
 
 def pieces(shrink: int = 1) -> list[Piece]:

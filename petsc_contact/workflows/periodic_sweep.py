@@ -25,6 +25,7 @@ from ..conventions.grid import grid_for
 from ..geometries.periodic import PeriodicProblem, verify
 from ..geometries.step import VERIFY_FACTOR, Step, collect, solve_step
 from ..io.output import check_finite
+from ..io.topography import SurfaceTopographyMap, map_and_lengths
 from ..physics.continuation import ConvergedStep, LoadPath
 
 __all__ = [
@@ -95,10 +96,10 @@ def sweep(
 
 
 def periodic_contact(
-    heights: np.ndarray,
-    length: float | tuple[float, float],
-    modulus: float,
-    pressures: Sequence[float],
+    heights: np.ndarray | SurfaceTopographyMap,
+    length: float | tuple[float, float] | None = None,
+    modulus: float = 1.0,
+    pressures: Sequence[float] = (),
     options: _petsc.OptionsArg = None,
     fields: bool = False,
     comm: Any = None,
@@ -109,10 +110,11 @@ def periodic_contact(
     Parameters
     ----------
     heights
-        The full ``nx x ny`` height map (every rank passes the same array or memory map).
+        The full ``nx x ny`` height map (every rank passes the same array or memory map), or
+        a SurfaceTopography ``Topography`` (its sides and unit; undefined points refused).
     length, modulus
         Cell sides ``(Lx, Ly)``, or the side ``Lx`` with square pixels (``L`` for a square
-        map), and the contact modulus ``E*``.
+        map; optional for a topography), and the contact modulus ``E*``.
     pressures
         Nominal pressures ``p0`` (same unit as ``modulus``), solved in order, warm-started.
     options
@@ -133,9 +135,11 @@ def periodic_contact(
     """
     from mpi4py import MPI
 
+    array, length = map_and_lengths(heights, length)
+    pressures = check_pressures(pressures)
     with _petsc.scoped_options(options):
-        grid = grid_for(heights.shape, length, comm or MPI.COMM_WORLD)
-        local = grid.scatter(heights)
+        grid = grid_for(array.shape, length, comm or MPI.COMM_WORLD)
+        local = grid.scatter(array)
         check_finite(grid, local)
         problem = PeriodicProblem(grid, make_fft(grid), local, modulus)
         return collect(sweep(problem, pressures, fields, stiffness=stiffness))

@@ -17,11 +17,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..conventions.fft import FFT
-from ..conventions.grid import Grid
+from ..conventions.fft import FFT, SerialFFT
+from ..conventions.grid import Grid, grid_for
+from ..io.topography import SurfaceTopographyMap, map_and_lengths
 from ..physics import theory
 from ..physics.surface import radial_psd, rms_of
 
+DEFAULT_LOADS = (1e-7, 1e-1, 25)  # p/E* from, to, how many (log-spaced)
 ROUNDING = 1e-24  # C(q) below this times its largest value is rounding noise (eps^2 ~ 5e-32)
 
 
@@ -105,3 +107,37 @@ def predict(
         crossover_pressure=p_c["printed"],
         crossover_pressure_appendix=p_c["appendix"],
     )
+
+
+def predict_map(
+    heights: np.ndarray | SurfaceTopographyMap,
+    length: float | tuple[float, float] | None = None,
+    modulus: float = 1.0,
+    pressures: np.ndarray | None = None,
+) -> Prediction:
+    """Persson's theory and the finite-size estimates for a whole map, in one process.
+
+    Parameters
+    ----------
+    heights
+        An ``nx x ny`` array (prepared: no undefined points), or a SurfaceTopography
+        ``Topography`` (its sides and unit).
+    length
+        The sides (``L`` or ``(Lx, Ly)``); optional for a topography.
+    modulus
+        The contact modulus ``E*``; pressures are in its unit.
+    pressures
+        Nominal pressures for ``u_bar(p)`` and ``K(p)`` (default: 25 from 1e-7 to 1e-1 E*).
+    """
+    array, length = map_and_lengths(heights, length)
+    grid = grid_for(array.shape, length)
+    if grid.comm.size > 1:
+        from mpi4py import MPI
+
+        grid = grid_for(array.shape, length, MPI.COMM_SELF)
+    lo, hi, n = DEFAULT_LOADS
+    p = np.geomspace(lo * modulus, hi * modulus, n) if pressures is None else pressures
+    values = np.asarray(array, dtype=float)
+    if not np.all(np.isfinite(values)):
+        raise ValueError("the map has undefined heights: fill them first")
+    return predict(grid, SerialFFT(grid), values, modulus, np.asarray(p, dtype=float))

@@ -20,6 +20,7 @@ from ..conventions.validation import positive
 from ..geometries.punch import PHARR_BETA, PunchProblem
 from ..geometries.step import Step, collect, solve_step
 from ..io.output import check_finite
+from ..io.topography import SurfaceTopographyMap, map_and_lengths
 
 FORCE_RTOL = 1e-6
 MAX_NEWTON = 60
@@ -138,9 +139,9 @@ class PunchSolver:
 
 
 def punch_contact(
-    heights: np.ndarray,
-    length: float | tuple[float, float],
-    modulus: float,
+    heights: np.ndarray | SurfaceTopographyMap,
+    length: float | tuple[float, float] | None = None,
+    modulus: float = 1.0,
     approaches: Sequence[float] | None = None,
     forces: Sequence[float] | None = None,
     options: _petsc.OptionsArg = None,
@@ -156,10 +157,11 @@ def punch_contact(
     Parameters
     ----------
     heights
-        Full ``n x n`` height map of the punch face (every rank passes the same array).
+        Full ``nx x ny`` height map of the punch face (every rank passes the same array), or
+        a SurfaceTopography ``Topography`` (its sides and unit; undefined points refused).
     length, modulus
         Footprint sides ``(Lx, Ly)``, or the side ``Lx`` with square pixels (``Lp`` for a
-        square patch), and the contact modulus ``E*``.
+        square patch; optional for a topography), and the contact modulus ``E*``.
     approaches, forces
         Exactly one of them: rigid approaches ``δ`` beyond first touch (displacement
         control), or total forces ``F`` (load control).  Solved in order, warm-started.
@@ -187,9 +189,10 @@ def punch_contact(
         raise ValueError("give either approaches or forces, at least one of them")
     from mpi4py import MPI
 
+    array, length = map_and_lengths(heights, length)
     with _petsc.scoped_options(options):
-        grid = grid_for(heights.shape, length, comm or MPI.COMM_WORLD)
-        local = grid.scatter(heights)
+        grid = grid_for(array.shape, length, comm or MPI.COMM_WORLD)
+        local = grid.scatter(array)
         check_finite(grid, local)
         mask = None if footprint is None else grid.scatter(footprint).astype(bool)
         problem = PunchProblem(grid, local, modulus, mask, flat, beta)

@@ -265,7 +265,7 @@ def ideal_spectrum(
     q0 = fundamental_wavevector(length)
     q = np.geomspace(q0, cutoff_ratio * q0, points)
     c = psd_shape(q, q0, rolloff_ratio * q0, cutoff_ratio * q0 * (1 + 1e-12), hurst)
-    return q, c * h_rms**2 / (2 * np.pi * np.trapz(q * c, q))
+    return q, c * h_rms**2 / (2 * np.pi * np.trapezoid(q * c, q))
 
 
 def save(path: str, data: dict[str, Any], **attributes: Any) -> None:

@@ -47,11 +47,13 @@ def _compare(path: str, index: int, theirs: object) -> str:
     try:
         mine = read_topography(path, channel=index)
     except Exception as exc:
-        return f"refused: {str(exc)[:90]}"
+        return "refused (not a height)" if "not a height" in str(exc) else f"refused: {exc}"
     if isinstance(theirs, str):
         return f"read, where SurfaceTopography: {theirs}"
     h = np.ma.filled(np.ma.asarray(theirs.heights(), dtype=float), np.nan)  # type: ignore[attr-defined]
     same_heights = np.array_equal(h, mine.heights, equal_nan=True)
+    if not same_heights and np.array_equal(h.T, mine.heights, equal_nan=True):
+        return "same, transposed (a bare matrix: its rows are x)"
     sizes = theirs.physical_sizes if mine.lengths is not None else None  # type: ignore[attr-defined]
     same_sides = sizes is None or np.allclose(sizes, mine.lengths, rtol=1e-12)
     unit = theirs.unit  # type: ignore[attr-defined]
@@ -66,30 +68,52 @@ def _compare(path: str, index: int, theirs: object) -> str:
     return "same" if not problems else "differ: " + ", ".join(problems)
 
 
+def _channel(path: str, index: int, theirs: object) -> str:
+    """The package's verdict on one channel."""
+    if isinstance(theirs, str) or theirs.dim != 2:  # type: ignore[attr-defined]
+        try:
+            read_topography(path, channel=index)
+            return "read, but SurfaceTopography reads no map"
+        except Exception as exc:
+            reason = "line scan" if "line scan" in str(exc) else "unreadable"
+            return f"refused ({reason})"
+    return _compare(path, index, theirs)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("folders", nargs="+")
     args = parser.parse_args()
-    print("| file | channel | shape | sides | unit | undefined | against SurfaceTopography |")
+    print("| file | format | channels: verdict | shape | sides | unit | undefined |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
     for path in sorted(p for f in args.folders for p in glob.glob(os.path.join(f, "*"))):
-        for index, name, theirs in _direct(path):
-            if isinstance(theirs, str) or theirs.dim != 2:  # type: ignore[attr-defined]
-                try:
-                    read_topography(path, channel=index)
-                    verdict = "read, but SurfaceTopography reads no map"
-                except Exception as exc:
-                    verdict = f"refused ({str(exc).split(':')[-1].strip()[:60]})"
-                what = theirs if isinstance(theirs, str) else "line scan"
-                print(f"| {os.path.basename(path)} | {index} {name} | {what} | | | | {verdict} |")
-                continue
-            h = np.ma.asarray(theirs.heights())  # type: ignore[attr-defined]
-            sizes = theirs.physical_sizes  # type: ignore[attr-defined]
-            print(
-                f"| {os.path.basename(path)} | {index} {name} | {h.shape[0]} x {h.shape[1]} | "
-                f"{sizes[0]:.4g} x {sizes[1]:.4g} | {theirs.unit} | "  # type: ignore[attr-defined]
-                f"{np.ma.count_masked(h)} | {_compare(path, index, theirs)} |"
-            )
+        channels = _direct(path) or [(0, "", "no channels")]
+        verdicts = [_channel(path, index, theirs) for index, _, theirs in channels]
+        counts = {v: verdicts.count(v) for v in dict.fromkeys(verdicts)}
+        summary = ", ".join(f"{n} {v}" for v, n in counts.items())
+        first = channels[0][2]
+        kind = _format(path)
+        if isinstance(first, str) or first.dim != 2:  # type: ignore[attr-defined]
+            print(f"| {os.path.basename(path)} | {kind} | {summary} | | | | |")
+            continue
+        h = np.ma.asarray(first.heights())  # type: ignore[attr-defined]
+        sizes = first.physical_sizes  # type: ignore[attr-defined]
+        print(
+            f"| {os.path.basename(path)} | {kind} | {summary} | {h.shape[0]} x {h.shape[1]} | "
+            f"{sizes[0]:.4g} x {sizes[1]:.4g} | {first.unit} | "  # type: ignore[attr-defined]
+            f"{np.ma.count_masked(h)} |"
+        )
+
+
+def _format(path: str) -> str:
+    from SurfaceTopography import open_topography
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            return type(open_topography(path)).__name__.removesuffix("Reader")
+        except Exception:
+            return "none"
 
 
 if __name__ == "__main__":

@@ -4,7 +4,7 @@ import argparse
 
 import numpy as np
 
-from petsc_contact.io.output import is_partial
+from petsc_contact.io.store import is_partial
 from petsc_contact.physics import theory
 from petsc_contact.workflows import scenes
 from petsc_contact.workflows.ensemble import ensemble_statistics

@@ -8,7 +8,7 @@ import argparse
 
 import numpy as np
 
-from petsc_contact.io.output import is_partial
+from petsc_contact.io.store import is_partial
 from petsc_contact.workflows import scenes
 from petsc_contact.workflows.paper_study import (
     FIG3_RATIOS,

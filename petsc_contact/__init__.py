@@ -19,9 +19,8 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
-__version__ = "0.1.0"
-
 from . import _moved
+from ._version import __version__
 from .conventions.grid import Grid
 from .workflows.periodic_sweep import periodic_contact
 from .workflows.punch_sweep import punch_contact

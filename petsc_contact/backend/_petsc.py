@@ -13,7 +13,7 @@ import shlex
 import sys
 import warnings
 from collections.abc import Iterable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from types import ModuleType
 from typing import Any, TypeAlias
 
@@ -67,12 +67,22 @@ def init(petsc_args: list[str] | None = None) -> ModuleType:
         with _loading():
             petsc4py.init([sys.argv[0] if sys.argv and sys.argv[0] else "petsc-contact"] + args)
             from petsc4py import PETSc
+        _python_sigpipe()
         return PETSc
     from petsc4py import PETSc
 
     if args:
         PETSc.Options().insertString(" ".join(args))
     return PETSc
+
+
+def _python_sigpipe() -> None:
+    """Give SIGPIPE back to Python (ignored: a write to a closed pipe raises
+    ``BrokenPipeError``), which PETSc's signal handler takes over and turns into an abort."""
+    import signal
+
+    with suppress(ValueError):  # not the main thread: leave it
+        signal.signal(signal.SIGPIPE, signal.SIG_IGN)
 
 
 def library_path() -> str:

@@ -6,9 +6,9 @@ import argparse
 import os
 import re
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NoReturn
 
-from .. import __version__
+from .._version import __version__
 from ..conventions.validation import log_range
 
 DEMO = {
@@ -377,8 +377,15 @@ def _command(sub: Any, name: str) -> argparse.ArgumentParser:
     return parser
 
 
+class _Parser(argparse.ArgumentParser):
+    """Argument errors in one line (what is wrong, where the help is), exit status 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"petsc-contact: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="petsc-contact",
         description="Non-adhesive contact of rough elastic solids with PETSc/TAO. "
         "Options with one dash (-tao_type bncg, -tao_monitor, -options_file F, "
@@ -386,7 +393,9 @@ def build_parser() -> argparse.ArgumentParser:
         "-petsc_contact_no_j0 (no Fourier initial Hessian for the BQNK types), "
         "-petsc_contact_no_ksp_pc (no Fourier KSP preconditioner for tron, bnls, "
         "bntr, bntl).",
-        epilog="Exit status: 0 converged, 1 a step did not converge, 2 bad input, 130 interrupted.",
+        epilog="Exit status: 0 converged, 1 a step did not converge, 2 bad input or an output "
+        "in use, 69 a package cannot be loaded, 74 results cannot be written (disk full, "
+        "unwritable), 75 paused, 130 interrupted.",
     )
     parser.add_argument("--version", action="version", version=f"petsc-contact {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")

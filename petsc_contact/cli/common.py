@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -15,6 +16,7 @@ from ..conventions.validation import non_negative, positive
 EXIT_NOT_CONVERGED = 1
 EXIT_BAD_INPUT = 2
 EXIT_UNAVAILABLE = 69  # a package the run needs cannot be loaded (sysexits' EX_UNAVAILABLE)
+EXIT_STORAGE = 74  # results cannot be written: disk full, unwritable (sysexits' EX_IOERR)
 EXIT_PAUSED = 75  # --stop-after reached: the run continues with --resume
 EXIT_INTERRUPTED = 130
 
@@ -72,7 +74,7 @@ def run_record(
     resolved: dict[str, Any],
 ) -> dict[str, Any]:
     """What reproduces the run: every option (defaults resolved), versions, PETSc options."""
-    from ..io.output import file_digest, petsc_options, versions
+    from ..io.provenance import file_digest, petsc_options, versions
 
     params = {k: v for k, v in vars(args).items() if k not in ("quiet",)} | resolved
     lengths, unit = resolved["length"], resolved["length_unit"]
@@ -108,6 +110,34 @@ def run_record(
             grid=np.array(args.grid) if isinstance(args.grid, tuple) else args.grid,
         )
     return attrs
+
+
+@contextmanager
+def output_lock(path: str | None) -> Iterator[None]:
+    """Hold the exclusive right to write ``path`` (rank 0 takes it; every rank raises the same
+    error when another run holds it: :class:`~petsc_contact.io.store.OutputBusy`)."""
+    from mpi4py import MPI
+
+    from ..io.store import OutputLock, check_writable
+
+    comm = MPI.COMM_WORLD
+    lock = OutputLock(path) if path is not None and comm.rank == 0 else None
+    failure: Exception | None = None
+    if lock is not None:
+        try:
+            check_writable(lock.output)
+            lock.acquire()
+        except (ValueError, OSError) as exc:
+            failure = exc
+    if comm.size > 1:
+        failure = comm.bcast(failure, root=0)
+    if failure is not None:
+        raise failure
+    try:
+        yield
+    finally:
+        if lock is not None:
+            lock.release()
 
 
 def say(message: str, kind: str = "error") -> None:

@@ -10,7 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from ..io.output import ENSEMBLE, annotate, atomic_h5, ensemble_entry, write_attributes
+from ..io.output import ENSEMBLE, annotate, ensemble_entry, write_attributes
+from ..io.store import atomic_h5
 from .common import EXIT_INTERRUPTED, EXIT_PAUSED, InputError, swept
 from .runs import run
 from .scene import prepare_scene
@@ -20,7 +21,7 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
     """One periodic run per seed (each resumable), then statistics over seeds in OUT.h5."""
     import h5py
 
-    from ..io.output import check_writable
+    from ..io.store import check_writable
     from ..workflows.ensemble import ensemble_statistics
 
     if args.heights is not None:
@@ -81,7 +82,7 @@ def _ensemble_record(
 ) -> dict[str, Any]:
     """What reproduces an ensemble: its command, options, versions and PETSc options."""
     from ..backend import _petsc
-    from ..io.output import petsc_options, versions
+    from ..io.provenance import petsc_options, versions
 
     petsc = _petsc.petsc()
     return {

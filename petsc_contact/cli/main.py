@@ -9,8 +9,16 @@ from collections.abc import Sequence
 from typing import Any
 
 from ..io.output import schema_markdown
+from ..io.store import StorageError
 from .arguments import build_parser, is_petsc_option, split_arguments
-from .common import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_UNAVAILABLE, InputError, say
+from .common import (
+    EXIT_BAD_INPUT,
+    EXIT_INTERRUPTED,
+    EXIT_STORAGE,
+    EXIT_UNAVAILABLE,
+    InputError,
+    say,
+)
 from .comparison import run_compare
 from .ensemble import run_ensemble
 from .runs import run
@@ -23,12 +31,48 @@ def _interrupt(signum: int, frame: Any) -> None:
     raise KeyboardInterrupt
 
 
+class QuietPipe:
+    """Standard output that falls silent when its reader goes away (``... | head``): the run
+    goes on and writes its files; only the table is no longer printed."""
+
+    def __init__(self, stream: Any) -> None:
+        self.stream = stream
+        self.closed_by_reader = False
+
+    def write(self, text: str) -> int:
+        if not self.closed_by_reader:
+            try:
+                return int(self.stream.write(text))
+            except BrokenPipeError:
+                self._silence()
+        return len(text)
+
+    def flush(self) -> None:
+        if not self.closed_by_reader:
+            try:
+                self.stream.flush()
+            except BrokenPipeError:
+                self._silence()
+
+    def _silence(self) -> None:
+        import os
+
+        self.closed_by_reader = True
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, self.stream.fileno())  # nothing is left to flush at exit
+        os.close(devnull)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.stream, name)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run ``petsc-contact`` with ``argv`` (default: the process's); return the exit status."""
     argv = list(sys.argv[1:] if argv is None else argv)
     ours, petsc_args = split_arguments(argv)
     args = build_parser().parse_args(ours)
     signal.signal(signal.SIGTERM, _interrupt)
+    sys.stdout = QuietPipe(sys.stdout)
     try:
         status = _dispatch(args, argv, petsc_args)
         _report_unused(petsc_args)
@@ -36,6 +80,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ImportError as exc:  # before OSError: the installation, not the input
         say(str(exc))
         return EXIT_UNAVAILABLE
+    except StorageError as exc:
+        say(exc.strerror or str(exc))
+        return EXIT_STORAGE
     except (InputError, ValueError, OSError) as exc:
         say(str(exc))
         return EXIT_BAD_INPUT

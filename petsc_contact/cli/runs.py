@@ -12,11 +12,13 @@ from typing import Any
 import numpy as np
 
 from ..geometries.step import FIELD_NAMES
+from ..io.store import StorageError
 from .common import (
     EXIT_INTERRUPTED,
     EXIT_NOT_CONVERGED,
     EXIT_PAUSED,
     InputError,
+    output_lock,
     run_record,
     say,
     swept,
@@ -56,6 +58,11 @@ def _disk(n: int) -> np.ndarray:
 
 def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
     """Run ``periodic``, ``demo`` or ``punch``; write the HDF5 file (and plot)."""
+    with output_lock(args.output):
+        return _locked_run(args, argv, petsc_args)
+
+
+def _locked_run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
     petsc, grid, fft, heights, resolved = prepare_scene(args, petsc_args)
     from ..physics.surface import rms_of
 
@@ -73,8 +80,8 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
     show = root and not args.quiet
     unit = resolved["length_unit"]
     try:
-        writer, done, start = _open_writer(args, grid, attributes, heights, len(plan.loads), show)
-        table = _finished_rows(args.output, done) if done and root else []
+        store, finished, start = _open_store(args, grid, attributes, heights, len(plan.loads), show)
+        table = finished.rows() if root else []
         if show:
             print(
                 f"# {args.command} {grid.describe()}{' ' + unit if unit else ''}, "
@@ -85,52 +92,57 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
             )
             print(_header(plan.columns), flush=True)
         try:
-            if not _run_steps(args, plan, writer, done, start, table, show):
+            if not _run_steps(args, plan, store, finished.steps, start, table, show):
                 limit = f"{args.stop_after:.3g} minutes"
-                writer.abandon(f"paused: the --stop-after limit of {limit} has passed")
+                say(store.abandon(f"paused: the --stop-after limit of {limit} has passed"), "note")
                 return EXIT_PAUSED
         except KeyboardInterrupt:
-            writer.abandon()
+            say(store.abandon("interrupted"), "note")
             return EXIT_INTERRUPTED
+        except StorageError as exc:
+            raise StorageError(exc.errno, store.abandon(exc.strerror or str(exc))) from None
+        except Exception:
+            if store.steps == 0:  # nothing finished: nothing is left behind
+                store.discard()
+            raise
+        store.finish()
     finally:
         plan.close()
-    writer.finish()
     return _conclude(args, plan, table, realised, root)
 
 
-def _open_writer(
+def _open_store(
     args: argparse.Namespace,
     grid: Any,
     attributes: dict[str, Any],
     heights: np.ndarray,
     total: int,
     show: bool,
-) -> tuple[Any, int, np.ndarray | None]:
-    """The step writer, the steps already done and the state to start from (``--resume``)."""
-    from ..io.output import StepWriter, partial_path, read_resume
+) -> tuple[Any, Any, np.ndarray | None]:
+    """The run's store, the steps already finished and the state to start from (``--resume``)."""
+    from ..io.store import Finished, StepStore, partial_path, read_resume
 
     fields = FIELD_NAMES if args.fields else ()
-    done, state = read_resume(args.output, attributes["parameters"]) if args.resume else (0, None)
-    if not done:
+    finished = read_resume(args.output, attributes["parameters"]) if args.resume else Finished(0)
+    if not finished.steps:
         stored = None if args.scalars_only else heights
-        return StepWriter(args.output, grid, attributes, stored, fields), 0, None
+        return StepStore.create(args.output, grid, attributes, stored, fields), finished, None
     if show:
-        print(f"# resuming {partial_path(args.output)} after {done} of {total} steps", flush=True)
-    if state is None:  # its state file is lost: the result is the same, the cost may be more
-        say(
-            f"{partial_path(args.output)} has no saved state beside it: step {done + 1} starts "
-            "from first touch",
-            "warning",
+        print(
+            f"# resuming {partial_path(args.output)} after {finished.steps} of {total} steps",
+            flush=True,
         )
-    start = grid.scatter(state) if state is not None else None
-    writer = StepWriter.reopen(args.output, grid, fields, from_saved_state=state is not None)
-    return writer, done, start
+    if finished.state is None and finished.steps < total:  # the same result, maybe more cost
+        step = finished.steps + 1
+        say(f"{finished.state_problem}: step {step} starts from first touch", "warning")
+    start = grid.scatter(finished.state) if finished.state is not None else None
+    return StepStore.resume(args.output, grid, finished, attributes, fields), finished, start
 
 
 def _run_steps(
     args: argparse.Namespace,
     plan: Plan,
-    writer: Any,
+    store: Any,
     done: int,
     start: np.ndarray | None,
     table: list[dict[str, Any]],
@@ -141,15 +153,17 @@ def _run_steps(
     Returns ``False`` when ``--stop-after`` ended the run before the last load.
     """
     total = len(plan.loads)
+    if done == total:  # every step was committed before the run was cut: only assemble
+        return True
     began = time.perf_counter()
     limit = np.inf if args.stop_after is None else 60.0 * args.stop_after
     for i, step in enumerate(plan.steps(plan.loads[done:], start, args.fields), done):
         fields = {name: step.field(name) for name in FIELD_NAMES} if args.fields else None
-        writer.append(step.scalars, fields, state=step.state)
+        store.append(step.scalars, fields, state=step.state)
         table.append(step.scalars)
         if show:
             print(_row(i, total, step.scalars, plan.columns), flush=True)
-        elapsed = writer.grid.max(time.perf_counter() - began)  # every rank stops together
+        elapsed = store.grid.max(time.perf_counter() - began)  # every rank stops together
         if i + 1 < total and elapsed > limit:
             return False
     return True
@@ -261,18 +275,3 @@ def _punch_plan(args: argparse.Namespace, grid: Any, heights: np.ndarray) -> Pla
         type(problem.compliance.fft).__name__,
         resolved,
     )
-
-
-def _finished_rows(path: str, steps: int) -> list[dict[str, Any]]:
-    """The per-step scalars already in an interrupted run's partial file (for the plot)."""
-    import h5py
-
-    from ..io.output import partial_path
-
-    with h5py.File(partial_path(path), "r") as f:
-        names = [k for k in f if f[k].ndim == 1 and f[k].shape[0] >= steps]
-        rows = [{k: f[k][i] for k in names} for i in range(steps)]
-    for row in rows:
-        for k, v in row.items():
-            row[k] = v.decode() if isinstance(v, bytes) else v
-    return rows

@@ -197,7 +197,7 @@ def prepare_scene(
     from ..backend import _petsc
     from ..backend.solve import check_tao_type
     from ..conventions.units import Lengths, parse_lengths
-    from ..io.output import check_writable
+    from ..io.store import check_writable
 
     check_numbers(args)
     try:

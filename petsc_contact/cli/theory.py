@@ -7,7 +7,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..io.output import THEORY, annotate, atomic_h5, write_attributes
+from ..io.output import THEORY, annotate, write_attributes
+from ..io.store import atomic_h5
 from ..workflows.predictions import Prediction, predict
 from .common import run_record, swept
 from .scene import prepare_scene

@@ -8,7 +8,8 @@ import os
 import numpy as np
 
 from ..conventions.validation import positive
-from ..io.output import EXPERIMENT, annotate, atomic_h5
+from ..io.output import EXPERIMENT, annotate
+from ..io.store import atomic_h5
 from .common import InputError
 
 
@@ -16,8 +17,9 @@ def run_plot(args: argparse.Namespace) -> int:
     """``petsc-contact plot``: one field of one step as a map."""
     import h5py
 
-    from ..io.output import ENTRIES, check_writable
+    from ..io.output import ENTRIES
     from ..io.plot import plot_field
+    from ..io.store import check_writable
 
     if not os.path.isfile(args.file):
         raise InputError(f"'{args.file}' does not exist")
@@ -52,7 +54,8 @@ def run_plot(args: argparse.Namespace) -> int:
 
 def run_experiment(args: argparse.Namespace) -> int:
     """``petsc-contact experiment``: Eq. C3 on a measured ``p(s)`` table."""
-    from ..io.output import check_writable, load_table
+    from ..io.output import load_table
+    from ..io.store import check_writable
     from ..physics.theory import block_corrected_stiffness
 
     for name in ("modulus", "thickness"):

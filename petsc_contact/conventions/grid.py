@@ -183,17 +183,18 @@ class Grid:
         return np.ascontiguousarray(full[self.rows], dtype=float)
 
     def gather(self, local: np.ndarray) -> np.ndarray | None:
-        """The global array on rank 0 (``None`` elsewhere)."""
+        """The global array on rank 0 (``None`` elsewhere), of the local slabs' dtype."""
         if self.comm.size == 1:
             return np.array(local, copy=True)
         counts = self.comm.gather(local.size, root=0)
-        full = np.empty(self.shape) if self.comm.rank == 0 else None
+        dtype = np.uint8 if local.dtype == bool else local.dtype  # MPI moves bytes, not bools
+        full = np.empty(self.shape, dtype=dtype) if self.comm.rank == 0 else None
         self.comm.Gatherv(
-            np.ascontiguousarray(local, dtype=float),
+            np.ascontiguousarray(local, dtype=dtype),
             [full, counts] if self.comm.rank == 0 else None,
             root=0,
         )
-        return full
+        return full.view(bool) if full is not None and local.dtype == bool else full
 
 
 def sides(shape: tuple[int, ...], length: Any) -> tuple[float, float]:

@@ -1,43 +1,20 @@
-"""HDF5 results: written step by step, renamed into place only when the run ends.
-
-A run writes ``OUT.h5.partial`` and renames it to ``OUT.h5`` when it ends (atomic on POSIX),
-so a killed run never damages an earlier ``OUT.h5``, and every finished load step is already
-on disk, flushed, in the ``.partial`` file.  Only rank 0 touches the file; distributed fields
-are gathered to it (see :meth:`petsc_contact.conventions.grid.Grid.gather`).  This module owns the
-schema: every dataset any command writes, with its units and description (the tables below,
-rendered as ``docs/output-schema.md``).
+"""The schema of the HDF5 results: every dataset any command writes, with its units and
+description (the tables below, rendered as ``docs/output-schema.md``), and the helpers that
+attach them.  How a run's files are written durably is :mod:`petsc_contact.io.store`; what
+reproduces a result, :mod:`petsc_contact.io.provenance`.
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
-import os
-import platform
 import re
-import sys
-import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from dataclasses import dataclass
-from importlib import metadata
 from typing import Any
 
 import numpy as np
 
 from ..conventions.grid import Grid
-
-PARTIAL = ".partial"  # a run's file until it ends: OUT.h5.partial, renamed OUT.h5 at the end
-
-
-def partial_path(path: str) -> str:
-    """The file a run with output ``path`` writes until it ends (``path + '.partial'``)."""
-    return path + PARTIAL
-
-
-def is_partial(path: str) -> bool:
-    """Whether ``path`` names an unfinished run's file (see :func:`partial_path`)."""
-    return path.endswith(PARTIAL)
 
 
 def load_table(path: str, columns: int) -> np.ndarray:
@@ -72,63 +49,6 @@ def check_finite(grid: Grid, h: np.ndarray, what: str = "heights") -> None:
         raise ValueError(f"{what} contain {int(bad)} NaN or infinite values")
 
 
-def file_digest(path: str) -> str:
-    """SHA-256 of a file, to tie a result to its input."""
-    sha = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            sha.update(block)
-    return sha.hexdigest()
-
-
-def versions(petsc: Any | None = None) -> dict[str, str]:
-    """Versions of everything that shapes a result."""
-    out = {"python": platform.python_version(), "platform": platform.platform()}
-    for mod in ("numpy", "scipy", "h5py", "mpi4py", "pyfftw", "mpi4py_fft", "numba", "petsc4py"):
-        try:
-            out[mod] = str(__import__(mod).__version__)
-        except Exception:
-            out[mod] = "not available"
-    try:  # the instrument reader, when installed (its own __version__ is not its release)
-        out["SurfaceTopography"] = metadata.version("SurfaceTopography")
-    except metadata.PackageNotFoundError:
-        out["SurfaceTopography"] = "not available"
-    try:
-        out["petsc_contact"] = metadata.version("petsc-contact")
-    except metadata.PackageNotFoundError:
-        from .. import __version__
-
-        out["petsc_contact"] = __version__
-    out["petsc_contact_commit"] = source_commit()
-    if petsc is not None:
-        out["petsc"] = ".".join(map(str, petsc.Sys.getVersion()))
-    return out
-
-
-def source_commit() -> str:
-    """The git commit of the package's source (``+dirty`` with local changes), or
-    ``unknown`` outside a git checkout."""
-    import subprocess
-
-    folder = os.path.dirname(os.path.abspath(__file__))
-    try:
-        run = [
-            subprocess.run(["git", "-C", folder, *args], capture_output=True, text=True, timeout=10)
-            for args in (["rev-parse", "HEAD"], ["status", "--porcelain", "--", "."])
-        ]
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
-    if run[0].returncode != 0:
-        return "unknown"
-    return run[0].stdout.strip() + ("+dirty" if run[1].stdout.strip() else "")
-
-
-def petsc_options(petsc: Any) -> str:
-    """All options in PETSc's database as one command-line string."""
-    opts = petsc.Options().getAll()
-    return " ".join(f"-{k} {v}".rstrip() for k, v in sorted(opts.items()))
-
-
 def write_attributes(obj: Any, attributes: dict[str, Any]) -> None:
     """HDF5 attributes of a file or group: dicts and lists as JSON, ``None`` as ``''``."""
     for key, value in attributes.items():
@@ -137,236 +57,6 @@ def write_attributes(obj: Any, attributes: dict[str, Any]) -> None:
             if isinstance(value, (dict, list, tuple))
             else ("" if value is None else value)
         )
-
-
-def check_writable(path: str) -> None:
-    """Raise ``OSError`` with a one-line reason unless ``path`` can be created."""
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise OSError(f"output folder '{folder}' does not exist")
-    if not os.access(folder, os.W_OK):
-        raise OSError(f"output folder '{folder}' is not writable")
-    if os.path.isdir(path):
-        raise OSError(f"output path '{path}' is a folder")
-
-
-class StepWriter:
-    """Per-step HDF5 writer (rank 0 writes; other ranks only join collective gathers).
-
-    Parameters
-    ----------
-    path
-        Final file name; the run writes ``path + '.partial'`` until :meth:`finish`.
-    grid
-        Layout of fields.
-    attributes
-        Run metadata stored as root attributes (dicts and lists stored as JSON).
-    heights
-        This rank's slab of the input heights, stored as the dataset ``heights``.
-    fields
-        Names of per-step 2-D fields to store (e.g. ``("gap", "pressure")``), or empty.
-    """
-
-    def __init__(
-        self,
-        path: str,
-        grid: Grid,
-        attributes: dict[str, Any],
-        heights: np.ndarray | None,
-        fields: tuple[str, ...] = (),
-        *,
-        resume: bool = False,
-        from_saved_state: bool = True,
-    ) -> None:
-        self.path = path
-        self.partial = partial_path(path)
-        self.grid = grid
-        self.fields = fields
-        self.root = grid.comm.rank == 0
-        self.file: Any = None
-        self.schema: dict[str, Entry] = GEOMETRIES.get(attributes.get("geometry", ""), {})
-        if resume:
-            opened = self._open_partial(from_saved_state) if self.root else 0
-            self.steps = grid.comm.bcast(opened, root=0)
-        else:
-            self.steps = 0
-            full = grid.gather(heights) if heights is not None else None
-            if self.root:
-                self._create(attributes, full)
-
-    @classmethod
-    def reopen(
-        cls, path: str, grid: Grid, fields: tuple[str, ...] = (), from_saved_state: bool = True
-    ) -> StepWriter:
-        """Continue writing an interrupted run's ``path + '.partial'`` (see :func:`read_resume`);
-        ``from_saved_state`` is false when :func:`read_resume` found no state to go on from."""
-        return cls(path, grid, {}, None, fields, resume=True, from_saved_state=from_saved_state)
-
-    def _create(self, attributes: dict[str, Any], heights: np.ndarray | None) -> None:
-        import h5py
-
-        nx, ny = self.grid.shape
-        if os.path.exists(state_path(self.path)):  # a fresh run: an old state is not ours
-            os.remove(state_path(self.path))
-        f = self.file = h5py.File(self.partial, "w")
-        write_attributes(f, attributes)
-        f.attrs["created"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
-        f.attrs["complete"] = False
-        if heights is not None:
-            describe(f.create_dataset("heights", data=heights), self._entry("heights"))
-        for name in self.fields:
-            d = f.create_dataset(
-                name,
-                shape=(0, nx, ny),
-                maxshape=(None, nx, ny),
-                dtype=bool if name == "contact" else np.float64,
-                chunks=(1, min(nx, 256), min(ny, 256)),
-                compression="gzip",
-                compression_opts=4,
-                shuffle=True,
-            )
-            describe(d, self._entry(name))
-        f.flush()
-
-    def _entry(self, name: str) -> Entry:
-        """The schema entry of ``name``, its ``length`` in the run's unit when it has one."""
-        try:
-            entry = self.schema[name]
-        except KeyError:
-            raise KeyError(
-                f"no schema entry for dataset '{name}' (petsc_contact.io.output)"
-            ) from None
-        return in_unit(entry, str(self.file.attrs.get("length_unit", "")))
-
-    def _open_partial(self, from_saved_state: bool) -> int:
-        """Open the ``.partial`` file for appending; the number of steps it holds."""
-        import h5py
-
-        self.file = h5py.File(self.partial, "a")
-        self.schema = GEOMETRIES.get(str(self.file.attrs.get("geometry", "")), {})
-        steps = int(self.file["converged"].shape[0]) if "converged" in self.file else 0
-        # the steps from here on may be computed by another version than the file's record
-        earlier = json.loads(str(self.file.attrs.get("resumed", "[]")) or "[]")
-        when = time.strftime("%Y-%m-%dT%H:%M:%S%z")
-        resumed = {
-            "after_step": steps,
-            "time": when,
-            "petsc_contact_commit": source_commit(),
-            "from_saved_state": from_saved_state,  # False: the next step began at first touch
-        }
-        self.file.attrs["resumed"] = json.dumps([*earlier, resumed])
-        return steps
-
-    def append(
-        self,
-        scalars: dict[str, Any],
-        fields: dict[str, np.ndarray] | None = None,
-        state: np.ndarray | None = None,
-    ) -> None:
-        """Add one load step: scalars (numbers, bools or strings) and the requested fields.
-
-        ``state`` (local slab) is the solution a resumed run restarts from; it is kept
-        beside the file, in ``path + '.state.npz'`` (:func:`state_path`), until :meth:`finish`
-        removes it, so that the results file never holds (or keeps the space of) a field.
-        """
-        gathered = {k: self.grid.gather(fields[k]) for k in self.fields} if fields else {}
-        full_state = self.grid.gather(state) if state is not None else None
-        if self.root:
-            f = self.file
-            for key, value in scalars.items():
-                if key not in f:  # new, or new since the version a resumed run began with
-                    dtype = h5_dtype(value)
-                    d = f.create_dataset(
-                        key, (0,), dtype, maxshape=(None,), fillvalue=MISSING.get(dtype)
-                    )
-                    describe(d, self._entry(key))
-                d = f[key]
-                d.resize((self.steps + 1,))
-                d[self.steps] = value
-            for key, value in gathered.items():
-                d = f[key]
-                d.resize((self.steps + 1, *self.grid.shape))
-                d[self.steps] = value
-            f.flush()
-            if full_state is not None:
-                temporary = state_path(self.path) + ".tmp.npz"
-                np.savez(temporary, state=full_state, after_step=self.steps)
-                os.replace(temporary, state_path(self.path))
-        self.steps += 1
-
-    def finish(self) -> None:
-        """Mark complete and rename into place (the earlier ``path``, if any, is replaced)."""
-        if self.root and self.file is not None:
-            self.file.attrs["complete"] = True
-            if "resume_state" in self.file:  # written there by earlier versions
-                del self.file["resume_state"]
-            self.file.close()
-            self.file = None
-            os.replace(self.partial, self.path)
-            if os.path.exists(state_path(self.path)):
-                os.remove(state_path(self.path))
-        self.grid.comm.Barrier()
-
-    def abandon(self, why: str = "interrupted") -> None:
-        """Close after an interruption, keeping the finished steps in the ``.partial`` file."""
-        if self.root and self.file is not None:
-            self.file.close()
-            self.file = None
-            print(
-                f"petsc-contact: {why}; {self.steps} finished step(s) kept in {self.partial} "
-                "(--resume continues)",
-                file=sys.stderr,
-            )
-
-
-def read_resume(path: str, parameters: dict[str, Any]) -> tuple[int, np.ndarray | None]:
-    """Finished steps and last state of an interrupted run ``path + '.partial'``.
-
-    Returns ``(0, None)`` when there is nothing to resume.  Raises ``ValueError`` when the
-    partial file belongs to a different run (its ``parameters`` differ, apart from
-    ``resume`` and ``quiet``), so a resume never mixes two runs.
-    """
-    import h5py
-
-    partial = partial_path(path)
-    if not os.path.exists(partial):
-        return 0, None
-    ignore = ("resume", "quiet", "stop_after")
-    mine = {k: v for k, v in parameters.items() if k not in ignore}
-    with h5py.File(partial, "r") as f:
-        theirs = {k: v for k, v in json.loads(f.attrs["parameters"]).items() if k not in ignore}
-        mine = json.loads(json.dumps(mine))
-        changed = sorted(
-            k for k in set(mine) | set(theirs) if not _same(mine.get(k), theirs.get(k))
-        )
-        if changed:
-            raise ValueError(
-                f"cannot resume '{partial}': it was run with different "
-                f"parameters ({', '.join(changed)})"
-            )
-        steps = int(f["converged"].shape[0]) if "converged" in f else 0
-        state = f["resume_state"][...] if "resume_state" in f else None  # earlier versions
-    if os.path.exists(state_path(path)):
-        with np.load(state_path(path)) as saved:
-            state = saved["state"]
-    return steps, state
-
-
-def state_path(path: str) -> str:
-    """Where an unfinished run keeps the state it resumes from: beside ``path``."""
-    return path + ".state.npz"
-
-
-def _same(a: Any, b: Any) -> bool:
-    """Equal parameters; floats to 1e-9 relative (derived loads carry FFT rounding)."""
-    if isinstance(a, list) and isinstance(b, list):
-        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
-    if isinstance(a, float) or isinstance(b, float):
-        try:
-            return bool(np.isclose(float(a), float(b), rtol=1e-9, atol=0.0))
-        except (TypeError, ValueError):
-            return False
-    return a == b
 
 
 MISSING = {np.float64: np.nan, np.int64: -1}  # the earlier steps' value of a new column
@@ -639,14 +329,3 @@ RUN_ATTRIBUTES = (
     "created",
     "complete",
 )
-
-
-@contextmanager
-def atomic_h5(path: str) -> Iterator[Any]:
-    """An HDF5 file written as ``path.partial`` and renamed to ``path`` only when complete."""
-    import h5py
-
-    partial = partial_path(path)
-    with h5py.File(partial, "w") as f:
-        yield f
-    os.replace(partial, path)

@@ -34,7 +34,8 @@ from ..backend import _petsc
 from ..backend.solve import BoundSolver, SolveInfo
 from ..geometries.periodic import PeriodicProblem
 from ..geometries.step import residual_verdict
-from ..io.output import COMPARE, annotate, atomic_h5, write_attributes
+from ..io.output import COMPARE, annotate, write_attributes
+from ..io.store import atomic_h5
 from ..physics.observables import natural_residual
 from .periodic_sweep import sweep
 

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..conventions.validation import log_range
-from ..io.output import partial_path
+from ..io.store import partial_path
 from ..physics.surface import psd_shape
 
 PAPER_GRID = 8192

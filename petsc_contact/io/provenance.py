@@ -1,0 +1,67 @@
+"""What reproduces a result: the versions of everything that shapes it, the source commit,
+PETSc's options and the digest of an input file."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import platform
+from importlib import metadata
+from typing import Any
+
+from .._version import __version__
+
+
+def file_digest(path: str) -> str:
+    """SHA-256 of a file, to tie a result to its input."""
+    sha = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            sha.update(block)
+    return sha.hexdigest()
+
+
+def versions(petsc: Any | None = None) -> dict[str, str]:
+    """Versions of everything that shapes a result."""
+    out = {"python": platform.python_version(), "platform": platform.platform()}
+    for mod in ("numpy", "scipy", "h5py", "mpi4py", "pyfftw", "mpi4py_fft", "numba", "petsc4py"):
+        try:
+            out[mod] = str(__import__(mod).__version__)
+        except Exception:
+            out[mod] = "not available"
+    try:  # the instrument reader, when installed (its own __version__ is not its release)
+        out["SurfaceTopography"] = metadata.version("SurfaceTopography")
+    except metadata.PackageNotFoundError:
+        out["SurfaceTopography"] = "not available"
+    try:
+        out["petsc_contact"] = metadata.version("petsc-contact")
+    except metadata.PackageNotFoundError:
+        out["petsc_contact"] = __version__
+    out["petsc_contact_commit"] = source_commit()
+    if petsc is not None:
+        out["petsc"] = ".".join(map(str, petsc.Sys.getVersion()))
+    return out
+
+
+def source_commit() -> str:
+    """The git commit of the package's source (``+dirty`` with local changes), or
+    ``unknown`` outside a git checkout."""
+    import subprocess
+
+    folder = os.path.dirname(os.path.abspath(__file__))
+    try:
+        run = [
+            subprocess.run(["git", "-C", folder, *args], capture_output=True, text=True, timeout=10)
+            for args in (["rev-parse", "HEAD"], ["status", "--porcelain", "--", "."])
+        ]
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    if run[0].returncode != 0:
+        return "unknown"
+    return run[0].stdout.strip() + ("+dirty" if run[1].stdout.strip() else "")
+
+
+def petsc_options(petsc: Any) -> str:
+    """All options in PETSc's database as one command-line string."""
+    opts = petsc.Options().getAll()
+    return " ".join(f"-{k} {v}".rstrip() for k, v in sorted(opts.items()))

@@ -1,0 +1,549 @@
+"""Durable run files: one writer per output, every finished step on disk whatever happens.
+
+While a run with output ``OUT.h5`` is under way, rank 0 keeps beside it:
+
+``OUT.h5.lock``
+    held (``flock``) by the running process from before it touches anything to its end, so
+    that a second run on the same output is refused at once.  The kernel drops the lock when
+    the process dies, however it dies; a lock file left behind is free.
+``OUT.h5.partial``
+    an HDF5 file with the run record and the scalars of every finished step, written whole
+    to a temporary name and renamed over the last one after each step.  A rename is atomic,
+    so whatever instant the process dies at, this file is the last step's or the one before,
+    never a torn one.  It is the commit point: a step is finished when it is in this file.
+``OUT.h5.parts/``
+    the bulky arrays, one HDF5 file each, each written to a temporary name and renamed before
+    the step is committed: ``heights.h5``, and ``step-000001.h5``, ... with a step's fields,
+    compressed once, as the final file holds them.
+``OUT.h5.state.npz``
+    the solution the next step starts from (``after_step`` says which step it ends), written
+    after the commit; a resume that finds it missing, damaged or stale starts the next step
+    from first touch (the same result to the solver's tolerance, at a different cost).
+
+When the run ends, ``OUT.h5`` is assembled from them (the fields' compressed chunks copied
+as they are), written to a temporary name and renamed into place, and the rest is removed.
+A run killed before that rename leaves everything to ``--resume``; one killed after it has
+its whole result.  Disk errors (full, read-only, I/O) raise :class:`StorageError`, after
+which every committed step is still there.  What is lost to a kill is at most the step being
+computed.  (Power loss is another matter: nothing here calls ``fsync``.)
+"""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+import re
+import shutil
+import socket
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager, suppress
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..conventions.grid import Grid
+from .output import GEOMETRIES, MISSING, Entry, describe, h5_dtype, in_unit, write_attributes
+from .provenance import source_commit
+
+PARTIAL = ".partial"  # a run's file until it ends: OUT.h5.partial, replaced by OUT.h5 at the end
+STATE = ".state.npz"
+PARTS = ".parts"
+LOCK = ".lock"
+FIELD_CHUNK = 256  # fields are stored in (1, 256, 256) chunks, gzip level 4 with shuffle
+
+
+def partial_path(path: str) -> str:
+    """The file a run with output ``path`` commits its finished steps to until it ends."""
+    return path + PARTIAL
+
+
+def is_partial(path: str) -> bool:
+    """Whether ``path`` names an unfinished run's file (see :func:`partial_path`)."""
+    return path.endswith(PARTIAL)
+
+
+def state_path(path: str) -> str:
+    """Where an unfinished run keeps the state it resumes from: beside ``path``."""
+    return path + STATE
+
+
+def parts_path(path: str) -> str:
+    """The folder of an unfinished run's bulky arrays (heights, fields)."""
+    return path + PARTS
+
+
+class StorageError(OSError):
+    """Results could not be written (disk full, read-only, an I/O error)."""
+
+
+class OutputBusy(ValueError):
+    """Another run is writing the same output."""
+
+
+def _reason(exc: BaseException) -> str:
+    """A write failure in words, with the system's reason when HDF5 buries it in its text."""
+    code = getattr(exc, "errno", None)
+    if not code:
+        found = re.search(r"errno = (\d+)", str(exc))
+        code = int(found.group(1)) if found else None
+    text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    return os.strerror(code) if code else text
+
+
+@contextmanager
+def storage(what: str) -> Iterator[None]:
+    """Raise any write failure inside the block as :class:`StorageError` naming ``what``."""
+    try:
+        yield
+    except StorageError:
+        raise
+    except (OSError, RuntimeError) as exc:
+        code = getattr(exc, "errno", None) or errno.EIO
+        raise StorageError(code, f"cannot write {what}: {_reason(exc)}") from None
+
+
+@contextmanager
+def replaced(path: str) -> Iterator[str]:
+    """A temporary name to write ``path`` under; renamed over ``path`` when the block ends
+    without an error, removed when it fails."""
+    temporary = f"{path}.{os.getpid()}.tmp"
+    try:
+        yield temporary
+        os.replace(temporary, path)
+    except BaseException:
+        with suppress(OSError):
+            os.remove(temporary)
+        raise
+
+
+@contextmanager
+def atomic_h5(path: str) -> Iterator[Any]:
+    """An HDF5 file written whole under a temporary name and renamed to ``path`` only when
+    complete; a failure to write raises :class:`StorageError` and leaves ``path`` as it was."""
+    import h5py
+
+    with storage(path), replaced(path) as temporary, h5py.File(temporary, "w") as f:
+        yield f
+
+
+def check_writable(path: str) -> None:
+    """Raise :class:`StorageError` with a one-line reason unless ``path`` can be created."""
+    if not path:
+        raise StorageError(errno.ENOENT, "give an output file name (--output is empty)")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise StorageError(errno.ENOENT, f"output folder '{folder}' does not exist")
+    if not os.access(folder, os.W_OK):
+        raise StorageError(errno.EACCES, f"output folder '{folder}' is not writable")
+    if os.path.isdir(path):
+        raise StorageError(errno.EISDIR, f"output path '{path}' is a folder")
+
+
+class OutputLock:
+    """The exclusive right to write an output, held for a whole run (``path + '.lock'``).
+
+    Taken before anything of the output is touched; :class:`OutputBusy` names the holder when
+    another process has it.  Only rank 0 of a run takes it.
+    """
+
+    def __init__(self, path: str) -> None:
+        self.output = path
+        self.path = path + LOCK
+        self.fd: int | None = None
+
+    def acquire(self) -> None:
+        import fcntl
+
+        while True:
+            with storage(self.path):
+                fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                holder = os.read(fd, 512).decode(errors="replace").strip() or "starting"
+                os.close(fd)
+                raise OutputBusy(
+                    f"'{self.output}' is being written by another run ({holder}): wait for it "
+                    "to end, or choose another --output"
+                ) from None
+            try:  # the file we locked may have been removed by the holder we waited for
+                mine = os.fstat(fd).st_ino == os.stat(self.path).st_ino
+            except FileNotFoundError:
+                mine = False
+            if mine:
+                break
+            os.close(fd)
+        os.ftruncate(fd, 0)
+        os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}, since {_now()}".encode())
+        self.fd = fd
+
+    def release(self) -> None:
+        if self.fd is not None:
+            with suppress(OSError):
+                os.remove(self.path)
+            os.close(self.fd)
+            self.fd = None
+
+    def __enter__(self) -> OutputLock:
+        self.acquire()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.release()
+
+
+def _now() -> str:
+    return time.strftime("%Y-%m-%dT%H:%M:%S%z")
+
+
+@dataclass
+class Finished:
+    """What an interrupted run left to go on from."""
+
+    steps: int
+    table: dict[str, list[Any]] = field(default_factory=dict)
+    state: np.ndarray | None = None
+    state_problem: str = ""  # why the state could not be used ("" when it can)
+
+    def rows(self) -> list[dict[str, Any]]:
+        """The finished steps' scalars, one dict per step."""
+        return [{k: v[i] for k, v in self.table.items()} for i in range(self.steps)]
+
+
+def read_resume(path: str, parameters: dict[str, Any]) -> Finished:
+    """The finished steps of an interrupted run ``path + '.partial'``, its scalars, and the
+    state to go on from.
+
+    Returns ``Finished(0)`` when there is nothing to resume.  Raises ``ValueError`` when the
+    partial file belongs to a different run (its ``parameters`` differ, apart from
+    ``resume``, ``quiet`` and ``stop_after``), so a resume never mixes two runs, or when it
+    cannot be read (damaged by something else than a run: the run itself replaces it whole).
+    """
+    import h5py
+
+    partial = partial_path(path)
+    if not os.path.exists(partial):
+        return Finished(0)
+    ignore = ("resume", "quiet", "stop_after")
+    mine = json.loads(json.dumps({k: v for k, v in parameters.items() if k not in ignore}))
+    try:
+        with h5py.File(partial, "r") as f:
+            theirs = json.loads(f.attrs["parameters"])
+            table = {k: list(_values(f[k])) for k in f if f[k].ndim == 1}
+            steps = len(table.get("converged", []))
+    except (OSError, KeyError, ValueError) as exc:
+        raise ValueError(
+            f"cannot resume '{partial}': it is damaged ({_reason(exc)}); remove it to start afresh"
+        ) from None
+    theirs = {k: v for k, v in theirs.items() if k not in ignore}
+    changed = sorted(k for k in set(mine) | set(theirs) if not _same(mine.get(k), theirs.get(k)))
+    if changed:
+        raise ValueError(
+            f"cannot resume '{partial}': it was run with different parameters "
+            f"({', '.join(changed)})"
+        )
+    state, problem = _saved_state(path, steps)
+    return Finished(steps, table, state, problem)
+
+
+def _values(dataset: Any) -> np.ndarray:
+    values = dataset[...]
+    if values.dtype.kind == "O":
+        return np.array([v.decode() if isinstance(v, bytes) else v for v in values], dtype=object)
+    return values
+
+
+def _saved_state(path: str, steps: int) -> tuple[np.ndarray | None, str]:
+    """The state after step ``steps``, or ``None`` and why not."""
+    where = state_path(path)
+    if not steps:
+        return None, ""
+    if not os.path.exists(where):
+        return None, f"{where} is missing"
+    try:
+        with np.load(where) as saved:
+            after, state = int(saved["after_step"]), saved["state"]
+    except Exception as exc:  # a truncated or foreign file: any reader failure
+        return None, f"{where} is damaged ({_reason(exc)})"
+    if after + 1 != steps:
+        return None, f"{where} is of step {after + 1}, not {steps}"
+    return state, ""
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Equal parameters; floats to 1e-9 relative (derived loads carry FFT rounding)."""
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
+    if isinstance(a, float) or isinstance(b, float):
+        try:
+            return bool(np.isclose(float(a), float(b), rtol=1e-9, atol=0.0))
+        except (TypeError, ValueError):
+            return False
+    return a == b
+
+
+class StepStore:
+    """A run's results, durable step by step (see the module docstring).
+
+    Rank 0 writes; the other ranks join the gathers of fields and state, and every rank
+    raises the same :class:`StorageError` when rank 0 cannot write.
+
+    Parameters
+    ----------
+    path
+        The final file, ``OUT.h5``.
+    grid
+        The layout of the fields.
+    fields
+        Names of per-step fields stored (``gap``, ``pressure``, ``contact``), or none.
+    """
+
+    def __init__(self, path: str, grid: Grid, fields: tuple[str, ...] = ()) -> None:
+        self.path = path
+        self.partial = partial_path(path)
+        self.parts = parts_path(path)
+        self.grid = grid
+        self.fields = fields
+        self.root = grid.comm.rank == 0
+        self.attributes: dict[str, Any] = {}
+        self.table: dict[str, list[Any]] = {}
+        self.steps = 0
+
+    @classmethod
+    def create(
+        cls,
+        path: str,
+        grid: Grid,
+        attributes: dict[str, Any],
+        heights: np.ndarray | None,
+        fields: tuple[str, ...] = (),
+    ) -> StepStore:
+        """A new run: whatever an earlier run left under this output is cleared (the caller
+        holds the output's lock), then the record and the heights are written."""
+        store = cls(path, grid, fields)
+        full = grid.gather(heights) if heights is not None else None
+        store.attributes = {**attributes, "created": _now(), "complete": False}
+
+        def begin() -> None:
+            for leftover in (state_path(path), store.partial):
+                with suppress(FileNotFoundError):
+                    os.remove(leftover)
+            shutil.rmtree(store.parts, ignore_errors=True)
+            os.makedirs(store.parts)
+            if full is not None:
+                store._write_part("heights.h5", {"heights": full}, chunked=False)
+            store._commit()
+
+        store._on_root(begin)
+        return store
+
+    @classmethod
+    def resume(
+        cls,
+        path: str,
+        grid: Grid,
+        finished: Finished,
+        record: dict[str, Any],
+        fields: tuple[str, ...] = (),
+    ) -> StepStore:
+        """Go on with an interrupted run from its ``finished`` steps; the file's ``resumed``
+        list gains this segment's record (its command line, PETSc options and commit)."""
+        import h5py
+
+        store = cls(path, grid, fields)
+        store.steps = finished.steps
+        if store.root:
+            with h5py.File(store.partial, "r") as f:
+                store.attributes = dict(f.attrs)
+            store.table = {k: list(v) for k, v in finished.table.items()}
+        earlier = json.loads(str(store.attributes.get("resumed", "[]")) or "[]")
+        segment = {
+            "after_step": finished.steps,
+            "time": _now(),
+            "petsc_contact_commit": source_commit(),
+            "from_saved_state": finished.state is not None,  # False: began at first touch
+            "command_line": record.get("command_line", ""),
+            "petsc_options": record.get("petsc_options", ""),
+        }
+        store.attributes["resumed"] = json.dumps([*earlier, segment])
+
+        def begin() -> None:
+            os.makedirs(store.parts, exist_ok=True)
+            store._commit()
+
+        store._on_root(begin)
+        return store
+
+    def append(
+        self,
+        scalars: dict[str, Any],
+        fields: dict[str, np.ndarray] | None = None,
+        state: np.ndarray | None = None,
+    ) -> None:
+        """Commit one finished step: its fields (if stored), then its scalars, then the state
+        a resume would start the next step from (collective)."""
+        gathered: dict[str, Any] = (
+            {k: self.grid.gather(fields[k]) for k in self.fields} if fields else {}
+        )
+        full_state = self.grid.gather(state) if state is not None else None
+        step = self.steps + 1
+
+        def commit() -> None:
+            if gathered:
+                self._write_part(f"step-{step:06d}.h5", gathered, chunked=True)
+            for key, value in scalars.items():
+                if key not in self.table:  # new, or new since the version a resume began with
+                    self.table[key] = [_missing(value)] * self.steps
+            for key, column in self.table.items():
+                column.append(scalars[key] if key in scalars else _missing(column[0]))
+            try:
+                self._commit()
+            except BaseException:
+                for column in self.table.values():
+                    column.pop()
+                raise
+            if full_state is not None:
+                where = state_path(self.path)
+                with storage(where), replaced(where) as tmp, open(tmp, "wb") as f:
+                    np.savez(f, state=full_state, after_step=step - 1)
+
+        self._on_root(commit)
+        self.steps = step
+
+    def finish(self) -> None:
+        """Assemble ``OUT.h5`` (complete), rename it into place, remove the rest (collective)."""
+
+        def assemble() -> None:
+            import h5py
+
+            with atomic_h5(self.path) as f:
+                write_attributes(f, {**self.attributes, "complete": True})
+                self._write_table(f)
+                heights = os.path.join(self.parts, "heights.h5")
+                if os.path.exists(heights):
+                    with h5py.File(heights, "r") as part:
+                        f.copy(part["heights"], "heights")
+                for name in self.fields:
+                    self._copy_field(f, name)
+            for leftover in (state_path(self.path), self.partial):
+                with suppress(FileNotFoundError):
+                    os.remove(leftover)
+            shutil.rmtree(self.parts, ignore_errors=True)
+
+        self._on_root(assemble)
+        self.grid.comm.Barrier()
+
+    def discard(self) -> None:
+        """Remove everything of a run that finished no step (a failure before the first)."""
+        if self.root:
+            for leftover in (state_path(self.path), self.partial):
+                with suppress(FileNotFoundError):
+                    os.remove(leftover)
+            shutil.rmtree(self.parts, ignore_errors=True)
+
+    def abandon(self, why: str = "interrupted") -> str:
+        """The one line to say when a run stops early: its finished steps stay committed."""
+        return f"{why}; {self.steps} finished step(s) kept in {self.partial} (--resume continues)"
+
+    # -- rank 0's writes ---------------------------------------------------------------------
+
+    def _on_root(self, work: Any) -> None:
+        """Run ``work`` on rank 0; when it fails, every rank raises (the others a
+        :class:`StorageError`, or a ``RuntimeError`` naming rank 0's failure), so that no
+        rank waits for one that has stopped."""
+        failure: BaseException | None = None
+        if self.root:
+            try:
+                work()
+            except Exception as exc:
+                failure = exc
+        if self.grid.comm.size > 1:
+            said = self.grid.comm.bcast(None if failure is None else _portable(failure), root=0)
+            if said is not None and failure is None:
+                failure = said
+        if failure is not None:
+            raise failure
+
+    def _entry(self, name: str) -> Entry:
+        schema = GEOMETRIES.get(str(self.attributes.get("geometry", "")), {})
+        try:
+            entry = schema[name]
+        except KeyError:
+            raise KeyError(f"no schema entry for dataset '{name}' (petsc_contact.io)") from None
+        return in_unit(entry, str(self.attributes.get("length_unit", "")))
+
+    def _commit(self) -> None:
+        """Replace the ``.partial`` file by one holding every finished step."""
+        with atomic_h5(self.partial) as f:
+            write_attributes(f, self.attributes)
+            self._write_table(f)
+
+    def _write_table(self, f: Any) -> None:
+        for key, column in self.table.items():
+            dtype = h5_dtype(column[0]) if column else np.float64
+            d = f.create_dataset(key, data=np.array(column, dtype=dtype), maxshape=(None,))
+            describe(d, self._entry(key))
+
+    def _write_part(self, name: str, arrays: dict[str, np.ndarray], chunked: bool) -> None:
+        with atomic_h5(os.path.join(self.parts, name)) as f:
+            for key, value in arrays.items():
+                if chunked:
+                    d = f.create_dataset(key, data=value[None], **_field_layout(value.shape))
+                else:
+                    d = f.create_dataset(key, data=value)
+                describe(d, self._entry(key))
+
+    def _copy_field(self, f: Any, name: str) -> None:
+        """Stack every step's ``name`` into ``f``, copying its compressed chunks as they are."""
+        import h5py
+
+        nx, ny = self.grid.shape
+        dtype = bool if name == "contact" else np.float64
+        out = f.create_dataset(
+            name, shape=(self.steps, nx, ny), maxshape=(None, nx, ny), dtype=dtype,
+            **_field_layout((nx, ny)),
+        )  # fmt: skip
+        describe(out, self._entry(name))
+        for k in range(self.steps):
+            path = os.path.join(self.parts, f"step-{k + 1:06d}.h5")
+            try:
+                part = h5py.File(path, "r")
+            except OSError:
+                raise StorageError(
+                    errno.EIO, f"cannot assemble {self.path}: {path} is missing or damaged"
+                ) from None
+            with part:
+                source = part[name].id
+                for i in range(source.get_num_chunks()):
+                    info = source.get_chunk_info(i)
+                    mask, data = source.read_direct_chunk(info.chunk_offset)
+                    out.id.write_direct_chunk((k, *info.chunk_offset[1:]), data, mask)
+
+
+def _field_layout(shape: tuple[int, ...]) -> dict[str, Any]:
+    nx, ny = shape
+    return {
+        "chunks": (1, min(nx, FIELD_CHUNK), min(ny, FIELD_CHUNK)),
+        "compression": "gzip",
+        "compression_opts": 4,
+        "shuffle": True,
+    }
+
+
+def _missing(value: Any) -> Any:
+    """What the steps without a column read in it: NaN, -1, '' or False (never a plausible
+    0 for a number)."""
+    dtype = h5_dtype(value)
+    if dtype in MISSING:
+        return MISSING[dtype]
+    return False if dtype is bool else ""
+
+
+def _portable(exc: BaseException) -> BaseException:
+    """An exception every rank can raise (pickled through MPI)."""
+    if isinstance(exc, StorageError):
+        return StorageError(exc.errno, exc.strerror or str(exc))
+    return RuntimeError(f"rank 0 failed to write results: {type(exc).__name__}: {exc}")

@@ -524,7 +524,17 @@ def _compare_parser(sub: Any) -> None:
         help="stop a solver whose natural residual has not fallen 10%% below "
         "its best for N iterations (default 1000; 0: never)",
     )
-    cmp_.add_argument("--output", required=True, metavar="OUT.h5")
+    cmp_.add_argument(
+        "--output",
+        required=True,
+        metavar="OUT.h5",
+        help="results; each finished solver is committed to OUT.h5.partial",
+    )
+    cmp_.add_argument(
+        "--resume",
+        action="store_true",
+        help="go on from OUT.h5.partial (same options): finished solvers are kept",
+    )
     cmp_.add_argument("--quiet", action="store_true", help="no table on standard output")
 
 

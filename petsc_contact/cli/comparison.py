@@ -13,11 +13,21 @@ from .scene import prepare_scene
 def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
     """``petsc-contact compare``: every solver on one scene, error against time."""
     from ..geometries.periodic import PeriodicProblem
+    from ..io.store import on_root
     from ..physics.surface import rms_of
-    from ..workflows.compare import DEFAULT_SOLVERS, compare, solver_options, write_compare
+    from ..workflows.compare import (
+        DEFAULT_SOLVERS,
+        commit_partial,
+        compare,
+        read_partial,
+        solver_options,
+        write_compare,
+    )
 
     if not args.time_limit >= 0 or args.stall_iterations < 0:
         raise InputError("--time-limit and --stall-iterations must not be negative")
+    if args.solvers == []:
+        raise InputError("--solvers names no solver: give cg,tron,... or leave it out")
     solvers = args.solvers or list(DEFAULT_SOLVERS)
     for name in solvers:
         solver_options(name)  # unknown options files fail here, before any work
@@ -31,19 +41,36 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
             flush=True,
         )
 
+    realised = {"rms_height": rms_of(grid, fft, heights), "pressure": args.pressure}  # collective
+    attrs = run_record(args, argv, petsc, realised, resolved)
+    done = read_partial(args.output, attrs["parameters"]) if args.resume else []
+    finished: list[Any] = list(done)
+    root = grid.comm.rank == 0
+    for t in done if show else ():
+        _print_trajectory(t)
+
+    def report(trajectory: Any) -> None:  # commit each solver as it finishes
+        finished.append(trajectory)
+        on_root(
+            grid.comm, lambda: commit_partial(args.output, reference_scalars[0], finished, attrs)
+        )
+        if show:
+            _print_trajectory(trajectory)
+
+    reference_scalars: list[dict[str, Any]] = []
     reference, trajectories = compare(
         problem,
         args.pressure,
         solvers,
         args.time_limit,
         stall_iterations=args.stall_iterations,
-        report=_print_trajectory if show else None,
+        report=report,
+        done=done,
+        reference_ready=reference_scalars.append,
     )
-    realised = {"rms_height": rms_of(grid, fft, heights), "pressure": args.pressure}  # collective
     status = 0 if all(t.converged for t in trajectories) else EXIT_NOT_CONVERGED
-    if grid.comm.rank != 0:
+    if not root:
         return status  # the same on every rank: the verdicts come from reduced residuals
-    attrs = run_record(args, argv, petsc, realised, resolved)
     csv, png = write_compare(args.output, reference, trajectories, attrs)
     if show:
         print(

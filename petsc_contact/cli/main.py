@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 from collections.abc import Sequence
 from typing import Any
 
 from ..io.output import schema_markdown
-from ..io.store import StorageError
+from ..io.store import StorageError, storage
 from .arguments import build_parser, is_petsc_option, split_arguments
 from .common import (
     EXIT_BAD_INPUT,
@@ -17,6 +18,7 @@ from .common import (
     EXIT_STORAGE,
     EXIT_UNAVAILABLE,
     InputError,
+    output_lock,
     say,
 )
 from .comparison import run_compare
@@ -55,8 +57,6 @@ class QuietPipe:
                 self._silence()
 
     def _silence(self) -> None:
-        import os
-
         self.closed_by_reader = True
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, self.stream.fileno())  # nothing is left to flush at exit
@@ -95,26 +95,33 @@ def main(argv: Sequence[str] | None = None) -> int:
         raise
 
 
+LOCKED = ("ensemble", "experiment", "compare", "theory")  # periodic, punch: their run locks
+
+
 def _dispatch(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
-    if args.command == "ensemble":
-        return run_ensemble(args, argv, petsc_args)
-    if args.command == "experiment":
-        return run_experiment(args)
-    if args.command == "compare":
-        return run_compare(args, argv, petsc_args)
     if args.command == "schema":
         sys.stdout.write(schema_markdown())
         return 0
     if args.command == "plot":
         return run_plot(args)
-    if args.command == "theory":
-        return run_theory(args, argv, petsc_args)
+    if args.command == "study" and args.list:
+        print(study_plan(args))
+        return 0
     if args.command == "study":
-        if args.list:
-            print(study_plan(args))
-            return 0
-        return run_study(args, petsc_args)
-    return run(args, argv, petsc_args)
+        with storage(args.data):
+            os.makedirs(args.data, exist_ok=True)
+        with output_lock(os.path.join(args.data, ".study")):  # one study per folder
+            return run_study(args, petsc_args)
+    if args.command not in LOCKED:
+        return run(args, argv, petsc_args)
+    with output_lock(args.output):
+        if args.command == "ensemble":
+            return run_ensemble(args, argv, petsc_args)
+        if args.command == "experiment":
+            return run_experiment(args)
+        if args.command == "compare":
+            return run_compare(args, argv, petsc_args)
+        return run_theory(args, argv, petsc_args)
 
 
 def _report_unused(petsc_args: list[str]) -> None:

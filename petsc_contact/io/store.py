@@ -227,8 +227,6 @@ def read_resume(path: str, parameters: dict[str, Any]) -> Finished:
     partial = partial_path(path)
     if not os.path.exists(partial):
         return Finished(0)
-    ignore = ("resume", "quiet", "stop_after")
-    mine = json.loads(json.dumps({k: v for k, v in parameters.items() if k not in ignore}))
     try:
         with h5py.File(partial, "r") as f:
             theirs = json.loads(f.attrs["parameters"])
@@ -238,15 +236,25 @@ def read_resume(path: str, parameters: dict[str, Any]) -> Finished:
         raise ValueError(
             f"cannot resume '{partial}': it is damaged ({_reason(exc)}); remove it to start afresh"
         ) from None
-    theirs = {k: v for k, v in theirs.items() if k not in ignore}
-    changed = sorted(k for k in set(mine) | set(theirs) if not _same(mine.get(k), theirs.get(k)))
+    check_same_run(partial, theirs, parameters)
+    state, problem = _saved_state(path, steps)
+    return Finished(steps, table, state, problem)
+
+
+RESUME_FREE = ("resume", "quiet", "stop_after")  # options a resume may change
+
+
+def check_same_run(partial: str, theirs: dict[str, Any], mine: dict[str, Any]) -> None:
+    """``ValueError`` unless an unfinished file's ``parameters`` are this run's (apart from
+    :data:`RESUME_FREE`): a resume never mixes two runs."""
+    a = json.loads(json.dumps({k: v for k, v in mine.items() if k not in RESUME_FREE}))
+    b = {k: v for k, v in theirs.items() if k not in RESUME_FREE}
+    changed = sorted(k for k in set(a) | set(b) if not _same(a.get(k), b.get(k)))
     if changed:
         raise ValueError(
             f"cannot resume '{partial}': it was run with different parameters "
             f"({', '.join(changed)})"
         )
-    state, problem = _saved_state(path, steps)
-    return Finished(steps, table, state, problem)
 
 
 def _values(dataset: Any) -> np.ndarray:
@@ -328,10 +336,7 @@ class StepStore:
         store.attributes = {**attributes, "created": _now(), "complete": False}
 
         def begin() -> None:
-            for leftover in (state_path(path), store.partial):
-                with suppress(FileNotFoundError):
-                    os.remove(leftover)
-            shutil.rmtree(store.parts, ignore_errors=True)
+            _clear(path, keep_steps=False)
             os.makedirs(store.parts)
             if full is not None:
                 store._write_part("heights.h5", {"heights": full}, chunked=False)
@@ -371,6 +376,7 @@ class StepStore:
         store.attributes["resumed"] = json.dumps([*earlier, segment])
 
         def begin() -> None:
+            _clear(path, keep_steps=True)
             os.makedirs(store.parts, exist_ok=True)
             store._commit()
 
@@ -428,10 +434,7 @@ class StepStore:
                         f.copy(part["heights"], "heights")
                 for name in self.fields:
                     self._copy_field(f, name)
-            for leftover in (state_path(self.path), self.partial):
-                with suppress(FileNotFoundError):
-                    os.remove(leftover)
-            shutil.rmtree(self.parts, ignore_errors=True)
+            _clear(self.path, keep_steps=False)
 
         self._on_root(assemble)
         self.grid.comm.Barrier()
@@ -439,10 +442,7 @@ class StepStore:
     def discard(self) -> None:
         """Remove everything of a run that finished no step (a failure before the first)."""
         if self.root:
-            for leftover in (state_path(self.path), self.partial):
-                with suppress(FileNotFoundError):
-                    os.remove(leftover)
-            shutil.rmtree(self.parts, ignore_errors=True)
+            _clear(self.path, keep_steps=False)
 
     def abandon(self, why: str = "interrupted") -> str:
         """The one line to say when a run stops early: its finished steps stay committed."""
@@ -451,21 +451,7 @@ class StepStore:
     # -- rank 0's writes ---------------------------------------------------------------------
 
     def _on_root(self, work: Any) -> None:
-        """Run ``work`` on rank 0; when it fails, every rank raises (the others a
-        :class:`StorageError`, or a ``RuntimeError`` naming rank 0's failure), so that no
-        rank waits for one that has stopped."""
-        failure: BaseException | None = None
-        if self.root:
-            try:
-                work()
-            except Exception as exc:
-                failure = exc
-        if self.grid.comm.size > 1:
-            said = self.grid.comm.bcast(None if failure is None else _portable(failure), root=0)
-            if said is not None and failure is None:
-                failure = said
-        if failure is not None:
-            raise failure
+        on_root(self.grid.comm, work)
 
     def _entry(self, name: str) -> Entry:
         schema = GEOMETRIES.get(str(self.attributes.get("geometry", "")), {})
@@ -540,6 +526,47 @@ def _missing(value: Any) -> Any:
     if dtype in MISSING:
         return MISSING[dtype]
     return False if dtype is bool else ""
+
+
+def _clear(path: str, keep_steps: bool) -> None:
+    """Remove what runs on output ``path`` left: temporary files of killed writers always,
+    the committed steps (``.partial``, parts, state) unless ``keep_steps``.  Only the holder
+    of the output's lock calls this."""
+    folder, name = os.path.split(os.path.abspath(path))
+    pattern = re.compile(re.escape(name) + r"(\.partial|\.state\.npz)?\.\d+\.tmp")
+    for entry in os.listdir(folder):
+        if pattern.fullmatch(entry):
+            with suppress(FileNotFoundError):
+                os.remove(os.path.join(folder, entry))
+    if keep_steps:
+        parts = parts_path(path)
+        for entry in os.listdir(parts) if os.path.isdir(parts) else ():
+            if entry.endswith(".tmp"):
+                with suppress(FileNotFoundError):
+                    os.remove(os.path.join(parts, entry))
+        return
+    for leftover in (state_path(path), partial_path(path)):
+        with suppress(FileNotFoundError):
+            os.remove(leftover)
+    shutil.rmtree(parts_path(path), ignore_errors=True)
+
+
+def on_root(comm: Any, work: Any) -> None:
+    """Run ``work`` on rank 0 of ``comm``; when it fails, every rank raises (the others a
+    :class:`StorageError`, or a ``RuntimeError`` naming rank 0's failure), so that no rank
+    waits for one that has stopped."""
+    failure: BaseException | None = None
+    if comm.rank == 0:
+        try:
+            work()
+        except Exception as exc:
+            failure = exc
+    if comm.size > 1:
+        said = comm.bcast(None if failure is None else _portable(failure), root=0)
+        if said is not None and failure is None:
+            failure = said
+    if failure is not None:
+        raise failure
 
 
 def _portable(exc: BaseException) -> BaseException:

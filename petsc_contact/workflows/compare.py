@@ -22,9 +22,11 @@ to a PETSc options file (``options/bqnls.opts``).
 
 from __future__ import annotations
 
+import json
 import os
 import time
 from collections.abc import Callable, Sequence
+from contextlib import suppress
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -35,7 +37,7 @@ from ..backend.solve import BoundSolver, SolveInfo
 from ..geometries.periodic import PeriodicProblem
 from ..geometries.step import residual_verdict
 from ..io.output import COMPARE, annotate, write_attributes
-from ..io.store import atomic_h5
+from ..io.store import atomic_h5, check_same_run, partial_path, replaced, storage
 from ..physics.observables import natural_residual
 from .periodic_sweep import sweep
 
@@ -193,8 +195,14 @@ def compare(
     extra_options: Sequence[str] = (),
     stall_iterations: int = 1000,
     report: Callable[[Trajectory], None] | None = None,
+    done: Sequence[Trajectory] = (),
+    reference_ready: Callable[[dict[str, Any]], None] | None = None,
 ) -> tuple[dict[str, Any], list[Trajectory]]:
     """Run each solver from first touch and record its error against time.
+
+    The solvers of ``done`` (an interrupted comparison's, :func:`read_partial`) are kept as
+    they are and not run again; the reference is solved again (the same solve, so the same
+    reference).  ``reference_ready(scalars)`` is called once the reference is solved.
 
     A solver is stopped (``DIVERGED_USER``, with the cause in its reason) after
     ``time_limit`` seconds, or once its natural residual has not fallen 10% below its best
@@ -210,9 +218,15 @@ def compare(
         solver, in order.
     """
     reference = reference_solve(problem, pressure)
+    if reference_ready is not None:
+        reference_ready(reference.scalars())
     x0 = problem.initial_gap().reshape(-1) / problem.scale_length
+    kept = {t.name: t for t in done}
     out = []
     for name in solvers:
+        if name in kept:
+            out.append(kept[name])
+            continue
         opts = solver_options(name) + list(extra_options)
         traj = Trajectory(name, opts)
         with _petsc.scoped_options(opts):
@@ -241,27 +255,16 @@ def write_compare(
     trajectories: Sequence[Trajectory],
     attributes: dict[str, Any],
 ) -> tuple[str, str]:
-    """HDF5 (one group per solver), a CSV table and a PNG of error against time.
+    """HDF5 (one group per solver), a CSV table and a PNG of error against time; the
+    comparison's ``.partial`` file is removed once they are written.
 
     Returns the CSV and PNG paths (next to ``path``).
     """
     stem = path[:-3] if path.endswith(".h5") else path
     with atomic_h5(path) as f:
-        write_attributes(f, attributes)
-        write_attributes(f, {f"reference_{k}": v for k, v in reference.items()})
-        for t in trajectories:
-            g = f.create_group(t.name.replace("/", "_"))
-            for k in COMPARE:
-                g[k] = np.asarray(getattr(t, k))
-            annotate(g, COMPARE.__getitem__)
-            for k in ("reason", "solve_time", "iterations", "converged", "verification"):
-                g.attrs[k] = getattr(t, k)
-            g.attrs["petsc_options"] = " ".join(t.options)
-            if "-options_file" in t.options:  # what the file said when it ran
-                with open(t.options[t.options.index("-options_file") + 1]) as opts:
-                    g.attrs["options_file_text"] = opts.read()
+        _write_groups(f, reference, trajectories, {**attributes, "complete": True})
     csv = stem + ".csv"
-    with open(csv, "w") as f:
+    with storage(csv), replaced(csv) as temporary, open(temporary, "w") as f:
         f.write(
             "solver,reason,converged,iterations,time_s,mean_gap_error,pressure_error,"
             "natural_residual,complementarity\n"
@@ -270,7 +273,67 @@ def write_compare(
             f.write(",".join(str(v) for v in row) + "\n")
     png = stem + ".png"
     plot_compare(png, trajectories, reference)
+    with suppress(FileNotFoundError):
+        os.remove(partial_path(path))
     return csv, png
+
+
+def commit_partial(
+    path: str,
+    reference: dict[str, Any],
+    trajectories: Sequence[Trajectory],
+    attributes: dict[str, Any],
+) -> None:
+    """Replace ``path + '.partial'`` by one holding every finished solver (atomically)."""
+    with atomic_h5(partial_path(path)) as f:
+        _write_groups(f, reference, trajectories, {**attributes, "complete": False})
+
+
+def read_partial(path: str, parameters: dict[str, Any]) -> list[Trajectory]:
+    """The finished solvers of an interrupted comparison (none without a ``.partial``);
+    ``ValueError`` when it was run with other parameters or cannot be read."""
+    import h5py
+
+    partial = partial_path(path)
+    if not os.path.exists(partial):
+        return []
+    try:
+        with h5py.File(partial, "r") as f:
+            check_same_run(partial, json.loads(f.attrs["parameters"]), parameters)
+            out = []
+            for name in json.loads(f.attrs["solvers"]):
+                g = f[name.replace("/", "_")]
+                t = Trajectory(name, str(g.attrs["petsc_options"]).split())
+                for k in COMPARE:
+                    setattr(t, k, g[k][...].tolist())
+                t.reason, t.verification = str(g.attrs["reason"]), str(g.attrs["verification"])
+                t.solve_time, t.iterations = (
+                    float(g.attrs["solve_time"]),
+                    int(g.attrs["iterations"]),
+                )
+                t.converged = bool(g.attrs["converged"])
+                out.append(t)
+    except (OSError, KeyError) as exc:
+        raise ValueError(f"cannot resume '{partial}': it is damaged ({exc}); remove it") from None
+    return out
+
+
+def _write_groups(
+    f: Any, reference: dict[str, Any], trajectories: Sequence[Trajectory], attrs: dict[str, Any]
+) -> None:
+    write_attributes(f, {**attrs, "solvers": [t.name for t in trajectories]})
+    write_attributes(f, {f"reference_{k}": v for k, v in reference.items()})
+    for t in trajectories:
+        g = f.create_group(t.name.replace("/", "_"))
+        for k in COMPARE:
+            g[k] = np.asarray(getattr(t, k))
+        annotate(g, COMPARE.__getitem__)
+        for k in ("reason", "solve_time", "iterations", "converged", "verification"):
+            g.attrs[k] = getattr(t, k)
+        g.attrs["petsc_options"] = " ".join(t.options)
+        if "-options_file" in t.options:  # what the file said when it ran
+            with open(t.options[t.options.index("-options_file") + 1]) as opts:
+                g.attrs["options_file_text"] = opts.read()
 
 
 def table_rows(trajectories: Sequence[Trajectory]) -> list[tuple[Any, ...]]:

@@ -1,0 +1,89 @@
+"""Run ``petsc-contact ARGS`` and SIGKILL it at a chosen point of its write path.
+
+    python tests/kill_at.py WHEN:TARGET:N -- ARGS...
+
+``TARGET`` is the file a rename puts in place: ``heights`` and ``step`` (the part files),
+``commit`` (the ``.partial`` file), ``state`` (the resume state), ``final`` (``OUT.h5``),
+``compare`` (a comparison's ``.partial``).  ``WHEN`` is ``before`` the ``N``-th such rename,
+``after`` it, or ``during`` the writing of the file it renames (the process dies with the
+temporary file half written: killed while HDF5 closes it, or numpy saves it).  Nothing of
+the package is changed: the runner wraps ``os.replace``, ``h5py.File.close`` and
+``numpy.savez`` from outside.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+from typing import Any
+
+import h5py
+import numpy as np
+
+from petsc_contact.cli import main
+
+
+def _target(path: str) -> str:
+    path = str(path)
+    for name, found in (
+        ("heights", f"{os.sep}heights.h5" in path and ".parts" in path),
+        ("step", f"{os.sep}step-" in path and ".parts" in path),
+        ("state", ".state.npz" in path),
+        ("commit", path.endswith(".partial")),
+        ("final", path.endswith(".h5")),
+    ):
+        if found:
+            return name
+    return ""
+
+
+def _install(when: str, target: str, nth: int) -> None:
+    seen = {"count": 0}
+    replace, close, savez = os.replace, h5py.File.close, np.savez
+
+    def die() -> None:
+        os.kill(os.getpid(), signal.SIGKILL)
+
+    def counted(path: str) -> bool:
+        if _target(path) != target:
+            return False
+        seen["count"] += 1
+        return seen["count"] == nth
+
+    def killing_replace(src: str, dst: str) -> None:
+        hit = when != "during" and counted(dst)
+        if hit and when == "before":
+            die()
+        replace(src, dst)
+        if hit and when == "after":
+            die()
+
+    def killing_close(self: h5py.File) -> None:
+        name = self.filename if self.id.valid else ""
+        if when == "during" and name.endswith(".tmp") and counted(name.rsplit(".", 2)[0]):
+            self.flush()
+            with open(name, "r+b") as f:  # torn: the process dies while the file is written
+                f.truncate(max(os.path.getsize(name) // 2, 1))
+            die()
+        close(self)
+
+    def killing_savez(file: Any, *args: Any, **kwargs: Any) -> None:
+        savez(file, *args, **kwargs)
+        name = getattr(file, "name", str(file))
+        if when == "during" and name.endswith(".tmp") and counted(name.rsplit(".", 2)[0]):
+            file.flush()
+            os.truncate(name, max(os.path.getsize(name) // 2, 1))
+            die()
+
+    os.replace = killing_replace  # type: ignore[assignment]
+    h5py.File.close = killing_close  # type: ignore[method-assign]
+    np.savez = killing_savez
+
+
+if __name__ == "__main__":
+    spec, separator, *args = sys.argv[1:]
+    assert separator == "--", "usage: kill_at.py WHEN:TARGET:N -- ARGS..."
+    when, target, nth = spec.split(":")
+    _install(when, target, int(nth))
+    sys.exit(main(args))

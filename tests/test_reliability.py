@@ -1,0 +1,242 @@
+"""Faults injected, not assumed away: SIGKILL at every point of the write path and at random
+times, two writers on one output, a full file system, damaged resume state, MPI with fields.
+After each, ``--resume`` must end with every step, equal to an uninterrupted run to the
+solver's tolerance (docs/reliability.md)."""
+
+from __future__ import annotations
+
+import json
+import os
+import random
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+from conftest import ROOT, cli, python
+
+SWEEP = "periodic --grid 64 --hurst 0.7 --rms-slope 0.1 --seed 3 --sweep 4,1e-4,1e-2 --stiffness"
+PUNCH = "punch --grid 48 --hurst 0.7 --rms-slope 0.1 --seed 3 --forces 1e-4,1e-3,3e-3"
+RTOL = 1e-6  # the steps after a cut start elsewhere; the solver's tolerance is 1e-8 p0 rms
+SCALARS = ("mean_gap", "area_fraction", "stiffness", "force", "approach", "nominal_pressure")
+
+
+def _whole(tmp_path: Path, command: str, *extra: str) -> Path:
+    """The uninterrupted run every interrupted one is held against."""
+    out = tmp_path / "whole.h5"
+    r = cli(*command.split(), *extra, "--quiet", "--output", str(out))
+    assert r.returncode == 0, r.stderr
+    return out
+
+
+def _killed(spec: str, command: str, out: Path, *extra: str) -> subprocess.CompletedProcess:
+    args = [*command.split(), *extra, "--quiet", "--output", str(out)]
+    return python(str(ROOT / "tests" / "kill_at.py"), spec, "--", *args)
+
+
+def _leftovers(out: Path) -> list[str]:
+    return sorted(p.name for p in out.parent.glob(out.name + ".*"))
+
+
+def _same_result(a: Path, b: Path, fields: bool) -> None:
+    with h5py.File(a) as fa, h5py.File(b) as fb:
+        assert fb.attrs["complete"] and fb["converged"].shape == fa["converged"].shape
+        assert np.all(fb["converged"][:])
+        for name in SCALARS:
+            if name in fa:
+                assert np.allclose(fb[name][:], fa[name][:], rtol=RTOL, atol=0), name
+        if fields:
+            for name in ("gap", "pressure"):
+                scale = np.abs(fa[name][...]).max()
+                assert np.allclose(fb[name][...], fa[name][...], rtol=0, atol=RTOL * scale), name
+            assert np.mean(fb["contact"][...] != fa["contact"][...]) < 1e-3
+            h = fa["heights"][...]  # generated on other FFT layouts: equal to rounding
+            assert np.allclose(fb["heights"][...], h, rtol=0, atol=1e-12 * np.abs(h).max())
+
+
+POINTS = [
+    "before:heights:1",
+    "during:heights:1",
+    "before:step:2",
+    "during:step:2",
+    "after:step:2",
+    "before:commit:3",
+    "during:commit:3",
+    "after:commit:3",
+    "before:state:2",
+    "during:state:2",
+    "after:state:2",
+    "before:final:1",
+    "during:final:1",
+    "after:final:1",
+]
+
+
+def test_sigkill_at_every_point_of_the_write_path(tmp_path):
+    """A sweep with fields killed at each point of its write path: --resume ends it with
+    every step, equal to the uninterrupted run (a kill after the final rename leaves the
+    whole result)."""
+    whole = _whole(tmp_path, SWEEP, "--fields")
+    for point in POINTS:
+        out = tmp_path / f"{point.replace(':', '-')}.h5"
+        r = _killed(point, SWEEP, out, "--fields")
+        assert r.returncode == -signal.SIGKILL, (point, r.stderr)
+        r = cli(*SWEEP.split(), "--fields", "--quiet", "--output", str(out), "--resume")
+        assert r.returncode == 0, (point, r.stderr)
+        _same_result(whole, out, fields=True)
+        assert _leftovers(out) == [], (point, _leftovers(out))
+
+
+def test_sigkill_at_random_times(tmp_path):
+    """Killed at random instants, a sweep with fields, a punch and a comparison each come
+    back whole with --resume (seeded, so a failure can be replayed)."""
+    rng = random.Random(20261125)
+    for command, extra, fields in ((SWEEP, ["--fields"], True), (PUNCH, ["--fields"], True)):
+        whole = _whole(tmp_path, command, *extra)
+        for k in range(3):
+            out = tmp_path / f"random{k}.h5"
+            args = [sys.executable, "-m", "petsc_contact.cli", *command.split(), *extra]
+            args += ["--quiet", "--output", str(out)]
+            process = subprocess.Popen(args, env=_env(), stdin=subprocess.DEVNULL)
+            time.sleep(rng.uniform(0.5, 3.0))
+            process.send_signal(signal.SIGKILL)
+            process.wait()
+            resume = "--resume" if out.with_name(out.name + ".partial").exists() else "--quiet"
+            r = cli(*command.split(), *extra, "--quiet", "--output", str(out), resume)
+            assert r.returncode == 0, r.stderr
+            _same_result(whole, out, fields)
+        os.remove(whole)
+
+
+def _env() -> dict[str, str]:
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env.pop("PETSC_DIR", None)
+    return env
+
+
+def test_compare_keeps_its_finished_solvers(tmp_path):
+    """A comparison killed after its second solver resumes with the first two kept (their
+    trajectories as recorded) and runs only the third."""
+    command = "compare --grid 48 --hurst 0.7 --rms-slope 0.1 --pressure 1e-3 --solvers cg,pk,bnls"
+    out = tmp_path / "cmp.h5"
+    r = _killed("after:commit:2", command, out)
+    assert r.returncode == -signal.SIGKILL, r.stderr
+    with h5py.File(str(out) + ".partial") as f:
+        assert json.loads(f.attrs["solvers"]) == ["cg", "pk"]
+        kept = f["pk/natural_residual"][...]
+    r = cli(*command.split(), "--output", str(out), "--resume")
+    assert r.returncode == 0, r.stderr
+    with h5py.File(out) as f:
+        assert json.loads(f.attrs["solvers"]) == ["cg", "pk", "bnls"] and f.attrs["complete"]
+        assert np.array_equal(f["pk/natural_residual"][...], kept)
+        assert all(f[s].attrs["converged"] for s in ("cg", "pk", "bnls"))
+    assert _leftovers(out) == [] and (tmp_path / "cmp.csv").exists()
+
+
+def test_a_second_writer_is_refused_before_it_touches_anything(tmp_path):
+    """While one run writes an output, a second on the same output exits 2 at once with one
+    line naming it, and the first run ends whole."""
+    out = tmp_path / "busy.h5"
+    slow = f"{SWEEP} --fields".replace("--grid 64", "--grid 384").replace("4,", "6,").split()
+    args = [sys.executable, "-m", "petsc_contact.cli", *slow, "--quiet", "--output", str(out)]
+    first = subprocess.Popen(args, env=_env(), stdin=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    lock = tmp_path / "busy.h5.lock"
+    deadline = time.time() + 60
+    while not (lock.exists() and lock.read_text()) and time.time() < deadline:
+        time.sleep(0.02)
+    second = cli(*slow, "--quiet", "--output", str(out))
+    assert first.wait(timeout=300) == 0, first.stderr.read() if first.stderr else ""
+    assert second.returncode == 2, second.stderr
+    lines = second.stderr.strip().splitlines()
+    assert len(lines) == 1 and "is being written by another run (pid" in lines[0], lines
+    with h5py.File(out) as f:
+        assert f.attrs["complete"] and f["gap"].shape[0] == 6
+    resumed = cli(*slow, "--quiet", "--output", str(out), "--resume")  # the lock is free again
+    assert resumed.returncode == 0, resumed.stderr
+
+
+def test_a_damaged_state_file_costs_a_cold_start_not_the_run(tmp_path):
+    """A truncated or foreign state file: a warning, the next step from first touch, the
+    same result; a damaged .partial is refused in one line."""
+    whole = _whole(tmp_path, SWEEP)
+    out = tmp_path / "cut.h5"
+    pause = [*SWEEP.split(), "--quiet", "--output", str(out), "--stop-after", "0"]
+    assert cli(*pause).returncode == 75
+    state = Path(f"{out}.state.npz")
+    state.write_bytes(state.read_bytes()[:100])
+    r = cli(*SWEEP.split(), "--quiet", "--output", str(out), "--resume")
+    assert r.returncode == 0, r.stderr
+    assert "state.npz is damaged" in r.stderr and "step 2 starts from first touch" in r.stderr
+    _same_result(whole, out, fields=False)
+    assert cli(*pause).returncode == 75
+    Path(f"{out}.partial").write_bytes(b"\x89HDF\r\n\x1a\n" + bytes(200))
+    r = cli(*SWEEP.split(), "--quiet", "--output", str(out), "--resume")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "is damaged" in r.stderr
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 2.5 MiB tmpfs, or a skip where this machine does not allow mounting one."""
+    mount = tmp_path / "disk"
+    mount.mkdir()
+    r = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", "size=2560k", "tmpfs", str(mount)], capture_output=True
+    )
+    if r.returncode != 0:
+        pytest.skip(f"cannot mount a small tmpfs here: {r.stderr.decode().strip()}")
+    yield mount
+    subprocess.run(["umount", "-l", str(mount)], check=False)
+
+
+def test_a_full_disk_is_an_error_and_resume_completes(tmp_path, small_disk):
+    """Fields fill the disk after a few steps: exit 74 in one line, the finished steps kept,
+    never a file marked complete; with room again --resume completes the run correctly."""
+    command = SWEEP.replace("--grid 64", "--grid 192").replace("4,", "8,")
+    whole = _whole(tmp_path, command, "--fields")
+    out = small_disk / "full.h5"
+    r = cli(*command.split(), "--fields", "--quiet", "--output", str(out))
+    assert r.returncode == 74, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "No space left on device" in lines[0], lines
+    assert "finished step(s) kept" in lines[0] and not out.exists()
+    with h5py.File(str(out) + ".partial") as f:
+        kept = f["converged"].shape[0]
+        assert not f.attrs["complete"] and 0 < kept < 8
+    subprocess.run(["mount", "-o", "remount,size=64m", str(small_disk)], check=True)
+    r = cli(*command.split(), "--fields", "--quiet", "--output", str(out), "--resume")
+    assert r.returncode == 0, r.stderr
+    _same_result(whole, out, fields=True)
+
+
+def test_fields_on_several_ranks_equal_the_serial_run(tmp_path):
+    """With --fields on 2 and 3 ranks the file is the serial one's (it used to hang)."""
+    whole = _whole(tmp_path, SWEEP, "--fields")
+    for ranks in (2, 3):
+        out = tmp_path / f"mpi{ranks}.h5"
+        r = cli(*SWEEP.split(), "--fields", "--quiet", "--output", str(out), mpi=ranks)
+        assert r.returncode == 0, r.stderr
+        _same_result(whole, out, fields=True)
+
+
+def test_a_closed_pipe_ends_the_table_not_the_run(tmp_path):
+    """``petsc-contact ... | head -2``: the run still writes its file and plot, quietly."""
+    out, png = tmp_path / "piped.h5", tmp_path / "piped.png"
+    exe = shutil.which("head")
+    assert exe
+    command = f"{sys.executable} -m petsc_contact.cli {SWEEP} --output {out} --plot {png}"
+    r = subprocess.run(
+        ["bash", "-c", f"{command} | {exe} -2; exit ${{PIPESTATUS[0]}}"],
+        capture_output=True,
+        text=True,
+        env=_env(),
+    )
+    assert r.returncode == 0 and r.stderr == "", r.stderr
+    assert len(r.stdout.splitlines()) == 2
+    with h5py.File(out) as f:
+        assert f.attrs["complete"]
+    assert png.stat().st_size > 0

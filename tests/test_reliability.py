@@ -34,8 +34,9 @@ def _whole(tmp_path: Path, command: str, *extra: str) -> Path:
     return out
 
 
-def _killed(spec: str, command: str, out: Path, *extra: str) -> subprocess.CompletedProcess:
-    args = [*command.split(), *extra, "--quiet", "--output", str(out)]
+def _killed(spec: str, command: str, out: Path | None, *extra: str) -> subprocess.CompletedProcess:
+    """``command`` run under tests/kill_at.py (``--output out`` unless ``out`` is None)."""
+    args = [*command.split(), *extra, "--quiet", *(["--output", str(out)] if out else [])]
     return python(str(ROOT / "tests" / "kill_at.py"), spec, "--", *args)
 
 
@@ -138,6 +139,36 @@ def test_compare_keeps_its_finished_solvers(tmp_path):
     assert _leftovers(out) == [] and (tmp_path / "cmp.csv").exists()
 
 
+def test_ensemble_and_study_come_back_whole(tmp_path):
+    """An ensemble killed while its second seed commits, and a study killed inside its first
+    piece: --resume (the study: run again) ends with every seed and every piece, the killed
+    ones equal to uninterrupted runs."""
+    ensemble = "ensemble --grid 48 --hurst 0.7 --rms-slope 0.1 --seeds 0-2 --pressures 1e-3,1e-2"
+    whole = tmp_path / "whole.h5"
+    assert cli(*ensemble.split(), "--quiet", "--output", str(whole)).returncode == 0
+    out = tmp_path / "ens.h5"
+    assert _killed("after:commit:4", ensemble, out).returncode == -signal.SIGKILL  # seed 1
+    assert (tmp_path / "ens_seed1.h5.partial").exists() and not out.exists()
+    r = cli(*ensemble.split(), "--quiet", "--output", str(out), "--resume")
+    assert r.returncode == 0, r.stderr
+    with h5py.File(whole) as a, h5py.File(out) as b:
+        assert np.allclose(b["mean_gap"][...], a["mean_gap"][...], rtol=RTOL, atol=0)
+    data = tmp_path / "paper"
+    study = f"study --figure 1 --shrink 128 --data {data} --minutes 10"
+    assert _killed("after:commit:3", study, None).returncode == -signal.SIGKILL
+    assert (data / "fig1" / "punch.h5.partial").exists()
+    r = cli(*study.split(), "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert sorted(f.name for f in (data / "fig1").iterdir()) == [
+        "periodic_r1.h5",
+        "periodic_r8.h5",
+        "punch.h5",
+    ]
+    fresh = tmp_path / "fresh"
+    assert cli(*study.replace(str(data), str(fresh)).split(), "--quiet").returncode == 0
+    _same_result(fresh / "fig1" / "punch.h5", data / "fig1" / "punch.h5", fields=False)
+
+
 def test_a_second_writer_is_refused_before_it_touches_anything(tmp_path):
     """While one run writes an output, a second on the same output exits 2 at once with one
     line naming it, and the first run ends whole."""
@@ -169,10 +200,15 @@ def test_a_damaged_state_file_costs_a_cold_start_not_the_run(tmp_path):
     assert cli(*pause).returncode == 75
     state = Path(f"{out}.state.npz")
     state.write_bytes(state.read_bytes()[:100])
-    r = cli(*SWEEP.split(), "--quiet", "--output", str(out), "--resume")
+    r = cli(*SWEEP.split(), "--quiet", "--output", str(out), "--resume", "-tao_max_it", "5000")
     assert r.returncode == 0, r.stderr
     assert "state.npz is damaged" in r.stderr and "step 2 starts from first touch" in r.stderr
     _same_result(whole, out, fields=False)
+    with h5py.File(out) as f:  # the resumed segment's own record
+        (resumed,) = json.loads(f.attrs["resumed"])
+        assert "--resume" in resumed["command_line"]
+        assert "-tao_max_it 5000" in resumed["petsc_options"]
+        assert not resumed["from_saved_state"]
     assert cli(*pause).returncode == 75
     Path(f"{out}.partial").write_bytes(b"\x89HDF\r\n\x1a\n" + bytes(200))
     r = cli(*SWEEP.split(), "--quiet", "--output", str(out), "--resume")
@@ -240,3 +276,52 @@ def test_a_closed_pipe_ends_the_table_not_the_run(tmp_path):
     with h5py.File(out) as f:
         assert f.attrs["complete"]
     assert png.stat().st_size > 0
+
+
+def test_bad_inputs_get_one_line_and_leave_nothing(tmp_path):
+    """Each bad input: exit 2, one line on stderr, no traceback, no file left behind."""
+    rng = np.random.default_rng(0)
+    np.save(tmp_path / "huge.npy", rng.standard_normal((32, 32)) * 1e300)
+    np.save(tmp_path / "flat.npy", np.ones((32, 32)))
+    out = str(tmp_path / "out.h5")
+    gen = "--grid 32 --hurst 0.7 --rms-slope 0.1".split()
+    cases = {
+        "--minutes": ["study", "--minutes", "nan", "--data", str(tmp_path / "d")],
+        "minutes must be": ["study", "--minutes=-1", "--data", str(tmp_path / "d")],
+        "--stop-after": ["periodic", *gen, "--pressures", "1e-3", "--stop-after", "nan"],
+        "GiB available": ["periodic", "--grid", "200000", "--hurst", "0.7", "--rms-slope", "1"],
+        "a seed is from 0": ["periodic", *gen, "--seed", str(2**70), "--pressures", "1e-3"],
+        "flat": ["theory", "--heights", str(tmp_path / "flat.npy")],
+        "names no solver": ["compare", *gen, "--pressure", "1e-3", "--solvers", ","],
+        "does not exist (-options_file)": ["periodic", *gen, "-options_file", "/no/such.opts"],
+        "heights up to": ["periodic", "--heights", str(tmp_path / "huge.npy")],
+        "more than 1e+06 E*": ["periodic", *gen, "--pressures", "1e300"],
+        "below what double precision resolves": ["periodic", *gen, "--pressures", "1e-12"],
+        "Input string abc has no numeric value": ["periodic", *gen, "-tao_gatol", "abc"],
+        "give an output file name": ["periodic", *gen, "--output", ""],
+        "unrecognized arguments: --no-such": ["periodic", *gen, "--no-such"],
+    }
+    for words, args in cases.items():
+        if "--output" not in args and args[0] != "study":
+            args = [*args, "--output", out]
+        if args[0] == "periodic" and "--pressures" not in args:
+            args = [*args, "--pressures", "1e-3"]
+        r = cli(*args)
+        lines = r.stderr.strip().splitlines()
+        assert r.returncode == 2, (words, r.stderr)
+        assert len(lines) == 1 and lines[0].startswith("petsc-contact: error:"), (words, lines)
+        assert words in lines[0], (words, lines[0])
+        left = sorted(p.name for p in tmp_path.iterdir())
+        assert left == ["flat.npy", "huge.npy"], (words, left)
+
+
+def test_an_unresolved_force_is_flagged_not_converged(petsc):
+    """A force whose approach is lost in the gap tolerance comes back with force 0: it is
+    flagged, with the reason, never reported converged; a resolved one meets its target."""
+    from petsc_contact import punch_contact
+    from petsc_contact.workflows.scenes import surface
+
+    h, _ = surface(32, 0.7, 1.0, 16.0, 1)
+    tiny, fine = punch_contact(h, 1.0, 1.0, forces=[1e-30, 1e-3])
+    assert not tiny.converged and "below what this grid resolves" in tiny.scalars["verification"]
+    assert fine.converged and abs(fine.scalars["force"] / 1e-3 - 1) < 1e-4

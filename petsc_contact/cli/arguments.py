@@ -8,6 +8,8 @@ import re
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
+import numpy as np
+
 from .._version import __version__
 from ..conventions.validation import log_range
 
@@ -32,6 +34,11 @@ _NUMBER = re.compile(r"^-?(\d|\.\d)")
 def is_petsc_option(token: str) -> bool:
     """``-tao_type`` is a PETSc option; ``--grid``, ``-h`` and numbers such as ``-1`` are not."""
     return token != "-h" and bool(_PETSC_OPTION.match(token)) and not token.startswith("--")
+
+
+def options_files(petsc_args: Sequence[str]) -> list[str]:
+    """The files named by ``-options_file`` among PETSc's options."""
+    return [b for a, b in zip(petsc_args, petsc_args[1:], strict=False) if a == "-options_file"]
 
 
 def split_arguments(argv: Sequence[str]) -> tuple[list[str], list[str]]:
@@ -76,6 +83,31 @@ def _float_list(text: str) -> list[float]:
         ) from None
 
 
+SEED_LIMIT = 2**63  # seeds are stored as 64-bit integers
+
+
+def _seed(text: str) -> int:
+    """A seed: a whole number from 0 to 2^63 - 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'") from None
+    if not 0 <= value < SEED_LIMIT:
+        raise argparse.ArgumentTypeError(f"a seed is from 0 to 2^63 - 1, got {text}")
+    return value
+
+
+def _minutes(text: str) -> float:
+    """A time budget: minutes, zero or more and finite."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected minutes, got '{text}'") from None
+    if not (np.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"minutes must be zero or more and finite, got {text}")
+    return value
+
+
 def _grid_shape(text: str) -> int | tuple[int, int]:
     """``N`` (square) or ``NX,NY`` / ``NXxNY`` (rectangle)."""
     parts = [v for v in re.split(r"[,x]", text) if v.strip()]
@@ -110,6 +142,10 @@ def _seed_list(text: str) -> list[int]:
         raise argparse.ArgumentTypeError(f"expected K1,K2,... or A-B, got '{text}'") from None
     if not seeds or len(set(seeds)) != len(seeds):
         raise argparse.ArgumentTypeError(f"need distinct seeds, got '{text}'")
+    if not all(0 <= k < SEED_LIMIT for k in seeds):
+        raise argparse.ArgumentTypeError(f"a seed is from 0 to 2^63 - 1, got '{text}'")
+    if len(seeds) > 100_000:
+        raise argparse.ArgumentTypeError(f"{len(seeds)} seeds are too many for one ensemble")
     return seeds
 
 
@@ -171,11 +207,17 @@ def _surface_arguments(p: argparse.ArgumentParser) -> None:
         help="system size over short-wavelength cut-off (default: the Nyquist limit, N/2; "
         "on a rectangle L is the longer side)",
     )
-    s.add_argument("--seed", type=int, default=0, metavar="K", help="random seed (default 0)")
+    s.add_argument("--seed", type=_seed, default=0, metavar="K", help="random seed (default 0)")
     s.add_argument(
         "--exact-rms",
         action="store_true",
         help="rescale the realisation to hit the rms target exactly",
+    )
+    s.add_argument(
+        "--skip-memory-check",
+        action="store_true",
+        help="run even when the grid needs more memory than the machine has available "
+        "(estimated from the measured bytes per point; refused otherwise)",
     )
 
 
@@ -294,7 +336,7 @@ def _output_arguments(p: argparse.ArgumentParser, d: dict[str, Any]) -> None:
     )
     p.add_argument(
         "--stop-after",
-        type=float,
+        type=_minutes,
         default=None,
         metavar="MINUTES",
         help="after the step that ends past MINUTES of wall time, stop; --resume continues "
@@ -446,7 +488,7 @@ def _theory_parser(sub: Any) -> None:
 def _study_parser(sub: Any) -> None:
     p = _command(sub, "study")
     p.add_argument("--figure", choices=("1", "2", "3", "all"), default="all", help="default all")
-    p.add_argument("--minutes", type=float, default=45.0, help="time budget (default 45)")
+    p.add_argument("--minutes", type=_minutes, default=45.0, help="time budget (default 45)")
     p.add_argument("--data", default=os.path.join("data", "paper"), help="default data/paper")
     p.add_argument("--shrink", type=int, default=1, help="divide every grid (a quick look)")
     p.add_argument(

@@ -11,7 +11,7 @@ from typing import Any
 
 from ..io.output import schema_markdown
 from ..io.store import StorageError, storage
-from .arguments import build_parser, is_petsc_option, split_arguments
+from .arguments import build_parser, is_petsc_option, options_files, split_arguments
 from .common import (
     EXIT_BAD_INPUT,
     EXIT_INTERRUPTED,
@@ -71,6 +71,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     ours, petsc_args = split_arguments(argv)
     args = build_parser().parse_args(ours)
+    missing = [f for f in options_files(petsc_args) if not os.path.isfile(f)]
+    if missing:  # before PETSc reads it, which would print a dozen lines
+        say(f"options file '{missing[0]}' does not exist (-options_file)")
+        return EXIT_BAD_INPUT
     signal.signal(signal.SIGTERM, _interrupt)
     sys.stdout = QuietPipe(sys.stdout)
     try:
@@ -83,16 +87,28 @@ def main(argv: Sequence[str] | None = None) -> int:
     except StorageError as exc:
         say(exc.strerror or str(exc))
         return EXIT_STORAGE
-    except (InputError, ValueError, OSError) as exc:
-        say(str(exc))
+    except (InputError, ValueError, OSError, MemoryError) as exc:
+        say(str(exc) or type(exc).__name__)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         return EXIT_INTERRUPTED
     except Exception as exc:
         if type(exc).__name__ == "Error" and "petsc4py" in type(exc).__module__:
-            say(f"PETSc error: {exc}")
+            say(f"PETSc error: {petsc_message(exc)}")
             return EXIT_BAD_INPUT
         raise
+
+
+def petsc_message(exc: Exception) -> str:
+    """A PETSc error in one line: its messages and the routine where it arose.
+
+    petsc4py's text is ``error code N`` then PETSc's stack (``[0] Routine() at file:line``)
+    and the messages (``[0] Argument out of range``)."""
+    lines = [line.removeprefix("[0]").strip() for line in str(exc).splitlines()[1:]]
+    stack = [line.split("()")[0] for line in lines if "() at " in line]
+    said = [line for line in lines if line and "() at " not in line]
+    where = f" (in {stack[-1]})" if stack else ""
+    return ": ".join(said) + where if said else str(exc).splitlines()[0]
 
 
 LOCKED = ("ensemble", "experiment", "compare", "theory")  # periodic, punch: their run locks

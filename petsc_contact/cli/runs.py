@@ -222,6 +222,8 @@ def _periodic_plan(args: argparse.Namespace, grid: Any, fft: Any, heights: np.nd
     if args.sweep is not None:
         pressures = swept(args.sweep, 1e-4 * p_full, 0.9 * p_full)
         resolved = {"pressures": pressures, "sweep": None}  # the file records the loads
+    for p0 in pressures:
+        problem.check_pressure(p0)  # before the output is touched
 
     def steps(loads: list[float], start: np.ndarray | None, fields: bool) -> Iterator[Any]:
         return sweep(problem, loads, fields, stiffness=args.stiffness, start=start)

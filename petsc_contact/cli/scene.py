@@ -102,6 +102,7 @@ def measured(args: argparse.Namespace, given: Any) -> tuple[np.ndarray, Any, dic
     full = detrend(full, spacing, args.detrend)
     if scale != 1.0:
         full = np.asarray(full, dtype=float) * scale
+    check_height_scale(full, lengths.pair)
     record = {
         "heights_reader": topo.reader,
         "heights_channel": topo.channel,
@@ -114,6 +115,21 @@ def measured(args: argparse.Namespace, given: Any) -> tuple[np.ndarray, Any, dic
         print(f"# {args.heights}: {topo.describe()}", flush=True)
     _warn(args, full, spacing)
     return full, lengths, record
+
+
+SLOPE_LIMIT = 1e6  # heights this many times the cell's side are no contact surface
+
+
+def check_height_scale(heights: np.ndarray, length: Any) -> None:
+    """``InputError`` for heights so large against the sides that no contact computation
+    means anything (and its squares overflow): a unit mistaken by many orders."""
+    top = float(np.max(np.abs(heights)))
+    side = max(np.atleast_1d(np.asarray(length, dtype=float)))
+    if not top <= SLOPE_LIMIT * side:
+        raise InputError(
+            f"heights up to {top:.3g} on sides of {side:.3g}: more than {SLOPE_LIMIT:g} times "
+            "the cell, no elastic contact; are the units right (--height-unit, --length)?"
+        )
 
 
 def grid_comm_rank() -> int:
@@ -163,7 +179,10 @@ def _scene(
     if full is None:
         cutoff = args.cutoff_ratio if args.cutoff_ratio is not None else nyquist_ratio(grid)
         resolved["cutoff_ratio"] = cutoff
-        return grid, fft, _generate(args, grid, fft, cutoff), resolved
+        heights = _generate(args, grid, fft, cutoff)
+        top = grid.max(float(np.max(np.abs(heights))))
+        check_height_scale(np.array([top]), grid.lengths)
+        return grid, fft, heights, resolved
     heights = grid.scatter(full)
     check_finite(grid, heights)
     return grid, fft, heights, resolved
@@ -212,6 +231,13 @@ def prepare_scene(
     check_writable(args.output)
     if getattr(args, "plot", None):
         check_writable(args.plot)
+    shape = full.shape if full is not None else _shape(args.grid)
+    if not args.skip_memory_check:
+        from ..conventions.resources import check_memory
+
+        tao_type = dict(zip(petsc_args, petsc_args[1:], strict=False)).get("-tao_type", "python")
+        default = tao_type == "python" and args.command != "compare"
+        check_memory(shape[0] * shape[1], args.command, default, getattr(args, "fields", False))
     petsc = _petsc.init(petsc_args)
     if check_type:
         check_tao_type(petsc)

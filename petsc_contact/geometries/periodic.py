@@ -37,6 +37,8 @@ from ..physics.theory import linear_stiffness
 from .step import Step, contact_fields, residual_verdict
 
 ROUNDING_FACTOR = 1000.0  # see PeriodicProblem.rounding_floor
+RESOLVED = 1e-4  # a load is solved only where rounding leaves its residual this far below p0
+LARGEST_LOAD = 1e6  # p0/E* beyond this is no elastic contact (strains of a million)
 SCHUR_MAX = 4096  # the most bound variables for the Schur form (dense matrix: 134 MB)
 
 
@@ -348,6 +350,26 @@ class PeriodicProblem:
     def full_contact_pressure(self) -> float:
         """Nominal pressure at which contact becomes complete, ``-min(K h)``."""
         return -self._min_kh
+
+    def check_pressure(self, p0: float) -> None:
+        """``ValueError`` in one line for a nominal pressure this grid cannot resolve: so
+        small that rounding alone exceeds :data:`RESOLVED` of it (:meth:`rounding_floor`), or
+        above :data:`LARGEST_LOAD` ``E*``."""
+        positive("nominal pressure", p0)
+        smallest = ROUNDING_FACTOR * np.finfo(float).eps * self.elastic_pressure_rms / RESOLVED
+        if p0 < smallest:
+            rms = self.elastic_pressure_rms
+            raise ValueError(
+                f"nominal pressure {p0:.3g} is below what double precision resolves on this "
+                f"surface, {smallest:.2g}: its elastic stresses (rms {rms:.3g}) are rounded at "
+                f"{self.rounding_floor(p0):.1e} of it"
+            )
+        if p0 > LARGEST_LOAD * self.modulus:
+            raise ValueError(
+                f"nominal pressure {p0:.3g} is more than {LARGEST_LOAD:g} E* (E* = "
+                f"{self.modulus:g}): no elastic contact; full contact is reached at "
+                f"{self.full_contact_pressure():.3g}"
+            )
 
     def stiffness_rounding_floor(self, p0: float) -> float:
         """The rms pressure residual (units of ``p0``) below which a tight solve stagnates.

@@ -130,9 +130,10 @@ def atomic_h5(path: str) -> Iterator[Any]:
 
 
 def check_writable(path: str) -> None:
-    """Raise :class:`StorageError` with a one-line reason unless ``path`` can be created."""
+    """Raise :class:`StorageError` with a one-line reason unless ``path`` can be created
+    (``ValueError`` for an empty name)."""
     if not path:
-        raise StorageError(errno.ENOENT, "give an output file name (--output is empty)")
+        raise ValueError("give an output file name (--output is empty)")
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise StorageError(errno.ENOENT, f"output folder '{folder}' does not exist")
@@ -338,9 +339,13 @@ class StepStore:
         def begin() -> None:
             _clear(path, keep_steps=False)
             os.makedirs(store.parts)
-            if full is not None:
-                store._write_part("heights.h5", {"heights": full}, chunked=False)
-            store._commit()
+            try:
+                if full is not None:
+                    store._write_part("heights.h5", {"heights": full}, chunked=False)
+                store._commit()
+            except BaseException:
+                _clear(path, keep_steps=False)  # nothing was finished: nothing is left
+                raise
 
         store._on_root(begin)
         return store

@@ -75,6 +75,9 @@ def spectrum_sums(grid: Grid, fft: FFT, shape: np.ndarray) -> tuple[float, float
     return s0 * dq2, s2 * dq2
 
 
+LARGEST_TARGET = 1e100
+
+
 def self_affine(
     grid: Grid,
     fft: FFT,
@@ -117,6 +120,8 @@ def self_affine(
         target, slope = non_negative("rms target", rms_slope), True
     else:
         raise ValueError("give exactly one of rms_height and rms_slope")
+    if target > LARGEST_TARGET:  # its square, the spectrum's scale, would overflow
+        raise ValueError(f"rms target {target:g} is too large (at most {LARGEST_TARGET:g})")
     q0 = grid.q0
     shape = psd_shape(
         wavevector_magnitude(grid, fft), q0, q0 * rolloff_ratio, q0 * cutoff_ratio, hurst

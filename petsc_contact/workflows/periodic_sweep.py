@@ -77,11 +77,14 @@ def sweep(
         Scalars (observables, TAO report, ``converged``, ``verification``) and, with
         ``fields``, the local ``gap`` and ``pressure`` slabs.
     """
+    loads = check_pressures(pressures)
+    for p0 in loads:
+        problem.check_pressure(p0)
     ell = problem.scale_length
     x = (problem.initial_gap() if start is None else start).reshape(-1) / ell
     path = LoadPath()
     with BoundSolver(problem.grid, problem.hessian, problem.preconditioner) as solver:
-        for p0 in check_pressures(pressures):
+        for p0 in loads:
             problem.set_pressure(p0, path.stiffness_estimate(p0))
             problem.start(path.start(p0, x))
             step, x_new = solve_step(

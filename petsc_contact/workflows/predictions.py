@@ -76,6 +76,8 @@ def predict(
 ) -> Prediction:
     """Persson's theory and the finite-size estimates from the spectrum of ``heights``."""
     q, c = radial_psd(grid, fft, heights)
+    if not c.max() > 0:
+        raise ValueError("the map is flat (h_rms = 0): it has no spectrum to predict from")
     keep = c > ROUNDING * c.max()  # beyond a cut-off the spectrum is FFT rounding
     q, c = q[keep], c[keep]
     if q[0] > grid.q0:  # the first bin's mean |q| lies above q0: hold C down to q0

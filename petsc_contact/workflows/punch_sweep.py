@@ -23,6 +23,7 @@ from ..io.output import check_finite
 from ..io.topography import SurfaceTopographyMap, map_and_lengths
 
 FORCE_RTOL = 1e-6
+FORCE_RESOLVED = 1e-4  # a force further than this from its target is not reported converged
 MAX_NEWTON = 60
 
 
@@ -97,6 +98,8 @@ class PunchSolver:
         iteration: the solve cannot tell the two approaches apart, and the force (stored next
         to ``target_force``) is as close to the target as the solve resolves, on contacts of
         a few pixels about ``1e-5`` (the gradient tolerance is an rms over the footprint).
+        A force further than :data:`FORCE_RESOLVED` from its target (a load so small that
+        its approach is lost in the tolerance, force 0) is not converged, and says why.
         """
         positive("force", force)
         lo, hi = 0.0, np.inf
@@ -129,6 +132,12 @@ class PunchSolver:
         else:
             s["converged"] = False
             s["verification"] = f"force not reached in {MAX_NEWTON} Newton steps"
+        if s["converged"] and abs(s["force"] - force) > FORCE_RESOLVED * force:
+            s["converged"] = False
+            s["verification"] = (
+                f"force {s['force']:.3g} reached, not {force:.3g}: below what this grid "
+                "resolves (the approach is lost in the tolerance on the gap)"
+            )
         s.update(
             target_force=force,
             newton_iterations=newton,

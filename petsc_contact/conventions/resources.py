@@ -1,0 +1,50 @@
+"""What a run will need of the machine, checked before it allocates: memory per grid point.
+
+The figures are the peaks ``benchmarks/memory.py`` measures (docs/performance.md, "Memory"),
+rounded up: a periodic sweep with the default solver and the exact stiffness, 227 B per point
+at 2048^2; TAO's quasi-Newton and Newton types about 430; the punch 392-437 per footprint
+point (its padded FFT has four times the points).  Fields kept for the output (``--fields``,
+gathered on rank 0) add three 8-byte fields.
+"""
+
+from __future__ import annotations
+
+import os
+
+BYTES_PER_POINT = {"periodic": 240.0, "punch": 450.0}
+"""Peak bytes per grid point (footprint point for the punch) of the default solver."""
+OTHER_TAO_FACTOR = 2.0  # TAO's own types keep about twice the default's fields
+FIELD_BYTES = 24.0  # gap, pressure and contact of one step on rank 0, with the state
+
+
+def estimated_bytes(
+    points: int, geometry: str, default_solver: bool = True, fields: bool = False
+) -> float:
+    """The peak memory of a run on ``points`` grid points, all ranks together."""
+    per_point = BYTES_PER_POINT["punch" if geometry == "punch" else "periodic"]
+    if not default_solver:
+        per_point *= OTHER_TAO_FACTOR
+    return points * (per_point + (FIELD_BYTES if fields else 0.0))
+
+
+def available_bytes() -> float:
+    """The memory this machine can give now (``MemAvailable``), else all of it."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+
+
+def check_memory(points: int, geometry: str, default_solver: bool, fields: bool) -> None:
+    """``MemoryError`` with one line when the run would need more memory than is available."""
+    need, have = estimated_bytes(points, geometry, default_solver, fields), available_bytes()
+    if need > have:
+        raise MemoryError(
+            f"this run needs about {need / 2**30:.3g} GiB ({points:,} grid points), more than "
+            f"the {have / 2**30:.3g} GiB available: choose a smaller grid, or "
+            "--skip-memory-check to try anyway"
+        )

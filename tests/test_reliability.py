@@ -19,11 +19,10 @@ import h5py
 import numpy as np
 import pytest
 from conftest import ROOT, cli, python
+from kill_at import POINTS, RTOL, same_result
 
 SWEEP = "periodic --grid 64 --hurst 0.7 --rms-slope 0.1 --seed 3 --sweep 4,1e-4,1e-2 --stiffness"
 PUNCH = "punch --grid 48 --hurst 0.7 --rms-slope 0.1 --seed 3 --forces 1e-4,1e-3,3e-3"
-RTOL = 1e-6  # the steps after a cut start elsewhere; the solver's tolerance is 1e-8 p0 rms
-SCALARS = ("mean_gap", "area_fraction", "stiffness", "force", "approach", "nominal_pressure")
 
 
 def _whole(tmp_path: Path, command: str, *extra: str) -> Path:
@@ -44,40 +43,6 @@ def _leftovers(out: Path) -> list[str]:
     return sorted(p.name for p in out.parent.glob(out.name + ".*"))
 
 
-def _same_result(a: Path, b: Path, fields: bool) -> None:
-    with h5py.File(a) as fa, h5py.File(b) as fb:
-        assert fb.attrs["complete"] and fb["converged"].shape == fa["converged"].shape
-        assert np.all(fb["converged"][:])
-        for name in SCALARS:
-            if name in fa:
-                assert np.allclose(fb[name][:], fa[name][:], rtol=RTOL, atol=0), name
-        if fields:
-            for name in ("gap", "pressure"):
-                scale = np.abs(fa[name][...]).max()
-                assert np.allclose(fb[name][...], fa[name][...], rtol=0, atol=RTOL * scale), name
-            assert np.mean(fb["contact"][...] != fa["contact"][...]) < 1e-3
-            h = fa["heights"][...]  # generated on other FFT layouts: equal to rounding
-            assert np.allclose(fb["heights"][...], h, rtol=0, atol=1e-12 * np.abs(h).max())
-
-
-POINTS = [
-    "before:heights:1",
-    "during:heights:1",
-    "before:step:2",
-    "during:step:2",
-    "after:step:2",
-    "before:commit:3",
-    "during:commit:3",
-    "after:commit:3",
-    "before:state:2",
-    "during:state:2",
-    "after:state:2",
-    "before:final:1",
-    "during:final:1",
-    "after:final:1",
-]
-
-
 def test_sigkill_at_every_point_of_the_write_path(tmp_path):
     """A sweep with fields killed at each point of its write path: --resume ends it with
     every step, equal to the uninterrupted run (a kill after the final rename leaves the
@@ -89,7 +54,7 @@ def test_sigkill_at_every_point_of_the_write_path(tmp_path):
         assert r.returncode == -signal.SIGKILL, (point, r.stderr)
         r = cli(*SWEEP.split(), "--fields", "--quiet", "--output", str(out), "--resume")
         assert r.returncode == 0, (point, r.stderr)
-        _same_result(whole, out, fields=True)
+        same_result(whole, out, fields=True)
         assert _leftovers(out) == [], (point, _leftovers(out))
 
 
@@ -110,7 +75,7 @@ def test_sigkill_at_random_times(tmp_path):
             resume = "--resume" if out.with_name(out.name + ".partial").exists() else "--quiet"
             r = cli(*command.split(), *extra, "--quiet", "--output", str(out), resume)
             assert r.returncode == 0, r.stderr
-            _same_result(whole, out, fields)
+            same_result(whole, out, fields)
         os.remove(whole)
 
 
@@ -166,7 +131,7 @@ def test_ensemble_and_study_come_back_whole(tmp_path):
     ]
     fresh = tmp_path / "fresh"
     assert cli(*study.replace(str(data), str(fresh)).split(), "--quiet").returncode == 0
-    _same_result(fresh / "fig1" / "punch.h5", data / "fig1" / "punch.h5", fields=False)
+    same_result(fresh / "fig1" / "punch.h5", data / "fig1" / "punch.h5", fields=False)
 
 
 def test_a_second_writer_is_refused_before_it_touches_anything(tmp_path):
@@ -203,7 +168,7 @@ def test_a_damaged_state_file_costs_a_cold_start_not_the_run(tmp_path):
     r = cli(*SWEEP.split(), "--quiet", "--output", str(out), "--resume", "-tao_max_it", "5000")
     assert r.returncode == 0, r.stderr
     assert "state.npz is damaged" in r.stderr and "step 2 starts from first touch" in r.stderr
-    _same_result(whole, out, fields=False)
+    same_result(whole, out, fields=False)
     with h5py.File(out) as f:  # the resumed segment's own record
         (resumed,) = json.loads(f.attrs["resumed"])
         assert "--resume" in resumed["command_line"]
@@ -246,7 +211,7 @@ def test_a_full_disk_is_an_error_and_resume_completes(tmp_path, small_disk):
     subprocess.run(["mount", "-o", "remount,size=64m", str(small_disk)], check=True)
     r = cli(*command.split(), "--fields", "--quiet", "--output", str(out), "--resume")
     assert r.returncode == 0, r.stderr
-    _same_result(whole, out, fields=True)
+    same_result(whole, out, fields=True)
 
 
 def test_fields_on_several_ranks_equal_the_serial_run(tmp_path):
@@ -256,7 +221,7 @@ def test_fields_on_several_ranks_equal_the_serial_run(tmp_path):
         out = tmp_path / f"mpi{ranks}.h5"
         r = cli(*SWEEP.split(), "--fields", "--quiet", "--output", str(out), mpi=ranks)
         assert r.returncode == 0, r.stderr
-        _same_result(whole, out, fields=True)
+        same_result(whole, out, fields=True)
 
 
 def test_a_closed_pipe_ends_the_table_not_the_run(tmp_path):

@@ -250,12 +250,15 @@ def schema_markdown() -> str:
         "",
         "Every file of `periodic`, `demo`, `punch` and `compare` also records, as root",
         "attributes, what reproduces it: " + ", ".join(f"`{a}`" for a in RUN_ATTRIBUTES) + ".",
-        "A run writes `OUT.h5.partial` and renames it to `OUT.h5` when it ends; until then the",
-        "state a `--resume` starts from is kept beside it in `OUT.h5.state.npz` (array `state`,",
-        "the gap or pressure field, and `after_step`), never in the results file. A resumed",
-        "file adds `resumed`: a JSON list with, for each resume, `after_step`, `time`, the",
-        "`petsc_contact_commit` that computed the steps from there on and `from_saved_state`",
-        "(false when the state file was lost and the next step started from first touch: the",
+        "While a run is under way its finished steps are committed to `OUT.h5.partial` (the",
+        "run record and every finished step's scalars, replaced whole after each step), its",
+        "heights and fields to `OUT.h5.parts/`, and the state a `--resume` starts from to",
+        "`OUT.h5.state.npz` (array `state`, the gap or pressure field, and `after_step`);",
+        "`OUT.h5` is assembled from them when the run ends ([reliability.md](reliability.md)).",
+        "A resumed file adds `resumed`: a JSON list with, for each resume, `after_step`, `time`,",
+        "its `command_line` and `petsc_options`, the `petsc_contact_commit` that computed the",
+        "steps from there on and `from_saved_state` (false when the state file was missing or",
+        "damaged and the next step started from first touch: the",
         "same result to the solver's tolerance, at a different cost).",
         "",
     ]
@@ -281,7 +284,9 @@ def schema_markdown() -> str:
     )
     table(
         "compare",
-        "One group per solver, one entry per TAO iteration. Group attributes: `reason`, "
+        "One group per solver, one entry per TAO iteration; root attribute `solvers` lists "
+        "them in order, each committed to `OUT.h5.partial` as it finishes (`compare "
+        "--resume` keeps them). Group attributes: `reason`, "
         "`converged`, `iterations`, `solve_time`, `verification`, `petsc_options` and, for an "
         "options file, `options_file_text`. Root attributes add `reference_mean_gap`, "
         "`reference_natural_residual`, `reference_tolerance`, `reference_iterations`.",

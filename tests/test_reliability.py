@@ -129,6 +129,15 @@ def test_ensemble_and_study_come_back_whole(tmp_path):
         "periodic_r8.h5",
         "punch.h5",
     ]
+    late = tmp_path / "late"  # killed after its first piece was renamed into place
+    killed = _killed("after:final:1", study.replace(str(data), str(late)), None)
+    assert killed.returncode == -signal.SIGKILL
+    assert cli(*study.replace(str(data), str(late)).split(), "--quiet").returncode == 0
+    assert sorted(f.name for f in (late / "fig1").iterdir()) == [
+        "periodic_r1.h5",
+        "periodic_r8.h5",
+        "punch.h5",
+    ]
     fresh = tmp_path / "fresh"
     assert cli(*study.replace(str(data), str(fresh)).split(), "--quiet").returncode == 0
     same_result(fresh / "fig1" / "punch.h5", data / "fig1" / "punch.h5", fields=False)

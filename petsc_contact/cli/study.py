@@ -13,6 +13,7 @@ import os
 import time
 from collections.abc import Sequence
 
+from ..io.store import tidy
 from ..workflows.paper_study import Piece, complete, finished_steps, pieces
 from .common import EXIT_INTERRUPTED, EXIT_PAUSED
 
@@ -36,6 +37,7 @@ def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
     for number, piece in enumerate(todo, 1):
         path = piece.path(args.data)
         if complete(path):
+            tidy(path)  # what a writer killed after its last rename left
             continue
         left = args.minutes - (time.perf_counter() - began) / 60
         if left <= 0:

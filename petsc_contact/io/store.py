@@ -533,6 +533,28 @@ def _missing(value: Any) -> Any:
     return False if dtype is bool else ""
 
 
+def tidy(path: str) -> None:
+    """Remove the run files a finished ``path`` left behind when its writer was killed between
+    renaming ``path`` into place and removing them: only when they are that very run's (the
+    same ``created`` stamp and steps), and only when no other run holds the output."""
+    import h5py
+
+    partial = partial_path(path)
+    if not (os.path.exists(partial) and os.path.exists(path)):
+        return
+    try:
+        with h5py.File(path, "r") as done, h5py.File(partial, "r") as left:
+            same = (
+                done.attrs.get("created") == left.attrs.get("created")
+                and done["converged"].shape == left["converged"].shape
+            )
+    except (OSError, KeyError):
+        return
+    if same:
+        with suppress(OutputBusy), OutputLock(path):
+            _clear(path, keep_steps=False)
+
+
 def _clear(path: str, keep_steps: bool) -> None:
     """Remove what runs on output ``path`` left: temporary files of killed writers always,
     the committed steps (``.partial``, parts, state) unless ``keep_steps``.  Only the holder

@@ -19,13 +19,25 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
+from typing import Any
+
 from . import _moved
 from ._version import __version__
-from .conventions.grid import Grid
-from .workflows.periodic_sweep import periodic_contact
-from .workflows.punch_sweep import punch_contact
 
 _moved.install()  # the module paths from before the layer folders
-__getattr__ = _moved.old_attribute
+
+PUBLIC = {  # loaded when first used: importing the package loads no numba, scipy or PETSc
+    "Grid": "conventions.grid",
+    "periodic_contact": "workflows.periodic_sweep",
+    "punch_contact": "workflows.punch_sweep",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in PUBLIC:
+        import importlib
+
+        return getattr(importlib.import_module(f".{PUBLIC[name]}", __name__), name)
+    return _moved.old_attribute(name)
 
 __all__ = ["Grid", "periodic_contact", "punch_contact", "__version__"]

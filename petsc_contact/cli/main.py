@@ -21,12 +21,6 @@ from .common import (
     output_lock,
     say,
 )
-from .comparison import run_compare
-from .ensemble import run_ensemble
-from .runs import run
-from .study import run_study, study_plan
-from .theory import run_theory
-from .tools import run_experiment, run_plot
 
 
 def _interrupt(signum: int, frame: Any) -> None:
@@ -115,6 +109,14 @@ LOCKED = ("ensemble", "experiment", "compare", "theory")  # periodic, punch: the
 
 
 def _dispatch(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
+    """Run the command (each module imported when used, so that ``--help`` starts fast)."""
+    from .comparison import run_compare
+    from .ensemble import run_ensemble
+    from .runs import run
+    from .study import run_study, study_plan
+    from .theory import run_theory
+    from .tools import run_experiment, run_plot
+
     if args.command == "schema":
         sys.stdout.write(schema_markdown())
         return 0

@@ -10,10 +10,12 @@ the same on every rank.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, SupportsFloat
+from typing import TYPE_CHECKING, Any, SupportsFloat
 
 import numpy as np
-from mpi4py import MPI
+
+if TYPE_CHECKING:  # mpi4py is loaded when a grid is made, not when this module is imported
+    from mpi4py import MPI
 
 from .validation import per_axis, positive
 
@@ -71,7 +73,11 @@ class Grid:
         positive("length", ly)
         object.__setattr__(self, "shape", (nx, ny))
         object.__setattr__(self, "lengths", (lx, ly))
-        object.__setattr__(self, "comm", comm if comm is not None else MPI.COMM_WORLD)
+        if comm is None:
+            from mpi4py import MPI
+
+            comm = MPI.COMM_WORLD
+        object.__setattr__(self, "comm", comm)
 
     @property
     def square(self) -> bool:
@@ -161,14 +167,24 @@ class Grid:
         if self.comm.size == 1:
             return local
         total = np.empty_like(local)
+        from mpi4py import MPI
+
         self.comm.Allreduce(local, total, op=MPI.SUM)
         return total
 
     def min(self, value: float) -> float:
-        return value if self.comm.size == 1 else self.comm.allreduce(value, op=MPI.MIN)
+        if self.comm.size == 1:
+            return value
+        from mpi4py import MPI
+
+        return self.comm.allreduce(value, op=MPI.MIN)
 
     def max(self, value: float) -> float:
-        return value if self.comm.size == 1 else self.comm.allreduce(value, op=MPI.MAX)
+        if self.comm.size == 1:
+            return value
+        from mpi4py import MPI
+
+        return self.comm.allreduce(value, op=MPI.MAX)
 
     def mean(self, local: np.ndarray) -> float:
         """Mean of a distributed field."""

@@ -10,11 +10,12 @@ import json
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..conventions.grid import Grid
+if TYPE_CHECKING:
+    from ..conventions.grid import Grid
 
 
 def load_table(path: str, columns: int) -> np.ndarray:

@@ -40,11 +40,12 @@ import time
 from collections.abc import Iterator
 from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..conventions.grid import Grid
+if TYPE_CHECKING:
+    from ..conventions.grid import Grid
 from .output import GEOMETRIES, MISSING, Entry, describe, h5_dtype, in_unit, write_attributes
 from .provenance import source_commit
 

@@ -40,4 +40,5 @@ def __getattr__(name: str) -> Any:
         return getattr(importlib.import_module(f".{PUBLIC[name]}", __name__), name)
     return _moved.old_attribute(name)
 
+
 __all__ = ["Grid", "periodic_contact", "punch_contact", "__version__"]

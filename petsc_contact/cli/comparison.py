@@ -6,8 +6,7 @@ import argparse
 from collections.abc import Sequence
 from typing import Any
 
-from .common import EXIT_NOT_CONVERGED, InputError, run_record
-from .scene import prepare_scene
+from .common import EXIT_NOT_CONVERGED, InputError, record_for, scene_for
 
 
 def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
@@ -31,7 +30,8 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
     solvers = args.solvers or list(DEFAULT_SOLVERS)
     for name in solvers:
         solver_options(name)  # unknown options files fail here, before any work
-    petsc, grid, fft, heights, resolved = prepare_scene(args, petsc_args, check_type=False)
+    petsc, run, scene = scene_for(args, petsc_args)
+    grid, fft, heights = scene.grid, scene.fft, scene.heights
     problem = PeriodicProblem(grid, fft, heights, args.modulus)
     show = grid.comm.rank == 0 and not args.quiet
     if show:
@@ -42,7 +42,7 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
         )
 
     realised = {"rms_height": rms_of(grid, fft, heights), "pressure": args.pressure}  # collective
-    attrs = run_record(args, argv, petsc, realised, resolved)
+    attrs = record_for(run, argv, petsc, realised, scene)
     done = read_partial(args.output, attrs["parameters"]) if args.resume else []
     finished: list[Any] = list(done)
     root = grid.comm.rank == 0

@@ -6,6 +6,7 @@ import argparse
 import os
 import signal
 import sys
+import warnings
 from collections.abc import Sequence
 from typing import Any
 
@@ -18,13 +19,20 @@ from .common import (
     EXIT_STORAGE,
     EXIT_UNAVAILABLE,
     InputError,
-    output_lock,
     say,
 )
 
 
 def _interrupt(signum: int, frame: Any) -> None:
     raise KeyboardInterrupt
+
+
+def _show_warning(message: Warning | str, category: type[Warning], *args: Any, **kw: Any) -> None:
+    """The package's warnings (a doubtful map, unused PETSc options) as one line each."""
+    if category.__module__.startswith("petsc_contact") or category is UserWarning:
+        say(str(message), "warning")
+    else:
+        print(warnings.formatwarning(message, category, *args[:2]), end="", file=sys.stderr)
 
 
 class QuietPipe:
@@ -71,6 +79,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     signal.signal(signal.SIGTERM, _interrupt)
     sys.stdout = QuietPipe(sys.stdout)
+    warnings.showwarning = _show_warning
     try:
         status = _dispatch(args, argv, petsc_args)
         _report_unused(petsc_args)
@@ -110,6 +119,7 @@ LOCKED = ("ensemble", "experiment", "compare", "theory")  # periodic, punch: the
 
 def _dispatch(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
     """Run the command (each module imported when used, so that ``--help`` starts fast)."""
+    from ..workflows.runner import locked
     from .comparison import run_compare
     from .ensemble import run_ensemble
     from .runs import run
@@ -128,11 +138,11 @@ def _dispatch(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[st
     if args.command == "study":
         with storage(args.data):
             os.makedirs(args.data, exist_ok=True)
-        with output_lock(os.path.join(args.data, ".study")):  # one study per folder
+        with locked(os.path.join(args.data, ".study")):  # one study per folder
             return run_study(args, petsc_args)
     if args.command not in LOCKED:
         return run(args, argv, petsc_args)
-    with output_lock(args.output):
+    with locked(args.output):
         if args.command == "ensemble":
             return run_ensemble(args, argv, petsc_args)
         if args.command == "experiment":

@@ -29,9 +29,10 @@ def chosen(args: argparse.Namespace) -> list[Piece]:
 
 def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
     """Run the pieces of the chosen figures in order within ``--minutes``."""
-    from .arguments import build_parser
-    from .runs import run
+    from ..backend import _petsc
+    from .runs import execute
 
+    _petsc.init(petsc_args)
     todo = chosen(args)
     began = time.perf_counter()
     for number, piece in enumerate(todo, 1):
@@ -43,10 +44,10 @@ def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
         if left <= 0:
             return _paused(todo, number - 1)
         os.makedirs(os.path.dirname(path), exist_ok=True)
-        argv = [*piece.argv, "--stiffness", "--scalars-only", "--output", path, "--resume"]
-        argv += ["--stop-after", f"{left:.3f}"] + (["--quiet"] if args.quiet else [])
+        run = piece.to_run(args.data, round(left, 3))
         print(f"# study {number}/{len(todo)}: {path}", flush=True)
-        code = run(build_parser().parse_args(argv), ["study", *argv], petsc_args)
+        shown = argparse.Namespace(command=run.geometry, quiet=args.quiet, plot=None)
+        code = execute(run, shown, ["study", *run.arguments()])
         if code in (EXIT_PAUSED, EXIT_INTERRUPTED):
             return code
     print(f"# study: all {len(todo)} pieces complete in {args.data}")
@@ -69,5 +70,5 @@ def study_plan(args: argparse.Namespace) -> str:
         else:
             kept = finished_steps(path)
             state = "todo" if kept is None else f"{kept}/{piece.steps}"
-        lines.append(f"{state:>5}  {path}  petsc-contact {' '.join(piece.argv)}")
+        lines.append(f"{state:>5}  {path}  petsc-contact {' '.join(piece.run.arguments())}")
     return "\n".join(lines)

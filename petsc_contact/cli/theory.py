@@ -10,21 +10,24 @@ import numpy as np
 from ..io.output import THEORY, annotate, write_attributes
 from ..io.store import atomic_h5
 from ..workflows.predictions import Prediction, predict
-from .common import run_record, swept
-from .scene import prepare_scene
+from ..workflows.runner import swept
+from .common import record_for, scene_for
 
 LOAD_RANGE = (1e-7, 1e-1)  # default pressures, in units of E*
 
 
 def run_theory(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
     """Predict, write ``OUT.h5`` (and the plot) and print the table (rank 0)."""
-    petsc, grid, fft, heights, resolved = prepare_scene(args, petsc_args, check_type=False)
+    petsc, run, scene = scene_for(args, petsc_args)
     low, high = (v * args.modulus for v in LOAD_RANGE)
     pressures = np.array(swept(args.sweep, low, high))
-    result = predict(grid, fft, heights, args.modulus, pressures)
-    if grid.comm.rank != 0:
+    result = predict(scene.grid, scene.fft, scene.heights, args.modulus, pressures)
+    if scene.grid.comm.rank != 0:
         return 0
-    attributes = run_record(args, argv, petsc, {}, resolved)
+    if not args.quiet and scene.reading:
+        print(f"# {scene.reading}", flush=True)
+    resolved = scene.resolved
+    attributes = record_for(run, argv, petsc, {}, scene)
     attributes.update(geometry="theory", **result.scalars())
     with atomic_h5(args.output) as f:
         for name in THEORY:

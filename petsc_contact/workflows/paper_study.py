@@ -1,8 +1,8 @@
 """The paper's study as a list of runs: which surfaces, loads and grids each figure needs.
 
-Each :class:`Piece` is one ``periodic`` or ``punch`` command line and the file it writes,
-``DATA/figN/NAME.h5``; ``petsc-contact study`` runs them in resumable pieces and the figure
-scripts read them back (:func:`piece_files`).
+Each :class:`Piece` is one periodic or punch :class:`~petsc_contact.workflows.description.Run`
+and the file it writes, ``DATA/figN/NAME.h5``; ``petsc-contact study`` runs them in resumable
+pieces and the figure scripts read them back (:func:`piece_files`).
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ import numpy as np
 from ..conventions.validation import log_range
 from ..io.store import partial_path
 from ..physics.surface import psd_shape
+from .description import Run
 
 PAPER_GRID = 8192
 RMS_SLOPE = 0.1
@@ -25,41 +26,55 @@ SEEDS = (1, 2, 3, 4)
 FIG3_RATIOS = (512, 768, 2048, 4096)  # lambda_r/lambda_1, L = lambda_r
 # Figs. 2 and 3: four loads per decade from below the smallest resolved contact, so that at
 # least four resolved points lie below the crossover p_c (about 2e-6 E* on 1024^2)
-FINITE_SIZE_SWEEP = "25,1e-8,1e-2"
+FINITE_SIZE_SWEEP = (25, 1e-8, 1e-2)
+FIG1_SWEEP = (16, 1e-7, 3e-1)
 
 
 @dataclass(frozen=True)
 class Piece:
-    """One run of the study: its figure, its file name and its command line."""
+    """One run of the study: its figure, its file name and its description."""
 
     figure: str  # "fig1", "fig2" or "fig3": where the file is kept
     name: str
-    argv: tuple[str, ...]
+    run: Run
     used_by: tuple[str, ...] = ()  # further figures drawn from the same file
 
     @property
     def grid(self) -> int:
         """The run's grid size, the measure of its cost."""
-        return int(self.argv[self.argv.index("--grid") + 1])
+        return int(self.run.grid)  # type: ignore[arg-type]
 
     @property
     def steps(self) -> int:
-        """The run's load steps: its ``--sweep`` count or its list of loads."""
-        options = dict(zip(self.argv[1::2], self.argv[2::2], strict=False))
-        if "--sweep" in options:
-            return int(options["--sweep"].split(",")[0])
-        loads = options.get("--approaches") or options.get("--pressures") or ""
-        return len(loads.split(","))
+        """The run's load steps: its sweep count or its list of loads."""
+        if self.run.sweep is not None:
+            return int(self.run.sweep[0])
+        return len(self.run.approaches or self.run.pressures or ())
 
     def path(self, data: str) -> str:
         return os.path.join(data, self.figure, f"{self.name}.h5")
 
+    def to_run(self, data: str, minutes: float | None = None) -> Run:
+        """The run that computes (or goes on with) this piece into ``data``: the exact
+        stiffness, scalars only, resumed, paused after ``minutes``."""
+        return self.run.with_(
+            stiffness=True,
+            scalars_only=True,
+            output=self.path(data),
+            resume=True,
+            stop_after=minutes,
+        )
 
-def _surface(grid: int, hurst: float, rolloff: float, cutoff: float, seed: int) -> list[str]:
-    return [
-        *f"--grid {grid} --hurst {hurst} --rms-slope {RMS_SLOPE}".split(),
-        *f"--rolloff-ratio {rolloff:g} --cutoff-ratio {cutoff:g} --seed {seed}".split(),
-    ]
+
+def _surface(grid: int, hurst: float, rolloff: float, cutoff: float, seed: int) -> dict[str, Any]:
+    return {
+        "grid": grid,
+        "hurst": hurst,
+        "rms_slope": RMS_SLOPE,
+        "rolloff_ratio": float(rolloff),
+        "cutoff_ratio": float(cutoff),
+        "seed": seed,
+    }
 
 
 def rms_height_per_slope(hurst: float, rolloff_ratio: float, cutoff_ratio: float) -> float:
@@ -74,29 +89,19 @@ def rms_height_per_slope(hurst: float, rolloff_ratio: float, cutoff_ratio: float
 def pieces(shrink: int = 1) -> list[Piece]:
     """The study at the paper's parameters (grids divided by ``shrink`` for a quick look)."""
     n = PAPER_GRID // shrink
-    sweep = ["--sweep", "16,1e-7,3e-1"]
     out = [
-        Piece("fig1", f"periodic_r{r}", ("periodic", *_surface(n, 0.7, r, n / 2, 1), *sweep))
+        Piece("fig1", f"periodic_r{r}", Run(**_surface(n, 0.7, r, n / 2, 1), sweep=FIG1_SWEEP))
         for r in (1, 8)
     ]
     punch_n = n // 4  # L_p/lambda_1 = 1024 at the paper's size: roughness down to two pixels
     # displacement control (one solve a step; load control costs several Newton solves),
     # from 0.01 to 10 rms heights beyond first touch: to well over 10% contact area
     h_rms = RMS_SLOPE * rms_height_per_slope(0.7, 1, punch_n / 2)
-    approaches = ",".join(f"{d:.4g}" for d in np.geomspace(1e-2, 10.0, 16) * h_rms)
-    out.append(
-        Piece(
-            "fig1",
-            "punch",
-            ("punch", *_surface(punch_n, 0.7, 1, punch_n / 2, 1), "--approaches", approaches),
-        )
-    )
+    approaches = tuple(float(f"{d:.4g}") for d in np.geomspace(1e-2, 10.0, 16) * h_rms)
+    surface = _surface(punch_n, 0.7, 1, punch_n / 2, 1)
+    out.append(Piece("fig1", "punch", Run(geometry="punch", **surface, approaches=approaches)))
     out += [
-        Piece(
-            "fig2",
-            f"H{h}_seed{k}",
-            ("periodic", *_surface(n, h, 1, n / 2, k), "--sweep", FINITE_SIZE_SWEEP),
-        )
+        Piece("fig2", f"H{h}_seed{k}", Run(**_surface(n, h, 1, n / 2, k), sweep=FINITE_SIZE_SWEEP))
         for h in HURSTS
         for k in SEEDS
     ]
@@ -106,7 +111,7 @@ def pieces(shrink: int = 1) -> list[Piece]:
             Piece(
                 "fig3",
                 f"ratio{ratio}_seed{k}",
-                ("periodic", *_surface(m, 0.3, 1, m / 2, k), "--sweep", FINITE_SIZE_SWEEP),
+                Run(**_surface(m, 0.3, 1, m / 2, k), sweep=FINITE_SIZE_SWEEP),
             )
             for k in SEEDS
         ]
@@ -118,9 +123,10 @@ def _once(todo: list[Piece]) -> list[Piece]:
     largest ratio is Fig. 2's H = 0.3) is that earlier piece, now used by both figures."""
     first: dict[tuple[str, ...], Piece] = {}
     for piece in todo:
-        seen = first.setdefault(piece.argv, piece)
+        key = tuple(piece.run.arguments())
+        seen = first.setdefault(key, piece)
         if seen is not piece:
-            first[piece.argv] = replace(seen, used_by=(*seen.used_by, piece.figure))
+            first[key] = replace(seen, used_by=(*seen.used_by, piece.figure))
     return list(first.values())
 
 
@@ -219,6 +225,11 @@ def log_pressures(args: argparse.Namespace) -> np.ndarray:
     return np.geomspace(low, high, int(n))
 
 
+def _text(value: Any) -> str:
+    """A description's value as the command line writes it (``0.3``, ``512``)."""
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
 def piece_files(
     data: str, figure: str, command: str = "periodic", *, partial: bool = False, **where: str
 ) -> list[str]:
@@ -228,10 +239,9 @@ def piece_files(
     a step."""
     out = []
     for piece in pieces():
-        if figure not in (piece.figure, *piece.used_by) or piece.argv[0] != command:
+        if figure not in (piece.figure, *piece.used_by) or piece.run.geometry != command:
             continue
-        options = dict(zip(piece.argv[1::2], piece.argv[2::2], strict=False))
-        if all(options.get(f"--{k.replace('_', '-')}") == v for k, v in where.items()):
+        if all(_text(getattr(piece.run, k)) == v for k, v in where.items()):
             path = piece.path(data)
             if complete(path):
                 out.append(path)

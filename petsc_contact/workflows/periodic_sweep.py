@@ -14,6 +14,7 @@ is within ten times the tolerance TAO was asked for.
 from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
+from contextlib import nullcontext
 from typing import Any
 
 import numpy as np
@@ -49,6 +50,11 @@ def check_pressures(pressures: Sequence[float]) -> list[float]:
     return out
 
 
+def problem_solver(problem: PeriodicProblem) -> BoundSolver:
+    """The TAO solver of ``problem`` (its type validated from the options database)."""
+    return BoundSolver(problem.grid, problem.hessian, problem.preconditioner)
+
+
 def sweep(
     problem: PeriodicProblem,
     pressures: Sequence[float],
@@ -56,6 +62,7 @@ def sweep(
     monitor: Monitor | None = None,
     stiffness: bool = False,
     start: np.ndarray | None = None,
+    solver: BoundSolver | None = None,
 ) -> Iterator[Step]:
     """Solve the pressures in the given order, each warm-started from the last converged steps.
 
@@ -70,6 +77,8 @@ def sweep(
         (:func:`~petsc_contact.backend.stiffness.periodic_stiffness_exact`), and its CG iterations.
     start
         Local gap slab to start from (e.g. a resumed run's last state); default: first touch.
+    solver
+        The TAO solver to use (kept open); default: one made for this sweep and closed after.
 
     Yields
     ------
@@ -83,7 +92,7 @@ def sweep(
     ell = problem.scale_length
     x = (problem.initial_gap() if start is None else start).reshape(-1) / ell
     path = LoadPath()
-    with BoundSolver(problem.grid, problem.hessian, problem.preconditioner) as solver:
+    with nullcontext(solver) if solver is not None else problem_solver(problem) as solver:
         for p0 in loads:
             problem.set_pressure(p0, path.stiffness_estimate(p0))
             problem.start(path.start(p0, x))

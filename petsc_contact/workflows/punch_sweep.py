@@ -147,6 +147,29 @@ class PunchSolver:
         return step
 
 
+def punch_sweep(
+    solver: PunchSolver,
+    loads: Sequence[float],
+    by_force: bool,
+    fields: bool = False,
+    monitor: Monitor | None = None,
+    stiffness: bool = False,
+    start: np.ndarray | None = None,
+) -> Iterator[Step]:
+    """Solve the approaches (or, ``by_force``, the forces) in order, each from the last
+    converged pressure: the punch's counterpart of
+    :func:`~petsc_contact.workflows.periodic_sweep.sweep`.
+
+    ``start`` is a local pressure slab to begin from (a resumed run's last state)."""
+    if start is not None:
+        solver.restart_from(start)
+    for v in loads:
+        if by_force:
+            yield solver.at_force(v, fields, monitor=monitor, stiffness=stiffness)
+        else:
+            yield solver.at_approach(v, fields, monitor, stiffness)
+
+
 def punch_contact(
     heights: np.ndarray | SurfaceTopographyMap,
     length: float | tuple[float, float] | None = None,
@@ -206,9 +229,7 @@ def punch_contact(
         mask = None if footprint is None else grid.scatter(footprint).astype(bool)
         problem = PunchProblem(grid, local, modulus, mask, flat, beta)
         with PunchSolver(problem) as solver:
-            if forces is not None:
-                return collect(solver.at_force(v, fields, monitor=monitor) for v in values)
-            return collect(solver.at_approach(v, fields, monitor) for v in values)
+            return collect(punch_sweep(solver, values, forces is not None, fields, monitor))
 
 
 def punch_steps(*args: Any, **kwargs: Any) -> Iterator[Step]:

@@ -1,0 +1,249 @@
+"""The scene of a run: its surface (generated, or a measured map read, filled, detrended and
+put in one length unit), its grid, its FFT and this rank's slab of the heights.
+
+:func:`prepare_scene` checks a :class:`~petsc_contact.workflows.description.Run`'s surface
+and sizes before anything large is allocated (the memory estimate, the height scale), and
+says what it read.  Doubtful maps warn with :class:`MapWarning` (an implausible rms slope;
+opposite edges that do not match in a periodic run); the command line prints them.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..conventions.fft import make_fft
+from ..conventions.grid import Grid, grid_for
+from ..conventions.units import Lengths, factor, parse_lengths, unit_name
+from ..io.output import check_finite
+from ..io.topography import SurfaceTopographyMap, Topography, from_surface_topography
+from .description import Run
+
+SLOPE_LIMIT = 1e6  # heights this many times the cell's side are no contact surface
+FILE_ONLY = ("height_unit", "detrend", "fill_undefined", "channel", "override_metadata")
+GENERATION = ("grid", "hurst", "rms_slope", "rms_height")
+
+
+class MapWarning(UserWarning):
+    """A measured map that may not be what its user thinks (units, edges)."""
+
+
+@dataclass
+class Scene:
+    """A run's grid, FFT and heights (this rank's slab), and what it records of them."""
+
+    grid: Grid
+    fft: Any
+    heights: np.ndarray
+    resolved: dict[str, Any]  # what defaults became: lengths, unit, cutoff ratio
+    record: dict[str, Any] = field(default_factory=dict)  # what was read, and how
+    reading: str = ""  # one line on the map read ("" for a generated surface)
+
+
+def check_surface(run: Run) -> None:
+    """``ValueError`` for a surface that is neither generated nor given, or both."""
+    defaults = Run()
+    if run.measured:
+        given = [o for o in GENERATION if getattr(run, o) is not None]
+        if given:
+            raise ValueError(
+                "--heights excludes the surface generation options "
+                f"(--{given[0].replace('_', '-')})"
+            )
+        return
+    extra = [o for o in FILE_ONLY if getattr(run, o) != getattr(defaults, o)]
+    if extra:
+        raise ValueError(f"--{extra[0].replace('_', '-')} applies to a --heights file")
+    if run.grid is None or run.hurst is None:
+        raise ValueError(
+            "give --heights FILE, or --grid N --hurst H and --rms-slope or "
+            "--rms-height to generate a surface"
+        )
+    if (run.rms_slope is None) == (run.rms_height is None):
+        raise ValueError("give exactly one of --rms-slope and --rms-height")
+
+
+def given_lengths(run: Run) -> Lengths | None:
+    """The sides ``run.length`` gives (text with a unit, a number or a pair), if any."""
+    if run.length is None:
+        return None
+    if isinstance(run.length, str):
+        try:
+            return parse_lengths(run.length)
+        except ValueError as exc:
+            raise ValueError(f"--length: {exc}") from None
+    values = tuple(float(v) for v in np.atleast_1d(run.length))
+    return Lengths(values, None)
+
+
+def shape_of(run: Run, full: np.ndarray | None) -> tuple[int, int]:
+    """The grid's ``(nx, ny)``: the map's, or the generated surface's."""
+    if full is not None:
+        return int(full.shape[0]), int(full.shape[1])
+    grid = run.grid
+    return (int(grid[0]), int(grid[1])) if isinstance(grid, (tuple, list)) else (grid, grid)  # type: ignore[return-value]
+
+
+def prepare_scene(run: Run, comm: Any = None, default_solver: bool = True) -> Scene:
+    """The checked scene of ``run``: its map read and prepared (or its surface generated),
+    the memory it will need checked, its grid and FFT made (collective).
+
+    ``default_solver`` says whether the run uses the package's solver (the memory estimate
+    is larger for TAO's own types)."""
+    check_surface(run)
+    given = given_lengths(run)
+    full: np.ndarray | None = None
+    lengths, reading = given or Lengths((1.0,), None), ""
+    record: dict[str, Any] = {}
+    if run.measured:
+        full, lengths, record, reading = measured(run, given)
+    shape = shape_of(run, full)
+    if not run.skip_memory_check:
+        from ..conventions.resources import check_memory
+
+        check_memory(shape[0] * shape[1], run.geometry, default_solver, run.fields)
+    grid = grid_for(shape, lengths.pair, comm)
+    fft = make_fft(grid)
+    resolved: dict[str, Any] = {"length": list(grid.lengths), "length_unit": lengths.unit or ""}
+    if full is None:
+        from ..physics.surface import nyquist_ratio, self_affine
+
+        cutoff = run.cutoff_ratio if run.cutoff_ratio is not None else nyquist_ratio(grid)
+        resolved["cutoff_ratio"] = cutoff
+        heights = self_affine(
+            grid,
+            fft,
+            hurst=run.hurst,  # type: ignore[arg-type]
+            rolloff_ratio=run.rolloff_ratio,
+            cutoff_ratio=cutoff,
+            seed=run.seed,
+            rms_height=run.rms_height,
+            rms_slope=run.rms_slope,
+            exact=run.exact_rms,
+        )
+        check_height_scale(np.array([grid.max(float(np.max(np.abs(heights))))]), grid.lengths)
+        return Scene(grid, fft, heights, resolved)
+    local = grid.scatter(full)
+    check_finite(grid, local)
+    return Scene(grid, fft, local, resolved, record, reading)
+
+
+def _topography(run: Run) -> Topography:
+    from ..io.topography import read_topography
+
+    if isinstance(run.heights, str):
+        return read_topography(run.heights, run.channel)
+    if isinstance(run.heights, SurfaceTopographyMap):
+        return from_surface_topography(run.heights)
+    if run.channel not in (None, 0, "0"):
+        raise ValueError("an array holds one map: it has no channels")
+    return Topography(np.asarray(run.heights), reader="array")
+
+
+def measured(run: Run, given: Lengths | None) -> tuple[np.ndarray, Lengths, dict[str, Any], str]:
+    """The prepared map (filled, detrended, in the lengths' unit), its lengths, what the run
+    records of it (its reader, channel and metadata, what was overridden), and one line on
+    what was read; warns about implausible slopes and, for periodic runs, edge mismatch."""
+    from ..physics.preparation import detrend, fill_undefined
+
+    topo = _topography(run)
+    lengths, scale, overridden = _units(run, topo, given)
+    spacing = grid_for(topo.heights.shape, lengths.pair).spacing
+    full = fill_undefined(topo.heights, run.fill_undefined)
+    full = detrend(full, spacing, run.detrend)
+    if scale != 1.0:
+        full = np.asarray(full, dtype=float) * scale
+    check_height_scale(full, lengths.pair)
+    record = {
+        "heights_reader": topo.reader,
+        "heights_channel": topo.channel,
+        "heights_channel_index": topo.channel_index,
+        "file_lengths": list(topo.lengths) if topo.lengths else [],
+        "file_unit": topo.unit or "",
+        "metadata_overridden": overridden,
+    }
+    _warn(run, full, spacing)
+    name = run.heights if isinstance(run.heights, str) else record["heights_reader"]
+    return full, lengths, record, f"{name}: {topo.describe()}"
+
+
+def _units(run: Run, topo: Topography, lengths: Lengths | None) -> tuple[Lengths, float, list[str]]:
+    """The run's lengths (with their unit), the factor that puts the map's heights in it, and
+    which of the file's metadata ``override_metadata`` replaced.
+
+    Without ``override_metadata`` contradictions are errors: a height unit other than the
+    file's, sides other than the file's.  Heights with a unit need lengths with one."""
+    from ..conventions.grid import sides
+
+    override = run.override_metadata
+    if override and run.height_unit is None and lengths is None:
+        raise ValueError(
+            "--override-metadata needs --length or --height-unit to replace the file's"
+        )
+    overridden = []
+    given = unit_name(run.height_unit) if run.height_unit else None
+    if given and topo.unit and given != topo.unit:
+        if not override:
+            raise ValueError(
+                f"--height-unit {given} contradicts the file's unit {topo.unit} (add "
+                "--override-metadata to replace it)"
+            )
+        overridden.append("height_unit")
+    heights_unit = given or topo.unit
+    if lengths is None:
+        lengths = Lengths(topo.lengths, topo.unit) if topo.lengths else Lengths((1.0,), None)
+    elif topo.lengths:
+        mine = np.array(sides(topo.heights.shape, lengths.values)) * factor(lengths.unit, topo.unit)
+        comparable = (topo.unit is None) == (lengths.unit is None)
+        if comparable and not np.allclose(mine, topo.lengths, rtol=1e-6):
+            theirs = Lengths(topo.lengths, topo.unit).describe()
+            if not override:
+                raise ValueError(
+                    f"--length {lengths.describe()} contradicts the file's {theirs} (add "
+                    "--override-metadata to replace it)"
+                )
+            overridden.append("length")
+    if heights_unit and not lengths.unit:
+        raise ValueError(f"heights in {heights_unit} need lengths with a unit, e.g. --length 100um")
+    return lengths, factor(heights_unit, lengths.unit), overridden
+
+
+def check_height_scale(heights: np.ndarray, length: Any) -> None:
+    """``ValueError`` for heights so large against the sides that no contact computation
+    means anything (and its squares overflow): a unit mistaken by many orders."""
+    top = float(np.max(np.abs(heights)))
+    side = max(np.atleast_1d(np.asarray(length, dtype=float)))
+    if not top <= SLOPE_LIMIT * side:
+        raise ValueError(
+            f"heights up to {top:.3g} on sides of {side:.3g}: more than {SLOPE_LIMIT:g} times "
+            "the cell, no elastic contact; are the units right (--height-unit, --length)?"
+        )
+
+
+def _warn(run: Run, full: np.ndarray, spacing: tuple[float, float]) -> None:
+    from mpi4py import MPI
+
+    from ..physics.preparation import EDGE_MISMATCH_LIMIT, SLOPE_RANGE, edge_mismatch, rms_slope
+
+    if MPI.COMM_WORLD.rank != 0:  # only rank 0 speaks: the others skip the passes over the map
+        return
+    slope = rms_slope(full, spacing)
+    if slope > 0 and not SLOPE_RANGE[0] <= slope <= SLOPE_RANGE[1]:
+        warnings.warn(
+            f"the map's rms slope is {slope:.3g}, outside {SLOPE_RANGE[0]:g}..{SLOPE_RANGE[1]:g}:"
+            " are the units right (--length, --height-unit)?",
+            MapWarning,
+            stacklevel=3,
+        )
+    mismatch = edge_mismatch(full)
+    if run.geometry == "periodic" and mismatch > EDGE_MISMATCH_LIMIT:
+        warnings.warn(
+            f"the map's opposite edges differ by {mismatch:.3g} times its typical neighbour "
+            "step, so treated as periodic it has a step at its edges; consider --detrend "
+            "slope, or the free-boundary geometry (petsc-contact punch)",
+            MapWarning,
+            stacklevel=3,
+        )

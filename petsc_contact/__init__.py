@@ -30,7 +30,14 @@ PUBLIC = {  # loaded when first used: importing the package loads no numba, scip
     "Grid": "conventions.grid",
     "periodic_contact": "workflows.periodic_sweep",
     "punch_contact": "workflows.punch_sweep",
+    "Run": "workflows.description",
+    "run_contact": "workflows.runner",
+    "run_ensemble": "workflows.seeds",
+    "read_topography": "io.topography",
+    "predict_map": "workflows.predictions",
+    "read_frame": "io.results",
 }
+__all__ = [*PUBLIC, "__version__"]
 
 
 def __getattr__(name: str) -> Any:
@@ -39,6 +46,3 @@ def __getattr__(name: str) -> Any:
 
         return getattr(importlib.import_module(f".{PUBLIC[name]}", __name__), name)
     return _moved.old_attribute(name)
-
-
-__all__ = ["Grid", "periodic_contact", "punch_contact", "__version__"]

@@ -151,6 +151,11 @@ class Grid:
         r = self.rows
         return (r.stop - r.start, self.shape[1])
 
+    def positions(self) -> tuple[np.ndarray, np.ndarray]:
+        """The pixel centres along ``x`` (rows) and ``y`` (columns): ``(i + 1/2) a``."""
+        (nx, ny), (ax, ay) = self.shape, self.spacing
+        return (np.arange(nx) + 0.5) * ax, (np.arange(ny) + 0.5) * ay
+
     def describe(self) -> str:
         """``nx x ny`` points on ``Lx x Ly``, for messages and headers."""
         (nx, ny), (lx, ly) = self.shape, self.lengths

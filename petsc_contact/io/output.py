@@ -148,6 +148,11 @@ PUNCH_COLUMNS = _entries(
     newton_iterations=("count", "Newton steps on the approach (load control)"),
     stiffness=("pressure/length", "the interfacial stiffness per area (--stiffness)"),
 )
+COORDINATES = _entries(
+    step=("count", "load step, counted from 1 as the printed table counts"),
+    x=("length", "position of each row of the maps: the pixel centres, (i + 1/2) Lx/nx"),
+    y=("length", "position of each column of the maps: the pixel centres, (j + 1/2) Ly/ny"),
+)
 FIELDS = _entries(
     heights=("length", "the height map as given or generated (n x n)"),
     gap=("length", "gap of every step, exactly zero in contact (steps x n x n)"),
@@ -197,10 +202,10 @@ THEORY = _entries(
     mean_gap=("length", "Persson's mean separation u_bar(p) from the map's spectrum"),
     stiffness=("pressure/length", "Persson's interfacial stiffness K(p) = -dp/du_bar"),
 )
-ENTRIES = {**SOLVE_COLUMNS, **PERIODIC_COLUMNS, **PUNCH_COLUMNS, **FIELDS}  # by name
+ENTRIES = {**COORDINATES, **SOLVE_COLUMNS, **PERIODIC_COLUMNS, **PUNCH_COLUMNS, **FIELDS}
 GEOMETRIES = {
-    "periodic": {**SOLVE_COLUMNS, **PERIODIC_COLUMNS, **FIELDS},
-    "punch": {**SOLVE_COLUMNS, **PUNCH_COLUMNS, **FIELDS},
+    "periodic": {**COORDINATES, **SOLVE_COLUMNS, **PERIODIC_COLUMNS, **FIELDS},
+    "punch": {**COORDINATES, **SOLVE_COLUMNS, **PUNCH_COLUMNS, **FIELDS},
 }
 
 
@@ -256,6 +261,10 @@ def schema_markdown() -> str:
         "heights and fields to `OUT.h5.parts/`, and the state a `--resume` starts from to",
         "`OUT.h5.state.npz` (array `state`, the gap or pressure field, and `after_step`);",
         "`OUT.h5` is assembled from them when the run ends ([reliability.md](reliability.md)).",
+        "A finished run's file labels its per-step datasets with the dimension `step` (1, 2,",
+        "...) and its maps with `x` and `y` (pixel centres) as HDF5 dimension scales, so that",
+        '`xarray.open_dataset(path, engine="h5netcdf")` gives labelled arrays; the step table is',
+        "also written beside it as `OUT.csv` (one row per step, the columns below).",
         "A resumed file adds `resumed`: a JSON list with, for each resume, `after_step`, `time`,",
         "its `command_line` and `petsc_options`, the `petsc_contact_commit` that computed the",
         "steps from there on and `from_saved_state` (false when the state file was missing or",
@@ -271,11 +280,21 @@ def schema_markdown() -> str:
         lines.append("")
 
     table(
+        "coordinates",
+        "Dimension scales of a run's file: `step` for every per-step dataset, `x` and `y` for "
+        "the maps (`heights`, and the fields as `step x x x y`).",
+        COORDINATES,
+    )
+    table(
         "periodic and demo",
         "One entry per load step; fields with `--fields`; `stiffness` with `--stiffness`.",
-        GEOMETRIES["periodic"],
+        {k: e for k, e in GEOMETRIES["periodic"].items() if k not in COORDINATES},
     )
-    table("punch", "One entry per approach or force.", GEOMETRIES["punch"])
+    table(
+        "punch",
+        "One entry per approach or force.",
+        {k: e for k, e in GEOMETRIES["punch"].items() if k not in COORDINATES},
+    )
     table(
         "ensemble summary",
         "Each quantity also has `_mean`, `_std`, `_sem` and `_count` over seeds. Attributes: "

@@ -1,4 +1,9 @@
-"""PNG summaries of load sweeps (periodic: area and mean gap; punch: force and stiffness)."""
+"""Figures of results: load sweeps (periodic: area and mean gap; punch: force and stiffness),
+ensembles, theory, an experiment, maps of fields.
+
+Every helper returns its matplotlib ``Figure`` (made without pyplot: no global state, no
+backend switched, shown as it is in a notebook) and writes it to ``path`` when one is given.
+"""
 
 from __future__ import annotations
 
@@ -8,17 +13,19 @@ from typing import Any
 import numpy as np
 
 
-def plot_sweep(path: str, steps: Sequence[dict[str, Any]], modulus: float, h_rms: float) -> None:
+def plot_sweep(
+    path: str | None, steps: Sequence[dict[str, Any]], modulus: float, h_rms: float
+) -> Any:
     """Two panels: ``A/A0`` vs ``p0/E*`` (log-log) and ``p0/E*`` vs ``u_bar/h_rms`` (semi-log).
 
     Steps that did not converge are drawn as red crosses.
     """
-    plt = _pyplot()
     p = np.array([s["nominal_pressure"] for s in steps]) / modulus
     area = np.array([s["area_fraction"] for s in steps])
     gap = np.array([s["mean_gap"] for s in steps]) / (h_rms if h_rms > 0 else 1.0)
     ok = np.array([bool(s["converged"]) for s in steps])
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.8), constrained_layout=True)
+    fig = _figure(figsize=(9, 3.8), layout="constrained")
+    ax1, ax2 = fig.subplots(1, 2)
     ax1.loglog(p[ok], area[ok], "o-", label="converged")
     ax2.semilogy(gap[ok], p[ok], "o-")
     if (~ok).any():
@@ -27,18 +34,18 @@ def plot_sweep(path: str, steps: Sequence[dict[str, Any]], modulus: float, h_rms
         ax1.legend()
     ax1.set(xlabel="$p_0/E^*$", ylabel="$A/A_0$", title="contact area")
     ax2.set(xlabel=r"$\bar u/h_\mathrm{rms}$", ylabel="$p_0/E^*$", title="mean gap")
-    _finish(fig, (ax1, ax2), path)
+    return _finish(fig, (ax1, ax2), path)
 
 
-def plot_punch(path: str, steps: Sequence[dict[str, Any]]) -> None:
+def plot_punch(path: str | None, steps: Sequence[dict[str, Any]]) -> Any:
     """Two panels: force vs approach, and interfacial stiffness per area vs nominal pressure."""
-    plt = _pyplot()
     ok = np.array([bool(s["converged"]) for s in steps])
     d = np.array([s["approach"] for s in steps])
     f = np.array([s["force"] for s in steps])
     p = np.array([s["nominal_pressure"] for s in steps])
     k = np.array([s["interfacial_stiffness"] for s in steps])
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.8), constrained_layout=True)
+    fig = _figure(figsize=(9, 3.8), layout="constrained")
+    ax1, ax2 = fig.subplots(1, 2)
     ax1.plot(d[ok], f[ok], "o-")
     ax2.loglog(p[ok & (p > 0)], k[ok & (p > 0)], "o-")
     if (~ok).any():
@@ -46,41 +53,43 @@ def plot_punch(path: str, steps: Sequence[dict[str, Any]]) -> None:
         ax1.legend()
     ax1.set(xlabel=r"approach $\delta$", ylabel="force $F$", title="punch")
     ax2.set(xlabel="$F/L_p^2$", ylabel="$K$ (per area)", title="interfacial stiffness, Eq. 2")
-    _finish(fig, (ax1, ax2), path)
+    return _finish(fig, (ax1, ax2), path)
 
 
-def plot_experiment(path: str, pressure: np.ndarray, k_star: np.ndarray, k: np.ndarray) -> None:
+def plot_experiment(
+    path: str | None, pressure: np.ndarray, k_star: np.ndarray, k: np.ndarray
+) -> Any:
     """``K`` (paper Eq. C3) and the measured ``K* = dp/ds`` against pressure, log-log."""
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(5, 3.8), constrained_layout=True)
+    fig = _figure(figsize=(5, 3.8), layout="constrained")
+    ax = fig.subplots()
     ax.loglog(pressure, k_star, "s", mfc="none", label="$K^* = dp/ds$")
     ax.loglog(pressure, k, "o-", label="$K = K^*/(1 - K^* d/E')$")
     ax.set(xlabel="$p$", ylabel="stiffness per area", title="experiment (paper Eq. C3)")
     ax.legend()
-    _finish(fig, (ax,), path)
+    return _finish(fig, (ax,), path)
 
 
-def plot_ensemble(path: str, summary: dict[str, np.ndarray], modulus: float) -> None:
+def plot_ensemble(path: str | None, summary: dict[str, np.ndarray], modulus: float) -> Any:
     """Mean over seeds with its standard error against ``p0/E*``: the area fraction and, when
     computed, the stiffness per area (log-log)."""
-    plt = _pyplot()
     p = np.asarray(summary["nominal_pressure"]) / modulus
     names = [q for q in ("area_fraction", "stiffness") if f"{q}_mean" in summary]
-    fig, axes = plt.subplots(1, len(names), figsize=(4.5 * len(names), 3.8), squeeze=False)
+    fig = _figure(figsize=(4.5 * len(names), 3.8))
+    axes = fig.subplots(1, len(names), squeeze=False)
     for ax, q in zip(axes[0], names, strict=True):
         mean, sem = summary[f"{q}_mean"], summary[f"{q}_sem"]
         ax.errorbar(p, mean, yerr=sem, fmt="o-", capsize=2)
         ax.set(xscale="log", yscale="log", xlabel="$p_0/E^*$", ylabel=q.replace("_", " "))
         ax.set_title(f"mean over {int(np.max(summary[f'{q}_count']))} seeds, +- s.e.m.")
     fig.set_layout_engine("constrained")
-    _finish(fig, list(axes[0]), path)
+    return _finish(fig, list(axes[0]), path)
 
 
-def plot_theory(path: str, result: Any, modulus: float) -> None:
+def plot_theory(path: str | None, result: Any, modulus: float) -> Any:
     """Two panels: the map's spectrum with its fitted power law, and Persson's ``K(p)`` with
     the finite-size crossover ``p_c`` (both variants) marked."""
-    plt = _pyplot()
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.8), constrained_layout=True)
+    fig = _figure(figsize=(9, 3.8), layout="constrained")
+    ax1, ax2 = fig.subplots(1, 2)
     ax1.loglog(result.wavevector, result.psd, ".", ms=3, label="map")
     lo, hi = result.fit_range
     q = np.geomspace(lo, hi, 20)
@@ -104,23 +113,23 @@ def plot_theory(path: str, result: Any, modulus: float) -> None:
         ax2.axvline(value / modulus, color="k", ls=style, label=name)
     ax2.set(xlabel="$p_0/E^*$", ylabel=r"$K h_\mathrm{rms}/E^*$", title="interfacial stiffness")
     ax2.legend()
-    _finish(fig, (ax1, ax2), path)
+    return _finish(fig, (ax1, ax2), path)
 
 
 def plot_field(
-    path: str,
+    path: str | None,
     values: np.ndarray,
     lengths: float | tuple[float, float],
     title: str,
     label: str,
     contact: bool = False,
     unit: str = "",
-) -> None:
+) -> Any:
     """A map of one field over the cell ``[0, Lx] x [0, Ly]`` (physical axes, equal aspect)
     with a colour bar; ``unit`` labels the axes."""
     lx, ly = lengths if isinstance(lengths, tuple) else (lengths, lengths)
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(5.6, 4.6), constrained_layout=True)
+    fig = _figure(figsize=(5.6, 4.6), layout="constrained")
+    ax = fig.subplots()
     cmap = "Greys" if contact else "viridis"
     image = ax.imshow(
         values.T, origin="lower", extent=(0, lx, 0, ly), cmap=cmap, interpolation="nearest"
@@ -128,24 +137,42 @@ def plot_field(
     suffix = f" ({unit})" if unit else ""
     ax.set(xlabel="x" + suffix, ylabel="y" + suffix, title=title)
     fig.colorbar(image, ax=ax, label=label)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    if path is not None:
+        fig.savefig(path, dpi=110)
+    return fig
 
 
-def _pyplot() -> Any:
-    import matplotlib
+def plot_compare(path: str | None, trajectories: Sequence[Any], reference: dict[str, Any]) -> Any:
+    """Pressure error and natural residual against wall time, log-log, one line per solver
+    (:class:`~petsc_contact.workflows.compare.Trajectory`)."""
+    fig = _figure(figsize=(10, 4), layout="constrained")
+    ax1, ax2 = fig.subplots(1, 2)
+    for t in trajectories:
+        tm = np.maximum(np.asarray(t.time), 1e-4)
+        style = "-" if t.converged else ":"
+        ax1.loglog(tm, np.maximum(t.pressure_error, 1e-17), style, label=t.name)
+        ax2.loglog(tm, np.maximum(t.natural_residual, 1e-17), style, label=t.name)
+    ax1.axhline(reference["natural_residual"], color="gray", lw=0.8)
+    ax1.set(
+        xlabel="wall time (s)",
+        ylabel=r"$\|p - p_\mathrm{ref}\| / \|p_\mathrm{ref}\|$",
+        title="pressure error (dotted: not converged)",
+    )
+    ax2.set(xlabel="wall time (s)", ylabel=r"rms$(\min(k g, p))/p_0$", title="natural residual")
+    ax2.legend(fontsize=8)
+    return _finish(fig, (ax1, ax2), path)
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
-    return plt
+def _figure(**options: Any) -> Any:
+    """A figure of its own (matplotlib's object interface: no pyplot state)."""
+    from matplotlib.figure import Figure
+
+    return Figure(**options)
 
 
-def _finish(fig: Any, axes: Sequence[Any], path: str) -> None:
+def _finish(fig: Any, axes: Sequence[Any], path: str | None) -> Any:
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
-    fig.savefig(path, dpi=110)
-    fig.clf()
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
+    if path is not None:
+        fig.savefig(path, dpi=110)
+    return fig

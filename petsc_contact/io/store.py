@@ -71,6 +71,11 @@ def state_path(path: str) -> str:
     return path + STATE
 
 
+def csv_path(path: str) -> str:
+    """The step table beside a run's results: ``OUT.csv`` for ``OUT.h5``."""
+    return path.removesuffix(".h5") + ".csv"
+
+
 def parts_path(path: str) -> str:
     """The folder of an unfinished run's bulky arrays (heights, fields)."""
     return path + PARTS
@@ -232,7 +237,7 @@ def read_resume(path: str, parameters: dict[str, Any]) -> Finished:
     try:
         with h5py.File(partial, "r") as f:
             theirs = json.loads(f.attrs["parameters"])
-            table = {k: list(_values(f[k])) for k in f if f[k].ndim == 1}
+            table = {k: list(_values(f[k])) for k in f if f[k].ndim == 1 and k != "step"}
             steps = len(table.get("converged", []))
     except (OSError, KeyError, ValueError) as exc:
         raise ValueError(
@@ -440,6 +445,8 @@ class StepStore:
                         f.copy(part["heights"], "heights")
                 for name in self.fields:
                     self._copy_field(f, name)
+                self._label_maps(f)
+            self._write_csv()
             _clear(self.path, keep_steps=False)
 
         self._on_root(assemble)
@@ -474,10 +481,44 @@ class StepStore:
             self._write_table(f)
 
     def _write_table(self, f: Any) -> None:
+        """The scalars of every step, on the dimension ``step`` (1, 2, ...)."""
+        step = f.create_dataset("step", data=np.arange(1, self.steps + 1), maxshape=(None,))
+        describe(step, self._entry("step"))
+        step.make_scale("step")
         for key, column in self.table.items():
             dtype = h5_dtype(column[0]) if column else np.float64
             d = f.create_dataset(key, data=np.array(column, dtype=dtype), maxshape=(None,))
             describe(d, self._entry(key))
+            d.dims[0].attach_scale(step)
+
+    def _label_maps(self, f: Any) -> None:
+        """The maps' dimensions ``x`` and ``y`` (pixel centres) and ``step``, as dimension
+        scales, so that xarray and netCDF tools read labelled arrays."""
+        if "heights" not in f and not self.fields:
+            return
+        scales = {}
+        for name, values in zip(("x", "y"), self.grid.positions(), strict=True):
+            scales[name] = f.create_dataset(name, data=values)
+            describe(scales[name], self._entry(name))
+            scales[name].make_scale(name)
+        if "heights" in f:
+            for axis, name in enumerate("xy"):
+                f["heights"].dims[axis].attach_scale(scales[name])
+        for field_name in self.fields:
+            for axis, scale in enumerate((f["step"], scales["x"], scales["y"])):
+                f[field_name].dims[axis].attach_scale(scale)
+
+    def _write_csv(self) -> None:
+        """The step table beside the results, ``OUT.csv`` (one row per step)."""
+        import csv
+
+        path = csv_path(self.path)
+        names = list(self.table)
+        with storage(path), replaced(path) as temporary, open(temporary, "w", newline="") as out:
+            writer = csv.writer(out)
+            writer.writerow(["step", *names])
+            for i in range(self.steps):
+                writer.writerow([i + 1, *(self.table[k][i] for k in names)])
 
     def _write_part(self, name: str, arrays: dict[str, np.ndarray], chunked: bool) -> None:
         with atomic_h5(os.path.join(self.parts, name)) as f:

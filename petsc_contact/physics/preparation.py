@@ -25,10 +25,21 @@ _CHUNK = 512  # rows per pass of the detrending sums (bounds the memory at large
 
 
 def fill_undefined(heights: np.ndarray, mode: str = "error") -> np.ndarray:
-    """``heights`` with its NaN entries filled (a copy), or ``heights`` itself if complete.
+    """A map with its undefined (NaN or infinite) heights filled.
 
-    ``mode``: ``error`` (``ValueError`` naming the count), ``mean`` or ``harmonic`` (module
-    docstring; the four-neighbour Laplacian, edges without neighbours beyond them).
+    Parameters
+    ----------
+    heights
+        The ``nx x ny`` map, NaN where the instrument recorded nothing.
+    mode
+        ``error`` (``ValueError`` naming the count), ``mean`` (the mean of the defined
+        heights) or ``harmonic`` (the discrete Laplace equation on the missing points, the
+        measured ones around them fixed: a plane is reproduced exactly; module docstring).
+
+    Returns
+    -------
+    numpy.ndarray
+        A filled copy, or ``heights`` itself when nothing is undefined.
     """
     if mode not in FILL_MODES:
         raise ValueError(f"fill mode must be one of {', '.join(FILL_MODES)}, got '{mode}'")
@@ -88,10 +99,24 @@ def _basis(mode: str, x: np.ndarray, y: np.ndarray) -> list[np.ndarray]:
     return [one, x * one, y * one, x * x * one, x * y, y * y * one]
 
 
-def detrend(heights: np.ndarray, spacing: tuple[float, float], mode: str) -> np.ndarray:
-    """``heights`` minus its least-squares polynomial of ``mode`` (a new array; ``none``
-    returns ``heights``).  Coordinates are physical (``spacing`` per axis), centred on the
-    map, so the fit does not depend on the pixel aspect ratio."""
+def detrend(heights: np.ndarray, spacing: tuple[float, float], mode: str = "slope") -> np.ndarray:
+    """A map minus its least-squares polynomial.
+
+    Parameters
+    ----------
+    heights
+        The ``nx x ny`` map (no undefined points: fill them first).
+    spacing
+        The pixel size ``(Lx/nx, Ly/ny)``: coordinates are physical and centred on the map,
+        so the fit does not depend on the pixel aspect ratio.
+    mode
+        ``none``, ``height`` (the mean), ``slope`` (a plane) or ``curvature`` (a quadratic).
+
+    Returns
+    -------
+    numpy.ndarray
+        A new array (``heights`` itself for ``none``).
+    """
     if mode not in DETREND_MODES:
         raise ValueError(f"detrend mode must be one of {', '.join(DETREND_MODES)}, got '{mode}'")
     if mode == "none":

@@ -37,6 +37,7 @@ from ..backend.solve import BoundSolver, SolveInfo
 from ..geometries.periodic import PeriodicProblem
 from ..geometries.step import residual_verdict
 from ..io.output import COMPARE, annotate, write_attributes
+from ..io.plot import plot_compare
 from ..io.store import atomic_h5, check_same_run, partial_path, replaced, storage
 from ..physics.observables import natural_residual
 from .periodic_sweep import sweep
@@ -358,25 +359,3 @@ def table_rows(trajectories: Sequence[Trajectory]) -> list[tuple[Any, ...]]:
             )
         )
     return rows
-
-
-def plot_compare(path: str, trajectories: Sequence[Trajectory], reference: dict[str, Any]) -> None:
-    """Pressure error and natural residual against wall time, log-log, one line per solver."""
-    from ..io.plot import _finish, _pyplot
-
-    plt = _pyplot()
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
-    for t in trajectories:
-        tm = np.maximum(np.asarray(t.time), 1e-4)
-        style = "-" if t.converged else ":"
-        ax1.loglog(tm, np.maximum(t.pressure_error, 1e-17), style, label=t.name)
-        ax2.loglog(tm, np.maximum(t.natural_residual, 1e-17), style, label=t.name)
-    ax1.axhline(reference["natural_residual"], color="gray", lw=0.8)
-    ax1.set(
-        xlabel="wall time (s)",
-        ylabel=r"$\|p - p_\mathrm{ref}\| / \|p_\mathrm{ref}\|$",
-        title="pressure error (dotted: not converged)",
-    )
-    ax2.set(xlabel="wall time (s)", ylabel=r"rms$(\min(k g, p))/p_0$", title="natural residual")
-    ax2.legend(fontsize=8)
-    _finish(fig, (ax1, ax2), path)

@@ -13,7 +13,7 @@ is within ten times the tolerance TAO was asked for.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import nullcontext
 from typing import Any
 
@@ -116,6 +116,8 @@ def periodic_contact(
     fields: bool = False,
     comm: Any = None,
     stiffness: bool = False,
+    monitor: Monitor | None = None,
+    progress: Callable[[int, int, dict[str, Any]], None] | None = None,
 ) -> list[Step]:
     """Solve the periodic contact of ``heights`` for each nominal pressure.
 
@@ -139,6 +141,10 @@ def periodic_contact(
         mpi4py communicator (default ``COMM_WORLD``).
     stiffness
         Add the exact incremental stiffness ``stiffness`` to every step (see :func:`sweep`).
+    monitor
+        Called as ``monitor(iteration, f, gnorm)`` at every TAO iteration; ``True`` stops.
+    progress
+        Called as ``progress(index, total, scalars)`` after each step (``index`` from 0).
 
     Returns
     -------
@@ -154,4 +160,14 @@ def periodic_contact(
         local = grid.scatter(array)
         check_finite(grid, local)
         problem = PeriodicProblem(grid, make_fft(grid), local, modulus)
-        return collect(sweep(problem, pressures, fields, stiffness=stiffness))
+        steps = sweep(problem, pressures, fields, monitor, stiffness)
+        return collect(_reported(steps, len(pressures), progress))
+
+
+def _reported(
+    steps: Iterator[Step], total: int, progress: Callable[[int, int, dict[str, Any]], None] | None
+) -> Iterator[Step]:
+    for i, step in enumerate(steps):
+        if progress is not None:
+            progress(i, total, step.scalars)
+        yield step

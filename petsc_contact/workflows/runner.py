@@ -77,10 +77,10 @@ class RunResult:
         return all(bool(s["converged"]) for s in self.table)
 
     def to_dataframe(self) -> Any:
-        """The step table as a pandas ``DataFrame`` (one row per step)."""
-        import pandas as pd
+        """The step table as a pandas ``DataFrame`` (one row per step, from 1)."""
+        from ..io.results import table_frame
 
-        return pd.DataFrame(self.table, index=pd.RangeIndex(1, len(self.table) + 1, name="step"))
+        return table_frame(self.table)
 
 
 @dataclass

@@ -1,0 +1,87 @@
+"""One run, two doors: the library does what the command line does, to the same file."""
+
+import json
+
+import h5py
+import numpy as np
+import pytest
+from conftest import cli, python
+
+from petsc_contact import Run, read_frame, run_contact, run_ensemble
+
+GEN = dict(grid=48, hurst=0.7, rms_slope=0.1, seed=2)
+CLI_GEN = "--grid 48 --hurst 0.7 --rms-slope 0.1 --seed 2".split()
+
+
+def test_a_run_from_python_writes_the_command_lines_file(tmp_path, petsc):
+    """run_contact with a progress callback and a TAO monitor: the same steps and file as
+    ``petsc-contact periodic``; the table as a DataFrame, from the result or the file."""
+    seen, its = [], []
+    run = Run(**GEN, sweep=(4,), stiffness=True, fields=True, output=str(tmp_path / "py.h5"))
+    result = run_contact(
+        run,
+        progress=lambda i, n, s: seen.append((i, n, s["nominal_pressure"])),
+        monitor=lambda it, f, g: its.append(it) and False,
+    )
+    r = cli("periodic", *CLI_GEN, "--sweep", "4", "--stiffness", "--fields", "--quiet",
+            "--output", str(tmp_path / "cli.h5"))  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert result.status == "complete" and result.converged and len(seen) == 4 and its
+    assert [s[:2] for s in seen] == [(i, 4) for i in range(4)]
+    with h5py.File(tmp_path / "py.h5") as a, h5py.File(tmp_path / "cli.h5") as b:
+        for name in ("nominal_pressure", "mean_gap", "stiffness", "area_fraction"):
+            assert np.allclose(a[name][:], b[name][:], rtol=1e-9, atol=0), name
+        assert np.allclose(a["gap"][...], b["gap"][...], rtol=0, atol=1e-12)
+        assert json.loads(a.attrs["parameters"])["sweep"] is None  # the loads are recorded
+    frame, again = result.to_dataframe(), read_frame(str(tmp_path / "py.h5"))
+    assert list(frame.index) == [1, 2, 3, 4] and frame.index.name == "step"
+    assert np.allclose(frame["mean_gap"], again["mean_gap"], rtol=1e-15)
+    assert (tmp_path / "py.csv").read_text().splitlines()[0].startswith("step,")
+
+
+def test_pause_and_resume_from_python(tmp_path, petsc):
+    """stop_after pauses after a step (its file kept as .partial); resume=True completes it
+    to the steps of an uninterrupted run."""
+    base = Run(**GEN, sweep=(4,), output=str(tmp_path / "cut.h5"))
+    paused = run_contact(base.with_(stop_after=0))
+    assert paused.status == "paused" and len(paused.table) == 1
+    assert (tmp_path / "cut.h5.partial").exists() and not (tmp_path / "cut.h5").exists()
+    done = run_contact(base.with_(resume=True))
+    whole = run_contact(base.with_(output=None))
+    assert done.status == "complete" and len(done.table) == 4 and len(done.steps) == 3
+    gaps = [s["mean_gap"] for s in done.table]
+    assert np.allclose(gaps, [s["mean_gap"] for s in whole.table], rtol=1e-6)
+
+
+def test_ensemble_from_python_equals_the_command_line(tmp_path, petsc):
+    base = Run(**GEN, pressures=(1e-3, 1e-2), output=str(tmp_path / "py.h5"))
+    result = run_ensemble(base, [0, 1])
+    r = cli("ensemble", *CLI_GEN, "--seeds", "0-1", "--pressures", "1e-3,1e-2", "--quiet",
+            "--output", str(tmp_path / "cli.h5"))  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    with h5py.File(tmp_path / "cli.h5") as f:
+        assert np.allclose(result.summary["mean_gap"], f["mean_gap"][...], rtol=1e-9)
+    assert list(result.to_dataframe()["nominal_pressure"]) == [1e-3, 1e-2]
+
+
+def test_descriptions_check_their_numbers_and_say_their_command_line():
+    with pytest.raises(ValueError, match="--modulus must be positive"):
+        Run(**GEN, modulus=-1)
+    with pytest.raises(ValueError, match="--pressures must be positive"):
+        Run(**GEN, pressures=(1e-3, 0.0))
+    run = Run(geometry="punch", **GEN, forces=(1e-4, 1e-3), fields=True)
+    assert run.arguments()[:3] == ["punch", "--grid", "48"]
+    assert "--forces" in run.arguments() and "--fields" in run.arguments()
+
+
+def test_importing_the_package_and_its_help_load_no_solver():
+    """``import petsc_contact`` and building the CLI's parser load neither numba, scipy,
+    mpi4py nor PETSc (they are loaded when a run needs them)."""
+    code = (
+        "import sys, petsc_contact; from petsc_contact.cli.main import main; "
+        "from petsc_contact.cli.arguments import build_parser; build_parser(); "
+        "print(sorted(m for m in ('numba', 'scipy', 'mpi4py', 'petsc4py', 'h5py') "
+        "if m in sys.modules))"
+    )
+    r = python("-c", code)
+    assert r.returncode == 0 and r.stdout.strip() == "[]", (r.stdout, r.stderr)

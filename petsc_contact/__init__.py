@@ -4,10 +4,10 @@ The folders are the layers, and imports run from the later to the earlier ones
 (docs/architecture.md): ``conventions`` (grid, FFTs, units, input checks), ``reference``
 (analytic solutions), ``physics`` (pure numpy), ``io`` (HDF5, height maps, plots),
 ``backend`` (PETSc: operators, TAO driver, the package's TAO types, stiffness solves),
-``geometries`` (the contact core: periodic and punch), ``workflows`` (sweeps, compare,
-ensembles, figures, the paper's study) and ``cli``.  The module paths from before the folders
-still import, with a ``DeprecationWarning`` (:mod:`petsc_contact._moved`).
-PETSc is found and initialised lazily (:func:`petsc_contact.backend._petsc.init`).
+``geometries`` (the contact core: periodic and punch), ``workflows`` (runs, sweeps, compare,
+ensembles, figures, the paper's study) and ``cli``.  The names below are loaded when first
+used, so that importing the package is quick; PETSc is initialised by the backend
+(:func:`petsc_contact.backend._petsc.init`) when a run needs it.
 """
 
 import os
@@ -21,10 +21,7 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 from typing import Any
 
-from . import _moved
 from ._version import __version__
-
-_moved.install()  # the module paths from before the layer folders
 
 PUBLIC = {  # loaded when first used: importing the package loads no numba, scipy or PETSc
     "Grid": "conventions.grid",
@@ -45,4 +42,4 @@ def __getattr__(name: str) -> Any:
         import importlib
 
         return getattr(importlib.import_module(f".{PUBLIC[name]}", __name__), name)
-    return _moved.old_attribute(name)
+    raise AttributeError(f"module 'petsc_contact' has no attribute '{name}'")

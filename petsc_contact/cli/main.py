@@ -10,7 +10,7 @@ import warnings
 from collections.abc import Sequence
 from typing import Any
 
-from ..io.output import schema_markdown
+from ..io.schema import schema_markdown
 from ..io.store import StorageError, storage
 from .arguments import build_parser, is_petsc_option, options_files, split_arguments
 from .common import (

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..io.output import THEORY, annotate, write_attributes
+from ..io.schema import THEORY, annotate, write_attributes
 from ..io.store import atomic_h5
 from ..workflows.predictions import Prediction, predict
 from ..workflows.runner import swept

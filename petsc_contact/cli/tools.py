@@ -8,7 +8,7 @@ import os
 import numpy as np
 
 from ..conventions.validation import positive
-from ..io.output import EXPERIMENT, annotate
+from ..io.schema import EXPERIMENT, annotate
 from ..io.store import atomic_h5
 from .common import InputError
 
@@ -17,8 +17,8 @@ def run_plot(args: argparse.Namespace) -> int:
     """``petsc-contact plot``: one field of one step as a map."""
     import h5py
 
-    from ..io.output import ENTRIES
     from ..io.plot import plot_field
+    from ..io.schema import ENTRIES
     from ..io.store import check_writable
 
     if not os.path.isfile(args.file):
@@ -54,8 +54,8 @@ def run_plot(args: argparse.Namespace) -> int:
 
 def run_experiment(args: argparse.Namespace) -> int:
     """``petsc-contact experiment``: Eq. C3 on a measured ``p(s)`` table."""
-    from ..io.output import load_table
     from ..io.store import check_writable
+    from ..io.tables import load_table
     from ..physics.theory import block_corrected_stiffness
 
     for name in ("modulus", "thickness"):

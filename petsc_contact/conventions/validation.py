@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from .grid import Grid
 
 
 def positive(name: str, value: float) -> float:
@@ -40,3 +43,10 @@ def per_axis(value: Any, name: str) -> tuple[Any, Any]:
             raise ValueError(f"{name} needs one value or two (x, y), got {tuple(value)}")
         return value[0], value[1]
     return value, value
+
+
+def check_finite(grid: Grid, h: np.ndarray, what: str = "heights") -> None:
+    """Raise ``ValueError`` if any rank's slab has NaN or inf."""
+    bad = grid.sum(np.count_nonzero(~np.isfinite(h)))[0]
+    if bad:
+        raise ValueError(f"{what} contain {int(bad)} NaN or infinite values")

@@ -46,8 +46,8 @@ import numpy as np
 
 if TYPE_CHECKING:
     from ..conventions.grid import Grid
-from .output import GEOMETRIES, MISSING, Entry, describe, h5_dtype, in_unit, write_attributes
 from .provenance import source_commit
+from .schema import GEOMETRIES, MISSING, Entry, describe, h5_dtype, in_unit, write_attributes
 
 PARTIAL = ".partial"  # a run's file until it ends: OUT.h5.partial, replaced by OUT.h5 at the end
 STATE = ".state.npz"

@@ -36,8 +36,8 @@ from ..backend import _petsc
 from ..backend.solve import BoundSolver, SolveInfo
 from ..geometries.periodic import PeriodicProblem
 from ..geometries.step import residual_verdict
-from ..io.output import COMPARE, annotate, write_attributes
 from ..io.plot import plot_compare
+from ..io.schema import COMPARE, annotate, write_attributes
 from ..io.store import atomic_h5, check_same_run, partial_path, replaced, storage
 from ..physics.observables import natural_residual
 from .periodic_sweep import sweep

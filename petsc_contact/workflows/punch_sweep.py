@@ -16,10 +16,9 @@ import numpy as np
 from ..backend import _petsc
 from ..backend.solve import BoundSolver, Monitor
 from ..conventions.grid import grid_for
-from ..conventions.validation import positive
+from ..conventions.validation import check_finite, positive
 from ..geometries.punch import PHARR_BETA, PunchProblem
 from ..geometries.step import Step, collect, solve_step
-from ..io.output import check_finite
 from ..io.topography import SurfaceTopographyMap, map_and_lengths
 
 FORCE_RTOL = 1e-6

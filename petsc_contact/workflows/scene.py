@@ -18,7 +18,7 @@ import numpy as np
 from ..conventions.fft import make_fft
 from ..conventions.grid import Grid, grid_for
 from ..conventions.units import Lengths, factor, parse_lengths, unit_name
-from ..io.output import check_finite
+from ..conventions.validation import check_finite
 from ..io.topography import SurfaceTopographyMap, Topography, from_surface_topography
 from .description import Run
 

@@ -14,7 +14,7 @@ import numpy as np
 from ..backend.stiffness import sweep_stiffness
 from ..conventions.fft import make_fft
 from ..conventions.grid import Grid, fundamental_wavevector
-from ..io.output import write_attributes
+from ..io.schema import write_attributes
 from ..io.store import atomic_h5, is_partial
 from ..physics import theory
 from ..physics.surface import psd_shape, rms_of, self_affine

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from ..io.output import ENSEMBLE, annotate, ensemble_entry, write_attributes
+from ..io.schema import ENSEMBLE, annotate, ensemble_entry, write_attributes
 from ..io.store import atomic_h5
 from .description import Run
 from .ensemble import ensemble_statistics

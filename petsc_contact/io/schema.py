@@ -1,7 +1,8 @@
 """The schema of the HDF5 results: every dataset any command writes, with its units and
-description (the tables below, rendered as ``docs/output-schema.md``), and the helpers that
-attach them.  How a run's files are written durably is :mod:`petsc_contact.io.store`; what
-reproduces a result, :mod:`petsc_contact.io.provenance`.
+description (the tables below, rendered as ``docs/output-schema.md``), how values are stored
+(attributes, per-step scalars) and the helpers that attach descriptions.  How a run's files
+are written durably is :mod:`petsc_contact.io.store`; what reproduces a result,
+:mod:`petsc_contact.io.provenance`.
 """
 
 from __future__ import annotations
@@ -10,44 +11,9 @@ import json
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from ..conventions.grid import Grid
-
-
-def load_table(path: str, columns: int) -> np.ndarray:
-    """A small numeric table: comma- or whitespace-separated, ``#`` comments, and at most one
-    header line (a first row that is not numbers).  Raises ``ValueError`` with the line."""
-    rows: list[list[float]] = []
-    with open(path) as f:
-        for number, line in enumerate(f, 1):
-            text = line.split("#", 1)[0].strip()
-            if not text:
-                continue
-            fields = [v for v in re.split(r"[,\s]+", text) if v]
-            try:
-                rows.append([float(v) for v in fields])
-            except ValueError:
-                if rows:  # only the first row may be a header
-                    raise ValueError(f"'{path}' line {number} is not {columns} numbers") from None
-                rows.append([])  # the header
-                continue
-            if len(fields) != columns:
-                raise ValueError(f"'{path}' line {number} has {len(fields)} columns, not {columns}")
-    table = np.array([r for r in rows if r], dtype=float).reshape(-1, columns)
-    if not table.size or not np.all(np.isfinite(table)):
-        raise ValueError(f"'{path}' must hold rows of {columns} finite numbers")
-    return table
-
-
-def check_finite(grid: Grid, h: np.ndarray, what: str = "heights") -> None:
-    """Raise ``ValueError`` if any rank's slab has NaN or inf."""
-    bad = grid.sum(np.count_nonzero(~np.isfinite(h)))[0]
-    if bad:
-        raise ValueError(f"{what} contain {int(bad)} NaN or infinite values")
 
 
 def write_attributes(obj: Any, attributes: dict[str, Any]) -> None:
@@ -247,7 +213,7 @@ def schema_markdown() -> str:
     lines = [
         "# Output schema",
         "",
-        "Generated from `petsc_contact/io/output.py` by",
+        "Generated from `petsc_contact/io/schema.py` by",
         "`petsc-contact schema > docs/output-schema.md`; a test fails when this page and the",
         "code disagree. Every dataset carries the `units` and `description` attributes listed",
         "here. Units are symbolic: `length` is the unit of `--length` and of the heights (a",

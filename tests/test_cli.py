@@ -448,7 +448,7 @@ def test_modules_import_only_from_layers_above():
     rank = {name: i for i, name in enumerate(layers)}
     rank["_version"] = -1  # the ground floor: the version, defined once, imports nothing
     version = pathlib.Path(__file__).parent.parent / "petsc_contact" / "_version.py"
-    assert "import " not in version.read_text().split("\"\"\"")[-1]  # code, not docstring
+    assert "import " not in version.read_text().split('"""')[-1]  # code, not docstring
     package = pathlib.Path(__file__).parent.parent / "petsc_contact"
     folders = {p.name for p in package.iterdir() if (p / "__init__.py").exists()}
     assert folders == set(layers), "every folder of the package is a layer"

@@ -74,6 +74,23 @@ def split_arguments(argv: Sequence[str]) -> tuple[list[str], list[str]]:
     return ours, petsc
 
 
+def _quantity(text: str) -> float | str:
+    """A number (returned as a float), or a number with a unit (kept as text, converted when
+    the run's units are known: ``2MPa``, ``1mN``, ``10nm``)."""
+    try:
+        return float(text)
+    except ValueError:
+        pass
+    if not text.strip() or not (text.strip()[0].isdigit() or text.strip()[0] in "+-."):
+        raise argparse.ArgumentTypeError(f"expected a number with an optional unit, got '{text}'")
+    return text.strip()
+
+
+def _quantity_list(text: str) -> list[float | str]:
+    """Comma-separated numbers, each with an optional unit (``1e5,2MPa``)."""
+    return [_quantity(v) for v in text.split(",") if v.strip()]
+
+
 def _float_list(text: str) -> list[float]:
     try:
         return [float(v) for v in text.split(",") if v.strip()]
@@ -235,10 +252,11 @@ def _run_arguments(
     )
     p.add_argument(
         "--modulus",
-        type=float,
+        type=_quantity,
         default=d.get("modulus", 1.0),
         metavar="ESTAR",
-        help="contact modulus E* (default %(default)s)",
+        help="contact modulus E*, with an optional unit (1GPa: pressures then in GPa; "
+        "default %(default)s)",
     )
     if punch:
         _punch_loads(p)
@@ -251,15 +269,22 @@ def _punch_loads(p: argparse.ArgumentParser) -> None:
     loads = p.add_mutually_exclusive_group(required=True)
     loads.add_argument(
         "--approaches",
-        type=_float_list,
+        type=_quantity_list,
         metavar="D1,D2,...",
-        help="rigid approaches beyond first touch (length units), in order",
+        help="rigid approaches beyond first touch (length units, or with a unit: 10nm), in order",
     )
     loads.add_argument(
         "--forces",
-        type=_float_list,
+        type=_quantity_list,
         metavar="F1,F2,...",
-        help="total forces (E* x length^2), in order (load control)",
+        help="total forces (E* x length^2, or with a unit: 1mN), in order (load control)",
+    )
+    loads.add_argument(
+        "--pressures",
+        type=_quantity_list,
+        metavar="P1,P2,...",
+        help="nominal pressures over the punch's face (units of E*, or with a unit: 2MPa), in "
+        "order (load control: the force is the pressure times the face's area)",
     )
     loads.add_argument(
         "--sweep",
@@ -288,10 +313,10 @@ def _periodic_loads(p: argparse.ArgumentParser, d: dict[str, Any]) -> None:
     loads = p.add_mutually_exclusive_group(required="pressures" not in d)
     loads.add_argument(
         "--pressures",
-        type=_float_list,
-        default=_float_list(d["pressures"]) if "pressures" in d else None,
+        type=_quantity_list,
+        default=_quantity_list(d["pressures"]) if "pressures" in d else None,
         metavar="P1,P2,...",
-        help="nominal pressures p0 (units of E*), in order",
+        help="nominal pressures p0 (units of E*, or with a unit: 2MPa), in order",
     )
     loads.add_argument(
         "--sweep",
@@ -462,10 +487,10 @@ def _cell_arguments(p: argparse.ArgumentParser, what: str) -> None:
     )
     p.add_argument(
         "--modulus",
-        type=float,
+        type=_quantity,
         default=1.0,
         metavar="ESTAR",
-        help="contact modulus E* (default %(default)s)",
+        help="contact modulus E*, with an optional unit (1GPa; default %(default)s)",
     )
 
 

@@ -32,7 +32,7 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
         solver_options(name)  # unknown options files fail here, before any work
     petsc, run, scene = scene_for(args, petsc_args)
     grid, fft, heights = scene.grid, scene.fft, scene.heights
-    problem = PeriodicProblem(grid, fft, heights, args.modulus)
+    problem = PeriodicProblem(grid, fft, heights, run.modulus_value)
     show = grid.comm.rank == 0 and not args.quiet
     if show:
         print(

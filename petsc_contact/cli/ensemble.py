@@ -33,7 +33,7 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
             return code  # the next --resume continues with this seed
         status = max(status, code)
     files = [str(r.output) for r in runs]
-    pressures = list(runs[0].pressures or [])
+    pressures = [float(p) for p in runs[0].pressures or []]
     record = ensemble_record(base, args.seeds, pressures, " ".join(["petsc-contact", *argv]))
     if MPI.COMM_WORLD.rank == 0:
         summary = summarise(args.seeds, files)
@@ -41,7 +41,7 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
         if args.plot:
             from ..io.plot import plot_ensemble
 
-            plot_ensemble(args.plot, summary, args.modulus)
+            plot_ensemble(args.plot, summary, base.modulus_value)
         if not args.quiet:
             plotted = f" and {args.plot}" if args.plot else ""
             print(f"# wrote {args.output}{plotted} ({len(files)} seeds)")

@@ -86,12 +86,13 @@ def _introduce(command: str, description: Any, prepared: Any) -> None:
     from ..io.store import partial_path
 
     scene, unit = prepared.scene, prepared.scene.resolved["length_unit"]
+    unit_p = f" {description.pressure_unit}" if description.pressure_unit else ""
     if scene.reading:
         print(f"# {scene.reading}", flush=True)
     record = prepared.record
     print(
         f"# {command} {scene.grid.describe()}{' ' + unit if unit else ''}, "
-        f"E* = {description.modulus:g}, h_rms = {record['rms_height']:.4g}, "
+        f"E* = {description.modulus_value:g}{unit_p}, h_rms = {record['rms_height']:.4g}, "
         f"h'_rms = {record['rms_slope']:.4g}{prepared.intro}",
         flush=True,
     )
@@ -118,7 +119,7 @@ def _conclude(
         if description.geometry == "punch":
             plot_punch(plot, table)
         else:
-            plot_sweep(plot, table, description.modulus, result.record["rms_height"])
+            plot_sweep(plot, table, description.modulus_value, result.record["rms_height"])
     failed = [s for s in table if not s["converged"]]
     if failed and root:
         load = columns[0]

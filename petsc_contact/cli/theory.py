@@ -19,9 +19,10 @@ LOAD_RANGE = (1e-7, 1e-1)  # default pressures, in units of E*
 def run_theory(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
     """Predict, write ``OUT.h5`` (and the plot) and print the table (rank 0)."""
     petsc, run, scene = scene_for(args, petsc_args)
-    low, high = (v * args.modulus for v in LOAD_RANGE)
+    modulus = run.modulus_value
+    low, high = (v * modulus for v in LOAD_RANGE)
     pressures = np.array(swept(args.sweep, low, high))
-    result = predict(scene.grid, scene.fft, scene.heights, args.modulus, pressures)
+    result = predict(scene.grid, scene.fft, scene.heights, modulus, pressures)
     if scene.grid.comm.rank != 0:
         return 0
     if not args.quiet and scene.reading:
@@ -33,13 +34,13 @@ def run_theory(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[s
         for name in THEORY:
             f[name] = getattr(result, name)
         write_attributes(f, attributes)
-        annotate(f, THEORY.__getitem__, resolved["length_unit"])
+        annotate(f, THEORY.__getitem__, resolved["length_unit"], run.pressure_unit or "")
     if not args.quiet:
         _print(result)
     if args.plot:
         from ..io.plot import plot_theory
 
-        plot_theory(args.plot, result, args.modulus)
+        plot_theory(args.plot, result, modulus)
     print(f"# wrote {args.output}" + (f" and {args.plot}" if args.plot else ""))
     return 0
 

@@ -1,10 +1,15 @@
-"""Length units: ``100um``, ``2.5 nm``, ``1e-3`` (no unit), and conversions between them.
+"""Units: lengths (``100um``, ``2.5 nm``, ``1e-3`` with no unit), pressures (``1GPa``) and
+forces (``1mN``), and conversions between them.
 
 A run computes in one length unit, the unit of its lengths (``--length``, or the file's
 physical size).  Heights given in another unit (``--height-unit``, or the file's) are
 converted into it; a run with no unit anywhere is unit-free, as before: lengths and
 heights then share whatever unit the user has in mind.  Pressures and stiffness per area
-are in the unit of the modulus.
+are in the unit of the modulus: ``--modulus 1GPa`` makes GPa the run's pressure unit, and
+``--pressures 2MPa`` is converted into it; a force's unit is the pressure unit times the
+length unit squared (``GPa*um^2``, which is a millinewton), so ``--forces 1mN`` needs both.
+Bare numbers keep their meaning: pressures in the unit of the modulus, forces in that times
+the length unit squared.
 """
 
 from __future__ import annotations
@@ -89,3 +94,86 @@ def parse_lengths(text: str) -> Lengths:
     if len(units) > 1:
         raise ValueError(f"give both lengths in one unit, got '{text}'")
     return Lengths(tuple(values), units.pop() if units else None)
+
+
+PASCALS = {
+    "Pa": 1.0,
+    "kPa": 1e3,
+    "MPa": 1e6,
+    "GPa": 1e9,
+    "TPa": 1e12,
+    "bar": 1e5,
+    "psi": 6894.757293168361,
+}
+"""Pascals per unit, for every pressure unit accepted."""
+NEWTONS = {"N": 1.0, "kN": 1e3, "mN": 1e-3, "uN": 1e-6, "µN": 1e-6, "μN": 1e-6, "nN": 1e-9}
+"""Newtons per unit, for every force unit accepted."""
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """A number and the unit it was given in (``None``: a bare number)."""
+
+    value: float
+    unit: str | None
+
+
+def parse_quantity(given: float | str, units: dict[str, float], what: str) -> Quantity:
+    """``2.5``, ``"2.5"``, ``"2MPa"`` or ``"2 MPa"`` as a :class:`Quantity` whose unit is one
+    of ``units``; ``ValueError`` naming ``what`` otherwise (the value must be finite)."""
+    if isinstance(given, (int, float)):
+        return Quantity(float(given), None)
+    m = _QUANTITY.match(str(given))
+    unit = m.group(2) if m else None
+    if m is None or (unit is not None and unit not in units):
+        known = ", ".join(k for k in units if k.isascii())
+        raise ValueError(
+            f"{what}: expected a number with an optional unit ({known}), got '{given}'"
+        )
+    try:
+        value = float(m.group(1))
+    except ValueError:
+        raise ValueError(f"{what}: expected a number, got '{given}'") from None
+    return Quantity(value, unit)
+
+
+def pressure_value(given: float | str, unit: str | None, what: str) -> float:
+    """A pressure in the run's pressure ``unit`` (the modulus's: ``None`` when it has none)."""
+    q = parse_quantity(given, PASCALS, what)
+    if q.unit is None:
+        return q.value
+    if unit is None:
+        raise ValueError(f"{what} in {q.unit} need a modulus with a unit, e.g. --modulus 1GPa")
+    return q.value * PASCALS[q.unit] / PASCALS[unit]
+
+
+def force_value(
+    given: float | str, pressure_unit: str | None, length_unit: str | None, what: str
+) -> float:
+    """A force in the run's force unit: the pressure unit times the length unit squared."""
+    q = parse_quantity(given, NEWTONS, what)
+    if q.unit is None:
+        return q.value
+    if pressure_unit is None or length_unit is None:
+        raise ValueError(
+            f"{what} in {q.unit} need a modulus and lengths with units (--modulus 1GPa, "
+            "--length 100um, or a file with its size)"
+        )
+    return q.value * NEWTONS[q.unit] / (PASCALS[pressure_unit] * METRES[length_unit] ** 2)
+
+
+def length_value(given: float | str, unit: str | None, what: str) -> float:
+    """A length (an approach: ``"10nm"`` or a bare number) in the run's length ``unit``."""
+    q = parse_quantity(given, METRES, what)
+    if q.unit is None:
+        return q.value
+    if unit is None:
+        raise ValueError(f"{what} in {q.unit} need lengths with a unit, e.g. --length 100um")
+    return q.value * METRES[q.unit] / METRES[unit]
+
+
+def force_unit(pressure_unit: str | None, length_unit: str | None) -> str:
+    """The run's force unit in words (``GPa*um^2``), or ``""`` when it has no units."""
+    if pressure_unit is None or length_unit is None:
+        return ""
+    return f"{pressure_unit}*{length_unit}^2"

@@ -46,7 +46,7 @@ def h5_dtype(value: Any) -> Any:
 #
 # Units are symbolic: ``length`` is the unit of ``--length`` and of the heights (written as
 # that unit, ``um``, in a file whose run has one: :func:`in_unit`), ``pressure`` the unit of
-# ``--modulus``; ``1`` is
+# ``--modulus`` (written as it, ``GPa``, when it has one); ``1`` is
 # dimensionless, ``s`` seconds of wall time, ``count`` a number of things, ``text`` a string
 # and ``bool`` a flag.
 
@@ -186,12 +186,16 @@ def ensemble_entry(name: str) -> Entry:
     raise KeyError(f"no schema entry for ensemble dataset '{name}'")
 
 
-def in_unit(entry: Entry, length_unit: str) -> Entry:
-    """``entry`` with the symbolic ``length`` of its units replaced by ``length_unit`` (``um``,
-    so ``pressure/length`` becomes ``pressure/um``); unchanged when the run has no unit."""
-    if not length_unit:
-        return entry
-    return Entry(re.sub(r"\blength\b", length_unit, entry.units), entry.description)
+def in_unit(entry: Entry, length_unit: str = "", pressure_unit: str = "") -> Entry:
+    """``entry`` with its symbolic ``length`` and ``pressure`` replaced by the run's units
+    (``um`` and ``GPa``: ``pressure/length`` becomes ``GPa/um``); each left symbolic when the
+    run has no such unit."""
+    units = entry.units
+    if length_unit:
+        units = re.sub(r"\blength\b", length_unit, units)
+    if pressure_unit:
+        units = re.sub(r"\bpressure\b", pressure_unit, units)
+    return Entry(units, entry.description)
 
 
 def describe(dataset: Any, entry: Entry) -> None:
@@ -200,12 +204,14 @@ def describe(dataset: Any, entry: Entry) -> None:
     dataset.attrs["description"] = entry.description
 
 
-def annotate(group: Any, lookup: Callable[[str], Entry], length_unit: str = "") -> None:
-    """Describe every dataset directly in ``group`` (lengths in ``length_unit`` when given);
+def annotate(
+    group: Any, lookup: Callable[[str], Entry], length_unit: str = "", pressure_unit: str = ""
+) -> None:
+    """Describe every dataset directly in ``group`` (in the run's units when given);
     ``KeyError`` for one the schema lacks."""
     for name, item in group.items():
         if hasattr(item, "shape"):
-            describe(item, in_unit(lookup(name), length_unit))
+            describe(item, in_unit(lookup(name), length_unit, pressure_unit))
 
 
 def schema_markdown() -> str:

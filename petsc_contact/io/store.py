@@ -472,7 +472,10 @@ class StepStore:
             entry = schema[name]
         except KeyError:
             raise KeyError(f"no schema entry for dataset '{name}' (petsc_contact.io)") from None
-        return in_unit(entry, str(self.attributes.get("length_unit", "")))
+        attrs = self.attributes
+        return in_unit(
+            entry, str(attrs.get("length_unit", "")), str(attrs.get("pressure_unit", ""))
+        )
 
     def _commit(self) -> None:
         """Replace the ``.partial`` file by one holding every finished step."""

@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from ..conventions.units import METRES, NEWTONS, PASCALS, parse_quantity
+
 GEOMETRIES = ("periodic", "punch")
 
 
@@ -43,10 +45,12 @@ class Run:
         and whether the realisation is rescaled to the target exactly.
     length, modulus
         The sides (``"100um"``, ``"150um,100um"``, ``1.0`` or ``(Lx, Ly)``; default: the
-        file's, else 1) and the contact modulus ``E*`` (pressures are in its unit).
+        file's, else 1) and the contact modulus ``E*`` (``1e9``, or ``"1GPa"``: pressures
+        are in its unit).
     pressures, sweep, approaches, forces
-        The loads: nominal pressures (periodic), approaches or forces (punch), or a sweep
-        ``(N,)`` or ``(N, min, max)`` of log-spaced ones (default range: see the CLI).
+        The loads: nominal pressures (periodic; the punch: over its face), approaches or
+        forces (punch), or a sweep ``(N,)`` or ``(N, min, max)`` of log-spaced ones (default
+        range: see the CLI).  A value may carry its unit: ``"2MPa"``, ``"10nm"``, ``"1mN"``.
     footprint, flat_stiffness, stiffness
         The punch's outline (``square``, ``disk``) and its flat-punch reference (``grid``,
         ``analytic``); whether every step adds the exact stiffness.
@@ -76,11 +80,11 @@ class Run:
     seed: int = 0
     exact_rms: bool = False
     length: Any = None
-    modulus: float = 1.0
-    pressures: Sequence[float] | None = None
+    modulus: float | str = 1.0
+    pressures: Sequence[float | str] | None = None
     sweep: Sequence[float] | None = None
-    approaches: Sequence[float] | None = None
-    forces: Sequence[float] | None = None
+    approaches: Sequence[float | str] | None = None
+    forces: Sequence[float | str] | None = None
     footprint: str = "square"
     flat_stiffness: str = "grid"
     stiffness: bool = False
@@ -98,10 +102,10 @@ class Run:
 
         if self.geometry not in GEOMETRIES:
             raise ValueError(f"geometry must be one of {', '.join(GEOMETRIES)}: {self.geometry}")
-        positive("--modulus", self.modulus)
+        positive("--modulus", self.modulus_value)
         if self.stop_after is not None:
             non_negative("--stop-after", self.stop_after)
-        for name in ("pressures", "approaches", "forces"):
+        for name, units in (("pressures", PASCALS), ("approaches", METRES), ("forces", NEWTONS)):
             values = getattr(self, name)
             if values is None or self.sweep is not None:
                 continue
@@ -109,7 +113,17 @@ class Run:
                 raise ValueError(f"--{name} needs at least one value")
             check = non_negative if name == "approaches" else positive  # an approach may be 0
             for v in values:
-                check(f"--{name}", v)
+                check(f"--{name}", parse_quantity(v, units, f"--{name}").value)
+
+    @property
+    def modulus_value(self) -> float:
+        """The contact modulus ``E*`` in the run's pressure unit."""
+        return parse_quantity(self.modulus, PASCALS, "--modulus").value
+
+    @property
+    def pressure_unit(self) -> str | None:
+        """The run's pressure unit: the modulus's (``--modulus 1GPa``), or none."""
+        return parse_quantity(self.modulus, PASCALS, "--modulus").unit
 
     @property
     def measured(self) -> bool:

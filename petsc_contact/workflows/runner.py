@@ -252,19 +252,25 @@ def swept(spec: Sequence[float], low: float, high: float) -> list[float]:
 
 
 def _periodic_plan(run: Run, scene: Scene) -> Plan:
+    from ..conventions.units import pressure_value
     from ..geometries.periodic import PeriodicProblem
     from .periodic_sweep import check_pressures, problem_solver, sweep
 
-    problem = PeriodicProblem(scene.grid, scene.fft, scene.heights, run.modulus)
+    problem = PeriodicProblem(scene.grid, scene.fft, scene.heights, run.modulus_value)
     p_full = problem.full_contact_pressure()
     resolved: dict[str, Any] = {}
     if run.sweep is not None:
         pressures = swept(run.sweep, 1e-4 * p_full, 0.9 * p_full)
         resolved = {"pressures": pressures, "sweep": None}  # the file records the loads
     elif run.pressures is not None:
-        pressures = check_pressures(run.pressures)
+        unit = run.pressure_unit
+        pressures = check_pressures([pressure_value(p, unit, "--pressures") for p in run.pressures])
+        if any(isinstance(p, str) for p in run.pressures):
+            resolved = {"pressures_resolved": pressures}  # in the run's pressure unit
     else:
         raise ValueError("give the nominal pressures (--pressures) or a --sweep")
+    if run.approaches is not None or run.forces is not None:
+        raise ValueError("a periodic run takes --pressures or --sweep, not approaches or forces")
     for p0 in pressures:
         problem.check_pressure(p0)  # before the output is touched
     solver = problem_solver(problem)
@@ -283,6 +289,7 @@ def _disk(n: int) -> np.ndarray:
 
 
 def _punch_plan(run: Run, scene: Scene) -> Plan:
+    from ..conventions.units import force_value, length_value, pressure_value
     from ..conventions.validation import non_negative, positive
     from ..geometries.punch import PHARR_BETA, PunchProblem
     from .punch_sweep import PunchSolver, punch_sweep
@@ -292,21 +299,36 @@ def _punch_plan(run: Run, scene: Scene) -> Plan:
         raise ValueError("--footprint disk needs a square grid")
     mask = grid.scatter(_disk(grid.shape[0])) > 0 if run.footprint == "disk" else None
     beta = 1.0 if run.footprint == "disk" else PHARR_BETA
-    problem = PunchProblem(grid, scene.heights, run.modulus, mask, run.flat_stiffness, beta)
-    by_force = run.forces is not None
-    given = [run.forces, run.approaches, run.sweep]
+    problem = PunchProblem(grid, scene.heights, run.modulus_value, mask, run.flat_stiffness, beta)
+    given = [run.forces, run.approaches, run.pressures, run.sweep]
     if sum(v is not None for v in given) != 1:
-        raise ValueError("give one of --approaches, --forces and --sweep")
+        raise ValueError("give one of --approaches, --forces, --pressures and --sweep")
+    by_force = run.forces is not None or run.pressures is not None
     resolved: dict[str, Any] = {}
+    length_unit = scene.resolved["length_unit"] or None
     if run.sweep is not None:
         loads = swept(run.sweep, 0.01 * problem.scale_length, 3 * problem.scale_length)
         resolved = {"approaches": loads, "sweep": None}  # the file records the loads
+    elif run.forces is not None:
+        units = run.pressure_unit, length_unit
+        loads = [positive("--forces", force_value(f, *units, "--forces")) for f in run.forces]
+        resolved = {"forces_resolved": loads}  # in the run's force unit
+    elif run.pressures is not None:  # nominal pressure over the punch's face
+        face = float(
+            grid.sum(np.count_nonzero(mask) if mask is not None else grid.size / grid.comm.size)[0]
+        )
+        area = face * grid.pixel_area
+        unit = run.pressure_unit
+        loads = [
+            positive("--pressures", pressure_value(p, unit, "--pressures")) * area
+            for p in run.pressures
+        ]
+        resolved = {"forces_resolved": loads}  # the forces of those pressures
     else:
-        check = positive if by_force else non_negative  # an approach may be 0
-        name = "--forces" if by_force else "--approaches"
-        loads = [check(name, v) for v in (run.forces if by_force else run.approaches)]  # type: ignore[union-attr]
-        if not loads:
-            raise ValueError(f"{name} needs at least one value")
+        loads = [
+            non_negative("--approaches", length_value(v, length_unit, "--approaches"))
+            for v in run.approaches  # type: ignore[union-attr]
+        ]
     solver = PunchSolver(problem)
 
     def solve(todo: list[float], start: np.ndarray | None, monitor: Monitor | None) -> Any:
@@ -335,6 +357,7 @@ def run_record(
     run: Run, command_line: str, petsc: Any, realised: dict[str, float], resolved: dict[str, Any]
 ) -> dict[str, Any]:
     """What reproduces the run: its description (defaults resolved), versions, PETSc options."""
+    from ..conventions.units import force_unit
     from ..io.provenance import file_digest, petsc_options, versions
 
     params = run.parameters() | {k: v for k, v in resolved.items() if k not in FILE_RECORD}
@@ -349,13 +372,19 @@ def run_record(
         "length": lengths[0],
         "lengths": np.array(lengths),
         "length_unit": unit,
-        "modulus": run.modulus,
+        "modulus": run.modulus_value,
+        "pressure_unit": run.pressure_unit or "",
+        "force_unit": force_unit(run.pressure_unit, unit or None),
         "units": (
             f"lengths and heights in {unit}"
             if unit
             else "lengths and heights in the unit of --length (none given)"
         )
-        + ", pressures and stiffness per area in the unit of --modulus",
+        + (
+            f", pressures and stiffness per area in {run.pressure_unit}"
+            if run.pressure_unit
+            else ", pressures and stiffness per area in the unit of --modulus"
+        ),
         **realised,
     }
     if run.measured:

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from ..conventions.units import pressure_value
 from ..io.schema import ENSEMBLE, annotate, ensemble_entry, write_attributes
 from ..io.store import atomic_h5
 from .description import Run
@@ -47,7 +48,7 @@ def ensemble_loads(base: Run, first_seed: int) -> list[float]:
     """The pressures every seed gets: ``base.pressures``, or its sweep, whose default range is
     ``1e-4`` to ``0.9`` times the full-contact pressure of the first seed's surface."""
     if base.pressures is not None:
-        return [float(p) for p in base.pressures]
+        return [pressure_value(p, base.pressure_unit, "--pressures") for p in base.pressures]
     if base.sweep is None:
         raise ValueError("give the nominal pressures (--pressures) or a --sweep")
     if len(base.sweep) == 3:
@@ -56,7 +57,7 @@ def ensemble_loads(base: Run, first_seed: int) -> list[float]:
     from .scene import prepare_scene
 
     scene = prepare_scene(base.with_(seed=first_seed))
-    problem = PeriodicProblem(scene.grid, scene.fft, scene.heights, base.modulus)
+    problem = PeriodicProblem(scene.grid, scene.fft, scene.heights, base.modulus_value)
     p_full = problem.full_contact_pressure()
     return swept(base.sweep, 1e-4 * p_full, 0.9 * p_full)
 
@@ -149,7 +150,7 @@ def run_ensemble(
                 continue
             run_contact(run, progress)
         files = [r.output for r in runs if r.output is not None]
-        pressures = list(runs[0].pressures or [])
+        pressures = [float(p) for p in runs[0].pressures or []]
         line = " ".join(["petsc-contact", "ensemble", *base.arguments()[1:]])
         record = ensemble_record(base, seeds, pressures, line)
         summary = summarise(seeds, files)

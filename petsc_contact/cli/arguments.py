@@ -526,14 +526,31 @@ def _study_parser(sub: Any) -> None:
 
 def _plot_parser(sub: Any) -> None:
     p = _command(sub, "plot")
-    p.add_argument("file", metavar="OUT.h5", help="a periodic or punch output file")
-    p.add_argument("--step", type=int, default=-1, metavar="K", help="load step (default: last)")
+    p.add_argument(
+        "file", metavar="OUT.h5", help="a periodic or punch output file, or a theory file"
+    )
+    p.add_argument(
+        "--step",
+        type=int,
+        default=-1,
+        metavar="K",
+        help="load step, counted from 1 as the run's table counts (-1, the default: the last)",
+    )
     p.add_argument(
         "--field",
-        choices=("pressure", "gap", "contact", "heights"),
+        choices=("pressure", "gap", "contact", "heights", "filled"),
         default="pressure",
-        help="the map to draw (default pressure; fields need a run with --fields)",
+        help="the map to draw (default pressure; fields need a run with --fields; filled: the "
+        "points --fill-undefined filled)",
     )
+    p.add_argument(
+        "--scale",
+        choices=("auto", "linear", "log"),
+        default="auto",
+        help="colour scale (auto: log for a pressure spanning more than two decades)",
+    )
+    p.add_argument("--vmin", type=float, metavar="V", help="lower end of the colour scale")
+    p.add_argument("--vmax", type=float, metavar="V", help="upper end of the colour scale")
     p.add_argument("--output", metavar="PNG", help="default: OUT_FIELD_stepK.png")
 
 

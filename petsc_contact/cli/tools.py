@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import json
 import os
+from typing import Any
 
 import numpy as np
 
@@ -14,42 +16,93 @@ from .common import InputError
 
 
 def run_plot(args: argparse.Namespace) -> int:
-    """``petsc-contact plot``: one field of one step as a map."""
+    """``petsc-contact plot``: one field of one step as a map, or a theory file's prediction."""
     import h5py
 
-    from ..io.plot import plot_field
-    from ..io.schema import ENTRIES
     from ..io.store import check_writable
 
     if not os.path.isfile(args.file):
         raise InputError(f"'{args.file}' does not exist")
+    stem = args.file.removesuffix(".h5")
     with h5py.File(args.file, "r") as f:
-        if args.field not in f:
-            hint = " (run with --fields)" if args.field != "heights" else ""
-            raise InputError(f"'{args.file}' has no dataset '{args.field}'{hint}")
-        data = f[args.field]
-        steps = data.shape[0] if data.ndim == 3 else 1
-        if not -steps <= args.step < steps:
-            raise InputError(f"--step {args.step} is out of range: the file has {steps} steps")
-        values = data[args.step] if data.ndim == 3 else data[...]
-        side = float(f.attrs.get("length", 1.0))
-        lx, ly = (float(v) for v in f.attrs.get("lengths", (side, side)))
+        if f.attrs.get("geometry") == "theory":
+            out = args.output or f"{stem}.png"
+            check_writable(out)
+            _plot_theory_file(f, out)
+            print(f"# wrote {out}")
+            return 0
+        values, title, label, step = _field(f, args)
+        lx, ly = (float(v) for v in f.attrs.get("lengths", (1.0, 1.0)))
         length_unit = str(f.attrs.get("length_unit", ""))
-        step = args.step % steps
-        load = f["nominal_pressure"][step] if "nominal_pressure" in f else np.nan
-        per_step = data.ndim == 3
-    stem = args.file[:-3] if args.file.endswith(".h5") else args.file
-    out = args.output or f"{stem}_{args.field}_step{step}.png"
+    from ..io.plot import plot_map
+
+    out = args.output or f"{stem}_{args.field}" + (f"_step{step}.png" if step else ".png")
     check_writable(out)
-    title = f"{args.field}, step {step}" + (f", p0 = {load:.3g}" if per_step else "")
-    unit = {
-        "length": f"({length_unit})" if length_unit else "in the unit of --length",
-        "pressure": "in the unit of --modulus",
-    }
-    label = f"{args.field} {unit.get(ENTRIES[args.field].units, '(1: in contact)')}"
-    plot_field(out, values, (lx, ly), title, label, args.field == "contact", length_unit)
+    plot_map(
+        out, values, (lx, ly), length_unit, args.field, title, label, args.scale, args.vmin,
+        args.vmax,
+    )  # fmt: skip
     print(f"# wrote {out}")
     return 0
+
+
+def _field(f: Any, args: argparse.Namespace) -> tuple[np.ndarray, str, str, int]:
+    """The map ``--field`` of step ``--step`` (counted from 1 as the table counts; negative
+    from the end), its title, its colour bar's label and the step (0 for the heights)."""
+    from ..conventions.units import METRES, display_unit
+    from ..io.schema import ENTRIES, in_unit
+
+    name = args.field
+    if name not in f:
+        hint = " (run with --fields)" if name in ("pressure", "gap", "contact") else ""
+        raise InputError(f"'{args.file}' has no dataset '{name}'{hint}")
+    data = f[name]
+    units = in_unit(ENTRIES[name], str(f.attrs.get("length_unit", "")),
+                    str(f.attrs.get("pressure_unit", "")))  # fmt: skip
+    symbolic = {"length": "unit of --length", "pressure": "unit of --modulus"}
+    label = f"{name} ({symbolic.get(units.units, units.units)})"
+    scale = 1.0
+    if ENTRIES[name].units == "length" and units.units in METRES:  # with an SI prefix: nm
+        scale, shown = display_unit(float(np.max(np.abs(data[...]))), units.units)
+        label = f"{name} ({shown})"
+    if data.ndim == 2:
+        return data[...] * scale, f"{name} of the map as solved", label, 0
+    steps = data.shape[0]
+    if args.step == 0 or not -steps <= args.step <= steps:
+        raise InputError(
+            f"--step {args.step} is out of range: the steps count from 1 to {steps}, as the "
+            "run's table does (-1 is the last)"
+        )
+    step = args.step if args.step > 0 else steps + 1 + args.step
+    modulus = float(f.attrs.get("modulus", 1.0))
+    p0 = float(f["nominal_pressure"][step - 1]) if "nominal_pressure" in f else np.nan
+    unit = str(f.attrs.get("pressure_unit", ""))
+    load = f"p0 = {p0 / modulus:.3g} E*" + (f" = {p0:.3g} {unit}" if unit else "")
+    return data[step - 1] * scale, f"{name}, step {step} of {steps}, {load}", label, step
+
+
+def _plot_theory_file(f: Any, out: str) -> None:
+    """A theory file's spectrum and prediction, drawn again from the file."""
+    from types import SimpleNamespace
+
+    from ..io.plot import plot_theory
+
+    result = SimpleNamespace(
+        **{
+            k: f[k][...] for k in ("wavevector", "psd", "nominal_pressure", "mean_gap", "stiffness")
+        },
+        **{
+            k: f.attrs[k]
+            for k in (
+                "hurst_fit",
+                "rms_height",
+                "crossover_pressure",
+                "crossover_pressure_appendix",
+            )
+        },  # fmt: skip
+        fit_range=tuple(json.loads(f.attrs["fit_range"])),
+    )
+    plot_theory(out, result, float(f.attrs.get("modulus", 1.0)))
 
 
 def run_experiment(args: argparse.Namespace) -> int:

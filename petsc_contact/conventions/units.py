@@ -177,3 +177,18 @@ def force_unit(pressure_unit: str | None, length_unit: str | None) -> str:
     if pressure_unit is None or length_unit is None:
         return ""
     return f"{pressure_unit}*{length_unit}^2"
+
+
+DISPLAY = ("km", "m", "mm", "um", "nm", "pm")
+
+
+def display_unit(extent: float, unit: str | None) -> tuple[float, str]:
+    """The factor and unit to show lengths of size ``extent`` (in ``unit``) with 1 to 999 in
+    front: ``2e-5`` m is shown as ``20 um`` (factor 1e6).  Unit-free lengths stay as they are."""
+    if unit is None or not extent > 0:
+        return 1.0, unit or ""
+    metres = extent * METRES[unit]
+    for name in DISPLAY:
+        if metres >= METRES[name] or name == DISPLAY[-1]:
+            return METRES[unit] / METRES[name], name
+    return 1.0, unit

@@ -116,30 +116,115 @@ def plot_theory(path: str | None, result: Any, modulus: float) -> Any:
     return _finish(fig, (ax1, ax2), path)
 
 
-def plot_field(
+MASKS = {  # two-colour maps: what 0 and 1 mean, and their colours
+    "contact": (("open", "#e8e8e8"), ("in contact", "#b2182b")),
+    "filled": (("measured", "#e8e8e8"), ("filled", "#2166ac")),
+}
+LOG_RANGE = 100.0  # ``scale="auto"`` draws pressure on a log scale past this max/min ratio
+
+
+def plot_map(
     path: str | None,
     values: np.ndarray,
-    lengths: float | tuple[float, float],
-    title: str,
-    label: str,
-    contact: bool = False,
-    unit: str = "",
+    lengths: tuple[float, float],
+    length_unit: str = "",
+    kind: str = "pressure",
+    title: str = "",
+    label: str = "",
+    scale: str = "auto",
+    vmin: float | None = None,
+    vmax: float | None = None,
 ) -> Any:
-    """A map of one field over the cell ``[0, Lx] x [0, Ly]`` (physical axes, equal aspect)
-    with a colour bar; ``unit`` labels the axes."""
-    lx, ly = lengths if isinstance(lengths, tuple) else (lengths, lengths)
-    fig = _figure(figsize=(5.6, 4.6), layout="constrained")
+    """A map of one field over the cell (physical axes with an SI prefix, equal aspect).
+
+    Parameters
+    ----------
+    values
+        The ``nx x ny`` field (rows are ``x``).
+    lengths, length_unit
+        The sides ``(Lx, Ly)`` and their unit (``""``: unit-free).
+    kind
+        ``pressure``, ``gap`` (from 0 to its 99.5th percentile), ``heights`` (centred on 0,
+        to its 0.5th and 99.5th percentiles), or a mask: ``contact``, ``filled`` (two colours
+        and a legend).  A colour bar with arrows says values lie beyond its range.
+    label
+        The colour bar's label (with the values' unit).
+    scale
+        ``linear``, ``log``, or ``auto``: log for a pressure whose positive values span more
+        than :data:`LOG_RANGE` (from their first percentile; zero pressure, out of contact,
+        drawn in grey).
+    vmin, vmax
+        The colour range (default: the values').
+    """
+    from matplotlib.colors import ListedColormap, LogNorm, Normalize
+    from matplotlib.patches import Patch
+
+    from ..conventions.units import display_unit
+
+    lx, ly = lengths
+    factor, unit = display_unit(max(lx, ly), length_unit or None)
+    fig = _figure(figsize=(5.8, 4.8), layout="constrained")
     ax = fig.subplots()
-    cmap = "Greys" if contact else "viridis"
-    image = ax.imshow(
-        values.T, origin="lower", extent=(0, lx, 0, ly), cmap=cmap, interpolation="nearest"
-    )
-    suffix = f" ({unit})" if unit else ""
+    extent = (0.0, lx * factor, 0.0, ly * factor)
+    show = dict(origin="lower", extent=extent, interpolation="nearest", aspect="equal")
+    if kind in MASKS:
+        (off, off_colour), (on, on_colour) = MASKS[kind]
+        ax.imshow(values.T.astype(float), cmap=ListedColormap([off_colour, on_colour]),
+                  vmin=0, vmax=1, **show)  # fmt: skip
+        share = float(np.mean(values))
+        handles = [
+            Patch(color=off_colour, label=off),
+            Patch(color=on_colour, label=f"{on}, {100 * share:.3g}%"),
+        ]
+        ax.legend(handles=handles, loc="upper right", framealpha=0.9, fontsize=8)
+    else:
+        data = np.asarray(values, dtype=float)
+        positive = data[data > 0]
+        use_log = scale == "log" or (
+            scale == "auto"
+            and kind == "pressure"
+            and positive.size > 0
+            and positive.max() > LOG_RANGE * positive.min()
+        )
+        if use_log:
+            if positive.size == 0:
+                raise ValueError("a log scale needs positive values; use --scale linear")
+            low = vmin if vmin is not None else float(np.percentile(positive, 1))
+            norm: Any = LogNorm(vmin=low, vmax=vmax if vmax is not None else positive.max())
+            data = np.ma.masked_less_equal(data, 0)
+        elif kind == "heights":  # centred on the mean plane, robust to a few spikes
+            bound = float(np.max(np.abs(np.percentile(data, [0.5, 99.5]))))
+            norm = Normalize(
+                vmin=-bound if vmin is None else vmin, vmax=bound if vmax is None else vmax
+            )
+        else:  # a gap: from zero (contact) to its 99.5th percentile, robust to a few spikes
+            top = float(np.percentile(data, 99.5)) if vmax is None else vmax
+            norm = Normalize(vmin=vmin if vmin is not None else min(0.0, data.min()), vmax=top)
+        cmap = _colour_map("RdBu_r" if kind == "heights" else "viridis")
+        cmap.set_bad("#d9d9d9")
+        image = ax.imshow(data.T, cmap=cmap, norm=norm, **show)
+        slack = 1e-9 * float(np.ptp(data.compressed() if np.ma.isMA(data) else data))
+        clipped = (norm.vmin is not None and data.min() < norm.vmin - slack) or (
+            norm.vmax is not None and data.max() > norm.vmax + slack
+        )
+        fig.colorbar(
+            image,
+            ax=ax,
+            label=label + (" (log scale)" if use_log else ""),
+            shrink=0.9,
+            extend="both" if clipped else "neither",
+        )
+    suffix = f" ({unit})" if unit else " (unit of --length)"
     ax.set(xlabel="x" + suffix, ylabel="y" + suffix, title=title)
-    fig.colorbar(image, ax=ax, label=label)
     if path is not None:
         fig.savefig(path, dpi=110)
     return fig
+
+
+def _colour_map(name: str) -> Any:
+    import matplotlib
+
+    return matplotlib.colormaps[name].copy()
 
 
 def plot_compare(path: str | None, trajectories: Sequence[Any], reference: dict[str, Any]) -> Any:

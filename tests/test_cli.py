@@ -506,22 +506,33 @@ def test_fields_written_with_contact_mask(tmp_path):
 
 
 def test_plot_command(tmp_path):
+    """Every field and the heights as maps; steps counted from 1 as the table counts; the
+    scale chosen or given; a theory file drawn again."""
     out = tmp_path / "f.h5"
-    assert (
-        cli("periodic", *GEN, "--pressures", "1e-3", "--fields", "--output", str(out)).returncode
-        == 0
-    )
-    for field in ("pressure", "gap", "contact", "heights"):
+    args = ["periodic", *GEN, "--pressures", "1e-3,1e-2", "--fields", "--output", str(out)]
+    assert cli(*args).returncode == 0
+    for field, name in (
+        ("pressure", "f_pressure_step2.png"),
+        ("gap", "f_gap_step2.png"),
+        ("contact", "f_contact_step2.png"),
+        ("heights", "f_heights.png"),
+    ):
         r = cli("plot", str(out), "--field", field)
         assert r.returncode == 0, r.stderr
-        step = 0
-        assert (tmp_path / f"f_{field}_step{step}.png").stat().st_size > 1000
-    r = cli("plot", str(out), "--step", "3")
-    assert r.returncode == 2 and "out of range" in r.stderr
+        assert (tmp_path / name).stat().st_size > 1000, name
+    r = cli("plot", str(out), "--step", "1", "--scale", "linear", "--vmax", "0.1")
+    assert r.returncode == 0 and (tmp_path / "f_pressure_step1.png").exists(), r.stderr
+    for step in ("3", "0"):
+        r = cli("plot", str(out), "--step", step)
+        assert r.returncode == 2 and "count from 1 to 2" in r.stderr, r.stderr
     bare = tmp_path / "bare.h5"
     assert cli("periodic", *GEN, "--pressures", "1e-3", "--output", str(bare)).returncode == 0
     r = cli("plot", str(bare), "--field", "gap")
     assert r.returncode == 2 and "--fields" in r.stderr
+    theory = tmp_path / "t.h5"
+    assert cli("theory", *GEN, "--output", str(theory)).returncode == 0
+    r = cli("plot", str(theory))
+    assert r.returncode == 0 and (tmp_path / "t.png").stat().st_size > 1000, r.stderr
 
 
 def test_study_runs_in_resumable_pieces(tmp_path):

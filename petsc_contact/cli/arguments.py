@@ -506,7 +506,13 @@ def _theory_parser(sub: Any) -> None:
         help="N log-spaced pressures of the predictions (default 40, from 1e-7 E* to 0.1 E*)",
     )
     p.add_argument("--output", required=True, metavar="OUT.h5", help="HDF5 results")
-    p.add_argument("--plot", metavar="PNG", help="spectrum and K(p) with p_c marked")
+    p.add_argument("--plot", metavar="PNG", help="spectrum, u(p) and K(p) with p_c marked")
+    p.add_argument(
+        "--compare",
+        nargs="+",
+        metavar="RUN.h5",
+        help="with --plot: draw these periodic runs' mean gap and stiffness beside the theory",
+    )
     p.add_argument("--quiet", action="store_true", help="no table on standard output")
 
 

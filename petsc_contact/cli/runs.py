@@ -90,10 +90,14 @@ def _introduce(command: str, description: Any, prepared: Any) -> None:
     if scene.reading:
         print(f"# {scene.reading}", flush=True)
     record = prepared.record
+    inside = record.get("rms_slope_inside", float("nan"))
+    slope = f"h'_rms = {record['rms_slope']:.4g}"
+    if abs(inside - record["rms_slope"]) > 0.2 * record["rms_slope"]:  # NaN: never
+        slope += f" (the map taken as periodic; {inside:.4g} inside it)"
     print(
         f"# {command} {scene.grid.describe()}{' ' + unit if unit else ''}, "
         f"E* = {description.modulus_value:g}{unit_p}, h_rms = {record['rms_height']:.4g}, "
-        f"h'_rms = {record['rms_slope']:.4g}{prepared.intro}",
+        f"{slope}{prepared.intro}",
         flush=True,
     )
     finished = prepared.resumable
@@ -117,7 +121,10 @@ def _conclude(
         from ..io.plot import plot_punch, plot_sweep
 
         if description.geometry == "punch":
-            plot_punch(plot, table)
+            record = result.record
+            units = {"length": record["length_unit"], "pressure": record["pressure_unit"],
+                     "force": record["force_unit"]}  # fmt: skip
+            plot_punch(plot, table, units)
         else:
             plot_sweep(plot, table, description.modulus_value, result.record["rms_height"])
     failed = [s for s in table if not s["converged"]]

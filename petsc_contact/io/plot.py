@@ -16,29 +16,44 @@ import numpy as np
 def plot_sweep(
     path: str | None, steps: Sequence[dict[str, Any]], modulus: float, h_rms: float
 ) -> Any:
-    """Two panels: ``A/A0`` vs ``p0/E*`` (log-log) and ``p0/E*`` vs ``u_bar/h_rms`` (semi-log).
+    """``A/A0`` against ``p0/E*`` (log-log), ``p0/E*`` against ``u_bar/h_rms`` (semi-log) and,
+    when the steps have it, the exact stiffness ``K h_rms/E*`` against ``p0/E*`` (log-log).
 
     Steps that did not converge are drawn as red crosses.
     """
     p = np.array([s["nominal_pressure"] for s in steps]) / modulus
     area = np.array([s["area_fraction"] for s in steps])
-    gap = np.array([s["mean_gap"] for s in steps]) / (h_rms if h_rms > 0 else 1.0)
+    scale = h_rms if h_rms > 0 else 1.0
+    gap = np.array([s["mean_gap"] for s in steps]) / scale
     ok = np.array([bool(s["converged"]) for s in steps])
-    fig = _figure(figsize=(9, 3.8), layout="constrained")
-    ax1, ax2 = fig.subplots(1, 2)
-    ax1.loglog(p[ok], area[ok], "o-", label="converged")
-    ax2.semilogy(gap[ok], p[ok], "o-")
-    if (~ok).any():
-        ax1.loglog(p[~ok], np.maximum(area[~ok], 1e-12), "rx", ms=10, label="NOT converged")
-        ax2.semilogy(gap[~ok], p[~ok], "rx", ms=10)
-        ax1.legend()
-    ax1.set(xlabel="$p_0/E^*$", ylabel="$A/A_0$", title="contact area")
-    ax2.set(xlabel=r"$\bar u/h_\mathrm{rms}$", ylabel="$p_0/E^*$", title="mean gap")
-    return _finish(fig, (ax1, ax2), path)
+    stiffness = all("stiffness" in s for s in steps)
+    fig = _figure(figsize=(13 if stiffness else 9, 3.8), layout="constrained")
+    axes = fig.subplots(1, 3 if stiffness else 2)
+    panels = [(axes[0], area, "loglog"), (axes[1], None, "semilogy")]
+    if stiffness:
+        k = np.array([s["stiffness"] for s in steps]) * scale / modulus
+        panels.append((axes[2], k, "loglog"))
+    for ax, y, kind in panels:
+        xs, ys = (gap, p) if y is None else (p, y)
+        getattr(ax, kind)(xs[ok], ys[ok], "o-", label="converged")
+        if (~ok).any():
+            getattr(ax, kind)(xs[~ok], np.abs(ys[~ok]) + 1e-300, "rx", ms=10, label="NOT converged")
+            ax.legend()
+    axes[0].set(xlabel="$p_0/E^*$", ylabel="$A/A_0$", title="contact area")
+    axes[1].set(xlabel=r"$\bar u/h_\mathrm{rms}$", ylabel="$p_0/E^*$", title="mean gap")
+    if stiffness:
+        axes[2].set(
+            xlabel="$p_0/E^*$", ylabel=r"$K h_\mathrm{rms}/E^*$", title="interfacial stiffness"
+        )
+    return _finish(fig, axes, path)
 
 
-def plot_punch(path: str | None, steps: Sequence[dict[str, Any]]) -> Any:
-    """Two panels: force vs approach, and interfacial stiffness per area vs nominal pressure."""
+def plot_punch(
+    path: str | None, steps: Sequence[dict[str, Any]], units: dict[str, str] | None = None
+) -> Any:
+    """Force against approach, and the interfacial stiffness per area against the nominal
+    pressure; ``units`` (``length``, ``pressure``, ``force``) label the axes."""
+    u = {"length": "", "pressure": "", "force": ""} | (units or {})
     ok = np.array([bool(s["converged"]) for s in steps])
     d = np.array([s["approach"] for s in steps])
     f = np.array([s["force"] for s in steps])
@@ -51,9 +66,23 @@ def plot_punch(path: str | None, steps: Sequence[dict[str, Any]]) -> Any:
     if (~ok).any():
         ax1.plot(d[~ok], f[~ok], "rx", ms=10, label="NOT converged")
         ax1.legend()
-    ax1.set(xlabel=r"approach $\delta$", ylabel="force $F$", title="punch")
-    ax2.set(xlabel="$F/L_p^2$", ylabel="$K$ (per area)", title="interfacial stiffness, Eq. 2")
+    per = f"{u['pressure']}/{u['length']}" if u["pressure"] and u["length"] else ""
+    ax1.set(
+        xlabel=rf"approach $\delta${_in(u['length'], 'length')}",
+        ylabel=f"force $F${_in(u['force'], 'E* length^2')}",
+        title="punch",
+    )
+    ax2.set(
+        xlabel=f"$F/L_p^2${_in(u['pressure'], 'E*')}",
+        ylabel=f"$K${_in(per, 'E*/length')}",
+        title="interfacial stiffness, Eq. 2",
+    )
     return _finish(fig, (ax1, ax2), path)
+
+
+def _in(unit: str, symbolic: str) -> str:
+    """An axis label's unit: `` (GPa)``, or the symbolic one (`` (units of E*)``)."""
+    return f" ({unit})" if unit else f" (units of {symbolic})"
 
 
 def plot_experiment(
@@ -85,35 +114,56 @@ def plot_ensemble(path: str | None, summary: dict[str, np.ndarray], modulus: flo
     return _finish(fig, list(axes[0]), path)
 
 
-def plot_theory(path: str | None, result: Any, modulus: float) -> Any:
-    """Two panels: the map's spectrum with its fitted power law, and Persson's ``K(p)`` with
-    the finite-size crossover ``p_c`` (both variants) marked."""
-    fig = _figure(figsize=(9, 3.8), layout="constrained")
-    ax1, ax2 = fig.subplots(1, 2)
+def plot_theory(
+    path: str | None,
+    result: Any,
+    modulus: float,
+    runs: Sequence[tuple[str, dict[str, np.ndarray]]] = (),
+    units: dict[str, str] | None = None,
+) -> Any:
+    """The map's spectrum with its fitted power law, and Persson's mean gap ``u_bar(p)`` and
+    stiffness ``K(p)`` with the finite-size crossover ``p_c`` (both variants) marked.
+
+    ``runs`` are simulations to draw beside the theory: ``(label, table)`` with the arrays
+    ``nominal_pressure``, ``mean_gap`` and, if computed, ``stiffness`` (a run's file).
+    ``units`` (``length``) label the spectrum's axes.
+    """
+    length = (units or {}).get("length", "")
+    h = result.rms_height if result.rms_height > 0 else 1.0
+    fig = _figure(figsize=(13, 3.8), layout="constrained")
+    ax1, ax2, ax3 = fig.subplots(1, 3)
     ax1.loglog(result.wavevector, result.psd, ".", ms=3, label="map")
     lo, hi = result.fit_range
     q = np.geomspace(lo, hi, 20)
     inside = (result.wavevector >= lo) & (result.wavevector <= hi)
-    anchor = np.exp(
-        np.mean(
-            np.log(result.psd[inside] * result.wavevector[inside] ** (2 + 2 * result.hurst_fit))
-        )
+    slope = 2 + 2 * result.hurst_fit
+    anchor = np.exp(np.mean(np.log(result.psd[inside] * result.wavevector[inside] ** slope)))
+    ax1.loglog(q, anchor * q**-slope, "k-", label=f"H = {result.hurst_fit:.2f}")
+    ax1.set(
+        xlabel=f"$q${_in(f'1/{length}' if length else '', '1/length')}",
+        ylabel=f"$C(q)${_in(f'{length}^4' if length else '', 'length^4')}",
+        title="spectrum",
     )
-    ax1.loglog(
-        q, anchor * q ** (-2 - 2 * result.hurst_fit), "k-", label=f"H = {result.hurst_fit:.2f}"
-    )
-    ax1.set(xlabel="$q$", ylabel="$C(q)$", title="spectrum")
     ax1.legend()
     p = result.nominal_pressure / modulus
-    ax2.loglog(p, result.stiffness * result.rms_height / modulus, "-", label="Persson")
+    ax2.semilogx(p, result.mean_gap / h, "-", label="Persson")
+    ax3.loglog(p, result.stiffness * h / modulus, "-", label="Persson")
+    for label, table in runs:
+        sim_p = np.asarray(table["nominal_pressure"]) / modulus
+        ax2.semilogx(sim_p, np.asarray(table["mean_gap"]) / h, "o", mfc="none", label=label)
+        if "stiffness" in table:
+            sim_k = np.asarray(table["stiffness"]) * h / modulus
+            ax3.loglog(sim_p, sim_k, "o", mfc="none", label=label)
     for value, style, name in (
         (result.crossover_pressure, "--", "$p_c$ (Eq. 13)"),
         (result.crossover_pressure_appendix, ":", r"$p_c$ ($q_r \approx \pi/L$)"),
     ):
-        ax2.axvline(value / modulus, color="k", ls=style, label=name)
-    ax2.set(xlabel="$p_0/E^*$", ylabel=r"$K h_\mathrm{rms}/E^*$", title="interfacial stiffness")
-    ax2.legend()
-    return _finish(fig, (ax1, ax2), path)
+        ax3.axvline(value / modulus, color="k", ls=style, label=name)
+    ax2.set(xlabel="$p_0/E^*$", ylabel=r"$\bar u/h_\mathrm{rms}$", title="mean gap")
+    ax3.set(xlabel="$p_0/E^*$", ylabel=r"$K h_\mathrm{rms}/E^*$", title="interfacial stiffness")
+    ax2.legend(fontsize=8)
+    ax3.legend(fontsize=8)
+    return _finish(fig, (ax1, ax2, ax3), path)
 
 
 MASKS = {  # two-colour maps: what 0 and 1 mean, and their colours

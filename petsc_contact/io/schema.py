@@ -317,6 +317,7 @@ RUN_ATTRIBUTES = (
     "grid",
     "heights_file",
     "heights_sha256",
+    "rms_slope_inside",
     "heights_reader",
     "heights_channel",
     "heights_channel_index",

@@ -189,6 +189,58 @@ def map_and_lengths(
     return topo.heights, topo.lengths
 
 
+@dataclass(frozen=True)
+class Profile:
+    """A line scan as read from a file: heights along its length, uniformly spaced."""
+
+    heights: np.ndarray
+    length: float | None
+    unit: str | None
+    reader: str
+    note: str = ""  # what was done to it (a nonuniform scan resampled)
+
+    def describe(self) -> str:
+        side = f" over {self.length:.6g} {self.unit or ''}" if self.length else ""
+        return f"a line scan of {self.heights.size} points{side}, read by {self.reader}{self.note}"
+
+
+def read_profile(path: str, channel: Channel = None) -> Profile:
+    """A line scan (``.csv`` x z pairs, a profilometer's file) through SurfaceTopography; a
+    nonuniform one is resampled to as many uniform points (linear interpolation).
+    ``ValueError`` for a file that holds a map or nothing SurfaceTopography reads."""
+    from SurfaceTopography import open_topography
+
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        try:
+            reader = open_topography(path)
+        except Exception as exc:
+            raise ValueError(f"cannot read a line scan from '{path}': {_flat(exc)}") from None
+        names = [str(c.name) for c in reader.channels]
+        chosen = (
+            reader.default_channel
+            if channel is None
+            else reader.channels[_channel_index(names, channel, path)]
+        )
+        if chosen.dim != 1:
+            raise ValueError(f"'{path}' holds a map, not a line scan")
+        sized = chosen.physical_sizes is not None
+        scan = reader.topography(channel_index=chosen.index, physical_sizes=None if sized else 1.0)
+        note = ""
+        if not scan.is_uniform:
+            scan = scan.to_uniform(nb_points=scan.nb_grid_pts[0])
+            note = f"; nonuniform, resampled to {scan.nb_grid_pts[0]} uniform points"
+    heights: np.ndarray = np.ma.filled(np.ma.asarray(scan.heights(), dtype=float), np.nan)
+    unit = scan.unit
+    return Profile(
+        heights,
+        float(scan.physical_sizes[0]) if sized else None,
+        _unit(unit) if isinstance(unit, str) else None,
+        f"SurfaceTopography {_version()}",
+        note,
+    )
+
+
 def read_topography(path: str, channel: Channel = None) -> Topography:
     """Read ``path`` (see the module docstring).
 

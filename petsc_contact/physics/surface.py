@@ -158,11 +158,18 @@ def radial_psd(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Radially averaged PSD of a realisation.
 
+    One ``q`` grid for squares, rectangles and oblong pixels: bins of the coarser of the two
+    lattice spacings ``max(2 pi/Lx, 2 pi/Ly)``, so that every bin holds wavevectors of every
+    direction (finer bins on a rectangle hold the long side's modes only, every other bin,
+    and the averages split into two branches), up to the smaller of the two Nyquist
+    wavevectors ``pi/max(ax, ay)`` (beyond it a bin holds only the directions of the finer
+    axis: the spectrum turns up there).
+
     Parameters
     ----------
     bins
-        Number of logarithmic bins between ``q0`` and the Nyquist wavevector; ``None`` gives
-        linear bins of width ``q0`` centred on ``k q0``.
+        Number of logarithmic bins between ``q0`` and that Nyquist wavevector; ``None``
+        gives linear bins of the lattice's coarser spacing ``dq``, centred on ``k dq``.
 
     Returns
     -------
@@ -171,17 +178,17 @@ def radial_psd(
     """
     c = fourier_power(grid, fft, h)
     q = wavevector_magnitude(grid, fft)
-    w = half_spectrum_weights(grid, fft) * np.ones_like(q)
-    q0 = grid.q0
-    ax, ay = grid.spacing
-    qmax = np.pi * np.hypot(1 / ax, 1 / ay)
+    w = half_spectrum_weights(grid, fft) * np.where(q > 0, 1.0, 0.0)
+    dq = max(grid.dq)
+    qmax = np.pi / max(grid.spacing)
     if bins is None:
-        index = np.rint(q / q0).astype(int)
-        nbins = int(np.rint(qmax / q0)) + 2
+        index = np.rint(q / dq).astype(int)
+        nbins = int(np.floor(qmax / dq + 0.5)) + 1
     else:
-        edges = np.geomspace(q0 * 0.999, qmax * 1.001, bins + 1)
+        edges = np.geomspace(grid.q0 * 0.999, qmax * 1.001, bins + 1)
         index = np.searchsorted(edges, q) - 1
         nbins = bins + 1
+    w = np.where(q <= qmax * (1 + 1e-12), w, 0.0)  # only the disc every direction fills
     index = np.clip(index, 0, nbins - 1)
     stats = [
         np.bincount(index.ravel(), weights=(w * x).ravel(), minlength=nbins)

@@ -343,6 +343,7 @@ def _punch_plan(run: Run, scene: Scene) -> Plan:
 
 
 FILE_RECORD = (
+    "rms_slope_inside",
     "heights_reader",
     "heights_channel",
     "heights_channel_index",

@@ -165,7 +165,8 @@ def measured(run: Run, given: Lengths | None) -> tuple[np.ndarray, Lengths, dict
         "file_unit": topo.unit or "",
         "metadata_overridden": overridden,
     }
-    _warn(run, full, spacing)
+    inside = _warn(run, full, spacing)
+    record["rms_slope_inside"] = inside  # finite differences inside the map (rank 0)
     name = run.heights if isinstance(run.heights, str) else record["heights_reader"]
     return full, lengths, record, f"{name}: {topo.describe()}"
 
@@ -223,27 +224,38 @@ def check_height_scale(heights: np.ndarray, length: Any) -> None:
         )
 
 
-def _warn(run: Run, full: np.ndarray, spacing: tuple[float, float]) -> None:
+def _warn(run: Run, full: np.ndarray, spacing: tuple[float, float]) -> float:
+    """Warn about implausible slopes and mismatched edges; the rms slope from finite
+    differences inside the map (rank 0; NaN on the others, which skip the passes)."""
     from mpi4py import MPI
 
     from ..physics.preparation import EDGE_MISMATCH_LIMIT, SLOPE_RANGE, edge_mismatch, rms_slope
 
     if MPI.COMM_WORLD.rank != 0:  # only rank 0 speaks: the others skip the passes over the map
-        return
+        return float("nan")
     slope = rms_slope(full, spacing)
     if slope > 0 and not SLOPE_RANGE[0] <= slope <= SLOPE_RANGE[1]:
         warnings.warn(
-            f"the map's rms slope is {slope:.3g}, outside {SLOPE_RANGE[0]:g}..{SLOPE_RANGE[1]:g}:"
-            " are the units right (--length, --height-unit)?",
+            f"the map's rms slope (finite differences inside the map) is {slope:.3g}, outside "
+            f"{SLOPE_RANGE[0]:g}..{SLOPE_RANGE[1]:g}: are the units right (--length, "
+            "--height-unit)?",
             MapWarning,
             stacklevel=3,
         )
     mismatch = edge_mismatch(full)
     if run.geometry == "periodic" and mismatch > EDGE_MISMATCH_LIMIT:
+        done = run.detrend in ("slope", "curvature")
+        remedy = (
+            "the free-boundary geometry (petsc-contact punch) needs no periodicity"
+            if done
+            else "consider --detrend slope, or the free-boundary geometry (petsc-contact "
+            "punch), which needs no periodicity"
+        )
         warnings.warn(
             f"the map's opposite edges differ by {mismatch:.3g} times its typical neighbour "
-            "step, so treated as periodic it has a step at its edges; consider --detrend "
-            "slope, or the free-boundary geometry (petsc-contact punch)",
+            f"step{f' after --detrend {run.detrend}' if done else ''}, so treated as periodic it "
+            f"has a step at its edges; {remedy}",
             MapWarning,
             stacklevel=3,
         )
+    return slope

@@ -77,6 +77,15 @@ def quarter(grid: Grid, column: np.ndarray) -> np.ndarray:
     return _allgather(np.ascontiguousarray(mine), grid.comm)
 
 
+def response_quarter(grid: Grid, apply: Any) -> np.ndarray:
+    """:func:`quarter` of an operator's response to a unit value at pixel ``(0, 0)``;
+    ``apply(x, out)`` applies it to this rank's slab."""
+    impulse = np.zeros(grid.local_shape)
+    if grid.rows.start == 0:
+        impulse[0, 0] = 1.0
+    return quarter(grid, apply(impulse, np.empty_like(impulse)))
+
+
 def _allgather(local: np.ndarray, comm: Any) -> np.ndarray:
     """Concatenate every rank's array along the first axis, in rank order."""
     return local if comm.size == 1 else np.concatenate(comm.allgather(local))

@@ -11,8 +11,9 @@ temporary ``git worktree`` of ``--baseline``, this checkout from its own tree, a
 the contact solve's time, the stiffness solve's iterations and time (NaN for a commit that
 does not record it); per run, the wall time and the peak resident memory of the process; and
 the ratios of the medians (this checkout over the baseline). The mean gaps and stiffnesses
-of the two are compared step by step: a mismatch beyond the tolerances' reach (5e-7 relative in the mean gap, 1e-6 in the stiffness) is
-printed as MISMATCH and makes the exit status 1.
+of the two are compared step by step: a mismatch beyond the tolerances' reach (5e-7
+relative in the mean gap, 1e-6 in the stiffness) is printed as MISMATCH and makes the exit
+status 1.
 """
 
 from __future__ import annotations

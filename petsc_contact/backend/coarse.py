@@ -34,7 +34,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 from scipy.linalg import LinAlgError, cho_factor, cho_solve
 
 from ..conventions.grid import Grid
@@ -103,9 +103,9 @@ def _fold(d: int, n: int) -> int:
 
 @njit(cache=True, nogil=True)
 def _interpolate(quarter: np.ndarray, dx: float, dy: float, nx: int, ny: int) -> float:
-    """``G`` at a real offset, bilinear in the folded quarter."""
-    dx = abs(dx) % nx
-    dy = abs(dy) % ny
+    """``G`` at a real offset ``|dx| < nx``, ``|dy| < ny``, bilinear in the folded quarter."""
+    dx = abs(dx)
+    dy = abs(dy)
     dx = min(dx, nx - dx)
     dy = min(dy, ny - dy)
     hx, hy = quarter.shape[0] - 1, quarter.shape[1] - 1
@@ -117,7 +117,7 @@ def _interpolate(quarter: np.ndarray, dx: float, dy: float, nx: int, ny: int) ->
     )
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, parallel=True)
 def _coarse_matrix(
     rows: np.ndarray,
     cols: np.ndarray,
@@ -127,36 +127,33 @@ def _coarse_matrix(
     quarter: np.ndarray,
     nx: int,
     ny: int,
+    near: np.ndarray,
     reach: int,
 ) -> np.ndarray:
     """``E = W^T G_BB W`` for aggregates ``I`` holding the pixels ``starts[I]:starts[I+1]``
     of ``(rows, cols)``, in block ``block_rc[I]``; ``lookup[bi, bj]`` is the aggregate of a
-    block (``-1`` for none).  Exact between blocks at most ``reach`` blocks apart, monopoles
-    beyond."""
+    block (``-1`` for none).  Exact between blocks at most ``reach`` blocks apart, from
+    ``near``, the corner of ``quarter`` that their pixel offsets reach (small enough for the
+    cache); monopoles beyond.  Only the upper triangle is filled (rows in parallel)."""
     k = starts.size - 1
     sizes = np.empty(k)
     centre = np.empty((k, 2))
     for a in range(k):
         s, e = starts[a], starts[a + 1]
         sizes[a] = e - s
-        # the centroid, unwrapped around the aggregate's first pixel (a block does not wrap)
+        # the centroid (an aggregate lies in one block, which does not wrap)
         centre[a, 0] = rows[s:e].astype(np.float64).mean()
         centre[a, 1] = cols[s:e].astype(np.float64).mean()
-    e_mat = np.empty((k, k))
-    for a in range(k):
+    e_mat = np.zeros((k, k))
+    for a in prange(k):
+        ra, ca, sa = centre[a, 0], centre[a, 1], sizes[a]
         for b in range(a, k):
-            v = (
-                sizes[a]
-                * sizes[b]
-                * _interpolate(
-                    quarter, centre[a, 0] - centre[b, 0], centre[a, 1] - centre[b, 1], nx, ny
-                )
+            e_mat[a, b] = (
+                sa * sizes[b] * _interpolate(quarter, ra - centre[b, 0], ca - centre[b, 1], nx, ny)
             )
-            e_mat[a, b] = v
-            e_mat[b, a] = v
     bx, by = lookup.shape
-    seen = np.empty((2 * reach + 1) ** 2, dtype=np.int64)
-    for a in range(k):
+    for a in prange(k):
+        seen = np.empty((2 * reach + 1) ** 2, dtype=np.int64)
         count = 0
         for di in range(-reach, reach + 1):
             for dj in range(-reach, reach + 1):
@@ -172,10 +169,10 @@ def _coarse_matrix(
                 count += 1
                 total = 0.0
                 for p in range(starts[a], starts[a + 1]):
+                    rp, cp = rows[p], cols[p]
                     for q in range(starts[b], starts[b + 1]):
-                        total += quarter[_fold(rows[p] - rows[q], nx), _fold(cols[p] - cols[q], ny)]
+                        total += near[_fold(rp - rows[q], nx), _fold(cp - cols[q], ny)]
                 e_mat[a, b] = total
-                e_mat[b, a] = total
     return e_mat
 
 
@@ -232,6 +229,7 @@ class CoarseSpace:
         lookup = np.full((bx, by), -1, dtype=np.int64)
         block_rc = np.stack(np.divmod(ids, by), axis=1)
         lookup[block_rc[:, 0], block_rc[:, 1]] = np.arange(k)
+        reach = (NEAR_REACH + 1) * block  # the largest folded offset of a near pair, plus one
         coarse = _coarse_matrix(
             np.ascontiguousarray(both[order, 0]),
             np.ascontiguousarray(both[order, 1]),
@@ -241,12 +239,13 @@ class CoarseSpace:
             np.ascontiguousarray(quarter, dtype=float),
             nx,
             ny,
+            np.ascontiguousarray(quarter[:reach, :reach], dtype=float),
             NEAR_REACH,
         )
         if block > 1:  # single pixels: the monopoles are exact
             coarse[np.diag_indices(k)] *= 1.0 + DIAGONAL_INFLATION
         try:
-            self._factor = cho_factor(coarse, lower=True, overwrite_a=True, check_finite=False)
+            self._factor = cho_factor(coarse, lower=False, overwrite_a=True, check_finite=False)
         except LinAlgError:  # E not positive definite: no coarse space
             self.factorised = False
             return

@@ -112,6 +112,8 @@ def _interpolate(quarter: np.ndarray, dx: float, dy: float, nx: int, ny: int) ->
     i, j = min(int(dx), hx), min(int(dy), hy)
     i1, j1 = min(i + 1, hx), min(j + 1, hy)
     fx, fy = dx - i, dy - j
+    if fx == 0.0 and fy == 0.0:  # a pixel offset (single-pixel aggregates)
+        return quarter[i, j]
     return (1.0 - fx) * ((1.0 - fy) * quarter[i, j] + fy * quarter[i, j1]) + fx * (
         (1.0 - fy) * quarter[i1, j] + fy * quarter[i1, j1]
     )

@@ -291,13 +291,15 @@ class CoarseCorrected(ShellInterface):
         ``G``, with a zero ``q = 0`` entry (``apply_array`` and ``diagonal``).
     correction
         The coarse space of the held contact set.
+    work
+        Two flat field-sized arrays, the first zero (:func:`add_correction`).
     """
 
-    def __init__(self, compliance: Any, correction: CoarseSpace) -> None:
+    def __init__(self, compliance: Any, correction: CoarseSpace, work: np.ndarray) -> None:
         self.op = compliance
         self.grid = compliance.grid
         self.correction = correction
-        self._work = np.zeros((2, int(np.prod(self.grid.local_shape))))
+        self._work = work
         self.applications = 0
 
     def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:

@@ -77,13 +77,16 @@ def quarter(grid: Grid, column: np.ndarray) -> np.ndarray:
     return _allgather(np.ascontiguousarray(mine), grid.comm)
 
 
-def response_quarter(grid: Grid, apply: Any) -> np.ndarray:
+def response_quarter(grid: Grid, apply: Any, work: np.ndarray) -> np.ndarray:
     """:func:`quarter` of an operator's response to a unit value at pixel ``(0, 0)``;
-    ``apply(x, out)`` applies it to this rank's slab."""
-    impulse = np.zeros(grid.local_shape)
+    ``apply(x, out)`` applies it to this rank's slab, ``work`` is two flat field-sized
+    arrays, the first zero (it is left zero)."""
+    impulse, response = (w.reshape(grid.local_shape) for w in work)
     if grid.rows.start == 0:
         impulse[0, 0] = 1.0
-    return quarter(grid, apply(impulse, np.empty_like(impulse)))
+    apply(impulse, response)
+    impulse[0, 0] = 0.0
+    return quarter(grid, response)
 
 
 def _allgather(local: np.ndarray, comm: Any) -> np.ndarray:

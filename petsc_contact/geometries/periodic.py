@@ -101,7 +101,7 @@ class MeanModePreconditioner(FourierOperator):
         self._last_count = 0  # the bound count of the last adapt
         self._built_free: np.ndarray | None = None  # the free set the coarse space was built on
         self._quarter: np.ndarray | None = None  # G's quarter, made when the Schur form starts
-        self._spread: np.ndarray | None = None  # work fields of the Schur form
+        self._spread: np.ndarray | None = None  # work fields of the set-dependent forms
 
     @property
     def schur(self) -> ContactSchur | None:
@@ -178,8 +178,16 @@ class MeanModePreconditioner(FourierOperator):
             self._fill(0.0)
         self._set_mean_mode(0.0)
         if self._quarter is None:
-            self._quarter = response_quarter(self.grid, super().apply_array)
+            self._quarter = response_quarter(self.grid, super().apply_array, self.work_fields())
         return self._quarter
+
+    def work_fields(self) -> np.ndarray:
+        """Two flat field-sized arrays, the first zero, kept while a set-dependent form is in
+        use (:func:`~petsc_contact.backend.coarse.add_correction`); lent to the held-set
+        stiffness solve after a contact solve."""
+        if self._spread is None:
+            self._spread = np.zeros((2, int(np.prod(self.grid.local_shape))))
+        return self._spread
 
     def _stale(self, free: np.ndarray, bound_count: int) -> bool:
         """Whether more than :data:`REBUILD_FRACTION` of the set changed since the build."""
@@ -210,9 +218,7 @@ class MeanModePreconditioner(FourierOperator):
         """``out <- M x``; in the Schur form ``x`` must vanish on the bound set."""
         super().apply_array(x, out)
         if self.correction is not None:
-            if self._spread is None:  # two work fields, kept while a set-dependent form is used
-                self._spread = np.zeros((2, out.size))
-            add_correction(super().apply_array, self.correction, x, out, self._spread)
+            add_correction(super().apply_array, self.correction, x, out, self.work_fields())
         return out
 
 
@@ -380,16 +386,17 @@ class PeriodicProblem:
             return self.held_compliance(self.interfacial_stiffness)
         compliance = self._compliance(0.0)
         set_mean_mode(compliance, 0.0)
+        work = pre.work_fields()  # the contact solve is over: its work fields are free
         space = CoarseSpace(
             self.grid,
-            response_quarter(self.grid, compliance.apply_array),
+            response_quarter(self.grid, compliance.apply_array, work),
             contact.reshape(self.grid.local_shape),
             1 if exact else pre.options.block,
             self.grid.size if exact else coarse_limit(self.grid.size),
         )
         if not space.factorised:
             return self.held_compliance(self.interfacial_stiffness)
-        return CoarseCorrected(compliance, space)
+        return CoarseCorrected(compliance, space, work)
 
     def _compliance(self, support: float) -> FourierOperator:
         """``1/(K + support)`` (normalised ``support``) in the one operator kept for it."""

@@ -70,26 +70,6 @@ def test_symmetric_positive_semidefinite_for_any_aggregates(petsc):
         assert eig.min() > 1e-6 * eig.max()  # definite on the free set
 
 
-def test_single_pixel_aggregates_are_the_exact_schur_form(petsc):
-    """With ``b = 1`` the form is the exact inverse on the free set: ``z_B = 0`` and
-    ``H_FF z_F = r_F`` to the rounding of a dense solve and two FFTs."""
-    grid, pb = problem(48)
-    pre = pb.preconditioner
-    rng = np.random.default_rng(0)
-    bound = np.zeros(grid.local_shape, dtype=bool)
-    bound[10:16, 20:27] = True
-    bound.flat[rng.choice(grid.size, 40, replace=False)] = True
-    free = ~bound.reshape(-1)
-    pre._exact_compliance()
-    pre.correction = CoarseSpace(grid, pre._quarter, bound, 1, grid.size)
-    r = rng.standard_normal(grid.size) * free
-    z = pre.apply_array(r, np.empty_like(r))
-    hz = pb.hessian.apply_array(z, np.empty_like(z))
-    scale = np.abs(r).max()
-    assert np.abs(z[~free]).max() <= 1e-11 * np.abs(z).max()
-    assert np.abs((hz - r)[free]).max() <= 1e-9 * scale
-
-
 def test_coarse_matrix_is_above_the_exact_one(petsc):
     """The assembled ``E`` (exact near blocks, monopoles beyond, diagonal raised) minus the
     exact ``W^T G_BB W`` is positive definite on a rough surface's contact (the highest 3%

@@ -40,7 +40,7 @@ from scipy.linalg import LinAlgError, cho_factor, cho_solve
 from ..conventions.grid import Grid
 from . import _petsc
 from .operator import ShellInterface
-from .schur import _allgather
+from .schur import allgather
 
 DIAGONAL_INFLATION = 0.2  # relative: keeps E above the exact one (monopole error ~1%; measured)
 NEAR_REACH = 1  # blocks this far apart (Chebyshev, in blocks) are summed pixel pair by pair
@@ -213,7 +213,7 @@ class CoarseSpace:
         self.local = np.flatnonzero(bound)
         nx, ny = grid.shape
         rows, cols = np.divmod(self.local, ny)
-        both = _allgather(np.stack([rows + grid.rows.start, cols], axis=1), grid.comm)
+        both = allgather(np.stack([rows + grid.rows.start, cols], axis=1), grid.comm)
         offset = 0 if grid.comm.size == 1 else int(grid.comm.exscan(len(self.local)) or 0)
         while True:
             bx, by = -(-nx // block), -(-ny // block)

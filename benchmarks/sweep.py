@@ -8,11 +8,12 @@ Both runs are the command line a user types, ``petsc-contact periodic --grid N -
 (paper bandwidth: roughness down to two pixels), each in its own process: the baseline from a
 temporary ``git worktree`` of ``--baseline``, this checkout from its own tree, alternated
 ``--repeat`` times (the machine's speed drifts). Prints, per step and run, the iterations,
-the contact solve's time, the stiffness solve's iterations; per run, the wall time and the
-peak resident memory of the process; and the ratios of the medians (this checkout over the
-baseline). The mean gaps and stiffnesses of the two are compared step by step: a mismatch
-beyond the tolerances' reach (5e-7 relative in the mean gap, 1e-6 in the stiffness) is
-printed as MISMATCH and makes the exit status 1.
+the contact solve's time, the stiffness solve's iterations and time (NaN for a commit that
+does not record it); per run, the wall time and the peak resident memory of the process; and
+the ratios of the medians (this checkout over the baseline). The mean gaps and stiffnesses
+of the two are compared step by step: a mismatch beyond the tolerances' reach (5e-7
+relative in the mean gap, 1e-6 in the stiffness) is printed as MISMATCH and makes the exit
+status 1.
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ COLUMNS = (
     "area_fraction",
     "converged",
 )
+OPTIONAL = ("stiffness_time",)  # not written by earlier commits: NaN there
 
 
 def run(tree: str, arguments: list[str], output: str) -> dict:
@@ -63,6 +65,10 @@ def run(tree: str, arguments: list[str], output: str) -> dict:
         raise SystemExit(f"{tree}: petsc-contact exited with status {status}")
     with h5py.File(output) as f:
         columns = {k: np.asarray(f[k]) for k in COLUMNS}
+        for k in OPTIONAL:
+            columns[k] = (
+                np.asarray(f[k]) if k in f else np.full(columns["iterations"].shape, np.nan)
+            )
     return {"wall": wall, "memory": usage.ru_maxrss / 2**20, **columns}
 
 
@@ -127,8 +133,8 @@ def report(runs: dict[str, list[dict]], baseline: str) -> int:
     """Print the per-step table and the ratios; 1 if the two disagree or a step failed."""
     base, this = runs["baseline"][0], runs["this"][0]
     print(
-        f"{'step':>4} {'p0':>9} | {'its':>4} {'solve_s':>7} {'K its':>5} | "
-        f"{'its':>4} {'solve_s':>7} {'K its':>5} | {'d mean_gap':>10} {'d K':>8}  "
+        f"{'step':>4} {'p0':>9} {'area':>7} | {'its':>4} {'solve_s':>7} {'K its':>5} {'K_s':>5} | "
+        f"{'its':>4} {'solve_s':>7} {'K its':>5} {'K_s':>5} | {'d mean_gap':>10} {'d K':>8}  "
         f"(baseline {baseline} | this checkout)"
     )
     status = 0
@@ -143,15 +149,21 @@ def report(runs: dict[str, list[dict]], baseline: str) -> int:
         if du > 5e-7 or dk > 1e-6 or not (this["converged"][i] and base["converged"][i]):
             flag, status = "  MISMATCH", 1
         print(
-            f"{i + 1:>4} {p0:>9.3e} | {base['iterations'][i]:>4} {base['solve_time'][i]:>7.2f} "
-            f"{base['stiffness_iterations'][i]:>5} | {this['iterations'][i]:>4} "
-            f"{this['solve_time'][i]:>7.2f} {this['stiffness_iterations'][i]:>5} | "
+            f"{i + 1:>4} {p0:>9.3e} {this['area_fraction'][i]:>7.4f} | "
+            f"{base['iterations'][i]:>4} {base['solve_time'][i]:>7.2f} "
+            f"{base['stiffness_iterations'][i]:>5} {base['stiffness_time'][i]:>5.2f} | "
+            f"{this['iterations'][i]:>4} {this['solve_time'][i]:>7.2f} "
+            f"{this['stiffness_iterations'][i]:>5} {this['stiffness_time'][i]:>5.2f} | "
             f"{du:>10.1e} {dk:>8.1e}{flag}"
         )
     for name in ("baseline", "this"):
         its = runs[name][0]["iterations"]
         warm = f", median of the warm-started steps {np.median(its[1:]):g}" if its.size > 1 else ""
-        print(f"# {name}: iterations {int(its.sum())} in all, first step {its[0]}{warm}")
+        k_its = runs[name][0]["stiffness_iterations"]
+        print(
+            f"# {name}: iterations {int(its.sum())} in all, first step {its[0]}{warm}; "
+            f"stiffness iterations {int(k_its.sum())} in all"
+        )
     wall = {k: float(np.median([r["wall"] for r in v])) for k, v in runs.items()}
     solve = {k: float(np.median([r["solve_time"].sum() for r in v])) for k, v in runs.items()}
     memory = {k: max(r["memory"] for r in v) for k, v in runs.items()}

@@ -44,7 +44,7 @@ class ContactSchur:
         nx, ny = grid.shape
         rows, cols = np.divmod(self.local, ny)
         rows = rows + grid.rows.start
-        both = _allgather(np.stack([rows, cols], axis=1), grid.comm)
+        both = allgather(np.stack([rows, cols], axis=1), grid.comm)
         self.offset = 0 if grid.comm.size == 1 else int(grid.comm.exscan(len(self.local)) or 0)
         di, dj = (
             _fold(both[:, k][:, None] - both[:, k][None, :], period)
@@ -60,7 +60,7 @@ class ContactSchur:
     def solve(self, g_r: np.ndarray, r_sum: float) -> tuple[np.ndarray, float]:
         """``(lambda on this rank's bound pixels, c)`` for ``G r`` (local slab) and ``sum(r)``."""
         rhs = np.empty(self.size + 1)
-        rhs[: self.size] = -_allgather(g_r.reshape(-1)[self.local], self.grid.comm)
+        rhs[: self.size] = -allgather(g_r.reshape(-1)[self.local], self.grid.comm)
         rhs[self.size] = -r_sum
         sol = lu_solve(self._lu, rhs, check_finite=False)
         return sol[self.offset : self.offset + len(self.local)], float(sol[self.size])
@@ -74,10 +74,22 @@ def quarter(grid: Grid, column: np.ndarray) -> np.ndarray:
     """
     half_x, half_y = (m // 2 + 1 for m in grid.shape)
     mine = column[: max(0, min(grid.rows.stop, half_x) - grid.rows.start), :half_y]
-    return _allgather(np.ascontiguousarray(mine), grid.comm)
+    return allgather(np.ascontiguousarray(mine), grid.comm)
 
 
-def _allgather(local: np.ndarray, comm: Any) -> np.ndarray:
+def response_quarter(grid: Grid, apply: Any, work: np.ndarray) -> np.ndarray:
+    """:func:`quarter` of an operator's response to a unit value at pixel ``(0, 0)``;
+    ``apply(x, out)`` applies it to this rank's slab, ``work`` is two flat field-sized
+    arrays, the first zero (it is left zero)."""
+    impulse, response = (w.reshape(grid.local_shape) for w in work)
+    if grid.rows.start == 0:
+        impulse[0, 0] = 1.0
+    apply(impulse, response)
+    impulse[0, 0] = 0.0
+    return quarter(grid, response)
+
+
+def allgather(local: np.ndarray, comm: Any) -> np.ndarray:
     """Concatenate every rank's array along the first axis, in rank order."""
     return local if comm.size == 1 else np.concatenate(comm.allgather(local))
 

@@ -459,7 +459,10 @@ def build_parser() -> argparse.ArgumentParser:
         "-log_view, ...) are passed to PETSc. The package's own PETSc options: "
         "-petsc_contact_no_j0 (no Fourier initial Hessian for the BQNK types), "
         "-petsc_contact_no_ksp_pc (no Fourier KSP preconditioner for tron, bnls, "
-        "bntr, bntl).",
+        "bntr, bntl); the default solver's two-level preconditioner: "
+        "-petsc_contact_two_level 0 (off), -petsc_contact_two_level_block B (aggregate "
+        "block side, pixels; default 16), -petsc_contact_two_level_max_fraction F (largest "
+        "contact fraction it is used at; default 0.1).",
         epilog="Exit status: 0 converged, 1 a step did not converge, 2 bad input or an output "
         "in use, 69 a package cannot be loaded, 74 results cannot be written (disk full, "
         "unwritable), 75 paused, 130 interrupted.",

@@ -20,12 +20,21 @@ The Hessian is ``s l K``.
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 from scipy.special import erf
 
 from ..backend import kernels
-from ..backend.operator import FourierOperator
-from ..backend.schur import ContactSchur, quarter
+from ..backend.coarse import (
+    CoarseCorrected,
+    CoarseSpace,
+    TwoLevelOptions,
+    add_correction,
+    changed_count,
+)
+from ..backend.operator import FourierOperator, ShellInterface
+from ..backend.schur import ContactSchur, response_quarter
 from ..backend.solve import SolveInfo
 from ..backend.stiffness import periodic_stiffness_exact
 from ..conventions.fft import FFT, wavevector_magnitude
@@ -40,6 +49,8 @@ ROUNDING_FACTOR = 1000.0  # see PeriodicProblem.rounding_floor
 RESOLVED = 1e-4  # a load is solved only where rounding leaves its residual this far below p0
 LARGEST_LOAD = 1e6  # p0/E* beyond this is no elastic contact (strains of a million)
 SCHUR_MAX = 4096  # the most bound variables for the Schur form (dense matrix: 134 MB)
+SETTLE_FRACTION = 0.1  # a contact count changing more than this per iteration is still moving
+REBUILD_FRACTION = 0.01  # the coarse space is rebuilt when this much of the set has changed
 
 
 class MeanModePreconditioner(FourierOperator):
@@ -64,6 +75,16 @@ class MeanModePreconditioner(FourierOperator):
     the contact pixels' bordered system per application), which
     makes each CG step exact on the current contact set; :func:`schur_limit` keeps its LU
     factorisation, once per contact set, within about ten FFT round trips.
+
+    Above that, up to the fraction ``options.max_fraction`` of the grid in contact, it is the
+    two-level form (:class:`~petsc_contact.backend.coarse.CoarseSpace`): the same inverse with
+    the reactions piecewise constant on the contact pixels of ``b x b`` blocks (``b`` grown
+    until the aggregates are at most :func:`coarse_limit`).  It is first built once the
+    contact count changes by at most :data:`SETTLE_FRACTION` per iteration (until then the
+    held compliance serves), and rebuilt when the count has settled again and more than
+    :data:`REBUILD_FRACTION` of the contact set has changed since the last build; in between
+    the coarse space of an older set is kept (it stays symmetric positive semi-definite) and
+    the recurrence goes on.
     Called by :class:`~petsc_contact.backend.cg.PolonskyKeer` through :meth:`adapt`.
     """
 
@@ -71,14 +92,28 @@ class MeanModePreconditioner(FourierOperator):
         super().__init__(grid, fft, np.zeros(fft.spectrum.shape))  # filled by invert
         self._hessian = hessian
         self.schur_max = schur_max  # the Schur form's largest bound set
+        self.options = TwoLevelOptions()
         self.hessian_diagonal = 1.0
         self.base_mean_mode = self.mean_mode = 0.0
         self.expected_bound_count = 0  # contact pixels Persson's theory expects at this load
         self.support = 0.0  # the interfacial stiffness held by (normalised), set by invert
         self._filled = 0.0  # the support the multiplier holds now (0 in the Schur form)
-        self.schur: ContactSchur | None = None
+        self.correction: ContactSchur | CoarseSpace | None = None  # the set-dependent form
+        self.builds = 0  # coarse spaces built since the last invert
+        self._last_count = 0  # the bound count of the last adapt
+        self._built_free: np.ndarray | None = None  # the free set the coarse space was built on
         self._quarter: np.ndarray | None = None  # G's quarter, made when the Schur form starts
-        self._spread: np.ndarray | None = None  # work fields of the Schur form
+        self._spread: np.ndarray | None = None  # work fields of the set-dependent forms
+
+    @property
+    def schur(self) -> ContactSchur | None:
+        """The exact Schur form, when it is in use."""
+        return self.correction if isinstance(self.correction, ContactSchur) else None
+
+    @property
+    def coarse(self) -> CoarseSpace | None:
+        """The two-level form's coarse space, when it is in use."""
+        return self.correction if isinstance(self.correction, CoarseSpace) else None
 
     def invert(
         self, support: float, hessian_diagonal: float, mean_mode: float, expected_bound_count: int
@@ -87,7 +122,8 @@ class MeanModePreconditioner(FourierOperator):
         is ``hessian_diagonal``), with ``mean_mode`` as its ``q = 0`` entry; ``support >= 0``
         is the interfacial stiffness in the Hessian's normalised units, and
         ``expected_bound_count`` the contact the load is expected to bring (a scale for the
-        CG's growth limit).
+        CG's growth limit).  The two-level form's options are read from the PETSc options
+        database (:class:`~petsc_contact.backend.coarse.TwoLevelOptions`).
 
         Computed in place, with no copy of the kernel kept: with ``N = n^2`` the normalised
         multipliers are ``c K/N`` for the Hessian, ``s = c K_i/N`` for the support and
@@ -99,7 +135,9 @@ class MeanModePreconditioner(FourierOperator):
         self.base_mean_mode = mean_mode
         self._set_mean_mode(self.base_mean_mode)
         self.hessian_diagonal = hessian_diagonal
-        self.schur = self._quarter = None
+        self.options = TwoLevelOptions.from_database()
+        self.correction = self._quarter = self._built_free = None
+        self._last_count = self.builds = 0
 
     def _fill(self, support: float) -> None:
         """The multiplier ``N^-2/(c K/N + support)`` in place (``q = 0``: set separately)."""
@@ -109,50 +147,88 @@ class MeanModePreconditioner(FourierOperator):
     def adapt(self, bound_count: int, free: np.ndarray) -> bool:
         """Adapt to ``bound_count`` variables at their bound (``free``: this rank's free mask).
 
-        Returns whether the operator is now the exact, set-dependent Schur form (the same
-        on every rank); otherwise only its ``q = 0`` entry followed the count.
+        Returns whether the operator changed with the set (the same on every rank): always
+        in the Schur form, on every build of the two-level form and when leaving it;
+        otherwise only its ``q = 0`` entry followed the count (or an older coarse space is
+        kept).
         """
+        last, self._last_count = self._last_count, bound_count
         if 0 < bound_count <= self.schur_max:
-            if self._filled != 0.0:  # the Schur form needs the exact inverse, G = 1/K
-                self._fill(0.0)
-            self._set_mean_mode(0.0)
-            if self._quarter is None:
-                impulse = np.zeros(self.grid.local_shape)
-                if self.grid.rows.start == 0:
-                    impulse[0, 0] = 1.0
-                column = FourierOperator.apply_array(self, impulse, np.empty_like(impulse))
-                self._quarter = quarter(self.grid, column)
-            self.schur = ContactSchur(
-                self.grid, self._quarter, ~free.reshape(self.grid.local_shape)
+            self.correction = ContactSchur(
+                self.grid, self._exact_compliance(), ~free.reshape(self.grid.local_shape)
             )
             return True
-        self.schur = self._spread = None
+        settled = last > 0 and abs(bound_count - last) <= SETTLE_FRACTION * last
+        if self.options.covers(bound_count, self.grid.size):
+            if self.coarse is not None and not (settled and self._stale(free, bound_count)):
+                return False  # an older coarse space is kept until the set has settled
+            if settled and self._build(free):
+                return True
+        leaving = self.coarse is not None
+        self.correction = self._spread = self._built_free = None
         if self._filled != self.support:
             self._fill(self.support)
         self._set_mean_mode(
             max(self.base_mean_mode, 1.0 / (max(bound_count, 1) * self.hessian_diagonal))
         )
-        return False
+        return leaving
+
+    def _exact_compliance(self) -> np.ndarray:
+        """Become ``G = 1/K`` with a zero ``q = 0`` entry (the set-dependent forms); returns
+        its quarter (:func:`~petsc_contact.backend.schur.quarter`)."""
+        if self._filled != 0.0:
+            self._fill(0.0)
+        self._set_mean_mode(0.0)
+        if self._quarter is None:
+            self._quarter = response_quarter(self.grid, super().apply_array, self.work_fields())
+        return self._quarter
+
+    def work_fields(self) -> np.ndarray:
+        """Two flat field-sized arrays, the first zero, kept while a set-dependent form is in
+        use (:func:`~petsc_contact.backend.coarse.add_correction`); lent to the held-set
+        stiffness solve after a contact solve."""
+        if self._spread is None:
+            self._spread = np.zeros((2, int(np.prod(self.grid.local_shape))))
+        return self._spread
+
+    def _stale(self, free: np.ndarray, bound_count: int) -> bool:
+        """Whether more than :data:`REBUILD_FRACTION` of the set changed since the build."""
+        assert self._built_free is not None
+        (changed,) = self.grid.sum(changed_count(self._built_free, free))
+        return bool(changed > REBUILD_FRACTION * bound_count)
+
+    def _build(self, free: np.ndarray) -> bool:
+        """The two-level form on the bound set of ``free``; ``False`` if it cannot be had."""
+        coarse = CoarseSpace(
+            self.grid,
+            self._exact_compliance(),
+            ~free.reshape(self.grid.local_shape),
+            self.options.block,
+            coarse_limit(self.grid.size),
+        )
+        if not coarse.factorised:
+            return False
+        self.correction, self._built_free = coarse, free.copy()
+        self.builds += 1
+        return True
 
     def _set_mean_mode(self, value: float) -> None:
         self.mean_mode = value
-        rows, cols = self.fft.spectral_index
-        if rows.start == 0 and cols.start == 0:  # this rank holds q = 0
-            self.set_entry(0, 0, value)
+        set_mean_mode(self, value)
 
     def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
         """``out <- M x``; in the Schur form ``x`` must vanish on the bound set."""
         super().apply_array(x, out)
-        if self.schur is not None:
-            reactions, shift = self.schur.solve(out, float(self.grid.sum(x.sum())[0]))
-            if self._spread is None:  # two work fields, kept while the Schur form is used
-                self._spread = np.zeros((2, out.size))
-            spread, response = self._spread  # spread is zero between applications
-            spread[self.schur.local] = reactions
-            out += super().apply_array(spread, response).reshape(out.shape)
-            out += shift
-            spread[self.schur.local] = 0.0
+        if self.correction is not None:
+            add_correction(super().apply_array, self.correction, x, out, self.work_fields())
         return out
+
+
+def set_mean_mode(op: FourierOperator, value: float) -> None:
+    """Set the normalised ``q = 0`` entry of ``op``'s multiplier (on the rank that holds it)."""
+    rows, cols = op.fft.spectral_index
+    if rows.start == 0 and cols.start == 0:
+        op.set_entry(0, 0, value)
 
 
 def verify(info: SolveInfo, obs: dict[str, float], scale_length: float) -> str:
@@ -174,6 +250,16 @@ def schur_limit(size: int) -> int:
     2400 at 2048^2, and never more than :data:`SCHUR_MAX`.
     """
     return int(min(SCHUR_MAX, (150 * size * np.log2(max(size, 2))) ** (1 / 3)))
+
+
+def coarse_limit(size: int) -> int:
+    """Most aggregates for the two-level form on a grid of ``size = n^2`` points.
+
+    Its Cholesky factorisation (``~2.2e-11 k^3`` s here) should cost at most about ten FFT
+    round trips (``~2.7e-10 n^2 log2(n^2)`` s): ``k <= (120 n^2 log2 n^2)^(1/3)``, 2200 at
+    2048^2, 3600 at 4096^2 and 5900 at 8192^2.
+    """
+    return int((120 * size * np.log2(max(size, 2))) ** (1 / 3))
 
 
 class PeriodicProblem:
@@ -263,13 +349,16 @@ class PeriodicProblem:
             "preconditioner_stiffness": self.interfacial_stiffness,
         }
         if stiffness:
-            held = self.held_compliance(self.interfacial_stiffness) if verdict == "ok" else None
+            start = time.perf_counter()
             k, its = (
-                periodic_stiffness_exact(grid, self.stiffness, held, contact)
-                if held is not None
+                periodic_stiffness_exact(
+                    grid, self.stiffness, self.stiffness_preconditioner(contact), contact
+                )
+                if verdict == "ok"
                 else (np.nan, 0)
             )
-            scalars.update(stiffness=k, stiffness_iterations=its)
+            elapsed = grid.max(time.perf_counter() - start)
+            scalars.update(stiffness=k, stiffness_iterations=its, stiffness_time=elapsed)
         if not fields:
             return Step(scalars)
         return Step(scalars, *contact_fields(gap, pressure, contact), contact=contact)
@@ -284,16 +373,47 @@ class PeriodicProblem:
             return self.pixel_stiffness
         return float(linear_stiffness(p0, self.h_rms))
 
+    def stiffness_preconditioner(self, contact: np.ndarray) -> ShellInterface:
+        """The preconditioner of the held-set stiffness solve on the open pixels of ``contact``
+        (this rank's mask): the exact Schur form while at most ``schur_max`` pixels are in
+        contact (the solve then takes one iteration), the two-level form up to the
+        preconditioner's ``options.max_fraction``, and the held compliance above or when
+        ``-petsc_contact_two_level 0`` switches both off (:meth:`held_compliance`), all on
+        one operator recomputed in place.
+        """
+        pre = self.preconditioner
+        (m,) = self.grid.sum(np.count_nonzero(contact))
+        exact = pre.options.enabled and 0 < m <= pre.schur_max
+        if not (exact or (m > 0 and pre.options.covers(int(m), self.grid.size))):
+            return self.held_compliance(self.interfacial_stiffness)
+        compliance = self._compliance(0.0)
+        set_mean_mode(compliance, 0.0)
+        work = pre.work_fields()  # the contact solve is over: its work fields are free
+        space = CoarseSpace(
+            self.grid,
+            response_quarter(self.grid, compliance.apply_array, work),
+            contact.reshape(self.grid.local_shape),
+            1 if exact else pre.options.block,
+            self.grid.size if exact else coarse_limit(self.grid.size),
+        )
+        if not space.factorised:
+            return self.held_compliance(self.interfacial_stiffness)
+        return CoarseCorrected(compliance, space, work)
+
+    def _compliance(self, support: float) -> FourierOperator:
+        """``1/(K + support)`` (normalised ``support``) in the one operator kept for it."""
+        if self._held is None:
+            self._held = self.stiffness.scaled(1.0)
+        self._held.set_inverse(self.stiffness, support)
+        return self._held
+
     def held_compliance(self, interfacial_stiffness: float) -> FourierOperator:
         """The compliance held by ``interfacial_stiffness``, ``1/(E* q/2 + K_i)``
         (:func:`~petsc_contact.physics.greens.held_compliance`): the preconditioner of the exact
         stiffness solve.  One operator, recomputed in place (no field-sized temporaries).
         """
         positive("interfacial stiffness", interfacial_stiffness)
-        if self._held is None:
-            self._held = self.stiffness.scaled(1.0)
-        self._held.set_inverse(self.stiffness, self.stiffness.normalised(interfacial_stiffness))
-        return self._held
+        return self._compliance(self.stiffness.normalised(interfacial_stiffness))
 
     def expected_contact_count(self, p0: float) -> int:
         """Contact pixels at ``p0`` in Persson's theory, ``n^2 erf(p0 / (sqrt(2) sigma))``.

@@ -25,6 +25,7 @@ errors cancel) or Pharr, Oliver & Brotzen's ``β 2 E* sqrt(A/π)``, ``β = 1.012
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 import numpy as np
@@ -184,11 +185,13 @@ class PunchProblem:
         obs = punch_observables(self, pressure, gap)
         contact = obs.pop("contact")
         verdict = verify_punch(info, obs)
+        start = time.perf_counter()
         k_tot, k_its = (
             punch_stiffness_exact(self.grid, self.compliance, self.inverse, contact)
             if verdict == "ok"
             else (np.nan, 0)
         )
+        k_time = self.grid.max(time.perf_counter() - start)
         k_int = interfacial_stiffness(k_tot, self.k_flat) / self.grid.area
         scalars = {
             **obs,
@@ -196,6 +199,7 @@ class PunchProblem:
             "interfacial_stiffness": k_int,
             "flat_punch_stiffness": self.k_flat,
             "stiffness_iterations": k_its,
+            "stiffness_time": k_time,
             **info.scalars(verdict),
         }
         if stiffness:

@@ -80,6 +80,11 @@ SOLVE_COLUMNS = _entries(
     gradient_norm=("1", "TAO's final gradient norm (its own definition, per type)"),
     tolerance=("1", "the absolute gradient tolerance used (raised to the rounding floor)"),
     stiffness_iterations=("count", "CG iterations of the exact stiffness solve"),
+    stiffness_time=(
+        "s",
+        "wall time of the exact stiffness solve with its preconditioner's set-up, the slowest "
+        "rank's",
+    ),
     complementarity=("1", "sum(p+ g) / (sum(p+) h_rms), as Tamaas reports it"),
     max_pressure=("pressure", "largest contact pressure"),
     min_gap=("length", "smallest gap (negative: the bound is violated)"),

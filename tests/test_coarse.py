@@ -1,0 +1,175 @@
+"""The two-level form of the preconditioner: contact reactions constant on aggregates."""
+
+import h5py
+import numpy as np
+import pytest
+from conftest import cli
+
+from petsc_contact import periodic_contact
+from petsc_contact.backend import _petsc
+from petsc_contact.backend.coarse import DIAGONAL_INFLATION, CoarseSpace, TwoLevelOptions
+from petsc_contact.backend.schur import _fold
+from petsc_contact.conventions.fft import make_fft
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.geometries.periodic import PeriodicProblem
+from petsc_contact.physics.surface import self_affine
+
+
+def problem(n=64, p0=1e-3):
+    grid = Grid(n, 1.3)
+    fft = make_fft(grid)
+    h = self_affine(
+        grid, fft, hurst=0.7, rolloff_ratio=1, cutoff_ratio=n / 2, seed=3, rms_slope=0.1
+    )
+    pb = PeriodicProblem(grid, make_fft(grid), h, 2.0)
+    pb.set_pressure(p0)
+    return grid, pb
+
+
+def dense(pre, free):
+    """``P_F M P_F`` as a dense matrix, column by column."""
+    n = free.size
+    out = np.zeros((n, n))
+    e = np.zeros(n)
+    for j in np.flatnonzero(free):
+        e[j] = 1.0
+        out[:, j] = pre.apply_array(e, np.empty(n)) * free
+        e[j] = 0.0
+    return out
+
+
+def exact_coarse(pre, space):
+    """``W^T G_BB W`` pixel pair by pixel pair."""
+    q = pre._quarter
+    n = pre.grid.shape[0]
+    rows, cols = np.divmod(space.local, pre.grid.shape[1])
+    g_bb = q[_fold(rows[:, None] - rows[None, :], n), _fold(cols[:, None] - cols[None, :], n)]
+    w = np.zeros((len(space.local), space.size))
+    w[np.arange(len(space.local)), space.labels] = 1.0
+    return w.T @ g_bb @ w
+
+
+def test_symmetric_positive_semidefinite_for_any_aggregates(petsc):
+    """``P_F M P_F`` is symmetric and positive semi-definite for a random bound set, and for a
+    coarse space built on another (older) set: a stale coarse space never breaks the CG."""
+    grid, pb = problem(24)
+    pre = pb.preconditioner
+    pre.options = TwoLevelOptions(block=3)
+    rng = np.random.default_rng(1)
+    for trial in range(2):
+        built = rng.random(grid.size) < 0.15
+        pre._exact_compliance()
+        pre._build(~built)
+        assert pre.coarse is not None and pre.coarse.size > 20
+        free = ~built if trial == 0 else rng.random(grid.size) > 0.15  # then a newer set
+        m = dense(pre, free)
+        scale = np.abs(m).max()
+        assert np.abs(m - m.T).max() <= 1e-12 * scale
+        sub = m[np.ix_(free, free)]
+        eig = np.linalg.eigvalsh(0.5 * (sub + sub.T))
+        assert eig.min() > 1e-6 * eig.max()  # definite on the free set
+
+
+def test_coarse_matrix_is_above_the_exact_one(petsc):
+    """The assembled ``E`` (exact near blocks, monopoles beyond, diagonal raised) minus the
+    exact ``W^T G_BB W`` is positive definite on a rough surface's contact (the highest 3%
+    of a paper-bandwidth surface): the preconditioner stays semi-definite."""
+    grid, pb = problem(256)
+    pre = pb.preconditioner
+    pre._exact_compliance()
+    bound = pb.heights > np.quantile(pb.heights, 0.97)
+    space = CoarseSpace(grid, pre._quarter, bound, 8, grid.size)
+    exact = exact_coarse(pre, space)
+    factor, lower = space._factor
+    triangle = np.tril(factor) if lower else np.triu(factor).T
+    assembled = triangle @ triangle.T
+    assert space.size > 50
+    assert np.linalg.eigvalsh(assembled - exact).min() > 0
+    # and close to it: within the inflation
+    d = np.sqrt(np.diag(exact))
+    rel = np.linalg.eigvalsh(assembled / np.outer(d, d) - exact / np.outer(d, d))
+    assert rel.max() <= 2 * DIAGONAL_INFLATION
+
+
+def test_block_grows_to_the_limit(petsc):
+    """At most ``max_size`` aggregates: the block side grows until they fit."""
+    grid, pb = problem(64)
+    pre = pb.preconditioner
+    pre._exact_compliance()
+    bound = np.random.default_rng(2).random(grid.local_shape) < 0.2
+    space = CoarseSpace(grid, pre._quarter, bound, 4, 30)
+    assert space.size <= 30 and space.block > 4
+    assert np.bincount(space.labels).sum() == bound.sum()
+
+
+@pytest.mark.parametrize("hurst", [0.7, 0.3])
+def test_two_level_solves_the_same_contact(hurst):
+    """At 2-3% contact on a paper-bandwidth 256^2 surface the two-level form is built, takes
+    fewer iterations, and reaches the same mean gap and KKT as the held compliance alone
+    (both to 1e-8 p0: the mean gaps agree to 1e-7 relative, measured 2e-10)."""
+    n = 256
+    grid = Grid(n, 1.0)
+    h = self_affine(
+        grid,
+        make_fft(grid),
+        hurst=hurst,
+        rolloff_ratio=1,
+        cutoff_ratio=n / 2,
+        seed=1,
+        rms_slope=0.1,
+    )
+    steps = {
+        on: periodic_contact(h, 1.0, 1.0, [1e-3], options=f"-petsc_contact_two_level {on}")[0]
+        for on in (0, 1)
+    }
+    for s in steps.values():
+        assert s.scalars["converged"] and s.scalars["kkt_residual"] <= 1e-8
+    off, on = steps[0].scalars, steps[1].scalars
+    assert on["iterations"] < off["iterations"]
+    assert abs(on["mean_gap"] / off["mean_gap"] - 1) <= 1e-7
+
+
+def test_iterations_at_1024_do_not_grow_with_the_spots():
+    """A cold step at 1024^2, ``p0 = 1e-3 E*``, H = 0.7, roughness down to two pixels (2.3%
+    contact, about 24 000 pixels): at most 30 iterations (25 measured; 68 with the held
+    compliance alone, docs/performance.md)."""
+    n = 1024
+    grid = Grid(n, 1.0)
+    h = self_affine(
+        grid, make_fft(grid), hurst=0.7, rolloff_ratio=1, cutoff_ratio=n / 2, seed=1, rms_slope=0.1
+    )
+    (step,) = periodic_contact(h, 1.0, 1.0, [1e-3])
+    assert step.scalars["converged"]
+    assert step.scalars["iterations"] <= 30
+
+
+def test_options_switch_it(petsc):
+    """``-petsc_contact_two_level*`` name its choices; a non-positive block is refused."""
+    with _petsc.scoped_options("-petsc_contact_two_level 0 -petsc_contact_two_level_block 8"):
+        opts = TwoLevelOptions.from_database()
+    assert not opts.enabled and opts.block == 8 and not opts.covers(1, 100)
+    assert TwoLevelOptions().covers(10, 100) and not TwoLevelOptions().covers(11, 100)
+    with _petsc.scoped_options("-petsc_contact_two_level_block 0"), pytest.raises(ValueError):
+        TwoLevelOptions.from_database()
+
+
+@pytest.mark.parametrize("ranks", [2, 3])
+def test_mpi_matches_serial(tmp_path, ranks):
+    """On 2 and 3 ranks (the coarse system gathered on every rank) the two-level form takes
+    the serial run's path: the same iterations within two, mean gaps to 1e-8 and exact
+    stiffnesses to 1e-6 relative (the tolerances' reach) at 2-5% contact on 256^2."""
+    args = [
+        "periodic", "--grid", "256", "--hurst", "0.7", "--rms-slope", "0.1",
+        "--rolloff-ratio", "1", "--cutoff-ratio", "128", "--seed", "1",
+        "--pressures", "1e-3,2.3e-3", "--stiffness",
+    ]  # fmt: skip
+    serial, par = tmp_path / "s.h5", tmp_path / "p.h5"
+    r = cli(*args, "--output", str(serial))
+    assert r.returncode == 0, r.stderr
+    r = cli(*args, "--output", str(par), mpi=ranks, timeout=240)
+    assert r.returncode == 0, r.stdout + r.stderr
+    with h5py.File(serial) as s, h5py.File(par) as p:
+        assert p.attrs["mpi_size"] == ranks
+        assert np.allclose(p["mean_gap"][:], s["mean_gap"][:], rtol=1e-8, atol=0)
+        assert np.allclose(p["stiffness"][:], s["stiffness"][:], rtol=1e-6, atol=0)
+        assert np.abs(p["iterations"][:] - s["iterations"][:]).max() <= 2

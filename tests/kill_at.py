@@ -6,9 +6,8 @@
 ``commit`` (the ``.partial`` file), ``state`` (the resume state), ``final`` (``OUT.h5``),
 ``compare`` (a comparison's ``.partial``).  ``WHEN`` is ``before`` the ``N``-th such rename,
 ``after`` it, or ``during`` the writing of the file it renames (the process dies with the
-temporary file half written: killed while HDF5 closes it, or numpy saves it).  Nothing of
-the package is changed: the runner wraps ``os.replace``, ``h5py.File.close`` and
-``numpy.savez`` from outside.
+temporary file half written).  Nothing of the package is changed: the runner wraps
+``os.replace`` from outside.
 """
 
 from __future__ import annotations
@@ -17,7 +16,6 @@ import os
 import signal
 import sys
 from pathlib import Path
-from typing import Any
 
 import h5py
 import numpy as np
@@ -78,10 +76,7 @@ def _target(path: str) -> str:
 
 def _install(when: str, target: str, nth: int) -> None:
     seen = {"count": 0}
-    replace, close, savez = os.replace, h5py.File.close, np.savez
-
-    def die() -> None:
-        os.kill(os.getpid(), signal.SIGKILL)
+    replace = os.replace
 
     def counted(path: str) -> bool:
         if _target(path) != target:
@@ -90,33 +85,16 @@ def _install(when: str, target: str, nth: int) -> None:
         return seen["count"] == nth
 
     def killing_replace(src: str, dst: str) -> None:
-        hit = when != "during" and counted(dst)
-        if hit and when == "before":
-            die()
+        hit = counted(dst)
+        if hit and when == "during":  # the temporary file half written when the process dies
+            os.truncate(src, max(os.path.getsize(src) // 2, 1))
+        if hit and when in ("before", "during"):
+            os.kill(os.getpid(), signal.SIGKILL)
         replace(src, dst)
         if hit and when == "after":
-            die()
-
-    def killing_close(self: h5py.File) -> None:
-        name = self.filename if self.id.valid else ""
-        if when == "during" and name.endswith(".tmp") and counted(name.rsplit(".", 2)[0]):
-            self.flush()
-            with open(name, "r+b") as f:  # torn: the process dies while the file is written
-                f.truncate(max(os.path.getsize(name) // 2, 1))
-            die()
-        close(self)
-
-    def killing_savez(file: Any, *args: Any, **kwargs: Any) -> None:
-        savez(file, *args, **kwargs)
-        name = getattr(file, "name", str(file))
-        if when == "during" and name.endswith(".tmp") and counted(name.rsplit(".", 2)[0]):
-            file.flush()
-            os.truncate(name, max(os.path.getsize(name) // 2, 1))
-            die()
+            os.kill(os.getpid(), signal.SIGKILL)
 
     os.replace = killing_replace  # type: ignore[assignment]
-    h5py.File.close = killing_close  # type: ignore[method-assign]
-    np.savez = killing_savez
 
 
 if __name__ == "__main__":

@@ -7,7 +7,7 @@ from mpi4py import MPI
 
 from petsc_contact import periodic_contact, punch_contact
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.physics.observables import contact_patches
+from petsc_contact.physics.observables import contact_patches, patch_sizes
 
 
 def count(mask, periodic=True):
@@ -55,7 +55,7 @@ SCRIPT = r"""
 import numpy as np
 from mpi4py import MPI
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.physics.observables import contact_patches
+from petsc_contact.physics.observables import contact_patches, patch_sizes
 rng = np.random.default_rng(3)
 for shape in [(16, 16), (30, 47), (7, 5)]:
     for fraction in (0.3, 0.5, 0.6):
@@ -76,3 +76,41 @@ def test_ranks_agree_with_one(ranks):
     run = python("-c", SCRIPT, mpi=ranks)
     assert run.returncode == 0, run.stderr[-2000:]
     assert run.stdout.count("ok") == ranks
+
+
+def test_patch_sizes_and_distributions_add_up(petsc):
+    """Patch sizes add up to the contact pixels on 1 rank and are the same set on 3; the
+    histograms count every contact and every open pixel; the filled statistics see the
+    filled pixels."""
+    from petsc_contact import periodic_contact
+    from petsc_contact.workflows.scenes import surface
+
+    h, _ = surface(64, 0.7, 1.0, 32.0, 2)
+    (step,) = periodic_contact(h, 1.0, 1.0, [1e-2], fields=True)
+    s, contact = step.scalars, step.contact
+    n = int(contact.sum())
+    assert s["pressure_histogram"].sum() == n and s["gap_histogram"].sum() == h.size - n
+    assert s["pressure_bins"][-1] == pytest.approx(s["max_pressure"])
+    grid = Grid(64, 1.0)
+    sizes = patch_sizes(grid, contact)
+    assert sizes.sum() == n and sizes.size == s["contact_patches"]
+    assert s["largest_patch"] == sizes.max() and s["patch_size_histogram"].sum() == sizes.size
+    r = python("-c", SIZES_ON_RANKS.format(seed=2), mpi=3)
+    assert r.returncode == 0, r.stderr
+    assert sorted(int(v) for v in r.stdout.split()) == sorted(sizes.tolist())
+
+
+SIZES_ON_RANKS = """
+import numpy as np
+from mpi4py import MPI
+from petsc_contact import periodic_contact
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.physics.observables import patch_sizes
+from petsc_contact.workflows.scenes import surface
+h, _ = surface(64, 0.7, 1.0, 32.0, {seed})
+(step,) = periodic_contact(h, 1.0, 1.0, [1e-2], fields=True, comm=MPI.COMM_SELF)
+grid = Grid(64, 1.0)
+sizes = patch_sizes(grid, step.contact[grid.rows])
+if grid.comm.rank == 0:
+    print(" ".join(map(str, sizes)))
+"""

@@ -211,3 +211,26 @@ def test_a_numpy_mismatch_is_named(monkeypatch):
     with pytest.raises(ImportError, match="petsc4py cannot be loaded \\(libpetsc.so"):  # noqa: SIM117
         with _petsc._loading():
             raise ImportError("libpetsc.so.3.18: cannot open shared object file")
+
+
+def test_filled_points_are_recorded_and_warned_about(tmp_path):
+    """Filled heights: the 'filled' map in the output, the share in the header and the
+    attributes, a warning above 5%, and the contact on filled pixels reported apart."""
+    h = _map()
+    mask = np.zeros(h.shape, bool)
+    mask[5:15, 5:20] = True  # 12.5% of the map, on a hill and a valley alike
+    STTopography(np.ma.masked_array(h, mask=mask), SIDES, unit="um").to_x3p(
+        str(tmp_path / "holes.x3p")
+    )
+    args = ["--heights", str(tmp_path / "holes.x3p"), "--fill-undefined", "harmonic"]
+    r = cli("periodic", *args, "--pressures", "1e-3,1e-2", "--fields", "--output",
+            str(tmp_path / "f.h5"))  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "12.5% of the map's heights were undefined and are filled (harmonic)" in r.stderr
+    assert "12.5%), read by" in r.stdout and "filled (harmonic)" in r.stdout
+    with h5py.File(tmp_path / "f.h5") as f:
+        assert np.array_equal(f["filled"][...], mask) and f.attrs["filled_fraction"] == 0.125
+        contact, filled_share = f["contact"][...], f["filled_contact_fraction"][:]
+        expected = [(c & mask).sum() / c.sum() for c in contact]
+        assert filled_share == pytest.approx(expected, rel=1e-12)
+        assert np.all((f["filled_load_fraction"][:] >= 0) & (f["filled_load_fraction"][:] <= 1))

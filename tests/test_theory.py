@@ -211,3 +211,79 @@ def test_crossover_conventions_reproduce_the_quoted_values():
         }
         assert values["printed"] == pytest.approx(printed, rel=0.01)
         assert values["appendix"] == pytest.approx(paper, rel=0.1)
+
+
+def _surface(shape, lengths, hurst=0.7, cutoff=None, seed=1):
+    from petsc_contact.conventions.fft import SerialFFT
+    from petsc_contact.conventions.grid import Grid
+    from petsc_contact.physics.surface import self_affine
+
+    grid = Grid(shape, lengths)
+    fft = SerialFFT(grid)
+    cut = cutoff if cutoff is not None else max(shape) / 4
+    h = self_affine(grid, fft, hurst=hurst, rolloff_ratio=1, cutoff_ratio=cut, seed=seed,
+                    rms_slope=0.1)  # fmt: skip
+    return grid, fft, h
+
+
+def test_a_rectangles_spectrum_is_one_curve_up_to_its_nyquist():
+    """A 2:1 rectangle with oblong pixels: the radial spectrum follows the prescribed power
+    law on one q grid (no two branches), and stops at the smaller Nyquist wavevector."""
+    from petsc_contact.physics.surface import radial_psd
+
+    grid, fft, h = _surface((256, 64), (2.0, 1.0), cutoff=256 / 8)
+    q, c = radial_psd(grid, fft, h)
+    assert q.max() <= np.pi / max(grid.spacing) * (1 + 1e-12)
+    assert np.all(np.diff(q) > 0)
+    fit = (q > 4 * grid.q0) & (q < 0.8 * 2 * np.pi * 256 / 8 / 2)
+    slope = np.polyfit(np.log(q[fit]), np.log(c[fit]), 1)[0]
+    residual = np.log(c[fit]) - np.polyval(np.polyfit(np.log(q[fit]), np.log(c[fit]), 1),
+                                           np.log(q[fit]))  # fmt: skip
+    assert slope == pytest.approx(-2 - 2 * 0.7, abs=0.25)
+    # two branches alternate: neighbours off the line in opposite directions, by a lot
+    assert np.mean(residual[1:] * residual[:-1] < 0) < 0.8 and np.std(residual) < 0.35
+
+
+def test_a_profile_predicts_what_its_map_predicts():
+    """Rows of an isotropic surface, each taken as a line scan: on average their Persson
+    stiffness is the map's within 20% and their H within 0.1 (a single profile's spectrum
+    scatters: one direction, one row)."""
+    import warnings
+
+    from petsc_contact.workflows.predictions import predict, predict_profile
+
+    grid, fft, h = _surface((512, 512), 1.0, cutoff=256)
+    loads = np.geomspace(1e-5, 1e-2, 4)
+    whole = predict(grid, fft, h, 1.0, loads)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a single row's fit may be poor: it says so
+        rows = [predict_profile(h[i], 1.0, 1.0, loads) for i in range(0, 512, 8)]
+    assert "isotropic" in rows[0].spectrum
+    mean_k = np.mean([r.stiffness for r in rows], axis=0)
+    assert np.allclose(mean_k, whole.stiffness, rtol=0.2)
+    assert np.mean([r.hurst_fit for r in rows]) == pytest.approx(whole.hurst_fit, abs=0.1)
+
+
+def test_theory_says_when_it_is_unsure():
+    """White noise fits no self-affine H: a warning; loads beyond where Persson's gap
+    underflows are left out with a warning; when every load is, the call is refused."""
+    import warnings
+
+    from petsc_contact.conventions.fft import SerialFFT
+    from petsc_contact.conventions.grid import Grid
+    from petsc_contact.workflows.predictions import TheoryWarning, predict
+
+    grid = Grid(128, 1.0)
+    noise = np.random.default_rng(0).standard_normal((128, 128)) * 1e-3
+    with pytest.warns(TheoryWarning, match="lies outside 0.05...1"):
+        predict(grid, SerialFFT(grid), noise, 1.0, np.array([1e-3]))
+    grid, fft, h = _surface((128, 128), 1.0)
+    loads = np.geomspace(1e-3, 1e3, 7)
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        kept = predict(grid, fft, h, 1.0, loads)
+    assert any("left out" in str(w.message) for w in said)
+    assert 0 < kept.nominal_pressure.size < loads.size
+    assert np.all(np.isfinite(kept.stiffness)) and np.all(kept.mean_gap > 0)
+    with pytest.raises(ValueError, match="underflows at every load"):
+        predict(grid, fft, h, 1.0, np.array([1e3]))

@@ -100,6 +100,19 @@ def main(argv: Sequence[str] | None = None) -> int:
             say(f"PETSc error: {petsc_message(exc)}")
             return EXIT_BAD_INPUT
         raise
+    finally:
+        _release_petsc()
+
+
+def _release_petsc() -> None:
+    """Destroy the PETSc objects Python no longer holds while Python still runs: PETSc
+    destroys what is left at its finalisation, after Python's, and a preconditioner with a
+    Python context (the default solver's) then crashes the process on its way out."""
+    if "petsc4py.PETSc" in sys.modules:
+        import gc
+
+        gc.collect()
+        sys.modules["petsc4py.PETSc"].garbage_cleanup()
 
 
 def petsc_message(exc: Exception) -> str:

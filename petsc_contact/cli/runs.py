@@ -9,6 +9,8 @@ from typing import Any
 
 from .common import EXIT_INTERRUPTED, EXIT_NOT_CONVERGED, EXIT_PAUSED, describe, say
 
+FILLED_LOAD = 0.1  # a share of the load on filled heights above this warns
+
 PERIODIC_COLUMNS = (("p0", "nominal_pressure", "{:>11.4e}"), ("mean_gap", "mean_gap", "{:>12.6e}"))
 PUNCH_COLUMNS = (
     ("approach", "approach", "{:>11.4e}"),
@@ -127,6 +129,15 @@ def _conclude(
             plot_punch(plot, table, units)
         else:
             plot_sweep(plot, table, description.modulus_value, result.record["rms_height"])
+    on_filled = [(s.get("filled_load_fraction", 0.0), i) for i, s in enumerate(table, 1)]
+    share, step = max(on_filled, default=(0.0, 0))
+    if share > FILLED_LOAD and root:
+        say(
+            f"{share:.0%} of the load rests on filled heights at step {step} "
+            f"(--fill-undefined {description.fill_undefined}): the answer depends on how they "
+            "were filled (the output's 'filled' map and filled_load_fraction)",
+            "warning",
+        )
     failed = [s for s in table if not s["converged"]]
     if failed and root:
         load = columns[0]

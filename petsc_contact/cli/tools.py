@@ -66,7 +66,8 @@ def _field(f: Any, args: argparse.Namespace) -> tuple[np.ndarray, str, str, int]
         scale, shown = display_unit(float(np.max(np.abs(data[...]))), units.units)
         label = f"{name} ({shown})"
     if data.ndim == 2:
-        return data[...] * scale, f"{name} of the map as solved", label, 0
+        titles = {"filled": "points whose heights were undefined and filled"}
+        return data[...] * scale, titles.get(name, f"{name} of the map as solved"), label, 0
     steps = data.shape[0]
     if args.step == 0 or not -steps <= args.step <= steps:
         raise InputError(

@@ -279,6 +279,7 @@ class PeriodicProblem:
         positive("modulus", modulus)
         self.grid = grid
         self.modulus = float(modulus)
+        self.filled: np.ndarray | None = None  # this rank's filled pixels (a measured map)
         self.heights = np.ascontiguousarray(heights - grid.mean(heights), dtype=float)
         self.h_rms = grid.rms(self.heights)
         self.scale_length = self.h_rms if self.h_rms > 0 else max(grid.lengths)
@@ -339,7 +340,9 @@ class PeriodicProblem:
         grid, ell, p0 = self.grid, self.scale_length, self.nominal_pressure
         gap = x.reshape(grid.local_shape) * ell
         pressure = self.pressure(gap)
-        obs = step_observables(grid, gap, pressure, self.heights, p0, self.pixel_stiffness)
+        obs = step_observables(
+            grid, gap, pressure, self.heights, p0, self.pixel_stiffness, self.filled
+        )
         contact = obs.pop("contact")
         verdict = verify(info, obs, ell)
         scalars = {

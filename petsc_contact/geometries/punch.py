@@ -36,7 +36,7 @@ from ..backend.stiffness import punch_stiffness_exact
 from ..conventions.grid import Grid
 from ..conventions.validation import non_negative, positive
 from ..physics.greens import hockney_kernel
-from ..physics.observables import contact_patches
+from ..physics.observables import distributions, patch_sizes
 from ..reference import flat_punch
 from .step import Step, contact_fields, residual_verdict
 
@@ -94,6 +94,7 @@ class PunchProblem:
         self.flat = flat
         self.grid = grid
         self.modulus = float(modulus)
+        self.filled: np.ndarray | None = None  # this rank's filled pixels (a measured map)
         self.footprint = (
             np.ones(grid.local_shape, dtype=bool)
             if footprint is None
@@ -216,6 +217,7 @@ def punch_observables(
     grid, fp = problem.grid, problem.footprint
     k = problem.pixel_stiffness
     contact = fp & (pressure > k * gap)
+    sizes = patch_sizes(grid, contact, periodic=False)
     r = np.where(fp, np.minimum(gap, pressure / k), 0.0)
     p_sum, n_contact, pg, r2 = grid.sum(
         pressure.sum(),
@@ -231,11 +233,12 @@ def punch_observables(
         "force": force,
         "nominal_pressure": force / area,
         "area_fraction": n_contact / problem.footprint_pixels,
-        "contact_patches": contact_patches(grid, contact, periodic=False),
+        "contact_patches": sizes.size,
         "max_pressure": grid.max(float(pressure.max(initial=0.0))),
         "min_gap": grid.min(float(np.where(fp, gap, np.inf).min(initial=np.inf))),
         "complementarity": pg / (p_sum * ell) if p_sum > 0 else 0.0,
         "kkt_residual": float(np.sqrt(r2 / problem.footprint_pixels)) / ell,
+        **distributions(grid, gap, pressure, contact, sizes, fp, problem.filled),
         "contact": contact,
     }
 

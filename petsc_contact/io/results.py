@@ -12,12 +12,15 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from typing import Any
 
+import numpy as np
+
 
 def table_frame(rows: Iterable[Mapping[str, Any]]) -> Any:
-    """A ``DataFrame`` with one row per step (index ``step`` from 1)."""
+    """A ``DataFrame`` of the scalars, one row per step (index ``step`` from 1); the per-step
+    arrays (histograms) stay in the rows and the file."""
     import pandas as pd
 
-    rows = [dict(r) for r in rows]
+    rows = [{k: v for k, v in r.items() if np.ndim(v) == 0} for r in rows]
     return pd.DataFrame(rows, index=pd.RangeIndex(1, len(rows) + 1, name="step"))
 
 

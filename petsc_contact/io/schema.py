@@ -30,9 +30,11 @@ MISSING = {np.float64: np.nan, np.int64: -1}  # the earlier steps' value of a ne
 
 
 def h5_dtype(value: Any) -> Any:
-    """HDF5 dtype of one per-step scalar."""
+    """HDF5 dtype of one per-step value (a scalar, or an array: its elements')."""
     import h5py
 
+    if isinstance(value, np.ndarray):
+        return np.int64 if value.dtype.kind in "iu" else np.float64
     if isinstance(value, str):
         return h5py.string_dtype()
     if isinstance(value, (bool, np.bool_)):
@@ -96,6 +98,30 @@ SOLVE_COLUMNS = _entries(
     ),
     nominal_pressure=("pressure", "nominal pressure p0 (punch: F / Lp^2)"),
 )
+DISTRIBUTIONS = _entries(
+    pressure_histogram=("count", "contact pixels per pressure bin (steps x bins)"),
+    pressure_bins=("pressure", "pressure bin edges, 0 to the largest contact pressure"),
+    gap_histogram=("count", "open pixels per gap bin (steps x bins)"),
+    gap_bins=("length", "gap bin edges, 0 to the largest gap"),
+    patch_size_histogram=(
+        "count",
+        "contact patches per size bin: 1, 2-3, 4-7, ... pixels (steps x bins)",
+    ),
+    largest_patch=("count", "pixels of the largest contact patch"),
+    largest_patch_fraction=("1", "the largest patch's share of the pixels"),
+    filled_contact_fraction=(
+        "1",
+        "share of the contact pixels whose heights were filled (--fill-undefined)",
+    ),
+    filled_load_fraction=("1", "share of the force carried by filled pixels"),
+)
+SECOND_DIMENSION = {  # the dimension of the per-step arrays' second axis
+    "pressure_histogram": "bin",
+    "gap_histogram": "bin",
+    "pressure_bins": "edge",
+    "gap_bins": "edge",
+    "patch_size_histogram": "patch_bin",
+}
 PERIODIC_COLUMNS = _entries(
     mean_gap=("length", "mean gap u_bar"),
     contact_pressure_mean=("pressure", "mean over all pixels of the contact pressure (= p0)"),
@@ -121,6 +147,9 @@ PUNCH_COLUMNS = _entries(
 )
 COORDINATES = _entries(
     step=("count", "load step, counted from 1 as the printed table counts"),
+    bin=("count", "a histogram's bin, counted from 0"),
+    edge=("count", "a histogram's bin edge, counted from 0"),
+    patch_bin=("count", "the smallest patch size of a patch size bin: 1, 2, 4, ... pixels"),
     x=("length", "position of each row of the maps: the pixel centres, (i + 1/2) Lx/nx"),
     y=("length", "position of each column of the maps: the pixel centres, (j + 1/2) Ly/ny"),
 )
@@ -129,6 +158,7 @@ FIELDS = _entries(
     gap=("length", "gap of every step, exactly zero in contact (steps x n x n)"),
     pressure=("pressure", "pressure of every step, exactly zero out of contact (steps x n x n)"),
     contact=("bool", "contact mask of every step, p > k g (steps x n x n)"),
+    filled=("bool", "the pixels whose heights were undefined and filled (n x n)"),
 )
 ENSEMBLE = _entries(
     seeds=("count", "the seeds, one row of every table each"),
@@ -173,10 +203,17 @@ THEORY = _entries(
     mean_gap=("length", "Persson's mean separation u_bar(p) from the map's spectrum"),
     stiffness=("pressure/length", "Persson's interfacial stiffness K(p) = -dp/du_bar"),
 )
-ENTRIES = {**COORDINATES, **SOLVE_COLUMNS, **PERIODIC_COLUMNS, **PUNCH_COLUMNS, **FIELDS}
+ENTRIES = {
+    **COORDINATES,
+    **SOLVE_COLUMNS,
+    **DISTRIBUTIONS,
+    **PERIODIC_COLUMNS,
+    **PUNCH_COLUMNS,
+    **FIELDS,
+}
 GEOMETRIES = {
-    "periodic": {**COORDINATES, **SOLVE_COLUMNS, **PERIODIC_COLUMNS, **FIELDS},
-    "punch": {**COORDINATES, **SOLVE_COLUMNS, **PUNCH_COLUMNS, **FIELDS},
+    "periodic": {**COORDINATES, **SOLVE_COLUMNS, **DISTRIBUTIONS, **PERIODIC_COLUMNS, **FIELDS},
+    "punch": {**COORDINATES, **SOLVE_COLUMNS, **DISTRIBUTIONS, **PUNCH_COLUMNS, **FIELDS},
 }
 
 
@@ -323,6 +360,7 @@ RUN_ATTRIBUTES = (
     "heights_file",
     "heights_sha256",
     "rms_slope_inside",
+    "filled_fraction",
     "heights_reader",
     "heights_channel",
     "heights_channel_index",

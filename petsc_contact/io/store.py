@@ -47,7 +47,17 @@ import numpy as np
 if TYPE_CHECKING:
     from ..conventions.grid import Grid
 from .provenance import source_commit
-from .schema import GEOMETRIES, MISSING, Entry, describe, h5_dtype, in_unit, write_attributes
+from .schema import (
+    COORDINATES,
+    GEOMETRIES,
+    MISSING,
+    SECOND_DIMENSION,
+    Entry,
+    describe,
+    h5_dtype,
+    in_unit,
+    write_attributes,
+)
 
 PARTIAL = ".partial"  # a run's file until it ends: OUT.h5.partial, replaced by OUT.h5 at the end
 STATE = ".state.npz"
@@ -126,13 +136,41 @@ def replaced(path: str) -> Iterator[str]:
 
 
 @contextmanager
-def atomic_h5(path: str) -> Iterator[Any]:
+def atomic_h5(path: str, large: bool = False) -> Iterator[Any]:
     """An HDF5 file written whole under a temporary name and renamed to ``path`` only when
-    complete; a failure to write raises :class:`StorageError` and leaves ``path`` as it was."""
+    complete; a failure to write raises :class:`StorageError` and leaves ``path`` as it was.
+
+    The file is made in memory and its bytes written by Python, so that a full disk fails
+    in Python's ``write``, never inside HDF5 (whose objects, left half-closed by a failed
+    write, crash the process when HDF5 closes them at exit).  A ``large`` file (a run's
+    assembled output) is written by HDF5 itself, after a check that the disk has room for
+    it (:func:`check_room`)."""
+    import io
+
     import h5py
 
-    with storage(path), replaced(path) as temporary, h5py.File(temporary, "w") as f:
+    if large:
+        with storage(path), replaced(path) as temporary, h5py.File(temporary, "w") as f:
+            yield f
+        return
+    image = io.BytesIO()
+    with h5py.File(image, "w") as f:
         yield f
+    with storage(path), replaced(path) as temporary, open(temporary, "wb") as out:
+        out.write(image.getbuffer())
+
+
+def check_room(folder: str, needed: int, what: str) -> None:
+    """:class:`StorageError` (no space) unless ``folder``'s disk has ``needed`` bytes free,
+    with a margin of a tenth."""
+    stats = os.statvfs(folder)
+    free = stats.f_bavail * stats.f_frsize
+    if free < 1.1 * needed:
+        raise StorageError(
+            errno.ENOSPC,
+            f"cannot write {what}: {os.strerror(errno.ENOSPC)} ({needed / 2**20:.3g} MiB "
+            f"needed, {free / 2**20:.3g} MiB free)",
+        )
 
 
 def check_writable(path: str) -> None:
@@ -237,7 +275,11 @@ def read_resume(path: str, parameters: dict[str, Any]) -> Finished:
     try:
         with h5py.File(partial, "r") as f:
             theirs = json.loads(f.attrs["parameters"])
-            table = {k: list(_values(f[k])) for k in f if f[k].ndim == 1 and k != "step"}
+            table = {
+                k: list(_values(f[k]))
+                for k in f
+                if k not in COORDINATES and f[k].ndim >= 1 and f[k].shape[0] == f["step"].shape[0]
+            }
             steps = len(table.get("converged", []))
     except (OSError, KeyError, ValueError) as exc:
         raise ValueError(
@@ -335,19 +377,22 @@ class StepStore:
         attributes: dict[str, Any],
         heights: np.ndarray | None,
         fields: tuple[str, ...] = (),
+        filled: np.ndarray | None = None,
     ) -> StepStore:
         """A new run: whatever an earlier run left under this output is cleared (the caller
-        holds the output's lock), then the record and the heights are written."""
+        holds the output's lock), then the record, the heights and (a measured map's) mask of
+        filled heights are written (local slabs)."""
         store = cls(path, grid, fields)
-        full = grid.gather(heights) if heights is not None else None
+        maps = {"heights": heights, "filled": filled}
+        full = {k: grid.gather(v) for k, v in maps.items() if v is not None}  # collective
         store.attributes = {**attributes, "created": _now(), "complete": False}
 
         def begin() -> None:
             _clear(path, keep_steps=False)
             os.makedirs(store.parts)
             try:
-                if full is not None:
-                    store._write_part("heights.h5", {"heights": full}, chunked=False)
+                if full:
+                    store._write_part("heights.h5", full, chunked=False)  # type: ignore[arg-type]
                 store._commit()
             except BaseException:
                 _clear(path, keep_steps=False)  # nothing was finished: nothing is left
@@ -436,13 +481,17 @@ class StepStore:
         def assemble() -> None:
             import h5py
 
-            with atomic_h5(self.path) as f:
+            parts = [os.path.join(self.parts, p) for p in os.listdir(self.parts)]
+            needed = sum(os.path.getsize(p) for p in [self.partial, *parts])
+            check_room(os.path.dirname(os.path.abspath(self.path)), needed, self.path)
+            with atomic_h5(self.path, large=True) as f:
                 write_attributes(f, {**self.attributes, "complete": True})
                 self._write_table(f)
                 heights = os.path.join(self.parts, "heights.h5")
                 if os.path.exists(heights):
                     with h5py.File(heights, "r") as part:
-                        f.copy(part["heights"], "heights")
+                        for name in part:  # the heights, and a measured map's filled mask
+                            f.copy(part[name], name)
                 for name in self.fields:
                     self._copy_field(f, name)
                 self._label_maps(f)
@@ -485,28 +534,43 @@ class StepStore:
 
     def _write_table(self, f: Any) -> None:
         """The scalars of every step, on the dimension ``step`` (1, 2, ...)."""
-        step = f.create_dataset("step", data=np.arange(1, self.steps + 1), maxshape=(None,))
+        count = len(next(iter(self.table.values()), []))  # the steps committed with this table
+        step = f.create_dataset("step", data=np.arange(1, count + 1), maxshape=(None,))
         describe(step, self._entry("step"))
         step.make_scale("step")
         for key, column in self.table.items():
             dtype = h5_dtype(column[0]) if column else np.float64
-            d = f.create_dataset(key, data=np.array(column, dtype=dtype), maxshape=(None,))
+            values = np.array(column, dtype=dtype)
+            d = f.create_dataset(key, data=values, maxshape=(None, *values.shape[1:]))
             describe(d, self._entry(key))
             d.dims[0].attach_scale(step)
+            if values.ndim == 2:  # a per-step array: its second axis is a named dimension
+                d.dims[1].attach_scale(self._scale(f, SECOND_DIMENSION[key], values.shape[1]))
+
+    def _scale(self, f: Any, name: str, size: int) -> Any:
+        """The dimension scale ``name`` (bins counted from 0; patch bins by their smallest
+        size), made once."""
+        if name not in f:
+            values = 2 ** np.arange(size) if name == "patch_bin" else np.arange(size)
+            scale = f.create_dataset(name, data=values)
+            describe(scale, self._entry(name))
+            scale.make_scale(name)
+        return f[name]
 
     def _label_maps(self, f: Any) -> None:
         """The maps' dimensions ``x`` and ``y`` (pixel centres) and ``step``, as dimension
         scales, so that xarray and netCDF tools read labelled arrays."""
-        if "heights" not in f and not self.fields:
+        maps = [name for name in ("heights", "filled") if name in f]
+        if not maps and not self.fields:
             return
         scales = {}
         for name, values in zip(("x", "y"), self.grid.positions(), strict=True):
             scales[name] = f.create_dataset(name, data=values)
             describe(scales[name], self._entry(name))
             scales[name].make_scale(name)
-        if "heights" in f:
+        for map_name in maps:
             for axis, name in enumerate("xy"):
-                f["heights"].dims[axis].attach_scale(scales[name])
+                f[map_name].dims[axis].attach_scale(scales[name])
         for field_name in self.fields:
             for axis, scale in enumerate((f["step"], scales["x"], scales["y"])):
                 f[field_name].dims[axis].attach_scale(scale)
@@ -516,7 +580,7 @@ class StepStore:
         import csv
 
         path = csv_path(self.path)
-        names = list(self.table)
+        names = [k for k, v in self.table.items() if not (v and isinstance(v[0], np.ndarray))]
         with storage(path), replaced(path) as temporary, open(temporary, "w", newline="") as out:
             writer = csv.writer(out)
             writer.writerow(["step", *names])
@@ -571,8 +635,10 @@ def _field_layout(shape: tuple[int, ...]) -> dict[str, Any]:
 
 def _missing(value: Any) -> Any:
     """What the steps without a column read in it: NaN, -1, '' or False (never a plausible
-    0 for a number)."""
+    0 for a number; an array of them for an array)."""
     dtype = h5_dtype(value)
+    if isinstance(value, np.ndarray):
+        return np.full(value.shape, MISSING[dtype], dtype=dtype)
     if dtype in MISSING:
         return MISSING[dtype]
     return False if dtype is bool else ""

@@ -28,44 +28,123 @@ def natural_residual(gap: np.ndarray, pressure: np.ndarray, pixel_stiffness: flo
 
 def contact_patches(grid: Grid, contact: np.ndarray, periodic: bool = True) -> int:
     """Number of contact patches: clusters of contact pixels joined through their edges
-    (4-connected), across the cell's edges when ``periodic`` (same on every rank).
+    (4-connected), across the cell's edges when ``periodic`` (same on every rank)."""
+    return int(patch_sizes(grid, contact, periodic).size)
 
-    Each rank labels its row slab and sends its boundary rows and columns; rank 0 joins
-    the labels that touch across slabs (and across the periodic edges).
+
+def patch_sizes(grid: Grid, contact: np.ndarray, periodic: bool = True) -> np.ndarray:
+    """The size (pixels) of every contact patch (see :func:`contact_patches`), on every rank.
+
+    Each rank labels its row slab and sends its boundary rows and columns and its labels'
+    sizes; rank 0 joins the labels that touch across slabs (and across the periodic edges)
+    and adds up the sizes of each joined patch.
     """
     from scipy import ndimage
 
     labels, count = ndimage.label(contact)
+    sizes = np.bincount(labels.ravel(), minlength=count + 1)[1:]
     ends = (labels[:1], labels[-1:], labels[:, :1].T, labels[:, -1:].T)
-    gathered = grid.comm.gather((count, ends), root=0)
-    total = 0
+    gathered = grid.comm.gather((count, ends, sizes), root=0)
+    total = np.zeros(0, dtype=np.int64)
     if gathered is not None:
-        slabs = [(n, e) for n, e in gathered if e[0].size]  # ranks with rows
-        offsets = np.cumsum([0] + [n for n, _ in slabs])
+        slabs = [(n, e, z) for n, e, z in gathered if e[0].size]  # ranks with rows
+        offsets = np.cumsum([0] + [n for n, _, _ in slabs])
         rows = [
             [np.where(a > 0, a + o, 0) for a in e]
-            for (_, e), o in zip(slabs, offsets[:-1], strict=True)
+            for (_, e, _), o in zip(slabs, offsets[:-1], strict=True)
         ]
         touching = [(rows[i][1], rows[i + 1][0]) for i in range(len(rows) - 1)]
         if periodic:
             touching += [(rows[-1][1], rows[0][0])] + [(r[2], r[3]) for r in rows]
-        total = int(offsets[-1]) - _joined(touching)
-    return int(grid.comm.bcast(total, root=0))
+        every = np.concatenate([z for _, _, z in slabs]) if slabs else total
+        total = _joined_sizes(touching, every)
+    return np.asarray(grid.comm.bcast(total, root=0))
 
 
-def _joined(touching: list[tuple[np.ndarray, np.ndarray]]) -> int:
-    """How many labels disappear when the labels facing each other in ``touching`` (pairs
-    of equal-shape arrays, 0 for no contact) are merged."""
+PRESSURE_BINS = 40  # equal bins from zero to the largest contact pressure
+GAP_BINS = 40  # equal bins from zero to the largest gap
+
+
+def distributions(
+    grid: Grid,
+    gap: np.ndarray,
+    pressure: np.ndarray,
+    contact: np.ndarray,
+    sizes: np.ndarray,
+    inside: np.ndarray | None = None,
+    filled: np.ndarray | None = None,
+) -> dict[str, Any]:
+    """How one step's pressure, gap and contact patches are distributed (same on every rank).
+
+    Parameters
+    ----------
+    gap, pressure, contact
+        This rank's slabs (the contact mask as the step decided it).
+    sizes
+        Every contact patch's size in pixels (:func:`patch_sizes`).
+    inside
+        The pixels that count (the punch's footprint); default every pixel.
+    filled
+        The pixels whose heights were filled (``--fill-undefined``), if any.
+
+    Returns
+    -------
+    dict
+        ``pressure_histogram`` (contact pixels per bin) on ``pressure_bins`` (edges from 0 to
+        the largest contact pressure); ``gap_histogram`` (open pixels per bin) on
+        ``gap_bins``; ``patch_size_histogram`` (patches per bin of sizes 1, 2-3, 4-7, ...
+        pixels: bins of powers of two up to the grid's size); ``largest_patch`` (pixels) and
+        ``largest_patch_fraction`` (of the pixels that count); with ``filled``,
+        ``filled_contact_fraction`` (of the contact pixels) and ``filled_load_fraction`` (of
+        the force) on filled pixels.
+    """
+    inside = np.ones(contact.shape, bool) if inside is None else inside
+    open_ = inside & ~contact
+    p_top = grid.max(float(np.where(contact, pressure, 0.0).max(initial=0.0)))
+    g_top = grid.max(float(np.where(open_, gap, 0.0).max(initial=0.0)))
+    p_edges = np.linspace(0.0, p_top if p_top > 0 else 1.0, PRESSURE_BINS + 1)
+    g_edges = np.linspace(0.0, g_top if g_top > 0 else 1.0, GAP_BINS + 1)
+    p_hist = np.histogram(pressure[contact], p_edges)[0]
+    g_hist = np.histogram(gap[open_], g_edges)[0]
+    counts = grid.sum(*p_hist, *g_hist).astype(np.int64)
+    pixels = int(grid.sum(np.count_nonzero(inside))[0])
+    s_edges = 2.0 ** np.arange(int(np.ceil(np.log2(max(grid.size, 2)))) + 2)
+    out: dict[str, Any] = {
+        "pressure_histogram": counts[:PRESSURE_BINS],
+        "pressure_bins": p_edges,
+        "gap_histogram": counts[PRESSURE_BINS:],
+        "gap_bins": g_edges,
+        "patch_size_histogram": np.histogram(sizes, s_edges)[0].astype(np.int64),
+        "largest_patch": int(sizes.max(initial=0)),
+        "largest_patch_fraction": float(sizes.max(initial=0)) / pixels,
+    }
+    if filled is not None:
+        n_contact, on_filled, load, load_filled = grid.sum(
+            np.count_nonzero(contact),
+            np.count_nonzero(contact & filled),
+            np.where(contact, pressure, 0.0).sum(),
+            np.where(contact & filled, pressure, 0.0).sum(),
+        )
+        out["filled_contact_fraction"] = on_filled / n_contact if n_contact else 0.0
+        out["filled_load_fraction"] = load_filled / load if load > 0 else 0.0
+    return out
+
+
+def _joined_sizes(touching: list[tuple[np.ndarray, np.ndarray]], sizes: np.ndarray) -> np.ndarray:
+    """The sizes of the patches left when the labels facing each other in ``touching`` (0 for
+    no contact) are merged; ``sizes[k]`` is the size of label ``k + 1``."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
+    n = sizes.size
+    if n == 0:
+        return np.zeros(0, dtype=np.int64)
     pairs = [np.stack([a.ravel(), b.ravel()], 1) for a, b in touching]
     edges = np.concatenate(pairs).reshape(-1, 2) if pairs else np.empty((0, 2), dtype=int)
-    edges = edges[(edges > 0).all(axis=1)]
-    nodes, index = np.unique(edges, return_inverse=True)
-    index = index.reshape(-1, 2)
-    graph = coo_matrix((np.ones(len(index)), (index[:, 0], index[:, 1])), (nodes.size,) * 2)
-    return int(nodes.size - connected_components(graph, directed=False)[0])
+    edges = edges[(edges > 0).all(axis=1)] - 1
+    graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), (n, n))
+    _, component = connected_components(graph, directed=False)
+    return np.bincount(component, weights=sizes).astype(np.int64)
 
 
 def step_observables(
@@ -75,8 +154,9 @@ def step_observables(
     heights: np.ndarray,
     nominal_pressure: float,
     pixel_stiffness: float,
+    filled: np.ndarray | None = None,
 ) -> dict[str, Any]:
-    """Scalars of one load step (same on every rank).
+    """Scalars (and :func:`distributions`) of one load step (same on every rank).
 
     Returns
     -------
@@ -91,6 +171,7 @@ def step_observables(
         contact mask (not a scalar: callers pop it).
     """
     contact = contact_mask(gap, pressure, pixel_stiffness)
+    sizes = patch_sizes(grid, contact)
     p_plus = np.maximum(pressure, 0.0)
     p_contact = np.where(contact, p_plus, 0.0)
     r = natural_residual(gap, pressure, pixel_stiffness)
@@ -110,7 +191,7 @@ def step_observables(
     return {
         "mean_gap": g_sum / n,
         "area_fraction": n_contact / n,
-        "contact_patches": contact_patches(grid, contact),
+        "contact_patches": sizes.size,
         "contact_pressure_mean": pc_sum / n,
         "elastic_energy": 0.5 * work / n,
         "max_pressure": grid.max(float(p_contact.max(initial=0.0))),
@@ -118,5 +199,6 @@ def step_observables(
         "min_pressure": grid.min(float(pressure.min())),
         "complementarity": pg / (p_sum * h_rms) if p_sum > 0 and h_rms > 0 else 0.0,
         "kkt_residual": np.sqrt(r2 / n) / nominal_pressure,
+        **distributions(grid, gap, pressure, contact, sizes, filled=filled),
         "contact": contact,
     }

@@ -149,7 +149,8 @@ class Prepared:
         finished = self.resumable
         if not finished.steps:
             stored = None if run.scalars_only else self.scene.heights
-            return StepStore.create(run.output, grid, self.record, stored, fields), None
+            filled = self.scene.filled
+            return StepStore.create(run.output, grid, self.record, stored, fields, filled), None
         start = grid.scatter(finished.state) if finished.state is not None else None
         return StepStore.resume(run.output, grid, finished, self.record, fields), start
 
@@ -257,6 +258,7 @@ def _periodic_plan(run: Run, scene: Scene) -> Plan:
     from .periodic_sweep import check_pressures, problem_solver, sweep
 
     problem = PeriodicProblem(scene.grid, scene.fft, scene.heights, run.modulus_value)
+    problem.filled = scene.filled
     p_full = problem.full_contact_pressure()
     resolved: dict[str, Any] = {}
     if run.sweep is not None:
@@ -344,6 +346,7 @@ def _punch_plan(run: Run, scene: Scene) -> Plan:
 
 FILE_RECORD = (
     "rms_slope_inside",
+    "filled_fraction",
     "heights_reader",
     "heights_channel",
     "heights_channel_index",

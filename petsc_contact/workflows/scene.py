@@ -23,6 +23,7 @@ from ..io.topography import SurfaceTopographyMap, Topography, from_surface_topog
 from .description import Run
 
 SLOPE_LIMIT = 1e6  # heights this many times the cell's side are no contact surface
+FILLED_WARNING = 0.05  # a filled share above this warns: contact may sit on filled points
 FILE_ONLY = ("height_unit", "detrend", "fill_undefined", "channel", "override_metadata")
 GENERATION = ("grid", "hurst", "rms_slope", "rms_height")
 
@@ -41,6 +42,7 @@ class Scene:
     resolved: dict[str, Any]  # what defaults became: lengths, unit, cutoff ratio
     record: dict[str, Any] = field(default_factory=dict)  # what was read, and how
     reading: str = ""  # one line on the map read ("" for a generated surface)
+    filled: np.ndarray | None = None  # this rank's pixels whose heights were filled
 
 
 def check_surface(run: Run) -> None:
@@ -128,7 +130,9 @@ def prepare_scene(run: Run, comm: Any = None, default_solver: bool = True) -> Sc
         return Scene(grid, fft, heights, resolved)
     local = grid.scatter(full)
     check_finite(grid, local)
-    return Scene(grid, fft, local, resolved, record, reading)
+    mask = record.pop("filled")
+    filled = grid.scatter(mask).astype(bool) if record["filled_fraction"] > 0 else None
+    return Scene(grid, fft, local, resolved, record, reading, filled)
 
 
 def _topography(run: Run) -> Topography:
@@ -152,7 +156,17 @@ def measured(run: Run, given: Lengths | None) -> tuple[np.ndarray, Lengths, dict
     topo = _topography(run)
     lengths, scale, overridden = _units(run, topo, given)
     spacing = grid_for(topo.heights.shape, lengths.pair).spacing
+    filled = ~np.isfinite(topo.heights)
+    share = float(np.mean(filled))
     full = fill_undefined(topo.heights, run.fill_undefined)
+    if share > FILLED_WARNING:
+        warnings.warn(
+            f"{share:.1%} of the map's heights were undefined and are filled "
+            f"({run.fill_undefined}): the contact may sit on filled points; the output's "
+            "'filled' map and filled_contact_fraction say where and how much",
+            MapWarning,
+            stacklevel=2,
+        )
     full = detrend(full, spacing, run.detrend)
     if scale != 1.0:
         full = np.asarray(full, dtype=float) * scale
@@ -164,11 +178,14 @@ def measured(run: Run, given: Lengths | None) -> tuple[np.ndarray, Lengths, dict
         "file_lengths": list(topo.lengths) if topo.lengths else [],
         "file_unit": topo.unit or "",
         "metadata_overridden": overridden,
+        "filled_fraction": share,
+        "filled": filled,  # the mask itself: the scene keeps it, the record does not
     }
     inside = _warn(run, full, spacing)
     record["rms_slope_inside"] = inside  # finite differences inside the map (rank 0)
     name = run.heights if isinstance(run.heights, str) else record["heights_reader"]
-    return full, lengths, record, f"{name}: {topo.describe()}"
+    how = f", filled ({run.fill_undefined})" if share > 0 else ""
+    return full, lengths, record, f"{name}: {topo.describe()}{how}"
 
 
 def _units(run: Run, topo: Topography, lengths: Lengths | None) -> tuple[Lengths, float, list[str]]:

@@ -17,6 +17,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+import numpy as np
+
 METRES = {
     "km": 1e3,
     "m": 1.0,
@@ -192,3 +194,12 @@ def display_unit(extent: float, unit: str | None) -> tuple[float, str]:
         if metres >= METRES[name] or name == DISPLAY[-1]:
             return METRES[unit] / METRES[name], name
     return 1.0, unit
+
+
+def display_force(newtons: np.ndarray) -> tuple[np.ndarray, str]:
+    """Forces in newtons shown with 1 to 999 in front: ``2e-3`` N as ``2 mN``."""
+    top = float(np.max(np.abs(newtons), initial=0.0))
+    for name in ("kN", "N", "mN", "uN", "nN"):
+        if top >= NEWTONS[name] or name == "nN":
+            return newtons / NEWTONS[name], name
+    return newtons, "N"

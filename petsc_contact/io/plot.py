@@ -53,12 +53,18 @@ def plot_punch(
 ) -> Any:
     """Force against approach, and the interfacial stiffness per area against the nominal
     pressure; ``units`` (``length``, ``pressure``, ``force``) label the axes."""
+    from ..conventions.units import METRES, PASCALS, display_force, display_unit
+
     u = {"length": "", "pressure": "", "force": ""} | (units or {})
     ok = np.array([bool(s["converged"]) for s in steps])
     d = np.array([s["approach"] for s in steps])
     f = np.array([s["force"] for s in steps])
     p = np.array([s["nominal_pressure"] for s in steps])
     k = np.array([s["interfacial_stiffness"] for s in steps])
+    if u["length"] and u["pressure"]:  # in newtons and lengths with SI prefixes: mN, um
+        f, u["force"] = display_force(f * PASCALS[u["pressure"]] * METRES[u["length"]] ** 2)
+        scale, u["length"] = display_unit(float(np.max(np.abs(d), initial=0.0)), u["length"])
+        d, k = d * scale, k / scale
     fig = _figure(figsize=(9, 3.8), layout="constrained")
     ax1, ax2 = fig.subplots(1, 2)
     ax1.plot(d[ok], f[ok], "o-")
@@ -254,15 +260,16 @@ def plot_map(
         cmap.set_bad("#d9d9d9")
         image = ax.imshow(data.T, cmap=cmap, norm=norm, **show)
         slack = 1e-9 * float(np.ptp(data.compressed() if np.ma.isMA(data) else data))
-        clipped = (norm.vmin is not None and data.min() < norm.vmin - slack) or (
-            norm.vmax is not None and data.max() > norm.vmax + slack
-        )
+        low_cut = norm.vmin is not None and data.min() < norm.vmin - slack
+        high_cut = norm.vmax is not None and data.max() > norm.vmax + slack
         fig.colorbar(
             image,
             ax=ax,
             label=label + (" (log scale)" if use_log else ""),
             shrink=0.9,
-            extend="both" if clipped else "neither",
+            extend={(True, True): "both", (True, False): "min", (False, True): "max"}.get(
+                (low_cut, high_cut), "neither"
+            ),
         )
     suffix = f" ({unit})" if unit else " (unit of --length)"
     ax.set(xlabel="x" + suffix, ylabel="y" + suffix, title=title)

@@ -257,3 +257,26 @@ def test_an_unfinished_study_is_read_over_the_loads_every_seed_has(tmp_path):
     with h5py.File(tmp_path / "f2.h5") as f:
         assert f["H0.7"]["stiffness"].shape == (4, 4)
         assert f["H0.7"]["alpha"][()] == pytest.approx(0.6, abs=1e-9)
+
+
+def test_the_gallery_draws_every_picture(tmp_path):
+    """examples/gallery.py at 64^2: every command of docs/gallery.md runs and draws."""
+    r = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "examples" / "gallery.py"),
+            "--grid",
+            "64",
+            "--output",
+            str(tmp_path),
+        ],  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
+    )
+    assert r.returncode == 0, r.stderr
+    drawn = sorted(p.name for p in tmp_path.iterdir())
+    documented = (ROOT / "docs" / "gallery.md").read_text()
+    assert drawn and all(f"gallery/{name}" in documented for name in drawn), drawn
+    assert all((tmp_path / name).stat().st_size > 5000 for name in drawn)

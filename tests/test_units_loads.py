@@ -68,21 +68,9 @@ def test_units_without_a_unit_system_are_refused(tmp_path):
     for args, words in (
         (["periodic", *scan, "--pressures", "2MPa"], "need a modulus with a unit"),
         (
-            [
-                "punch",
-                "--grid",
-                "32",
-                "--hurst",
-                "0.7",
-                "--rms-slope",
-                "0.1",
-                "--modulus",
-                "1GPa",
-                "--forces",
-                "1mN",
-            ],
+            ["punch", *"--grid 32 --hurst 0.7 --rms-slope 0.1 --modulus 1GPa --forces 1mN".split()],
             "need a modulus and lengths with units",
-        ),  # fmt: skip
+        ),
         (["periodic", *scan, "--modulus", "1 Gigapascal", "--pressures", "1"], "optional unit"),
     ):
         r = cli(*args, "--output", str(tmp_path / "x.h5"))

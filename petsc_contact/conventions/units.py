@@ -139,14 +139,21 @@ def parse_quantity(given: float | str, units: dict[str, float], what: str) -> Qu
     return Quantity(value, unit)
 
 
-def pressure_value(given: float | str, unit: str | None, what: str) -> float:
-    """A pressure in the run's pressure ``unit`` (the modulus's: ``None`` when it has none)."""
-    q = parse_quantity(given, PASCALS, what)
+def _converted(
+    given: float | str, units: dict[str, float], unit: str | None, what: str, needs: str
+) -> float:
+    """``given`` in ``unit`` (a bare number is taken to be in it already)."""
+    q = parse_quantity(given, units, what)
     if q.unit is None:
         return q.value
     if unit is None:
-        raise ValueError(f"{what} in {q.unit} need a modulus with a unit, e.g. --modulus 1GPa")
-    return q.value * PASCALS[q.unit] / PASCALS[unit]
+        raise ValueError(f"{what} in {q.unit} need {needs}")
+    return q.value * units[q.unit] / units[unit]
+
+
+def pressure_value(given: float | str, unit: str | None, what: str) -> float:
+    """A pressure in the run's pressure ``unit`` (the modulus's: ``None`` when it has none)."""
+    return _converted(given, PASCALS, unit, what, "a modulus with a unit, e.g. --modulus 1GPa")
 
 
 def force_value(
@@ -166,12 +173,7 @@ def force_value(
 
 def length_value(given: float | str, unit: str | None, what: str) -> float:
     """A length (an approach: ``"10nm"`` or a bare number) in the run's length ``unit``."""
-    q = parse_quantity(given, METRES, what)
-    if q.unit is None:
-        return q.value
-    if unit is None:
-        raise ValueError(f"{what} in {q.unit} need lengths with a unit, e.g. --length 100um")
-    return q.value * METRES[q.unit] / METRES[unit]
+    return _converted(given, METRES, unit, what, "lengths with a unit, e.g. --length 100um")
 
 
 def force_unit(pressure_unit: str | None, length_unit: str | None) -> str:

@@ -337,6 +337,18 @@ def schema_markdown() -> str:
     return "\n".join(lines).rstrip() + "\n"
 
 
+FILE_RECORD = (
+    "rms_slope_inside",
+    "filled_fraction",
+    "heights_reader",
+    "heights_channel",
+    "heights_channel_index",
+    "file_lengths",
+    "file_unit",
+    "metadata_overridden",
+)
+"""What a run records of its measured map, beside its path and digest."""
+
 RUN_ATTRIBUTES = (
     "geometry",
     "command_line",
@@ -359,14 +371,7 @@ RUN_ATTRIBUTES = (
     "grid",
     "heights_file",
     "heights_sha256",
-    "rms_slope_inside",
-    "filled_fraction",
-    "heights_reader",
-    "heights_channel",
-    "heights_channel_index",
-    "file_lengths",
-    "file_unit",
-    "metadata_overridden",
+    *FILE_RECORD,
     "created",
     "complete",
 )

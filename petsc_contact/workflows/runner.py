@@ -30,6 +30,7 @@ import numpy as np
 from ..backend import _petsc
 from ..backend.solve import Monitor
 from ..geometries.step import FIELD_NAMES, Step
+from ..io.schema import FILE_RECORD
 from ..io.store import Finished, OutputLock, StepStore, StorageError, check_writable, read_resume
 from .description import Run
 from .scene import Scene, prepare_scene
@@ -342,19 +343,6 @@ def _punch_plan(run: Run, scene: Scene) -> Plan:
     )
     backend = type(problem.compliance.fft).__name__
     return loads, resolved, intro, solve, solver.close, backend
-
-
-FILE_RECORD = (
-    "rms_slope_inside",
-    "filled_fraction",
-    "heights_reader",
-    "heights_channel",
-    "heights_channel_index",
-    "file_lengths",
-    "file_unit",
-    "metadata_overridden",
-)
-"""What a run records of its measured map, beside its path and digest."""
 
 
 def run_record(

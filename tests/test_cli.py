@@ -201,7 +201,13 @@ def test_help_documents_options():
 
 @pytest.mark.parametrize(
     "ranks, solver, rtol",
-    [(2, [], 1e-8), (3, [], 1e-8), (2, ["-tao_type", "bqnls", "-tao_gatol", "1e-7"], 1e-7)],
+    [
+        (2, [], 1e-8),
+        (3, [], 1e-8),
+        (2, ["-tao_type", "bqnls", "-tao_gatol", "1e-7"], 1e-7),
+        (2, ["-tao_type", "blmvm"], 1e-6),
+        (3, ["-tao_type", "bncg"], 1e-6),
+    ],
 )
 def test_mpi_matches_serial(tmp_path, ranks, solver, rtol):
     """Same surface for any rank count; mean gap to ``rtol``, area to two pixels (n = 64).
@@ -213,7 +219,9 @@ def test_mpi_matches_serial(tmp_path, ranks, solver, rtol):
     BQNLS's line search uses the objective values, so it also checks those under MPI; at the
     default 1e-8 its More-Thuente search ends in DIVERGED_LS_FAILURE in some runs (which runs
     depends on FFTW's measured plan: 9 of 12 serial runs for seed 3, 0 of 8 for seed 4, old
-    and new code alike), never at 1e-7 (16 of 16)."""
+    and new code alike), never at 1e-7 (16 of 16). BLMVM and BNCG, whose ``H0`` follows
+    the free set of the whole grid, are held to the cross-solver tolerance (1e-6, as in
+    test_periodic)."""
     args = ["periodic", *GEN, "--pressures", "1e-3,1e-2", *solver]
     serial, par = tmp_path / "s.h5", tmp_path / "p.h5"
     r = cli(*args, "--output", str(serial))

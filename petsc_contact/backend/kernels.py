@@ -74,6 +74,13 @@ def restrict_dot(z: np.ndarray, free: np.ndarray, r: np.ndarray) -> float:
 
 
 @njit(cache=True, fastmath=FAST, nogil=True)
+def restrict(out: np.ndarray, x: np.ndarray, free: np.ndarray) -> None:
+    """``out <- x`` on the free set, ``0`` elsewhere (``out`` may be ``x``)."""
+    for i in range(out.size):
+        out[i] = x[i] if free[i] else 0.0
+
+
+@njit(cache=True, fastmath=FAST, nogil=True)
 def extend_direction(
     z: np.ndarray, d: np.ndarray, free: np.ndarray, beta: float, r: np.ndarray
 ) -> float:

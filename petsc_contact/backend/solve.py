@@ -14,6 +14,13 @@ the Fourier compliance as the initial inverse Hessian ``J0`` of their LMVM matri
 petsc4py 3.18 does not wrap ``TaoGetLMVMMatrix``/``MatLMVMSetJ0PC``, so this goes through
 ctypes on the same ``libpetsc`` that petsc4py uses; ``-petsc_contact_no_j0`` turns it off.
 
+``blmvm`` and ``bncg`` get it as their initial Hessian ``H0`` (``TaoLMVMSetH0``,
+``TaoBNCGSetH0``), restricted to TAO's current free set and following it like the default
+solver's (:class:`FreeSetPreconditioner`): an LMVM matrix without history whose ``J0`` is that
+preconditioner.  BNCG applies ``H0`` only through an LMVM matrix of its own, whose default type
+(``lmvmdiagbroyden``) never does, so ``-tao_bncg_mat_type`` defaults to ``lmvmbfgs`` for it.
+``-petsc_contact_no_j0`` turns these off as well.
+
 Newton types whose KSP solves on the free variables (``tron``, ``bnls``, ``bntr``, ``bntl``)
 get the Fourier preconditioner as the Hessian's preconditioning matrix with ``PCMAT``: TAO
 restricts it to the free set like the Hessian, so the KSP is preconditioned by
@@ -31,7 +38,8 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from ..conventions.grid import Grid
-from . import _petsc
+from . import _petsc, kernels
+from .cg import ContactPreconditioner, _bound
 from .operator import SpectralOperator, shell_matrix
 
 BOUND_TYPES = (
@@ -50,6 +58,8 @@ BOUND_TYPES = (
     "python",
 )
 J0_TYPES = ("bqnls", "bqnkls", "bqnktr", "bqnktl")
+H0_TYPES = ("blmvm", "bncg")  # given the restricted compliance as their H0
+BNCG_MATRIX = "lmvmbfgs"  # BNCG's scaling matrix: one that applies H0 (docs/solvers.md)
 KSP_TYPES = ("tron", "gpcg", "bnls", "bntr", "bntl", "bqpip")
 KSP_PC_TYPES = ("tron", "bnls", "bntr", "bntl")  # preconditioned through the Hessian's Pmat
 DEFAULT_TYPE = "python"
@@ -115,20 +125,114 @@ def _type_name(tao: Any, context: Any) -> str:
 
 def _libpetsc() -> ctypes.CDLL:
     lib = ctypes.CDLL(_petsc.library_path())
-    for name in ("TaoGetLMVMMatrix", "MatLMVMSetJ0PC"):
+    for name in ("TaoGetLMVMMatrix", "MatLMVMSetJ0PC", "TaoBNCGSetH0"):
         getattr(lib, name).argtypes = [ctypes.c_void_p, ctypes.c_void_p]
         getattr(lib, name).restype = ctypes.c_int
+    lib.MatLMVMSetHistorySize.argtypes = [ctypes.c_void_p, ctypes.c_int]
+    lib.MatLMVMSetHistorySize.restype = ctypes.c_int
+    lib.MatLMVMAllocate.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
+    lib.MatLMVMAllocate.restype = ctypes.c_int
     return lib
+
+
+def _check(code: int, name: str) -> None:
+    if code != 0:
+        raise RuntimeError(f"{name} failed (PETSc error {code})")
 
 
 def attach_lmvm_j0(tao: Any, pc: Any) -> None:
     """Make ``pc`` the initial inverse Hessian of a BQNK-type TAO's LMVM matrix."""
     lib = _libpetsc()
     lmvm = ctypes.c_void_p()
-    if lib.TaoGetLMVMMatrix(ctypes.c_void_p(tao.handle), ctypes.byref(lmvm)) != 0:
-        raise RuntimeError("TaoGetLMVMMatrix failed")
-    if lib.MatLMVMSetJ0PC(lmvm, ctypes.c_void_p(pc.handle)) != 0:
-        raise RuntimeError("MatLMVMSetJ0PC failed")
+    _check(
+        lib.TaoGetLMVMMatrix(ctypes.c_void_p(tao.handle), ctypes.byref(lmvm)), "TaoGetLMVMMatrix"
+    )
+    _check(lib.MatLMVMSetJ0PC(lmvm, ctypes.c_void_p(pc.handle)), "MatLMVMSetJ0PC")
+
+
+def initial_matrix(petsc: Any, pc: Any, template: Any) -> Any:
+    """An LMVM matrix without history whose inverse is ``pc``: the ``H0`` of ``blmvm`` and
+    ``bncg``.  Its ``MatSolve`` applies ``pc`` (``MatLMVMSetJ0PC``); LMVM matrices update an
+    LMVM ``J0`` with their own pairs, which a history of zero discards."""
+    lib = _libpetsc()
+    h0 = petsc.Mat().create(comm=template.getComm())
+    h0.setSizes((template.getSizes(), template.getSizes()))  # square, rows as the Vec
+    h0.setType("lmvmbfgs")
+    handle = ctypes.c_void_p(h0.handle)
+    _check(lib.MatLMVMSetHistorySize(handle, 0), "MatLMVMSetHistorySize")
+    h0.setUp()
+    vec = ctypes.c_void_p(template.handle)
+    _check(lib.MatLMVMAllocate(handle, vec, vec), "MatLMVMAllocate")
+    _check(lib.MatLMVMSetJ0PC(handle, ctypes.c_void_p(pc.handle)), "MatLMVMSetJ0PC")
+    return h0
+
+
+def attach_h0(tao: Any, tao_type: str, h0: Any) -> None:
+    """Give ``blmvm`` or ``bncg`` the initial matrix ``h0`` (before ``TaoSetUp``)."""
+    if tao_type == "blmvm":
+        tao.setLMVMH0(h0)
+    else:  # petsc4py 3.18 does not wrap TaoBNCGSetH0; libpetsc exports it
+        _check(
+            _libpetsc().TaoBNCGSetH0(ctypes.c_void_p(tao.handle), ctypes.c_void_p(h0.handle)),
+            "TaoBNCGSetH0",
+        )
+
+
+class FreeSetPreconditioner:
+    """A PC context: the package's preconditioner on TAO's current free set, ``P_F M P_F``.
+
+    ``F = {x > lower} U {g < 0}`` (less ``{x >= upper, g < 0}``) from TAO's solution and the
+    gradient Vec the objective was last evaluated into, read at the moment of the application
+    (BLMVM and BNCG evaluate into one Vec, the unprojected gradient, and restore it with the
+    solution after a failed line search; ``TaoGetGradient`` may hold the projected step
+    instead), so the compliance never spreads the
+    contact pressures of the bound pixels over the open ones.  BLMVM applies its ``H0`` to
+    the unprojected gradient: with the whole compliance its first quasi-Newton step goes to the
+    unconstrained minimiser, far through the bound, and its line searches fail (docs/solvers.md).
+    A preconditioner that follows the contact set
+    (:class:`~petsc_contact.backend.cg.ContactPreconditioner`: the exact Schur and two-level
+    forms of the default solver) is adapted whenever the set has changed.
+
+    Parameters
+    ----------
+    op
+        The preconditioner's operator (``apply_array``).
+    tao
+        The TAO whose solution defines ``F`` with the gradient.
+    gradient
+        ``gradient[0]`` is the Vec the objective was last evaluated into.
+    lower, upper
+        The bounds' Vecs.
+    """
+
+    def __init__(self, op: Any, tao: Any, gradient: list[Any], lower: Any, upper: Any) -> None:
+        self.op = op
+        self.tao = tao
+        self.gradient = gradient
+        self.comm = tao.getComm().tompi4py()
+        self.contact = op if isinstance(op, ContactPreconditioner) else None
+        self.lower, self.upper = _bound(lower.array_r), _bound(upper.array_r)
+        self.size = lower.getSize()
+        self.free = np.zeros(lower.getLocalSize(), dtype=bool)
+        self.work = np.empty(lower.getLocalSize())
+        self.applications = 0
+
+    def apply(self, pc: Any, x: Any, y: Any) -> None:
+        self.applications += 1
+        solution = self.tao.getSolution().array_r
+        gradient = self.gradient[0].array_r
+        with y as out:  # out is scratch until the operator writes it
+            counts = kernels.free_set(solution, gradient, self.lower, self.upper, self.free, out)
+            changed, n_free = counts[1], counts[3]
+            if self.comm.size > 1:
+                changed, n_free = self.comm.allreduce(np.array([changed, n_free]))
+            if changed and self.contact is not None:
+                self.contact.adapt(int(self.size - n_free), self.free)
+            kernels.restrict(self.work, x.array_r, self.free)
+            self.op.apply_array(self.work, out)
+            kernels.restrict(out, out, self.free)
+
+    applyTranspose = apply
 
 
 def requested_type(petsc: Any) -> str:
@@ -182,6 +286,7 @@ class BoundSolver:
         ):
             self.pmat = shell_matrix(petsc, preconditioner)
         use_j0 = not petsc.Options().getBool("petsc_contact_no_j0", False)
+        self.use_h0 = preconditioner is not None and self.tao_type in H0_TYPES and use_j0
         wants_pc = (self.tao_type in J0_TYPES and use_j0) or self.tao_type == "python"
         if preconditioner is not None and wants_pc:
             self.pc = petsc.PC().createPython(preconditioner, comm=grid.comm)
@@ -210,8 +315,12 @@ class BoundSolver:
         self._load(x0, lower, upper)
         counts = {"objgrad": 0}
         norms: list[float] = []  # the first iteration's gradient norm, for the report
-        tao = self._create(objgrad, counts)
+        gradient: list[Any] = []  # the Vec the objective was last evaluated into
+        tao = self._create(objgrad, counts, gradient)
+        initial: list[Any] = []  # the H0 of blmvm/bncg and its PC, destroyed with the TAO
         try:
+            if self.use_h0:
+                initial = self._attach_h0(tao, gradient)
             context = tao.getPythonContext() if self.tao_type == "python" else None
             if self.pc is not None and isinstance(context, TakesPreconditioner):
                 context.set_preconditioner(self.pc)
@@ -242,7 +351,21 @@ class BoundSolver:
             )
         finally:
             tao.destroy()
+            for obj in initial:
+                obj.destroy()
+            gradient.clear()
         return self.x.array_r.copy(), info
+
+    def _attach_h0(self, tao: Any, gradient: list[Any]) -> list[Any]:
+        """The restricted compliance as ``tao``'s ``H0`` (:class:`FreeSetPreconditioner`)."""
+        op = self.preconditioner_op
+        context = FreeSetPreconditioner(op, tao, gradient, self.lower, self.upper)
+        pc = self.petsc.PC().createPython(context, comm=self.grid.comm)
+        pc.setOperators(self.hessian)
+        pc.setUp()
+        h0 = initial_matrix(self.petsc, pc, self.x)
+        attach_h0(tao, self.tao_type, h0)
+        return [h0, pc]
 
     def _load(self, x0: np.ndarray, lower: float, upper: np.ndarray | None) -> None:
         """The start point and the bounds into the solver's Vecs."""
@@ -255,11 +378,13 @@ class BoundSolver:
             with self.upper as ua:
                 ua[...] = upper
 
-    def _create(self, objgrad: ObjGrad, counts: dict[str, int]) -> Any:
-        """A TAO of the requested type with the package's defaults, then the user's options."""
+    def _create(self, objgrad: ObjGrad, counts: dict[str, int], gradient: list[Any]) -> Any:
+        """A TAO of the requested type with the package's defaults, then the user's options;
+        ``gradient[0]`` becomes the Vec the objective was last evaluated into."""
 
         def tao_objgrad(tao: Any, x: Any, g: Any) -> float:
             counts["objgrad"] += 1
+            gradient[:] = [g]
             with g as garr:
                 return objgrad(x.array_r, garr)
 
@@ -278,7 +403,16 @@ class BoundSolver:
         tao.setMaximumFunctionEvaluations(10 * DEFAULT_MAX_IT)
         if self.tao_type in KSP_TYPES:
             tao.getKSP().getPC().setType("none" if self.pmat is None else "mat")
-        tao.setFromOptions()
+        opts = self.petsc.Options()
+        default_matrix = self.use_h0 and self.tao_type == "bncg"
+        default_matrix = default_matrix and not opts.hasName("tao_bncg_mat_type")
+        if default_matrix:  # read by TaoSetFromOptions only
+            opts.setValue("tao_bncg_mat_type", BNCG_MATRIX)
+        try:
+            tao.setFromOptions()
+        finally:
+            if default_matrix:
+                opts.delValue("tao_bncg_mat_type")
         if self.pc is not None and self.tao_type in J0_TYPES:
             attach_lmvm_j0(tao, self.pc)
         return tao

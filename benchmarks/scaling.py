@@ -33,8 +33,8 @@ from mpi4py import MPI
 
 from petsc_contact import periodic_contact
 from petsc_contact.backend.operator import FourierOperator
-from petsc_contact.conventions.fft import SerialFFT, SlabFFT, make_fft
 from petsc_contact.conventions.grid import Grid
+from petsc_contact.numerics.fft import SerialFFT, SlabFFT, make_fft
 from petsc_contact.physics.surface import self_affine
 
 

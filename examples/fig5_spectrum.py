@@ -5,8 +5,8 @@ import argparse
 import numpy as np
 from mpi4py import MPI
 
-from petsc_contact.conventions.fft import make_fft
 from petsc_contact.conventions.grid import Grid, fundamental_wavevector
+from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.surface import radial_psd
 from petsc_contact.workflows import scenes
 

@@ -40,8 +40,8 @@ def make_map(path: str, n: int) -> None:
     """The scan: paper Eq. 5's spectrum, in nm on 50 um, tilted, with undefined points."""
     from SurfaceTopography import Topography
 
-    from petsc_contact.conventions.fft import SerialFFT
     from petsc_contact.conventions.grid import Grid
+    from petsc_contact.numerics.fft import SerialFFT
     from petsc_contact.physics.surface import self_affine
 
     grid = Grid(n, 50.0)

@@ -61,9 +61,9 @@ def test_stops_at_the_rounding_floor(monkeypatch):
     off), the default CG stops at the floor with CONVERGED_STEPTOL within a few confirmations,
     instead of running to its iteration limit; the verification then flags the step."""
     from petsc_contact import periodic_contact
-    from petsc_contact.conventions.fft import make_fft
     from petsc_contact.conventions.grid import Grid
     from petsc_contact.geometries import periodic as problem
+    from petsc_contact.numerics.fft import make_fft
     from petsc_contact.physics.surface import self_affine
 
     grid = Grid(128, 1.0)

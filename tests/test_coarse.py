@@ -8,10 +8,10 @@ from conftest import cli
 from petsc_contact import periodic_contact
 from petsc_contact.backend import _petsc
 from petsc_contact.backend.coarse import DIAGONAL_INFLATION, CoarseSpace, TwoLevelOptions
-from petsc_contact.backend.schur import _fold
-from petsc_contact.conventions.fft import make_fft
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.geometries.periodic import PeriodicProblem
+from petsc_contact.numerics.fft import make_fft
+from petsc_contact.numerics.schur import _fold
 from petsc_contact.physics.surface import self_affine
 
 

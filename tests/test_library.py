@@ -85,3 +85,23 @@ def test_importing_the_package_and_its_help_load_no_solver():
     )
     r = python("-c", code)
     assert r.returncode == 0 and r.stdout.strip() == "[]", (r.stdout, r.stderr)
+
+
+@pytest.mark.parametrize(
+    "old, new, name",
+    [
+        ("conventions.fft", "numerics.fft", "make_fft"),
+        ("backend.kernels", "numerics.kernels", "free_set"),
+        ("backend.schur", "numerics.schur", "ContactSchur"),
+    ],
+)
+def test_moved_modules_warn_and_forward(old, new, name):
+    """Modules moved in 0.2.0 still import from their old paths, with a DeprecationWarning
+    naming the new one, and give the same objects."""
+    import importlib
+    import sys
+
+    sys.modules.pop(f"petsc_contact.{old}", None)
+    with pytest.warns(DeprecationWarning, match=f"petsc_contact.{new}"):
+        module = importlib.import_module(f"petsc_contact.{old}")
+    assert getattr(module, name) is getattr(importlib.import_module(f"petsc_contact.{new}"), name)

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from petsc_contact import periodic_contact
-from petsc_contact.conventions.fft import make_fft
 from petsc_contact.conventions.grid import Grid
+from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 
 N = 64

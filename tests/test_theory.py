@@ -164,8 +164,8 @@ def test_prediction_from_a_map_matches_the_prescribed_spectrum():
     where the continuum spectrum describes the discrete one) u0 and K(p) agree within 5%
     (0.97-0.99 and 1.01-1.04 over six seeds); at L = lambda_r the map's few lowest modes
     put u0 about 20% lower (docs/measured.md)."""
-    from petsc_contact.conventions.fft import make_fft
     from petsc_contact.conventions.grid import Grid
+    from petsc_contact.numerics.fft import make_fft
     from petsc_contact.physics.surface import self_affine
     from petsc_contact.workflows.predictions import predict
     from petsc_contact.workflows.scenes import ideal_spectrum
@@ -214,8 +214,8 @@ def test_crossover_conventions_reproduce_the_quoted_values():
 
 
 def _surface(shape, lengths, hurst=0.7, cutoff=None, seed=1):
-    from petsc_contact.conventions.fft import SerialFFT
     from petsc_contact.conventions.grid import Grid
+    from petsc_contact.numerics.fft import SerialFFT
     from petsc_contact.physics.surface import self_affine
 
     grid = Grid(shape, lengths)
@@ -269,8 +269,8 @@ def test_theory_says_when_it_is_unsure():
     underflows are left out with a warning; when every load is, the call is refused."""
     import warnings
 
-    from petsc_contact.conventions.fft import SerialFFT
     from petsc_contact.conventions.grid import Grid
+    from petsc_contact.numerics.fft import SerialFFT
     from petsc_contact.workflows.predictions import TheoryWarning, predict
 
     grid = Grid(128, 1.0)

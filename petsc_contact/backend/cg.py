@@ -33,14 +33,14 @@ conjugate gradient in the spirit of Polonsky & Keer (Wear 231, 206 (1999)).
   :mod:`petsc_contact.backend.operator`) is applied
   in those two halves, and the second only when ``H d`` is used: a projected step needs
   ``d.Hd`` but not ``H d``.  Any other Hessian is multiplied and dotted.
-- The element-wise work runs in fused single-pass loops (:mod:`petsc_contact.backend.kernels`).
+- The element-wise work runs in fused single-pass loops (:mod:`petsc_contact.numerics.kernels`).
 
 :class:`PreconditionedCG` applies a preconditioner restricted to ``F`` (``z = P_F M P_F r``);
 the package gives it the Fourier compliance, the inverse of the periodic stiffness, which
 makes the iteration count almost independent of the grid.  A preconditioner whose context
 is a :class:`ContactPreconditioner` is told every new free set before it is applied; when
 :meth:`~ContactPreconditioner.adapt` returns ``True`` the operator depends on the set (the
-package's exact Schur form for small contact sets, :mod:`petsc_contact.backend.schur`) and the
+package's exact Schur form for small contact sets, :mod:`petsc_contact.numerics.schur`) and the
 recurrence restarts.
 :class:`PolonskyKeer` is the unpreconditioned method (``M = I``).
 
@@ -61,8 +61,8 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 from scipy.linalg import blas
 
-from . import kernels
-from .kernels import Bound
+from ..numerics import kernels
+from ..numerics.kernels import Bound
 
 REFRESH_EVERY = 50
 # STALLS confirmations in a row whose exact residual is not below STALL_RATIO times the best

@@ -1,6 +1,6 @@
 """A coarse space for the contact reactions: the two-level form of the Schur preconditioner.
 
-The exact Schur form (:mod:`petsc_contact.backend.schur`) solves for one reaction per contact
+The exact Schur form (:mod:`petsc_contact.numerics.schur`) solves for one reaction per contact
 pixel.  Here the reactions are restricted to piecewise constants on *aggregates*: the contact
 pixels of each ``b x b`` block of pixels, ``lambda = W a`` with ``W`` the aggregates'
 indicator columns.  With ``G`` the Fourier compliance (``q = 0`` entry zero), the
@@ -38,9 +38,9 @@ from numba import njit, prange
 from scipy.linalg import LinAlgError, cho_factor, cho_solve
 
 from ..conventions.grid import Grid
+from ..numerics.schur import allgather
 from . import _petsc
 from .operator import ShellInterface
-from .schur import allgather
 
 DIAGONAL_INFLATION = 0.2  # relative: keeps E above the exact one (monopole error ~1%; measured)
 NEAR_REACH = 1  # blocks this far apart (Chebyshev, in blocks) are summed pixel pair by pair
@@ -270,7 +270,7 @@ def add_correction(apply: Any, correction: Any, x: np.ndarray, out: np.ndarray, 
     """``out <- out + G (reactions) + c`` for ``out = G x``: the Schur or two-level form.
 
     ``apply(x, out)`` applies ``G``; ``correction`` is a :class:`CoarseSpace` or a
-    :class:`~petsc_contact.backend.schur.ContactSchur` (``solve`` and ``local``);
+    :class:`~petsc_contact.numerics.schur.ContactSchur` (``solve`` and ``local``);
     ``work`` is two flat field-sized arrays, the first zero (it is left zero).
     """
     reactions, shift = correction.solve(out, float(correction.grid.sum(x.sum())[0]))

@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from ..conventions.fft import FFT, half_spectrum_weights, make_fft, single_entries
 from ..conventions.grid import Grid, block_rows
-from . import kernels
+from ..numerics import kernels
+from ..numerics.fft import FFT, half_spectrum_weights, make_fft, single_entries
 
 
 def twice(values: np.ndarray) -> np.ndarray:

@@ -38,7 +38,8 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from ..conventions.grid import Grid
-from . import _petsc, kernels
+from ..numerics import kernels
+from . import _petsc
 from .cg import ContactPreconditioner, _bound
 from .operator import SpectralOperator, shell_matrix
 

@@ -25,21 +25,21 @@ import time
 import numpy as np
 from scipy.special import erf
 
-from ..backend import kernels
-from ..backend.coarse import (
-    CoarseCorrected,
-    CoarseSpace,
-    TwoLevelOptions,
-    add_correction,
-    changed_count,
-)
+from ..backend.coarse import CoarseCorrected, CoarseSpace
 from ..backend.operator import FourierOperator, ShellInterface
-from ..backend.schur import ContactSchur, response_quarter
+from ..backend.preconditioner import (
+    MeanModePreconditioner,
+    coarse_limit,
+    schur_limit,
+    set_mean_mode,
+)
 from ..backend.solve import SolveInfo
 from ..backend.stiffness import periodic_stiffness_exact
-from ..conventions.fft import FFT, wavevector_magnitude
 from ..conventions.grid import Grid
 from ..conventions.validation import non_negative, positive
+from ..numerics import kernels
+from ..numerics.fft import FFT, wavevector_magnitude
+from ..numerics.schur import response_quarter
 from ..physics.greens import mean_mode_compliance, periodic_stiffness
 from ..physics.observables import step_observables
 from ..physics.theory import linear_stiffness
@@ -48,187 +48,6 @@ from .step import Step, contact_fields, residual_verdict
 ROUNDING_FACTOR = 1000.0  # see PeriodicProblem.rounding_floor
 RESOLVED = 1e-4  # a load is solved only where rounding leaves its residual this far below p0
 LARGEST_LOAD = 1e6  # p0/E* beyond this is no elastic contact (strains of a million)
-SCHUR_MAX = 4096  # the most bound variables for the Schur form (dense matrix: 134 MB)
-SETTLE_FRACTION = 0.1  # a contact count changing more than this per iteration is still moving
-REBUILD_FRACTION = 0.01  # the coarse space is rebuilt when this much of the set has changed
-
-
-class MeanModePreconditioner(FourierOperator):
-    """The inverse of the Hessian held by the contact's interfacial stiffness, with its
-    ``q = 0`` entry adapted to the contact set.
-
-    On the open pixels the contact spots hold the surface like a layer of springs of the
-    interfacial stiffness ``K_i`` (:func:`~petsc_contact.physics.greens.held_compliance`), so the
-    multiplier is ``1/(E*|q|/2 + K_i)`` (scaled like the Hessian), with ``K_i`` an estimate
-    for the current load.  The free compliance ``2/(E*|q|)`` misses exactly that support:
-    at long wavelengths it over-predicts the response of the open surface, most of all for
-    the mean mode, which ``K`` alone does not hold at all.
-
-    With ``m`` isolated pixels at the bound a uniform gap change meets a stiffness of at
-    most ``m k / n^2`` (``k`` the Hessian's diagonal), so the ``q = 0`` entry used is the
-    larger of the two compliances, ``max(1/K_i, 1/(m k))``: a few contact pixels are softer
-    than any estimate of ``K_i`` from the continuum.
-
-    With at most :attr:`schur_max` variables at the bound it is instead the exact inverse of
-    the Hessian on the free set, built on the unsupported inverse ``1/K``
-    (:class:`~petsc_contact.backend.schur.ContactSchur`: two FFT round trips and a dense solve of
-    the contact pixels' bordered system per application), which
-    makes each CG step exact on the current contact set; :func:`schur_limit` keeps its LU
-    factorisation, once per contact set, within about ten FFT round trips.
-
-    Above that, up to the fraction ``options.max_fraction`` of the grid in contact, it is the
-    two-level form (:class:`~petsc_contact.backend.coarse.CoarseSpace`): the same inverse with
-    the reactions piecewise constant on the contact pixels of ``b x b`` blocks (``b`` grown
-    until the aggregates are at most :func:`coarse_limit`).  It is first built once the
-    contact count changes by at most :data:`SETTLE_FRACTION` per iteration (until then the
-    held compliance serves), and rebuilt when the count has settled again and more than
-    :data:`REBUILD_FRACTION` of the contact set has changed since the last build; in between
-    the coarse space of an older set is kept (it stays symmetric positive semi-definite) and
-    the recurrence goes on.
-    Called by :class:`~petsc_contact.backend.cg.PolonskyKeer` through :meth:`adapt`.
-    """
-
-    def __init__(self, grid: Grid, fft: FFT, hessian: FourierOperator, schur_max: int) -> None:
-        super().__init__(grid, fft, np.zeros(fft.spectrum.shape))  # filled by invert
-        self._hessian = hessian
-        self.schur_max = schur_max  # the Schur form's largest bound set
-        self.options = TwoLevelOptions()
-        self.hessian_diagonal = 1.0
-        self.base_mean_mode = self.mean_mode = 0.0
-        self.expected_bound_count = 0  # contact pixels Persson's theory expects at this load
-        self.support = 0.0  # the interfacial stiffness held by (normalised), set by invert
-        self._filled = 0.0  # the support the multiplier holds now (0 in the Schur form)
-        self.correction: ContactSchur | CoarseSpace | None = None  # the set-dependent form
-        self.builds = 0  # coarse spaces built since the last invert
-        self._last_count = 0  # the bound count of the last adapt
-        self._built_free: np.ndarray | None = None  # the free set the coarse space was built on
-        self._quarter: np.ndarray | None = None  # G's quarter, made when the Schur form starts
-        self._spread: np.ndarray | None = None  # work fields of the set-dependent forms
-
-    @property
-    def schur(self) -> ContactSchur | None:
-        """The exact Schur form, when it is in use."""
-        return self.correction if isinstance(self.correction, ContactSchur) else None
-
-    @property
-    def coarse(self) -> CoarseSpace | None:
-        """The two-level form's coarse space, when it is in use."""
-        return self.correction if isinstance(self.correction, CoarseSpace) else None
-
-    def invert(
-        self, support: float, hessian_diagonal: float, mean_mode: float, expected_bound_count: int
-    ) -> None:
-        """Become the inverse of the Hessian plus ``support`` (the Hessian's diagonal entry
-        is ``hessian_diagonal``), with ``mean_mode`` as its ``q = 0`` entry; ``support >= 0``
-        is the interfacial stiffness in the Hessian's normalised units, and
-        ``expected_bound_count`` the contact the load is expected to bring (a scale for the
-        CG's growth limit).  The two-level form's options are read from the PETSc options
-        database (:class:`~petsc_contact.backend.coarse.TwoLevelOptions`).
-
-        Computed in place, with no copy of the kernel kept: with ``N = n^2`` the normalised
-        multipliers are ``c K/N`` for the Hessian, ``s = c K_i/N`` for the support and
-        ``N^-2/(c K/N + s)`` for the inverse, whose ``q = 0`` entry is ``1/(N c K_i)``.
-        """
-        self.support = support
-        self.expected_bound_count = int(expected_bound_count)
-        self._fill(support)
-        self.base_mean_mode = mean_mode
-        self._set_mean_mode(self.base_mean_mode)
-        self.hessian_diagonal = hessian_diagonal
-        self.options = TwoLevelOptions.from_database()
-        self.correction = self._quarter = self._built_free = None
-        self._last_count = self.builds = 0
-
-    def _fill(self, support: float) -> None:
-        """The multiplier ``N^-2/(c K/N + support)`` in place (``q = 0``: set separately)."""
-        self.set_inverse(self._hessian, support)
-        self._filled = support
-
-    def adapt(self, bound_count: int, free: np.ndarray) -> bool:
-        """Adapt to ``bound_count`` variables at their bound (``free``: this rank's free mask).
-
-        Returns whether the operator changed with the set (the same on every rank): always
-        in the Schur form, on every build of the two-level form and when leaving it;
-        otherwise only its ``q = 0`` entry followed the count (or an older coarse space is
-        kept).
-        """
-        last, self._last_count = self._last_count, bound_count
-        if 0 < bound_count <= self.schur_max:
-            self.correction = ContactSchur(
-                self.grid, self._exact_compliance(), ~free.reshape(self.grid.local_shape)
-            )
-            return True
-        settled = last > 0 and abs(bound_count - last) <= SETTLE_FRACTION * last
-        if self.options.covers(bound_count, self.grid.size):
-            if self.coarse is not None and not (settled and self._stale(free, bound_count)):
-                return False  # an older coarse space is kept until the set has settled
-            if settled and self._build(free):
-                return True
-        leaving = self.coarse is not None
-        self.correction = self._spread = self._built_free = None
-        if self._filled != self.support:
-            self._fill(self.support)
-        self._set_mean_mode(
-            max(self.base_mean_mode, 1.0 / (max(bound_count, 1) * self.hessian_diagonal))
-        )
-        return leaving
-
-    def _exact_compliance(self) -> np.ndarray:
-        """Become ``G = 1/K`` with a zero ``q = 0`` entry (the set-dependent forms); returns
-        its quarter (:func:`~petsc_contact.backend.schur.quarter`)."""
-        if self._filled != 0.0:
-            self._fill(0.0)
-        self._set_mean_mode(0.0)
-        if self._quarter is None:
-            self._quarter = response_quarter(self.grid, super().apply_array, self.work_fields())
-        return self._quarter
-
-    def work_fields(self) -> np.ndarray:
-        """Two flat field-sized arrays, the first zero, kept while a set-dependent form is in
-        use (:func:`~petsc_contact.backend.coarse.add_correction`); lent to the held-set
-        stiffness solve after a contact solve."""
-        if self._spread is None:
-            self._spread = np.zeros((2, int(np.prod(self.grid.local_shape))))
-        return self._spread
-
-    def _stale(self, free: np.ndarray, bound_count: int) -> bool:
-        """Whether more than :data:`REBUILD_FRACTION` of the set changed since the build."""
-        assert self._built_free is not None
-        (changed,) = self.grid.sum(changed_count(self._built_free, free))
-        return bool(changed > REBUILD_FRACTION * bound_count)
-
-    def _build(self, free: np.ndarray) -> bool:
-        """The two-level form on the bound set of ``free``; ``False`` if it cannot be had."""
-        coarse = CoarseSpace(
-            self.grid,
-            self._exact_compliance(),
-            ~free.reshape(self.grid.local_shape),
-            self.options.block,
-            coarse_limit(self.grid.size),
-        )
-        if not coarse.factorised:
-            return False
-        self.correction, self._built_free = coarse, free.copy()
-        self.builds += 1
-        return True
-
-    def _set_mean_mode(self, value: float) -> None:
-        self.mean_mode = value
-        set_mean_mode(self, value)
-
-    def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
-        """``out <- M x``; in the Schur form ``x`` must vanish on the bound set."""
-        super().apply_array(x, out)
-        if self.correction is not None:
-            add_correction(super().apply_array, self.correction, x, out, self.work_fields())
-        return out
-
-
-def set_mean_mode(op: FourierOperator, value: float) -> None:
-    """Set the normalised ``q = 0`` entry of ``op``'s multiplier (on the rank that holds it)."""
-    rows, cols = op.fft.spectral_index
-    if rows.start == 0 and cols.start == 0:
-        op.set_entry(0, 0, value)
 
 
 def verify(info: SolveInfo, obs: dict[str, float], scale_length: float) -> str:
@@ -240,26 +59,6 @@ def verify(info: SolveInfo, obs: dict[str, float], scale_length: float) -> str:
     relative = info.relative_tolerance
     tol = max(info.tolerance, relative * info.initial_gradient_norm if relative > 0 else 0.0)
     return residual_verdict(obs["kkt_residual"], tol)
-
-
-def schur_limit(size: int) -> int:
-    """Largest bound set for the Schur preconditioner on a grid of ``size = n^2`` points.
-
-    Its dense LU (``~1.8e-11 m^3`` s here) should cost at most about ten FFT round trips
-    (``~2.7e-10 n^2 log2(n^2)`` s): ``m <= (150 n^2 log2 n^2)^(1/3)``, 880 at 512^2 and
-    2400 at 2048^2, and never more than :data:`SCHUR_MAX`.
-    """
-    return int(min(SCHUR_MAX, (150 * size * np.log2(max(size, 2))) ** (1 / 3)))
-
-
-def coarse_limit(size: int) -> int:
-    """Most aggregates for the two-level form on a grid of ``size = n^2`` points.
-
-    Its Cholesky factorisation (``~2.2e-11 k^3`` s here) should cost at most about ten FFT
-    round trips (``~2.7e-10 n^2 log2(n^2)`` s): ``k <= (120 n^2 log2 n^2)^(1/3)``, 2200 at
-    2048^2, 3600 at 4096^2 and 5900 at 8192^2.
-    """
-    return int((120 * size * np.log2(max(size, 2))) ** (1 / 3))
 
 
 class PeriodicProblem:

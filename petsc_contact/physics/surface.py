@@ -17,9 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..conventions.fft import FFT, half_spectrum_weights, wavevector_magnitude
 from ..conventions.grid import Grid
 from ..conventions.validation import non_negative
+from ..numerics.fft import FFT, half_spectrum_weights, wavevector_magnitude
 
 
 def psd_shape(q: np.ndarray, q0: float, qr: float, q1: float, hurst: float) -> np.ndarray:

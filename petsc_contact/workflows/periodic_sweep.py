@@ -21,12 +21,12 @@ import numpy as np
 
 from ..backend import _petsc
 from ..backend.solve import BoundSolver, Monitor
-from ..conventions.fft import make_fft
 from ..conventions.grid import grid_for
 from ..conventions.validation import check_finite
 from ..geometries.periodic import PeriodicProblem, verify
 from ..geometries.step import VERIFY_FACTOR, Step, collect, solve_step
 from ..io.topography import SurfaceTopographyMap, map_and_lengths
+from ..numerics.fft import make_fft
 from ..physics.continuation import ConvergedStep, LoadPath
 
 __all__ = [

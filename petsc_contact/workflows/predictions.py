@@ -18,9 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..conventions.fft import FFT, SerialFFT
 from ..conventions.grid import Grid, grid_for
 from ..io.topography import SurfaceTopographyMap, map_and_lengths
+from ..numerics.fft import FFT, SerialFFT
 from ..physics import theory
 from ..physics.surface import radial_psd, rms_of
 

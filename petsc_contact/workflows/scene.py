@@ -15,11 +15,11 @@ from typing import Any
 
 import numpy as np
 
-from ..conventions.fft import make_fft
 from ..conventions.grid import Grid, grid_for
 from ..conventions.units import Lengths, factor, parse_lengths, unit_name
 from ..conventions.validation import check_finite
 from ..io.topography import SurfaceTopographyMap, Topography, from_surface_topography
+from ..numerics.fft import make_fft
 from .description import Run
 
 SLOPE_LIMIT = 1e6  # heights this many times the cell's side are no contact surface

@@ -12,10 +12,10 @@ from typing import Any
 import numpy as np
 
 from ..backend.stiffness import sweep_stiffness
-from ..conventions.fft import make_fft
 from ..conventions.grid import Grid, fundamental_wavevector
 from ..io.schema import write_attributes
 from ..io.store import atomic_h5, is_partial
+from ..numerics.fft import make_fft
 from ..physics import theory
 from ..physics.surface import psd_shape, rms_of, self_affine
 from .periodic_sweep import periodic_contact

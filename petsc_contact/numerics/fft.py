@@ -1,0 +1,432 @@
+"""Real-to-complex 2-D FFTs on the row-slab layout, planned once and reused.
+
+One interface, three backends chosen by the communicator size:
+
+- one rank: FFTW through Debian's ``pyfftw``, measured plan, one thread per core (faster
+  than scipy's and numpy's FFTs; docs/performance.md);
+- several ranks: FFTW's own MPI transforms (``libfftw3_mpi``, the library PETSc's MATFFTW
+  uses, called through ctypes) with the spectrum in transposed order, which skips one global
+  transpose per direction and keeps every local transform contiguous (faster than
+  mpi4py-fft; docs/parallel.md);
+- several ranks whose row slabs are not FFTW's (FFTW gives every rank ``ceil(nx/P)`` rows but
+  the last; :func:`~petsc_contact.conventions.grid.block_rows` spreads the remainder, e.g.
+  22/21/21 rows
+  for n = 64 on 3 ranks), or without ``libfftw3_mpi``: the slab-decomposed parallel FFT of
+  Debian's ``mpi4py-fft`` (FFTW underneath).
+
+A backend's ``transposed`` attribute says how its spectrum block is stored: ``False`` for
+(rows ``qx``, columns ``qy``), ``True`` for (``qy``, ``qx``).  Spectral multipliers built
+with :func:`wavevectors` follow it; ``spectral_index`` is always (``qx`` range, ``qy`` range).
+
+Each backend owns three buffers: ``real`` (input of :meth:`forward`, never modified by
+either transform), ``spectrum`` (its output, the local block of the ``nx x (ny//2+1)`` half
+spectrum) and ``result`` (output of :meth:`backward`).  Both transforms are unnormalised:
+``backward(forward(x)) = nx ny x``.
+
+:meth:`forward_from` and :meth:`backward_into` are the hot path of every operator (one round
+trip with a spectral multiplier between them, :mod:`petsc_contact.backend.operator`).  The serial
+backend runs FFTW directly on the caller's arrays when they are as aligned as its plans
+(PETSc's Vec arrays are: 16 bytes), which saves two copies of the field per application;
+otherwise it copies.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import platform
+from typing import Any
+
+import numpy as np
+
+from ..conventions.grid import Grid, fft_order
+
+PLANNER_EFFORT = "FFTW_MEASURE"
+WISDOM_VARIABLE = "PETSC_CONTACT_FFTW_WISDOM"  # a file for FFTW's wisdom, or "off"
+
+
+def default_threads() -> int:
+    """FFT threads for a one-rank run: the cores this process may use."""
+    return max(1, len(os.sched_getaffinity(0)))
+
+
+class _Wisdom:
+    """FFTW's measured plans kept on disk between runs (the serial backend's).
+
+    Measuring plans for a large grid takes seconds; with the wisdom of an earlier run
+    FFTW plans at once, and every run of a machine uses the same plans (so the same
+    rounding, and the same iteration counts).  The file is
+    ``$XDG_CACHE_HOME/petsc-contact/fftw-wisdom-HOST`` (``~/.cache`` by default), or the path
+    in ``PETSC_CONTACT_FFTW_WISDOM``; ``PETSC_CONTACT_FFTW_WISDOM=off`` measures afresh in
+    every run.  A file FFTW cannot read is ignored and replaced.
+    """
+
+    loaded = False
+
+    @staticmethod
+    def path() -> str | None:
+        value = os.environ.get(WISDOM_VARIABLE, "")
+        if value == "off":
+            return None
+        if value:
+            return value
+        cache = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+        return os.path.join(cache, "petsc-contact", f"fftw-wisdom-{platform.node()}")
+
+    @classmethod
+    def load(cls, pyfftw: Any) -> None:
+        """Import the file's wisdom, once per process."""
+        path = cls.path()
+        if cls.loaded or path is None:
+            return
+        cls.loaded = True
+        try:
+            with open(path, "rb") as f:
+                parts = tuple(f.read().split(b"\0"))
+        except OSError:
+            return  # no file yet: plans are measured
+        if len(parts) == 3:  # double, single, long double; FFTW rejects what it cannot read
+            pyfftw.import_wisdom(parts)
+
+    @classmethod
+    def save(cls, pyfftw: Any) -> None:
+        """Write the process's wisdom back (atomically; a failure only costs planning time)."""
+        path = cls.path()
+        if path is None:
+            return
+        try:
+            os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
+            temporary = f"{path}.{os.getpid()}"
+            with open(temporary, "wb") as f:
+                f.write(b"\0".join(pyfftw.export_wisdom()))  # FFTW's wisdom is text
+            os.replace(temporary, path)
+        except OSError:
+            pass
+
+
+class SerialFFT:
+    """FFTW (pyfftw) on the whole grid, for one MPI rank (plans kept by :class:`_Wisdom`)."""
+
+    def __init__(self, grid: Grid, threads: int | None = None) -> None:
+        import pyfftw
+
+        _Wisdom.load(pyfftw)
+        known = pyfftw.export_wisdom()
+        nx, m = grid.shape[0], grid.half
+        threads = threads or default_threads()
+        self.threads = threads
+        self.real = pyfftw.empty_aligned(grid.shape, dtype="float64")
+        self.spectrum = pyfftw.empty_aligned((nx, m), dtype="complex128")
+        self.result = pyfftw.empty_aligned(grid.shape, dtype="float64")
+        self._forward = pyfftw.FFTW(
+            self.real, self.spectrum, axes=(0, 1), flags=(PLANNER_EFFORT,), threads=threads
+        )
+        self._backward = pyfftw.FFTW(
+            self.spectrum,
+            self.result,
+            axes=(0, 1),
+            direction="FFTW_BACKWARD",
+            flags=(PLANNER_EFFORT, "FFTW_DESTROY_INPUT"),
+            threads=threads,
+        )
+        if pyfftw.export_wisdom() != known:  # new plans were measured
+            _Wisdom.save(pyfftw)
+        self.spectral_index = (slice(0, nx), slice(0, m))
+
+    transposed = False
+
+    def forward(self) -> None:
+        """``spectrum <- FFT(real)``."""
+        self._forward.execute()
+
+    def backward(self) -> None:
+        """``result <- IFFT(spectrum)`` without the ``1/(nx ny)``; destroys ``spectrum``."""
+        self._backward.execute()
+
+    def forward_from(self, x: np.ndarray) -> None:
+        """``spectrum <- FFT(x)`` for a local array of the grid's size.
+
+        ``x`` is read in place when it is contiguous and as aligned as the plan (PETSc's Vec
+        arrays are); ``real`` is then left untouched.
+        """
+        src = x.reshape(self.real.shape)
+        if self._direct(src, self._forward.input_alignment):
+            self._forward.update_arrays(src, self.spectrum)
+            self._forward.execute()
+            self._forward.update_arrays(self.real, self.spectrum)
+        else:
+            self.real[...] = src
+            self._forward.execute()
+
+    def backward_into(self, out: np.ndarray) -> None:
+        """``out <- IFFT(spectrum)`` (unnormalised, destroys ``spectrum``), in place if aligned."""
+        dst = out.reshape(self.result.shape)
+        if self._direct(dst, self._backward.output_alignment):
+            self._backward.update_arrays(self.spectrum, dst)
+            self._backward.execute()
+            self._backward.update_arrays(self.spectrum, self.result)
+        else:
+            self._backward.execute()
+            dst[...] = self.result
+
+    @staticmethod
+    def _direct(a: np.ndarray, alignment: int) -> bool:
+        return a.flags.c_contiguous and a.ctypes.data % alignment == 0
+
+
+class SlabFFT:
+    """mpi4py-fft slab decomposition: rows in real space, half-spectrum columns in Fourier space."""
+
+    def __init__(self, grid: Grid) -> None:
+        from mpi4py_fft import PFFT
+
+        self._pfft = PFFT(
+            grid.comm,
+            grid.shape,
+            axes=(0, 1),
+            dtype=np.float64,
+            grid=(-1,),
+            planner_effort=PLANNER_EFFORT,
+        )
+        if self._pfft.local_slice(False)[0] != grid.rows:
+            raise RuntimeError("mpi4py-fft row distribution differs from the grid's")
+        # mpi4py-fft's backward transform works in forward.input_array, so ``real`` is a
+        # separate buffer that no transform touches (as with the serial backend).
+        self.real = np.zeros_like(self._pfft.forward.input_array)
+        self.spectrum = self._pfft.forward.output_array
+        self.result = np.empty_like(self.real)
+        self.spectral_index = tuple(self._pfft.local_slice(True))
+
+    transposed = False
+
+    def forward(self) -> None:
+        self._pfft.forward(self.real, self.spectrum, normalize=False)
+
+    def backward(self) -> None:
+        self._pfft.backward(self.spectrum, self.result, normalize=False)
+
+    def forward_from(self, x: np.ndarray) -> None:
+        """``spectrum <- FFT(x)`` for a local array of the slab's size (through ``real``)."""
+        self.real[...] = x.reshape(self.real.shape)
+        self.forward()
+
+    def backward_into(self, out: np.ndarray) -> None:
+        """``out <- IFFT(spectrum)`` (unnormalised, through ``result``)."""
+        self.backward()
+        out.reshape(self.result.shape)[...] = self.result
+
+
+_FFTW_MPI_TRANSPOSED_IN = 1 << 29  # fftw3-mpi.h
+_FFTW_MPI_TRANSPOSED_OUT = 1 << 30
+_FFTW_MEASURE = 0
+
+
+class _FFTWMPILibrary:
+    """``libfftw3_mpi`` through ctypes, initialised once per process (``None`` if absent)."""
+
+    _lib: Any = None
+
+    @classmethod
+    def get(cls) -> Any:
+        if cls._lib is None:
+            try:
+                lib = ctypes.CDLL("libfftw3_mpi.so.3")
+            except OSError:
+                cls._lib = False
+                return None
+            size_t = ctypes.c_ssize_t
+            lib.fftw_mpi_local_size_many_transposed.restype = size_t
+            # rank, n[], howmany, two block sizes and a pointer open both signatures
+            head: list[Any] = [
+                ctypes.c_int,
+                ctypes.POINTER(size_t),
+                size_t,
+                size_t,
+                size_t,
+                ctypes.c_void_p,
+            ]
+            local_size = lib.fftw_mpi_local_size_many_transposed
+            local_size.argtypes = [*head, *[ctypes.POINTER(size_t)] * 4]
+            for name in ("fftw_mpi_plan_many_dft_r2c", "fftw_mpi_plan_many_dft_c2r"):
+                fn = getattr(lib, name)
+                fn.restype = ctypes.c_void_p
+                fn.argtypes = [*head, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint]
+            lib.fftw_execute.argtypes = [ctypes.c_void_p]
+            lib.fftw_mpi_init()
+            cls._lib = lib
+        return cls._lib or None
+
+
+class _FFTWMPIPlans:
+    """FFTW-MPI's in-place buffer and its two transposed-order plans for one grid and comm.
+
+    Made once per communicator and grid size and kept for the life of the process:
+    destroying an FFTW-MPI plan after mpi4py-fft had planned in the same process crashed
+    in ``fftw_destroy_plan`` in 8 of 16 runs here.  Every user runs forward, multiply and
+    backward with no other transform in between (the CG's split Hessian application drops
+    the backward instead), so the buffer can be shared.
+    """
+
+    _made: dict[tuple[int, tuple[int, int]], _FFTWMPIPlans | None] = {}
+
+    def __init__(
+        self, grid: Grid, lib: Any, block0: int, block1: int, local: list[int], alloc: int
+    ) -> None:
+        from mpi4py import MPI
+
+        (nx, ny), m = grid.shape, grid.half
+        rows, _, n_cols, col_start = local
+        self.lib = lib
+        self._buffer = _aligned(2 * alloc, np.float64)
+        self.padded = self._buffer[: rows * 2 * m].reshape(rows, 2 * m)[:, :ny]
+        self.spectrum = self._buffer.view(np.complex128)[: n_cols * nx].reshape(n_cols, nx)
+        self.spectral_index = (slice(0, nx), slice(col_start, col_start + n_cols))
+        dims = (ctypes.c_ssize_t * 2)(nx, ny)
+        comm = ctypes.c_void_p(MPI._handleof(grid.comm))
+        data = self._buffer.ctypes.data
+        self.forward = lib.fftw_mpi_plan_many_dft_r2c(
+            2, dims, 1, block0, block1, data, data, comm, _FFTW_MEASURE | _FFTW_MPI_TRANSPOSED_OUT
+        )
+        self.backward = lib.fftw_mpi_plan_many_dft_c2r(
+            2, dims, 1, block1, block0, data, data, comm, _FFTW_MEASURE | _FFTW_MPI_TRANSPOSED_IN
+        )
+        self.ok = bool(self.forward and self.backward)
+
+    @classmethod
+    def get(cls, grid: Grid) -> _FFTWMPIPlans | None:
+        """The plans for ``grid``; ``None`` without FFTW-MPI or if its rows are not the grid's."""
+        from mpi4py import MPI
+
+        key = (MPI._handleof(grid.comm), grid.shape)
+        if key not in cls._made:
+            cls._made[key] = cls._make(grid)
+        return cls._made[key]
+
+    @classmethod
+    def _make(cls, grid: Grid) -> _FFTWMPIPlans | None:
+        from mpi4py import MPI
+
+        lib = _FFTWMPILibrary.get()
+        if lib is None:
+            return None
+        nx, m = grid.shape[0], grid.half
+        block0 = block1 = 0  # FFTW_MPI_DEFAULT_BLOCK: ceil(nx/P) rows, ceil(m/P) columns
+        local = [ctypes.c_ssize_t() for _ in range(4)]
+        alloc = lib.fftw_mpi_local_size_many_transposed(
+            2,
+            (ctypes.c_ssize_t * 2)(nx, m),
+            1,
+            block0,
+            block1,
+            MPI._handleof(grid.comm),
+            *map(ctypes.byref, local),
+        )
+        rows, row_start = local[0].value, local[1].value
+        if not grid.comm.allreduce(grid.rows == slice(row_start, row_start + rows), op=MPI.LAND):
+            return None
+        plans = cls(grid, lib, block0, block1, [v.value for v in local], max(alloc, 1))
+        return plans if grid.comm.allreduce(plans.ok, op=MPI.LAND) else None
+
+
+class FFTWMPI:
+    """FFTW-MPI slab transforms with the spectrum in transposed order (``transposed = True``).
+
+    Real space: this rank's rows of the grid, ``ceil(nx/P)`` per rank (FFTW's distribution).
+    Fourier space: this rank's ``qy`` columns of the half spectrum, each holding all ``nx``
+    values of ``qx`` contiguously.  FFTW's real arrays are padded to ``2 (ny//2 + 1)`` per
+    row, so ``real`` and ``result`` are this object's own dense arrays, copied in and out;
+    the plans and ``spectrum`` are shared by all objects of the same grid
+    (:class:`_FFTWMPIPlans`).  Use :meth:`create`, which returns ``None`` when FFTW-MPI
+    cannot serve the grid.
+    """
+
+    transposed = True
+
+    def __init__(self, plans: _FFTWMPIPlans) -> None:
+        self._plans = plans
+        self._execute = plans.lib.fftw_execute
+        self.spectrum = plans.spectrum
+        self.spectral_index = plans.spectral_index
+        self.real = np.zeros(plans.padded.shape)
+        self.result = np.zeros(plans.padded.shape)
+
+    @classmethod
+    def create(cls, grid: Grid) -> FFTWMPI | None:
+        """The backend for ``grid``, or ``None`` without FFTW-MPI or if its rows differ."""
+        plans = _FFTWMPIPlans.get(grid)
+        return cls(plans) if plans is not None else None
+
+    def forward(self) -> None:
+        """``spectrum <- FFT(real)`` (``real`` is kept)."""
+        self.forward_from(self.real)
+
+    def backward(self) -> None:
+        """``result <- IFFT(spectrum)`` without the ``1/(nx ny)``; destroys ``spectrum``."""
+        self.backward_into(self.result)
+
+    def forward_from(self, x: np.ndarray) -> None:
+        """``spectrum <- FFT(x)`` for a local array of the slab's size (through FFTW's rows)."""
+        self._plans.padded[...] = x.reshape(self.real.shape)
+        self._execute(self._plans.forward)
+
+    def backward_into(self, out: np.ndarray) -> None:
+        """``out <- IFFT(spectrum)`` (unnormalised, destroys ``spectrum``)."""
+        self._execute(self._plans.backward)
+        out.reshape(self.result.shape)[...] = self._plans.padded
+
+
+def _aligned(size: int, dtype: Any) -> np.ndarray:
+    """A zeroed 1-D array of ``size`` items whose data is 64-byte aligned (SIMD-friendly)."""
+    raw = np.zeros(size * np.dtype(dtype).itemsize + 64, dtype=np.uint8)
+    offset = -raw.ctypes.data % 64
+    return raw[offset : offset + size * np.dtype(dtype).itemsize].view(dtype)
+
+
+FFT = SerialFFT | SlabFFT | FFTWMPI
+
+
+def make_fft(grid: Grid) -> FFT:
+    """The FFT backend for this grid's communicator (see the module docstring)."""
+    if grid.comm.size == 1:
+        return SerialFFT(grid)
+    return FFTWMPI.create(grid) or SlabFFT(grid)
+
+
+def wavevectors(grid: Grid, fft: FFT) -> tuple[np.ndarray, np.ndarray]:
+    """Local components ``(qx, qy)`` of the half-spectrum block, broadcastable to its shape.
+
+    ``q = 2 pi (i/Lx, j/Ly)`` with ``i`` in numpy's FFT order
+    (:func:`~petsc_contact.conventions.grid.fft_order`) and ``j = 0 .. ny//2``.
+    """
+    rows, cols = fft.spectral_index
+    dqx, dqy = grid.dq
+    qx = dqx * fft_order(grid.shape[0])[rows]
+    qy = dqy * np.arange(grid.half)[cols]
+    return (qx[None, :], qy[:, None]) if fft.transposed else (qx[:, None], qy[None, :])
+
+
+def wavevector_magnitude(grid: Grid, fft: FFT) -> np.ndarray:
+    """``|q|`` on the local half-spectrum block."""
+    qx, qy = wavevectors(grid, fft)
+    return np.sqrt(qx**2 + qy**2)
+
+
+def half_spectrum_weights(grid: Grid, fft: FFT) -> np.ndarray:
+    """Multiplicity of each half-spectrum column in the full spectrum (1 or 2).
+
+    ``sum(w * |F|^2)`` over all ranks equals the full-spectrum sum (Parseval).
+    """
+    ny = grid.shape[1]
+    cols = np.arange(grid.half)[fft.spectral_index[1]]
+    w = np.where((cols == 0) | ((ny % 2 == 0) & (cols == ny // 2)), 1.0, 2.0)
+    return w[:, None] if fft.transposed else w[None, :]
+
+
+def single_entries(grid: Grid, fft: FFT) -> np.ndarray:
+    """Flat indices, in the local spectrum block, of the entries of multiplicity 1.
+
+    They are the columns ``qy = 0`` and ``qy = ny/2`` (even ``ny``) of the half spectrum; every
+    other entry stands for itself and its complex conjugate (:func:`half_spectrum_weights`).
+    """
+    weights = np.broadcast_to(half_spectrum_weights(grid, fft), fft.spectrum.shape)
+    return np.flatnonzero(weights == 1.0)

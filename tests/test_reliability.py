@@ -45,8 +45,8 @@ def _leftovers(out: Path) -> list[str]:
 
 def test_sigkill_at_every_point_of_the_write_path(tmp_path):
     """A sweep with fields killed at each point of its write path: --resume ends it with
-    every step, equal to the uninterrupted run (a kill after the final rename leaves the
-    whole result)."""
+    every step, equal to the uninterrupted run, and its step table beside it (a kill after
+    the final rename leaves the whole result, the table written before it)."""
     whole = _whole(tmp_path, SWEEP, "--fields")
     for point in POINTS:
         out = tmp_path / f"{point.replace(':', '-')}.h5"
@@ -56,6 +56,10 @@ def test_sigkill_at_every_point_of_the_write_path(tmp_path):
         assert r.returncode == 0, (point, r.stderr)
         same_result(whole, out, fields=True)
         assert _leftovers(out) == [], (point, _leftovers(out))
+        table = out.with_suffix(".csv").read_text().splitlines()  # the step table beside it
+        expected = whole.with_suffix(".csv").read_text().splitlines()
+        assert [row.split(",")[0] for row in table] == [row.split(",")[0] for row in expected]
+        assert len(table) == 5, (point, len(table))  # the header and four steps
 
 
 def test_sigkill_at_random_times(tmp_path):
@@ -133,9 +137,12 @@ def test_ensemble_and_study_come_back_whole(tmp_path):
     killed = _killed("after:final:1", study.replace(str(data), str(late)), None)
     assert killed.returncode == -signal.SIGKILL
     assert cli(*study.replace(str(data), str(late)).split(), "--quiet").returncode == 0
-    assert sorted(f.name for f in (late / "fig1").iterdir() if f.suffix != ".csv") == [
+    assert sorted(f.name for f in (late / "fig1").iterdir()) == [  # each with its table
+        "periodic_r1.csv",
         "periodic_r1.h5",
+        "periodic_r8.csv",
         "periodic_r8.h5",
+        "punch.csv",
         "punch.h5",
     ]
     fresh = tmp_path / "fresh"

@@ -484,6 +484,7 @@ class StepStore:
             parts = [os.path.join(self.parts, p) for p in os.listdir(self.parts)]
             needed = sum(os.path.getsize(p) for p in [self.partial, *parts])
             check_room(os.path.dirname(os.path.abspath(self.path)), needed, self.path)
+            self._write_csv()  # first: once OUT.h5 is in place the run counts as complete
             with atomic_h5(self.path, large=True) as f:
                 write_attributes(f, {**self.attributes, "complete": True})
                 self._write_table(f)
@@ -495,7 +496,6 @@ class StepStore:
                 for name in self.fields:
                     self._copy_field(f, name)
                 self._label_maps(f)
-            self._write_csv()
             _clear(self.path, keep_steps=False)
 
         self._on_root(assemble)

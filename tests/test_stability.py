@@ -1,6 +1,8 @@
 """Extreme and degenerate scenes for the default solver (the cheap part of the stability
 matrix; the whole matrix is benchmarks/stability.py -> docs/stability.md)."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -68,16 +70,23 @@ def test_extreme_spectra(hurst, slope, solver):
     assert area[0] < area[1] < area[2]
 
 
-@pytest.mark.parametrize("tao_type", ["blmvm", "bncg"])
-def test_first_order_tao_types_with_fourier_h0(tao_type):
+OPTIONS = Path(__file__).parent.parent / "options"
+
+
+@pytest.mark.parametrize(
+    "tao_type, extra",
+    [("blmvm", []), ("bncg", []), ("blmvm", ["-options_file", str(OPTIONS / "blmvm.opts")])],
+)
+def test_first_order_tao_types_with_fourier_h0(tao_type, extra):
     """BLMVM and BNCG with the Fourier compliance restricted to their free set as ``H0``
     converge from a single asperity's load to beyond half contact, where without it they
     stall at ``p0/E* = 1e-7`` (measured at 64^2: 5000 iterations, the limit), and reach the
-    default solver's mean gap within their shared tolerance (1e-8 p0 rms: 1e-6 relative)."""
+    default solver's mean gap within their shared tolerance (1e-8 p0 rms: 1e-6 relative);
+    BLMVM also with its options file (a history of two pairs)."""
     h = rough()
     loads = [1e-7, 1e-5, 1e-3, 1e-2, 0.1]
     default = periodic_contact(h, 1.0, 1.0, loads)
-    steps = periodic_contact(h, 1.0, 1.0, loads, options=["-tao_type", tao_type])
+    steps = periodic_contact(h, 1.0, 1.0, loads, options=["-tao_type", tao_type, *extra])
     assert all(s.converged for s in steps), [s.scalars["verification"] for s in steps]
     for s, ref in zip(steps, default, strict=True):
         assert s.scalars["preconditioner_applications"] > 0  # H0 is applied

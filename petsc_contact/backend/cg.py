@@ -98,7 +98,7 @@ class ContactPreconditioner(Protocol):
         ...
 
 
-def _bound(values: np.ndarray) -> np.ndarray | float:
+def compact_bound(values: np.ndarray) -> np.ndarray | float:
     """A bound array, or its value when it is the same everywhere (saves a memory pass)."""
     if values.size and values.min() == values.max():
         return float(values[0])
@@ -175,7 +175,7 @@ class _Run:
         )
         self.xa, self.g, self.w = self.x.array, self.g_vec.array, self.w_vec.array
         self.d, self.r, self.z = self.d_vec.array, self.r_vec.array, self.z_vec.array
-        self.lower, self.upper = _bound(lower_vec.array_r), _bound(upper_vec.array_r)
+        self.lower, self.upper = compact_bound(lower_vec.array_r), compact_bound(upper_vec.array_r)
         self.preconditioner = preconditioner
         context = (
             preconditioner.getPythonContext()

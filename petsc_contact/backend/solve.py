@@ -40,7 +40,7 @@ import numpy as np
 from ..conventions.grid import Grid
 from ..numerics import kernels
 from . import _petsc
-from .cg import ContactPreconditioner, _bound
+from .cg import ContactPreconditioner, compact_bound
 from .operator import SpectralOperator, shell_matrix
 
 BOUND_TYPES = (
@@ -212,7 +212,7 @@ class FreeSetPreconditioner:
         self.gradient = gradient
         self.comm = tao.getComm().tompi4py()
         self.contact = op if isinstance(op, ContactPreconditioner) else None
-        self.lower, self.upper = _bound(lower.array_r), _bound(upper.array_r)
+        self.lower, self.upper = compact_bound(lower.array_r), compact_bound(upper.array_r)
         self.size = lower.getSize()
         self.free = np.zeros(lower.getLocalSize(), dtype=bool)
         self.work = np.empty(lower.getLocalSize())

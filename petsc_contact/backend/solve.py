@@ -385,7 +385,8 @@ class BoundSolver:
 
         def tao_objgrad(tao: Any, x: Any, g: Any) -> float:
             counts["objgrad"] += 1
-            gradient[:] = [g]
+            if self.use_h0:  # only H0 reads it: holding TAO's Vec costs memory otherwise
+                gradient[:] = [g]
             with g as garr:
                 return objgrad(x.array_r, garr)
 

@@ -63,6 +63,35 @@ def test_units_give_the_bare_numbers_answer(tmp_path):
         assert a["nominal_pressure"][0] == pytest.approx(2e-3, rel=1e-6)  # GPa
 
 
+def test_sweeps_take_units(tmp_path):
+    """A sweep's bounds with units are the bare bounds in the run's units: 100 kPa to 10 MPa
+    on a 1 GPa modulus is 1e-4 to 1e-2 (the same loads, exactly); the punch's approaches 1 nm
+    to 5 nm on a map in um are 1e-3 to 5e-3.  Bounds in the wrong order are refused in one
+    line, with or without units."""
+    scan = _map(tmp_path)
+    si = ["periodic", *scan, "--modulus", "1GPa", "--sweep", "3,100kPa,10MPa"]
+    bare = ["periodic", *scan, "--sweep", "3,1e-4,1e-2"]
+    with _out(tmp_path, "si", *si) as a, _out(tmp_path, "bare", *bare) as b:
+        assert np.allclose(a["nominal_pressure"][:], b["nominal_pressure"][:], rtol=1e-12)
+        assert np.allclose(a["mean_gap"][:], b["mean_gap"][:], rtol=1e-10)
+    with _out(tmp_path, "nm", "punch", *scan, "--sweep", "3,1nm,5nm") as a:
+        assert a["approach"][0] == pytest.approx(1e-3, rel=1e-12)
+        assert a["approach"][-1] == pytest.approx(5e-3, rel=1e-12)
+    for bounds in ("3,10MPa,100kPa", "3,1e-2,1e-4"):
+        r = cli(
+            "periodic",
+            *scan,
+            "--modulus",
+            "1GPa",
+            "--sweep",
+            bounds,
+            "--output",
+            str(tmp_path / "x.h5"),
+        )
+        assert r.returncode == 2 and "0 < PMIN < PMAX" in r.stderr, r.stderr
+        assert len(r.stderr.strip().splitlines()) == 1
+
+
 def test_units_without_a_unit_system_are_refused(tmp_path):
     scan = _map(tmp_path)
     for args, words in (

@@ -137,15 +137,20 @@ def _grid_shape(text: str) -> int | tuple[int, int]:
     return sizes[0] if len(sizes) == 1 else (sizes[0], sizes[1])
 
 
-def _sweep_spec(text: str) -> list[float]:
-    values = _float_list(text)
-    if len(values) not in (1, 3):
+def _sweep_spec(text: str) -> list[float | str]:
+    """``N`` or ``N,MIN,MAX``, the bounds with an optional unit (``12,1kPa,10MPa``: checked
+    once the run's units are known)."""
+    parts = [v for v in text.split(",") if v.strip()]
+    if len(parts) not in (1, 3):
         raise argparse.ArgumentTypeError(f"expected N or N,PMIN,PMAX, got '{text}'")
+    count = _float_list(parts[0])[0]
+    bounds = [_quantity(v) for v in parts[1:]]
+    numbers = [b for b in bounds if isinstance(b, float)]
     try:
-        log_range("the sweep", values[0], (values[1], values[2]) if len(values) == 3 else None)
+        log_range("the sweep", count, (numbers[0], numbers[1]) if len(numbers) == 2 else None)
     except ValueError as bad:
         raise argparse.ArgumentTypeError(str(bad)) from None
-    return values
+    return [count, *bounds]
 
 
 def _seed_list(text: str) -> list[int]:

@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from ..conventions.units import pressure_value
 from ..io.schema import THEORY, annotate, write_attributes
 from ..io.store import atomic_h5
 from ..workflows.predictions import Prediction, predict, predict_profile
@@ -23,7 +24,8 @@ def run_theory(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[s
     run = describe(args)
     modulus = run.modulus_value
     low, high = (v * modulus for v in LOAD_RANGE)
-    pressures = np.array(swept(args.sweep, low, high))
+    unit = run.pressure_unit
+    pressures = np.array(swept(args.sweep, low, high, lambda v: pressure_value(v, unit, "--sweep")))
     profile = _line_scan(args)
     if profile is None:
         petsc, run, scene = scene_for(args, petsc_args)

@@ -82,7 +82,7 @@ class Run:
     length: Any = None
     modulus: float | str = 1.0
     pressures: Sequence[float | str] | None = None
-    sweep: Sequence[float] | None = None
+    sweep: Sequence[float | str] | None = None
     approaches: Sequence[float | str] | None = None
     forces: Sequence[float | str] | None = None
     footprint: str = "square"

@@ -246,10 +246,22 @@ Plan = tuple[
 ]
 
 
-def swept(spec: Sequence[float], low: float, high: float) -> list[float]:
+def swept(
+    spec: Sequence[float | str],
+    low: float,
+    high: float,
+    value: Callable[[float | str], float] = float,
+) -> list[float]:
     """The loads of a sweep ``(N,)`` or ``(N, MIN, MAX)``: ``N`` log-spaced, by default from
-    ``low`` to ``high``."""
-    n, lo, hi = spec if len(spec) == 3 else (spec[0], low, high)
+    ``low`` to ``high``; ``value`` turns a bound given with a unit (``"1kPa"``) into the run's
+    units."""
+    from ..conventions.validation import log_range
+
+    if len(spec) == 3:
+        n, lo, hi = float(spec[0]), value(spec[1]), value(spec[2])
+        log_range("the sweep", n, (lo, hi))
+    else:
+        n, lo, hi = float(spec[0]), low, high
     return [float(v) for v in np.geomspace(lo, hi, int(n))]
 
 
@@ -263,7 +275,10 @@ def _periodic_plan(run: Run, scene: Scene) -> Plan:
     p_full = problem.full_contact_pressure()
     resolved: dict[str, Any] = {}
     if run.sweep is not None:
-        pressures = swept(run.sweep, 1e-4 * p_full, 0.9 * p_full)
+        unit = run.pressure_unit
+        pressures = swept(
+            run.sweep, 1e-4 * p_full, 0.9 * p_full, lambda v: pressure_value(v, unit, "--sweep")
+        )
         resolved = {"pressures": pressures, "sweep": None}  # the file records the loads
     elif run.pressures is not None:
         unit = run.pressure_unit
@@ -310,7 +325,8 @@ def _punch_plan(run: Run, scene: Scene) -> Plan:
     resolved: dict[str, Any] = {}
     length_unit = scene.resolved["length_unit"] or None
     if run.sweep is not None:
-        loads = swept(run.sweep, 0.01 * problem.scale_length, 3 * problem.scale_length)
+        low, high = 0.01 * problem.scale_length, 3 * problem.scale_length
+        loads = swept(run.sweep, low, high, lambda v: length_value(v, length_unit, "--sweep"))
         resolved = {"approaches": loads, "sweep": None}  # the file records the loads
     elif run.forces is not None:
         units = run.pressure_unit, length_unit

@@ -51,8 +51,9 @@ def ensemble_loads(base: Run, first_seed: int) -> list[float]:
         return [pressure_value(p, base.pressure_unit, "--pressures") for p in base.pressures]
     if base.sweep is None:
         raise ValueError("give the nominal pressures (--pressures) or a --sweep")
-    if len(base.sweep) == 3:
-        return swept(base.sweep, base.sweep[1], base.sweep[2])
+    if len(base.sweep) == 3:  # the bounds given (with their units, if any)
+        unit = base.pressure_unit
+        return swept(base.sweep, 0.0, 0.0, lambda v: pressure_value(v, unit, "--sweep"))
     from ..geometries.periodic import PeriodicProblem
     from .scene import prepare_scene
 

@@ -295,8 +295,8 @@ def _punch_loads(p: argparse.ArgumentParser) -> None:
         "--sweep",
         type=_sweep_spec,
         metavar="N[,DMIN,DMAX]",
-        help="N log-spaced approaches from DMIN to DMAX (default: 0.01 and "
-        "3 times the rms recess of the punch face)",
+        help="N log-spaced approaches from DMIN to DMAX, with an optional unit (6,1nm,50nm; "
+        "default: 0.01 and 3 times the rms recess of the punch face)",
     )
     p.add_argument(
         "--footprint",
@@ -327,8 +327,8 @@ def _periodic_loads(p: argparse.ArgumentParser, d: dict[str, Any]) -> None:
         "--sweep",
         type=_sweep_spec,
         metavar="N[,PMIN,PMAX]",
-        help="N log-spaced pressures from PMIN to PMAX (default: 1e-4 and "
-        "0.9 times the full-contact pressure -min(K h))",
+        help="N log-spaced pressures from PMIN to PMAX, with an optional unit (12,1kPa,10MPa; "
+        "default: 1e-4 and 0.9 times the full-contact pressure -min(K h))",
     )
 
 
@@ -511,7 +511,8 @@ def _theory_parser(sub: Any) -> None:
         type=_sweep_spec,
         default=[40],
         metavar="N[,PMIN,PMAX]",
-        help="N log-spaced pressures of the predictions (default 40, from 1e-7 E* to 0.1 E*)",
+        help="N log-spaced pressures of the predictions, the bounds with an optional unit "
+        "(default 40, from 1e-7 E* to 0.1 E*)",
     )
     p.add_argument("--output", required=True, metavar="OUT.h5", help="HDF5 results")
     p.add_argument("--plot", metavar="PNG", help="spectrum, u(p) and K(p) with p_c marked")

@@ -3,7 +3,8 @@
     python tests/kill_at.py WHEN:TARGET:N -- ARGS...
 
 ``TARGET`` is the file a rename puts in place: ``heights`` and ``step`` (the part files),
-``commit`` (the ``.partial`` file), ``state`` (the resume state), ``final`` (``OUT.h5``),
+``commit`` (the ``.partial`` file), ``state`` (the resume state), ``table`` (``OUT.csv``),
+``final`` (``OUT.h5``),
 ``compare`` (a comparison's ``.partial``).  ``WHEN`` is ``before`` the ``N``-th such rename,
 ``after`` it, or ``during`` the writing of the file it renames (the process dies with the
 temporary file half written).  Nothing of the package is changed: the runner wraps
@@ -34,6 +35,8 @@ POINTS = [  # every point of the write path a kill is tried at
     "before:state:2",
     "during:state:2",
     "after:state:2",
+    "during:table:1",
+    "after:table:1",
     "before:final:1",
     "during:final:1",
     "after:final:1",
@@ -67,6 +70,7 @@ def _target(path: str) -> str:
         ("step", f"{os.sep}step-" in path and ".parts" in path),
         ("state", ".state.npz" in path),
         ("commit", path.endswith(".partial")),
+        ("table", path.endswith(".csv")),
         ("final", path.endswith(".h5")),
     ):
         if found:

@@ -40,7 +40,9 @@ def _killed(spec: str, command: str, out: Path | None, *extra: str) -> subproces
 
 
 def _leftovers(out: Path) -> list[str]:
-    return sorted(p.name for p in out.parent.glob(out.name + ".*"))
+    """What a run on ``out`` left beside its results: files named after it, the table's too."""
+    table = out.with_suffix(".csv").name
+    return sorted(p.name for name in (out.name, table) for p in out.parent.glob(name + ".*"))
 
 
 def test_sigkill_at_every_point_of_the_write_path(tmp_path):

@@ -667,11 +667,15 @@ def tidy(path: str) -> None:
 
 
 def _clear(path: str, keep_steps: bool) -> None:
-    """Remove what runs on output ``path`` left: temporary files of killed writers always,
+    """Remove what runs on output ``path`` left: temporary files of killed writers always
+    (the step table's too),
     the committed steps (``.partial``, parts, state) unless ``keep_steps``.  Only the holder
     of the output's lock calls this."""
     folder, name = os.path.split(os.path.abspath(path))
-    pattern = re.compile(re.escape(name) + r"(\.partial|\.state\.npz)?\.\d+\.tmp")
+    table = os.path.basename(csv_path(path))
+    pattern = re.compile(
+        rf"({re.escape(name)}(\.partial|\.state\.npz)?|{re.escape(table)})\.\d+\.tmp"
+    )
     for entry in os.listdir(folder):
         if pattern.fullmatch(entry):
             with suppress(FileNotFoundError):

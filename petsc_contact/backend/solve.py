@@ -216,10 +216,8 @@ class FreeSetPreconditioner:
         self.size = lower.getSize()
         self.free = np.zeros(lower.getLocalSize(), dtype=bool)
         self.work = np.empty(lower.getLocalSize())
-        self.applications = 0
 
     def apply(self, pc: Any, x: Any, y: Any) -> None:
-        self.applications += 1
         solution = self.tao.getSolution().array_r
         gradient = self.gradient[0].array_r
         with y as out:  # out is scratch until the operator writes it

@@ -16,7 +16,9 @@ application, a ``k x k`` Cholesky factorisation per build and two triangular sol
 application (``k`` aggregates).
 
 ``E`` comes from one column of ``G`` (the kernel is periodic and even, :func:`schur.quarter`):
-exactly, pixel pair by pixel pair, between aggregates of neighbouring blocks; as the
+exactly between aggregates of neighbouring blocks (pixel pair by pixel pair where the blocks
+hold few contact pixels, by FFTs on ``2b x 2b`` cells where they hold many,
+:func:`coarse_matrix`); as the
 monopole ``|A_I| |A_J| G(c_I - c_J)`` of the aggregates' centroids (``G`` interpolated
 bilinearly) between all others, where the neighbour blocks in between make the pixels at
 least ``b`` apart.  The monopoles' error is about 1% of ``E`` (relative eigenvalues of 0.99
@@ -34,6 +36,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import scipy.fft
 from numba import njit, prange
 from scipy.linalg import LinAlgError, cho_factor, cho_solve
 
@@ -45,7 +48,8 @@ from .operator import ShellInterface
 DIAGONAL_INFLATION = 0.2  # relative: keeps E above the exact one (monopole error ~1%; measured)
 NEAR_REACH = 1  # blocks this far apart (Chebyshev, in blocks) are summed pixel pair by pair
 BLOCK = 16  # the aggregates' block side (pixels)
-MAX_FRACTION = 0.1  # the largest contact fraction the two-level form is used at
+MAX_FRACTION = 0.3  # the largest contact fraction the two-level form is used at (measured)
+FFT_PRODUCTS = 8  # per b^2 and near pair: the FFT pair sums' cost in direct products (measured)
 
 
 @dataclass(frozen=True)
@@ -60,7 +64,8 @@ class TwoLevelOptions:
         ``-petsc_contact_two_level_block``: the aggregates' block side in pixels.
     max_fraction
         ``-petsc_contact_two_level_max_fraction``: the largest fraction of the grid in contact
-        at which it is used (above it the held compliance is as fast).
+        at which it is used (at 2048^2 it halves the iterations at 53% contact too, but its
+        builds and its second round trip then cost as much as it saves; docs/performance.md).
     """
 
     enabled: bool = True
@@ -95,6 +100,18 @@ def changed_count(before: np.ndarray, now: np.ndarray) -> int:
 
 
 @njit(cache=True, nogil=True)
+def _grouped(labels: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """The indices of ``labels`` grouped by label, in order within each (a counting sort;
+    label ``I`` has the places ``starts[I]:starts[I+1]``)."""
+    order = np.empty(labels.size, dtype=np.int64)
+    place = starts[:-1].copy()
+    for i in range(labels.size):
+        order[place[labels[i]]] = i
+        place[labels[i]] += 1
+    return order
+
+
+@njit(cache=True, nogil=True)
 def _fold(d: int, n: int) -> int:
     """The offset ``|d| < n`` of two pixels folded into the even kernel's quarter."""
     d = abs(d)
@@ -120,23 +137,12 @@ def _interpolate(quarter: np.ndarray, dx: float, dy: float, nx: int, ny: int) ->
 
 
 @njit(cache=True, nogil=True, parallel=True)
-def _coarse_matrix(
-    rows: np.ndarray,
-    cols: np.ndarray,
-    starts: np.ndarray,
-    block_rc: np.ndarray,
-    lookup: np.ndarray,
-    quarter: np.ndarray,
-    nx: int,
-    ny: int,
-    near: np.ndarray,
-    reach: int,
+def _monopoles(
+    rows: np.ndarray, cols: np.ndarray, starts: np.ndarray, quarter: np.ndarray, nx: int, ny: int
 ) -> np.ndarray:
-    """``E = W^T G_BB W`` for aggregates ``I`` holding the pixels ``starts[I]:starts[I+1]``
-    of ``(rows, cols)``, in block ``block_rc[I]``; ``lookup[bi, bj]`` is the aggregate of a
-    block (``-1`` for none).  Exact between blocks at most ``reach`` blocks apart, from
-    ``near``, the corner of ``quarter`` that their pixel offsets reach (small enough for the
-    cache); monopoles beyond.  Only the upper triangle is filled (rows in parallel)."""
+    """``|A_I| |A_J| G(c_I - c_J)`` for aggregates ``I`` holding the pixels
+    ``starts[I]:starts[I+1]`` of ``(rows, cols)`` (``c`` their centroids), upper triangle
+    only (rows in parallel)."""
     k = starts.size - 1
     sizes = np.empty(k)
     centre = np.empty((k, 2))
@@ -153,28 +159,183 @@ def _coarse_matrix(
             e_mat[a, b] = (
                 sa * sizes[b] * _interpolate(quarter, ra - centre[b, 0], ca - centre[b, 1], nx, ny)
             )
+    return e_mat
+
+
+@njit(cache=True, nogil=True)
+def _near_pairs(block_rc: np.ndarray, lookup: np.ndarray, reach: int) -> np.ndarray:
+    """The pairs ``(I, J)``, ``I <= J``, of aggregates whose blocks are at most ``reach``
+    blocks apart (``lookup[bi, bj]``: the aggregate of a block, ``-1`` for none), each once
+    (a small grid's blocks wrap onto the same neighbour)."""
+    k = block_rc.shape[0]
     bx, by = lookup.shape
-    for a in prange(k):
-        seen = np.empty((2 * reach + 1) ** 2, dtype=np.int64)
+    width = (2 * reach + 1) ** 2
+    found = np.full((k, width), -1, dtype=np.int64)
+    for a in range(k):
         count = 0
         for di in range(-reach, reach + 1):
             for dj in range(-reach, reach + 1):
                 b = lookup[(block_rc[a, 0] + di) % bx, (block_rc[a, 1] + dj) % by]
-                if b < a:  # none, or done from b's side
+                if b < a:  # none, or found from b's side
                     continue
                 known = False
                 for t in range(count):
-                    known = known or seen[t] == b
-                if known:  # a small grid's blocks wrap onto the same neighbour
-                    continue
-                seen[count] = b
-                count += 1
-                total = 0.0
-                for p in range(starts[a], starts[a + 1]):
-                    rp, cp = rows[p], cols[p]
-                    for q in range(starts[b], starts[b + 1]):
-                        total += near[_fold(rp - rows[q], nx), _fold(cp - cols[q], ny)]
-                e_mat[a, b] = total
+                    known = known or found[a, t] == b
+                if not known:
+                    found[a, count] = b
+                    count += 1
+    total = 0
+    for a in range(k):
+        for t in range(width):
+            total += found[a, t] >= 0
+    pairs = np.empty((total, 2), dtype=np.int64)
+    i = 0
+    for a in range(k):
+        for t in range(width):
+            if found[a, t] >= 0:
+                pairs[i, 0] = a
+                pairs[i, 1] = found[a, t]
+                i += 1
+    return pairs
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _pair_sums_direct(
+    rows: np.ndarray,
+    cols: np.ndarray,
+    starts: np.ndarray,
+    pairs: np.ndarray,
+    near: np.ndarray,
+    nx: int,
+    ny: int,
+) -> np.ndarray:
+    """``sum G(p - q)`` over the pixels ``p`` of ``I`` and ``q`` of ``J`` for each pair, pixel
+    pair by pixel pair; ``near`` is the corner of ``G``'s quarter the offsets reach."""
+    out = np.empty(pairs.shape[0])
+    for t in prange(pairs.shape[0]):
+        a, b = pairs[t, 0], pairs[t, 1]
+        total = 0.0
+        for p in range(starts[a], starts[a + 1]):
+            rp, cp = rows[p], cols[p]
+            for q in range(starts[b], starts[b + 1]):
+                total += near[_fold(rp - rows[q], nx), _fold(cp - cols[q], ny)]
+        out[t] = total
+    return out
+
+
+AGGREGATES_PER_BATCH = 128  # the FFT pair sums transform this many aggregates at a time
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _spectral_dots(
+    spectra: np.ndarray,
+    kernels: np.ndarray,
+    pairs: np.ndarray,
+    kind: np.ndarray,
+    weight: np.ndarray,
+    out: np.ndarray,
+    where: np.ndarray,
+) -> None:
+    """``out[where[t]] = sum_k weight Re(conj(A^) T^ B^)`` for the ``t``-th pair of rows
+    ``(A, B)`` of ``spectra`` and its kernel ``kernels[kind[t]]`` (half spectra)."""
+    rows, cols = spectra.shape[1], spectra.shape[2]
+    for t in prange(pairs.shape[0]):
+        a, b, c = pairs[t, 0], pairs[t, 1], kind[t]
+        total = 0.0
+        for i in range(rows):
+            for j in range(cols):
+                z = np.conj(spectra[a, i, j]) * kernels[c, i, j] * spectra[b, i, j]
+                total += weight[j] * z.real
+        out[where[t]] = total
+
+
+def _pair_sums_fft(
+    rows: np.ndarray,
+    cols: np.ndarray,
+    starts: np.ndarray,
+    origin: np.ndarray,
+    pairs: np.ndarray,
+    quarter: np.ndarray,
+    shape: tuple[int, int],
+    block: int,
+) -> np.ndarray:
+    """The sums of :func:`_pair_sums_direct` by FFTs on ``2b x 2b`` cells.
+
+    With ``u``, ``v`` the pixels' positions in their blocks (``origin``: each aggregate's
+    block corner), a pair's sum is ``sum_{u,v} A(u) B(v) T(u - v)``, ``T(w) = G(o_I - o_J + w)``
+    for ``|w| < b``: a circular correlation on a ``2b x 2b`` cell, where the offsets do not
+    alias, so ``(1/M^2) Re sum_k conj(A^(k)) T^(k) B^(k)`` (``M = 2b``; half spectra, each
+    column but the first and the Nyquist one counted twice).  Its cost per pair is about
+    ``2 b^2`` products against ``|A_I| |A_J|``: it pays where the blocks are well filled.
+    The aggregates are transformed in batches of :data:`AGGREGATES_PER_BATCH` (with the
+    partners of their pairs), so the memory stays small.
+    """
+    nx, ny = shape
+    m = 2 * block
+    w = np.arange(-block + 1, block)
+    offsets = origin[pairs[:, 0]] - origin[pairs[:, 1]]
+    keys, kind = np.unique(
+        np.stack([offsets[:, 0] % nx, offsets[:, 1] % ny], axis=1), axis=0, return_inverse=True
+    )
+    kernels = np.empty((len(keys), m, m // 2 + 1), dtype=complex)
+    for i, (dx, dy) in enumerate(keys):  # T^ for each distinct block offset (a few)
+        fx, fy = (dx + w) % nx, (dy + w) % ny
+        cell = np.zeros((m, m))
+        cell[np.ix_(w % m, w % m)] = quarter[
+            np.ix_(np.minimum(fx, nx - fx), np.minimum(fy, ny - fy))
+        ]
+        kernels[i] = scipy.fft.rfft2(cell)
+    weight = np.full(m // 2 + 1, 2.0 / (m * m))
+    weight[0] = weight[-1] = 1.0 / (m * m)
+    out = np.empty(len(pairs))
+    order = np.argsort(pairs[:, 0], kind="stable")
+    first = pairs[order, 0]
+    for low in range(0, starts.size - 1, AGGREGATES_PER_BATCH):
+        lo, hi = np.searchsorted(first, [low, low + AGGREGATES_PER_BATCH])
+        if lo == hi:
+            continue
+        chosen = order[lo:hi]
+        members, index = np.unique(pairs[chosen].ravel(), return_inverse=True)
+        cells = np.zeros((len(members), m, m))
+        for i, a in enumerate(members):
+            s, e = starts[a], starts[a + 1]
+            cells[i, rows[s:e] - origin[a, 0], cols[s:e] - origin[a, 1]] = 1.0
+        spectra = scipy.fft.rfft2(cells)
+        _spectral_dots(spectra, kernels, index.reshape(-1, 2), kind[chosen], weight, out, chosen)
+    return out
+
+
+def coarse_matrix(
+    rows: np.ndarray,
+    cols: np.ndarray,
+    starts: np.ndarray,
+    block_rc: np.ndarray,
+    lookup: np.ndarray,
+    quarter: np.ndarray,
+    shape: tuple[int, int],
+    block: int,
+) -> np.ndarray:
+    """``E = W^T G_BB W`` for aggregates ``I`` holding the pixels ``starts[I]:starts[I+1]``
+    of ``(rows, cols)``, in block ``block_rc[I]`` of side ``block``; ``lookup[bi, bj]`` is
+    the aggregate of a block (``-1`` for none).  Exact between blocks at most
+    :data:`NEAR_REACH` blocks apart, monopoles beyond; only the upper triangle is filled.
+
+    The near sums are taken pixel pair by pixel pair where the aggregates are small and by
+    FFTs on ``2b x 2b`` cells where they are large (:func:`_pair_sums_fft`), whichever
+    costs fewer products (``|A_I| |A_J|`` against :data:`FFT_PRODUCTS` ``b^2`` per pair).
+    """
+    nx, ny = shape
+    e_mat = _monopoles(rows, cols, starts, quarter, nx, ny)
+    pairs = _near_pairs(block_rc, lookup, NEAR_REACH)
+    sizes = np.diff(starts).astype(float)
+    direct = float(np.dot(sizes[pairs[:, 0]], sizes[pairs[:, 1]]))
+    if direct > FFT_PRODUCTS * block**2 * len(pairs):
+        sums = _pair_sums_fft(rows, cols, starts, block_rc * block, pairs, quarter, shape, block)
+    else:
+        reach = (NEAR_REACH + 1) * block  # the largest folded offset of a near pair, plus one
+        near = np.ascontiguousarray(quarter[:reach, :reach])
+        sums = _pair_sums_direct(rows, cols, starts, pairs, near, nx, ny)
+    e_mat[pairs[:, 0], pairs[:, 1]] = sums
     return e_mat
 
 
@@ -218,31 +379,30 @@ class CoarseSpace:
         while True:
             bx, by = -(-nx // block), -(-ny // block)
             block_id = (both[:, 0] // block) * by + both[:, 1] // block
-            ids, labels = np.unique(block_id, return_inverse=True)
+            counts = np.bincount(block_id, minlength=bx * by)
+            ids = np.flatnonzero(counts)
             if len(ids) <= max_size:
                 break
             block = max(block + 1, int(np.ceil(block * np.sqrt(len(ids) / max_size))))
+        labels = (np.cumsum(counts > 0) - 1)[block_id]
         self.block = block
         self.labels = labels[offset : offset + len(self.local)]
         self.size = k = len(ids)
-        order = np.argsort(labels, kind="stable")
-        self.sizes = np.bincount(labels, minlength=k).astype(float)
-        starts = np.concatenate([[0], np.cumsum(self.sizes).astype(np.int64)])
+        self.sizes = counts[ids].astype(float)
+        starts = np.concatenate([[0], np.cumsum(counts[ids])]).astype(np.int64)
+        order = _grouped(labels, starts)
         lookup = np.full((bx, by), -1, dtype=np.int64)
         block_rc = np.stack(np.divmod(ids, by), axis=1)
         lookup[block_rc[:, 0], block_rc[:, 1]] = np.arange(k)
-        reach = (NEAR_REACH + 1) * block  # the largest folded offset of a near pair, plus one
-        coarse = _coarse_matrix(
+        coarse = coarse_matrix(
             np.ascontiguousarray(both[order, 0]),
             np.ascontiguousarray(both[order, 1]),
             starts,
             block_rc,
             lookup,
             np.ascontiguousarray(quarter, dtype=float),
-            nx,
-            ny,
-            np.ascontiguousarray(quarter[:reach, :reach], dtype=float),
-            NEAR_REACH,
+            (nx, ny),
+            block,
         )
         if block > 1:  # single pixels: the monopoles are exact
             coarse[np.diag_indices(k)] *= 1.0 + DIAGONAL_INFLATION

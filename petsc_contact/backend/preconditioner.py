@@ -79,6 +79,11 @@ class MeanModePreconditioner(FourierOperator):
         """The two-level form's coarse space, when it is in use."""
         return self.correction if isinstance(self.correction, CoarseSpace) else None
 
+    @property
+    def two_level(self) -> bool:
+        """Whether the two-level form is in use (the CG then limits the set's growth more)."""
+        return self.coarse is not None
+
     def invert(
         self, support: float, hessian_diagonal: float, mean_mode: float, expected_bound_count: int
     ) -> None:

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..conventions.grid import Grid
+from ..numerics import kernels
 from . import _petsc
 from .operator import ShellInterface, shell_matrix
 
@@ -33,16 +34,16 @@ class Restricted(ShellInterface):
         self.op = op
         self.grid = op.grid
         self.mask = mask.reshape(-1)
-        self._outside = ~self.mask
         self._masked = np.empty(self.mask.shape)  # reused by every application
         self.applications = 0
 
     def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
         self.applications += 1
         out = out.reshape(-1)
-        np.multiply(x.reshape(-1), self.mask, out=self._masked)
+        flat = x.reshape(-1)
+        kernels.restrict(self._masked, flat, self.mask)
         self.op.apply_array(self._masked, out)
-        np.copyto(out, x.reshape(-1), where=self._outside)
+        kernels.fill_outside(out, flat, self.mask)
         return out
 
     def diagonal(self) -> float:

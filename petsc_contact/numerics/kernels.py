@@ -81,6 +81,14 @@ def restrict(out: np.ndarray, x: np.ndarray, free: np.ndarray) -> None:
 
 
 @njit(cache=True, fastmath=FAST, nogil=True)
+def fill_outside(out: np.ndarray, x: np.ndarray, inside: np.ndarray) -> None:
+    """``out <- x`` off ``inside`` (``out`` kept on it)."""
+    for i in range(out.size):
+        if not inside[i]:
+            out[i] = x[i]
+
+
+@njit(cache=True, fastmath=FAST, nogil=True)
 def extend_direction(
     z: np.ndarray, d: np.ndarray, free: np.ndarray, beta: float, r: np.ndarray
 ) -> float:

@@ -214,7 +214,7 @@ def test_the_papers_recipe_gives_its_three_quoted_crossovers(case):
     """convention="paper" (q_r h_rms with q_r = 2 pi/lambda_r, q_r L = pi L/lambda_r,
     theta = 1) gives each of the paper's quoted p_c from the paper's own inputs, within the
     interval its one significant figure stands for.  The formula as printed gives none of
-    them (4 theta^(-(1+H)/H) = 5.1 and 4.2 times lower at H = 0.7 and 0.9), nor does the
+    them (4 theta^(-(1+H)/H) = 5.0 and 4.1 times lower at H = 0.7 and 0.9), nor does the
     deprecated "appendix" reading fed the surface's own h_rms (2 times lower: outside the
     intervals of both Fig. 1 values)."""
     c = PAPER_RECIPE_CASES[case]

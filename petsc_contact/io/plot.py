@@ -162,7 +162,7 @@ def plot_theory(
             sim_k = np.asarray(table["stiffness"]) * h / modulus
             ax3.loglog(sim_p, sim_k, "o", mfc="none", label=label)
     for value, style, name in (
-        (result.crossover_pressure, "--", "$p_c$ (Eq. 13)"),
+        (result.crossover_pressure, "--", "$p_c$ (Eq. 13 as printed)"),
         (result.crossover_pressure_paper, ":", r"$p_c$ (the paper's recipe)"),
     ):
         ax3.axvline(value / modulus, color="k", ls=style, label=name)

@@ -188,7 +188,7 @@ def crossover_pressure(
             syringe, Conclusions): ``q_r h_rms`` with ``q_r = 2 pi/lambda_r``, the size
             factor with Appendix B's ``q_r ~ pi/L`` (``q_r L = pi L/lambda_r``: for
             ``L != lambda_r`` this package's assumption), ``theta = 1``.  It is
-            ``4 theta^(-(1+H)/H)`` times ``"printed"`` (5.1 at H = 0.7).  Its two ``q_r``
+            ``4 theta^(-(1+H)/H)`` times ``"printed"`` (5.0 at H = 0.7).  Its two ``q_r``
             are not the same, so Eq. 12 (in either ``q_r``) does not meet
             ``p/(gamma h_rms)`` at this ``p_c``: the recipe is the pure ``q_r ~ pi/L``
             reading with ``h_rms`` read as ``(2 pi/lambda_r) h_rms/(pi/lambda_r)``, twice

@@ -7,7 +7,12 @@ import numpy as np
 from petsc_contact.physics import theory
 from petsc_contact.workflows import scenes
 from petsc_contact.workflows.ensemble import power_law_fit
-from petsc_contact.workflows.paper_study import add_pressures_option, log_pressures, piece_files
+from petsc_contact.workflows.paper_study import (
+    RMS_SLOPE,
+    add_pressures_option,
+    log_pressures,
+    piece_files,
+)
 
 
 def crossover_from_simulation(
@@ -26,7 +31,7 @@ def crossover_from_simulation(
 def _solved(
     args: argparse.Namespace, ratio: float, p: np.ndarray, cutoff: float
 ) -> tuple[dict, float, int, float]:
-    h, h_rms = scenes.surface(args.grid, args.hurst, ratio, cutoff, args.seed)
+    h, h_rms = scenes.surface(args.grid, args.hurst, ratio, cutoff, args.seed, RMS_SLOPE)
     return scenes.stiffness_curve(h, p), h_rms, args.grid, cutoff
 
 
@@ -90,8 +95,9 @@ def _arguments() -> argparse.Namespace:
 
 
 def _periodic_curves(args: argparse.Namespace) -> tuple[dict, int]:
-    """Each roll-off's K(p) with Persson's theory, the resolution mask, both crossovers and
-    the Hertz slope at its lowest resolved loads."""
+    """Each roll-off's K(p) with Persson's theory (on paper Eq. 5 at the surfaces' prescribed
+    rms slope), the resolution mask, both crossovers and the Hertz slope at its lowest
+    resolved loads."""
     cutoff = args.cutoff_ratio or args.grid / 4
     p = log_pressures(args)
     data, n = {}, args.grid
@@ -103,11 +109,11 @@ def _periodic_curves(args: argparse.Namespace) -> tuple[dict, int]:
             args.rolloff_ratios.remove(ratio)
             continue
         p = curve["nominal_pressure"]
-        q, c = scenes.ideal_spectrum(1.0, args.hurst, ratio, cutoff, h_rms)
+        q, c = scenes.ideal_spectrum(1.0, args.hurst, ratio, cutoff, rms_slope=RMS_SLOPE)
         curve["persson_stiffness"] = theory.persson_stiffness(p, q, c, 1.0)
         curve["persson_mean_gap"] = theory.persson_mean_gap(p, q, c, 1.0)
         pc_formula = theory.crossover_pressure(
-            1.0, h_rms, args.hurst, 1.0, ratio, convention="appendix"
+            1.0, h_rms, args.hurst, 1.0, ratio, convention="paper"
         )
         curve["resolved"] = ok = scenes.resolved(curve["area_fraction"], n)
         pc_sim, u0 = crossover_from_simulation(
@@ -182,6 +188,7 @@ def _draw(args: argparse.Namespace, data: dict, n: int) -> None:
     ax.plot([], [], "o", color="gray", label="one contact patch")
     ax.plot([], [], ".", color="gray", label="< 16 contact pixels (not fitted)")
     ax.plot([], [], "-.", color="gray", label=r"Hertz, $K \propto p^{1/3}$")
+    ax.plot([], [], ":", color="gray", label="$p_c$, Eq. 13 (the paper's recipe)")
     ax.loglog(p, p / theory.GAMMA, "k--", lw=1, label=r"$K = p/(\gamma h_\mathrm{rms})$")
     ok = punch["converged"] & (punch["nominal_pressure"] > 0)
     ax.loglog(
@@ -195,7 +202,8 @@ def _draw(args: argparse.Namespace, data: dict, n: int) -> None:
     ax.set(
         xlabel="$p_0/E^*$",
         ylabel=r"$K h_\mathrm{rms}/E^*$",
-        title=f"Fig. 1: H = {args.hurst}, {n}$^2$ (lines: Persson; x: -dp/du)",
+        title=f"Fig. 1: H = {args.hurst}, {n}$^2$ (x: -dp/du)\n"
+        f"lines: Persson on Eq. 5 at rms slope {RMS_SLOPE:g}",
     )
     ax.set_ylim(top=10)  # K diverges at full contact: the last loads leave the frame
     ax.legend(fontsize=7, loc="upper left")
@@ -233,7 +241,7 @@ def main() -> None:
         hr = d["h_rms"]
         print(
             f"L/lambda_r = {ratio:g}: q_r h_rms = {2 * np.pi * ratio * hr:.3g}, "
-            f"p_c/E* formula (paper Eq. 13, q_r ~ pi/L) {d['pc_formula']:.2e}, simulation "
+            f"p_c/E* formula (paper Eq. 13, the paper's recipe) {d['pc_formula']:.2e}, simulation "
             f"crossover {d['pc_simulation']:.2e}, u0/h_rms = {d['u0'] / hr:.3f}, "
             f"d ln K/d ln p at the lowest resolved loads {d['lowest_slope']:.2f} (Hertz 1/3), "
             f"one contact patch up to p0/E* = {single_patch_limit(d):.2g} (nan: at no load)"

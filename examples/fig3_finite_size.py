@@ -1,4 +1,5 @@
-"""The paper's Fig. 2: finite-size K(p) for H = 0.3, 0.5, 0.7 (L = lambda_r), alpha fitted."""
+"""The paper's Fig. 2: finite-size K(p) for H = 0.3, 0.5, 0.7 (L = lambda_r), alpha fitted,
+with the theory's K(p) (paper Eq. 12) and its ratio to the simulation."""
 
 import argparse
 
@@ -64,6 +65,20 @@ def _from_data(args: argparse.Namespace) -> tuple[np.ndarray, dict]:
     return next(iter(results.values()))["nominal_pressure"][0], results
 
 
+def eq12_ratios(r: dict, hurst: float) -> tuple[float, np.ndarray]:
+    """The simulated ``K`` over paper Eq. 12's at the fitted loads (geometric mean): of the
+    seed-averaged ``K`` against Eq. 12 with the seeds' mean ``h_rms``, and of each seed's
+    ``K`` against Eq. 12 with its own ``h_rms``."""
+    p = r["nominal_pressure"][0][r["fitted"]]
+
+    def ratio(k: np.ndarray, h_rms: float) -> float:
+        eq12 = theory.finite_size_stiffness(p, 1.0, h_rms, hurst, 1.0, 1.0)
+        return float(np.exp(np.mean(np.log(k[r["fitted"]] / eq12))))
+
+    seeds = np.array([ratio(k, h) for k, h in zip(r["stiffness"], r["h_rms"], strict=True)])
+    return ratio(r["stiffness_mean"], float(r["h_rms"].mean())), seeds
+
+
 def _arguments() -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--grid", type=int, default=512, help="pixels per side (default 512)")
@@ -89,7 +104,10 @@ def _draw(args: argparse.Namespace, results: dict) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(5.5, 4.2), constrained_layout=True)
-    print(f"{'H':>4} {'alpha (fit)':>16} {'paper (sim.)':>12} {'1/(1+H)':>8}")
+    print(
+        f"{'H':>4} {'alpha (fit)':>16} {'paper (sim.)':>12} {'1/(1+H)':>8}  "
+        "K/K_Eq.12 at the fitted loads: seed-averaged (seeds)"
+    )
     for h in args.hursts:
         r = results[f"H{h}"]
         p = r["nominal_pressure"][0]  # each H its own loads (fewer while a piece computes)
@@ -113,15 +131,20 @@ def _draw(args: argparse.Namespace, results: dict) -> None:
             label=rf"$\alpha$ = {r['alpha']:.2f} $\pm$ {r['alpha_error']:.2f}",
         )
         ax.axvline(r["crossover"], color=line.get_color(), ls=":", lw=1)
+        below = p[p <= r["crossover"]]  # Eq. 12 up to the crossover
+        eq12 = theory.finite_size_stiffness(below, 1.0, h_rms, h, 1.0, 1.0) * h_rms
+        ax.loglog(below, eq12, "--", color=line.get_color(), lw=1)
         paper = PAPER_ALPHA.get(h, float("nan"))
         print(
             f"{h:>4} {r['alpha']:>9.3f} +- {r['alpha_error']:.3f} {paper:>12} {1 / (1 + h):>8.3f}"
+            f"  {r['eq12_ratio']:.2f} ({', '.join(f'{x:.2f}' for x in r['eq12_ratios'])})"
         )
     ax.plot(
         [], [], ".", color="gray", label=f"< {args.min_contact_pixels} contact pixels (not fitted)"
     )
     ax.fill_between([], [], [], color="gray", alpha=0.2, label="spread over seeds (std)")
-    ax.plot([], [], ":", color="gray", label="$p_c$ (paper Eq. 13)")
+    ax.plot([], [], "--", color="gray", label="theory, paper Eq. 12 (mean $h_\\mathrm{rms}$)")
+    ax.plot([], [], ":", color="gray", label="$p_c$, Eq. 13 (the paper's recipe)")
     ax.set(
         xlabel="$p_0/E^*$",
         ylabel=r"$K h_\mathrm{rms}/E^*$",
@@ -135,6 +158,9 @@ def _draw(args: argparse.Namespace, results: dict) -> None:
 def main() -> None:
     args = _arguments()
     p, results = (_from_data if args.data else _computed)(args)
+    for h in args.hursts:
+        r = results[f"H{h}"]
+        r["eq12_ratio"], r["eq12_ratios"] = eq12_ratios(r, h)
     scenes.save(
         f"{args.output}.h5",
         {"nominal_pressure": p, **results},

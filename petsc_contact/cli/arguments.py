@@ -424,7 +424,7 @@ COMMANDS = {  # name: (one-line help, description)
         "K(p) from a measured p(s) table (paper Eq. C3)",
         "Interfacial stiffness from a squeeze test of an elastic "
         "block of thickness d and effective modulus E' (paper "
-        "section III): K* = dp/ds, K = K*/(1 - K* d/E').",
+        "Appendix C): K* = dp/ds, K = K*/(1 - K* d/E').",
     ),
     "theory": (
         "Persson's theory and the finite-size p_c from a map's spectrum",

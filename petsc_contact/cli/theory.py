@@ -125,7 +125,8 @@ def _print(result: Prediction) -> None:
     )
     print(
         f"# finite-size crossover p_c = {result.crossover_pressure:.3g} (paper Eq. 13 as "
-        f"printed), {result.crossover_pressure_appendix:.3g} (q_r ~ pi/L, theta ~ 1)"
+        f"printed), {result.crossover_pressure_paper:.3g} (the paper's recipe: q_r h_rms with "
+        "q_r = 2 pi/L, q_r L = pi, theta = 1)"
     )
     print(f"{'p0':>12} {'mean_gap':>12} {'K':>12}")
     for row in zip(result.nominal_pressure, result.mean_gap, result.stiffness, strict=True):

@@ -88,19 +88,14 @@ def _plot_theory_file(f: Any, out: str) -> None:
 
     from ..io.plot import plot_theory
 
+    appendix = float(f.attrs["crossover_pressure_appendix"])
     result = SimpleNamespace(
         **{
             k: f[k][...] for k in ("wavevector", "psd", "nominal_pressure", "mean_gap", "stiffness")
         },
-        **{
-            k: f.attrs[k]
-            for k in (
-                "hurst_fit",
-                "rms_height",
-                "crossover_pressure",
-                "crossover_pressure_appendix",
-            )
-        },  # fmt: skip
+        **{k: f.attrs[k] for k in ("hurst_fit", "rms_height", "crossover_pressure")},
+        # files before 0.2.0's paper reading: twice the appendix reading (theory.READINGS)
+        crossover_pressure_paper=float(f.attrs.get("crossover_pressure_paper", 2 * appendix)),
         fit_range=tuple(json.loads(f.attrs["fit_range"])),
     )
     plot_theory(out, result, float(f.attrs.get("modulus", 1.0)))

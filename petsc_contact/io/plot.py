@@ -128,7 +128,8 @@ def plot_theory(
     units: dict[str, str] | None = None,
 ) -> Any:
     """The map's spectrum with its fitted power law, and Persson's mean gap ``u_bar(p)`` and
-    stiffness ``K(p)`` with the finite-size crossover ``p_c`` (both variants) marked.
+    stiffness ``K(p)`` with the finite-size crossover ``p_c`` marked, as printed (paper
+    Eq. 13) and in the recipe of the paper's quoted values (``crossover_pressure_paper``).
 
     ``runs`` are simulations to draw beside the theory: ``(label, table)`` with the arrays
     ``nominal_pressure``, ``mean_gap`` and, if computed, ``stiffness`` (a run's file).
@@ -161,8 +162,8 @@ def plot_theory(
             sim_k = np.asarray(table["stiffness"]) * h / modulus
             ax3.loglog(sim_p, sim_k, "o", mfc="none", label=label)
     for value, style, name in (
-        (result.crossover_pressure, "--", "$p_c$ (Eq. 13)"),
-        (result.crossover_pressure_appendix, ":", r"$p_c$ ($q_r \approx \pi/L$)"),
+        (result.crossover_pressure, "--", "$p_c$ (Eq. 13 as printed)"),
+        (result.crossover_pressure_paper, ":", r"$p_c$ (the paper's recipe)"),
     ):
         ax3.axvline(value / modulus, color="k", ls=style, label=name)
     ax2.set(xlabel="$p_0/E^*$", ylabel=r"$\bar u/h_\mathrm{rms}$", title="mean gap")

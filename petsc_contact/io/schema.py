@@ -331,7 +331,9 @@ def schema_markdown() -> str:
         "theory",
         "Persson's theory from a map's spectrum. Attributes: the run record (as above) and "
         "`u0`, `beta` (p = beta E* exp(-u_bar/u0)), `hurst_fit`, `fit_range`, "
-        "`crossover_pressure`, `crossover_pressure_appendix`.",
+        "`crossover_pressure` (paper Eq. 13 as printed), `crossover_pressure_paper` (the recipe of "
+        "the paper's quoted values), `crossover_pressure_appendix` (deprecated reading, half of "
+        "`crossover_pressure_paper`).",
         THEORY,
     )
     return "\n".join(lines).rstrip() + "\n"

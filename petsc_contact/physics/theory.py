@@ -14,6 +14,7 @@ Units: any consistent set; ``q`` in 1/length, ``C`` in length^4, pressures in th
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -98,15 +99,63 @@ def finite_size_stiffness(
     )
 
 
-CONVENTIONS = ("printed", "appendix")
+@dataclass(frozen=True)
+class Reading:
+    """How paper Eq. 13 is evaluated: which ``q_r`` in ``q_r h_rms`` and in ``q_r L``, and
+    whether with ``theta(H)`` or ``theta = 1``.
+
+    Appendix B derives the crossover in dimensionless form, ``F_c/h_rms = s^(-1/2H)
+    (theta gamma)^((1+H)/H)`` with the height ``q_r h_rms`` and the force ``F q_r^2/E* =
+    p (q_r L)^2/E*``, so that ``p_c/E* = (q_r h_rms)/(q_r L)^2 s^(-1/2H)
+    (theta gamma)^((1+H)/H)``.  ``height`` and ``size`` are the two ``q_r`` in units of
+    ``pi/lambda_r``.
+    """
+
+    height: float  # q_r lambda_r/pi in q_r h_rms
+    size: float  # q_r lambda_r/pi in q_r L
+    unit_theta: bool  # theta = 1 instead of theta(H)
+
+
+READINGS = {
+    # paper Eq. 13 as printed: q_r = 2 pi/lambda_r (its definition under Eq. 5), theta(H)
+    "printed": Reading(height=2.0, size=2.0, unit_theta=False),
+    # how the paper computed its quoted p_c (Sec. IV, Appendix B "Discussion", Conclusions):
+    # q_r h_rms with q_r = 2 pi/lambda_r, q_r L = pi L/lambda_r, theta = 1
+    "paper": Reading(height=2.0, size=1.0, unit_theta=True),
+    # deprecated: q_r = pi/lambda_r in both places, theta = 1 (half of "paper")
+    "appendix": Reading(height=1.0, size=1.0, unit_theta=True),
+}
+CONVENTIONS = tuple(READINGS)
+
+
+def _reading(convention: str | Reading) -> Reading:
+    """The :class:`Reading` of ``convention`` (a name, or a reading used as given);
+    ``"appendix"`` warns (deprecated)."""
+    if isinstance(convention, Reading):
+        return convention
+    if convention not in READINGS:
+        raise ValueError(f"convention must be one of {', '.join(CONVENTIONS)}, got '{convention}'")
+    if convention == "appendix":
+        warnings.warn(
+            'convention="appendix" (q_r = pi/lambda_r in q_r h_rms too) gives half of what '
+            "the paper's recipe gives for a surface's own h_rms: use \"paper\" (the recipe "
+            'of its quoted p_c) or "printed"; "appendix" will be removed in 0.3.0',
+            DeprecationWarning,
+            stacklevel=3,
+        )
+    return READINGS[convention]
 
 
 def rolloff_wavevector(length: float, rolloff_ratio: float, convention: str = "printed") -> float:
-    """``q_r``: ``2 pi/lambda_r`` as printed, or the paper's appendix approximation
-    ``q_r ~ pi/L`` (for ``L = lambda_r``; ``pi L/lambda_r / L`` in general), half of it."""
-    if convention not in CONVENTIONS:
-        raise ValueError(f"convention must be one of {', '.join(CONVENTIONS)}, got '{convention}'")
-    return (2 if convention == "printed" else 1) * np.pi * rolloff_ratio / length
+    """The ``q_r`` of the size factor ``(q_r L)^2`` of paper Eq. 13 in ``convention``.
+
+    ``"printed"``: ``2 pi/lambda_r`` (the paper's definition under Eq. 5).  ``"paper"``:
+    ``pi/lambda_r``, Appendix B's ``q_r ~ pi/L`` (stated there for ``L = lambda_r``; taking
+    it as ``pi L/lambda_r / L`` for ``L != lambda_r`` is this package's assumption, which
+    the paper's quoted ``p_c`` at ``L/lambda_r = 8`` bears out).  ``"appendix"``
+    (deprecated): the same ``pi/lambda_r``.
+    """
+    return _reading(convention).size * np.pi * rolloff_ratio / length
 
 
 def crossover_pressure(
@@ -116,27 +165,52 @@ def crossover_pressure(
     length: float,
     rolloff_ratio: float,
     gamma: float = GAMMA,
-    convention: str = "printed",
+    convention: str | Reading = "printed",
 ) -> float:
-    """``p_c`` of paper Eq. 13::
+    """``p_c`` of paper Eq. 13, where Eq. 12 meets ``K = p/(gamma h_rms)``::
 
         p_c / E* = h_rms/(2 pi lambda_r) lambda_r^2/L^2 s^(-1/2H) (theta gamma)^((1+H)/H)
-                 = h_rms/(q_r L^2) s^(-1/2H) (theta gamma)^((1+H)/H)
+                 = (q_r h_rms)/(q_r L)^2 s^(-1/2H) (theta gamma)^((1+H)/H)
 
-    ``convention="printed"`` is the formula as printed (``q_r = 2 pi/lambda_r``).
-    ``"appendix"`` uses the appendix's approximations ``q_r ~ pi/L`` and ``theta ~ 1``
-    (:func:`rolloff_wavevector`).  Given the paper's quoted ``q_r h_rms`` instead of
-    ``h_rms`` (``h_rms = (q_r h_rms)/q_r`` with the same ``q_r``), the appendix convention is
-    about 5 times the printed one and reproduces the paper's quoted ``p_c``
-    (docs/paper.md).
+    Parameters
+    ----------
+    modulus, h_rms, hurst, length, rolloff_ratio, gamma
+        ``E*``, the surface's rms height, ``H``, ``L``, ``L/lambda_r`` and ``gamma``.
+    convention
+        Which ``q_r`` and ``theta`` (:data:`READINGS`):
+
+        ``"printed"``
+            The formula as printed: ``q_r = 2 pi/lambda_r`` in both places, ``theta(H)``.
+            Only this reading makes Eq. 12 meet ``p/(gamma h_rms)`` at ``p_c``.
+        ``"paper"``
+            The recipe that gives the paper's three quoted values (``6e-5`` and ``3e-6`` for
+            ``L/lambda_r`` = 1 and 8, Sec. IV and Appendix B; ``about 1 kPa`` for the
+            syringe, Conclusions): ``q_r h_rms`` with ``q_r = 2 pi/lambda_r``, the size
+            factor with Appendix B's ``q_r ~ pi/L`` (``q_r L = pi L/lambda_r``: for
+            ``L != lambda_r`` this package's assumption), ``theta = 1``.  It is
+            ``4 theta^(-(1+H)/H)`` times ``"printed"`` (5.0 at H = 0.7).  Its two ``q_r``
+            are not the same, so Eq. 12 (in either ``q_r``) does not meet
+            ``p/(gamma h_rms)`` at this ``p_c``: the recipe is the pure ``q_r ~ pi/L``
+            reading with ``h_rms`` read as ``(2 pi/lambda_r) h_rms/(pi/lambda_r)``, twice
+            the surface's.
+        ``"appendix"``
+            Deprecated (``DeprecationWarning``): ``q_r = pi/lambda_r`` in both places and
+            ``theta = 1``, half of ``"paper"``.  It gives the paper's values only when fed
+            ``h_rms = (q_r h_rms)/(pi/lambda_r)``, twice a surface's own ``h_rms``.
+
+        A :class:`Reading` is used as given (no warning: ``READINGS["appendix"]`` is how the
+        package itself still records the deprecated value).
     """
+    reading = _reading(convention)
     s = roll_off_factor(hurst, rolloff_ratio)
-    q_r = rolloff_wavevector(length, rolloff_ratio, convention)
-    th = theta(hurst, gamma) if convention == "printed" else 1.0
+    q_height = reading.height * np.pi * rolloff_ratio / length
+    q_size = reading.size * np.pi * rolloff_ratio / length
+    th = 1.0 if reading.unit_theta else theta(hurst, gamma)
     return float(
         modulus
+        * q_height
         * h_rms
-        / (q_r * length**2)
+        / (q_size * length) ** 2
         * s ** (-1.0 / (2 * hurst))
         * (th * gamma) ** ((1 + hurst) / hurst)
     )
@@ -309,7 +383,7 @@ def persson_exponential(
     return float(np.exp(constant / u0)), u0
 
 
-# -- the paper's experiment (section III) ------------------------------------------------------
+# -- the paper's experiment (Appendix C) -----------------------------------------------------
 
 
 def block_corrected_stiffness(

@@ -25,7 +25,7 @@ HURSTS = (0.3, 0.5, 0.7)
 SEEDS = (1, 2, 3, 4)
 FIG3_RATIOS = (512, 768, 2048, 4096)  # lambda_r/lambda_1, L = lambda_r
 # Figs. 2 and 3: four loads per decade from below the smallest resolved contact, so that at
-# least four resolved points lie below the crossover p_c (about 2e-6 E* on 1024^2)
+# least four resolved points lie below the crossover p_c (4e-6 E* on 1024^2, the paper's recipe)
 FINITE_SIZE_SWEEP = (25, 1e-8, 1e-2)
 FIG1_SWEEP = (16, 1e-7, 3e-1)
 

@@ -1,14 +1,16 @@
 """What theory predicts for a given height map: Persson's ``u_bar(p)`` and ``K(p)``, the
 exponential law's ``u0`` and ``beta``, and the finite-size crossover ``p_c``.
 
-This is the comparison the paper's experiment section makes, and an experimentalist's
+This is the comparison the paper's experiment (Appendix C) makes, and an experimentalist's
 first question about a measured surface.  The map's radially averaged spectrum
 (:func:`~petsc_contact.physics.surface.radial_psd`, the map taken as periodic) feeds Persson's
 integrals (:mod:`~petsc_contact.physics.theory`), with ``C`` held at its first bin's value down to
 ``q0 = 2 pi/L`` (the first bin's mean ``|q|`` lies above ``q0``, and Persson's integrals
-weigh the lowest wavevectors most).  ``p_c`` (paper Eq. 13) needs a Hurst exponent:
-it is fitted to the spectrum's power law ``C ~ q^(-2-2H)`` between ``2 q0`` and half the
-Nyquist wavevector, and the map is taken as ``L = lambda_r`` (no roll-off inside it).
+weigh the lowest wavevectors most): the realised spectrum, not a prescribed one.  ``p_c``
+(paper Eq. 13, as printed and in the recipe of the paper's quoted values,
+``theory.crossover_pressure``) needs a Hurst exponent: it is fitted to the spectrum's power law
+``C ~ q^(-2-2H)`` between ``2 q0`` and half the Nyquist wavevector, and the map is taken as
+``L = lambda_r`` (no roll-off inside it).
 """
 
 from __future__ import annotations
@@ -53,9 +55,10 @@ class Prediction:
     rms_height: float
     rms_slope: float
     crossover_pressure: float  # paper Eq. 13 as printed
-    crossover_pressure_appendix: float  # with the appendix's q_r ~ pi/L and theta ~ 1
+    crossover_pressure_appendix: float  # deprecated reading: q_r = pi/lambda_r, theta = 1
     hurst_fit_r2: float = 1.0  # the share of log C's variance the power law explains
     spectrum: str = SPECTRUM_2D  # how C(q) was obtained
+    crossover_pressure_paper: float = float("nan")  # the recipe of the paper's quoted p_c
 
     def scalars(self) -> dict[str, float | str | list[float]]:
         """The single numbers, for a file's attributes or a printout."""
@@ -69,6 +72,7 @@ class Prediction:
             "rms_height": self.rms_height,
             "rms_slope": self.rms_slope,
             "crossover_pressure": self.crossover_pressure,
+            "crossover_pressure_paper": self.crossover_pressure_paper,
             "crossover_pressure_appendix": self.crossover_pressure_appendix,
         }
 
@@ -189,11 +193,11 @@ def _persson(
             stacklevel=3,
         )
     beta, u0 = theory.persson_exponential(q, c)
-    p_c = {
-        convention: theory.crossover_pressure(
-            modulus, h_rms, float(np.clip(hurst, *HURST_RANGE)), length, 1.0, convention=convention
+    p_c = {  # every reading, the deprecated one too (files keep its name)
+        name: theory.crossover_pressure(
+            modulus, h_rms, float(np.clip(hurst, *HURST_RANGE)), length, 1.0, convention=reading
         )
-        for convention in theory.CONVENTIONS
+        for name, reading in theory.READINGS.items()
     }
     p = np.asarray(pressures, dtype=float)
     with np.errstate(all="ignore"):
@@ -230,6 +234,7 @@ def _persson(
         crossover_pressure_appendix=p_c["appendix"],
         hurst_fit_r2=r2,
         spectrum=spectrum,
+        crossover_pressure_paper=p_c["paper"],
     )
 
 

@@ -146,11 +146,13 @@ def ensemble_curves(
 
 
 def crossover(h_rms: np.ndarray, hurst: float, rolloff_ratio: float) -> float:
-    """The seeds' mean ``p_c`` (paper Eq. 13, appendix convention) for ``E* = L = 1``."""
+    """The seeds' mean ``p_c`` (paper Eq. 13 in the recipe of the paper's quoted values,
+    ``convention="paper"`` of :func:`~petsc_contact.physics.theory.crossover_pressure`, with
+    each seed's realised ``h_rms``) for ``E* = L = 1``."""
     return float(
         np.mean(
             [
-                theory.crossover_pressure(1.0, h, hurst, 1.0, rolloff_ratio, convention="appendix")
+                theory.crossover_pressure(1.0, h, hurst, 1.0, rolloff_ratio, convention="paper")
                 for h in h_rms
             ]
         )
@@ -258,15 +260,35 @@ def ideal_spectrum(
     hurst: float,
     rolloff_ratio: float,
     cutoff_ratio: float,
-    h_rms: float,
+    h_rms: float | None = None,
     points: int = 4000,
+    *,
+    rms_slope: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Eq. 5 on a fine log grid from ``q0`` to ``q1``, normalised to ``h_rms``
-    (``h_rms^2 = 2 pi int q C dq``): the continuous spectrum Persson theory needs."""
+    """Paper Eq. 5 on a fine log grid from ``q0`` to ``q1``: the continuous spectrum Persson
+    theory needs.
+
+    Parameters
+    ----------
+    h_rms, rms_slope
+        Exactly one: ``C0`` such that ``h_rms^2 = 2 pi int q C dq``, or such that
+        ``h'_rms^2 = 2 pi int q^3 C dq``.  A surface generated for an rms slope
+        (:func:`surface`, the paper's surfaces) was drawn from the spectrum of that slope:
+        give ``rms_slope``.  Its realised ``h_rms`` differs from the spectrum's by the
+        scatter of its few lowest modes (1.2 times the expectation for the study's
+        ``L = lambda_r``, H = 0.7, seed 1), so ``C`` normalised to it lies above the
+        prescribed one at every ``q`` by that factor squared.
+    """
+    if h_rms is not None and rms_slope is None:
+        moment, target = 1, h_rms
+    elif rms_slope is not None and h_rms is None:
+        moment, target = 3, rms_slope
+    else:
+        raise ValueError("give exactly one of h_rms and rms_slope")
     q0 = fundamental_wavevector(length)
     q = np.geomspace(q0, cutoff_ratio * q0, points)
     c = psd_shape(q, q0, rolloff_ratio * q0, cutoff_ratio * q0 * (1 + 1e-12), hurst)
-    return q, c * h_rms**2 / (2 * np.pi * np.trapezoid(q * c, q))
+    return q, c * target**2 / (2 * np.pi * np.trapezoid(q**moment * c, q))
 
 
 def save(path: str, data: dict[str, Any], **attributes: Any) -> None:

@@ -48,7 +48,7 @@ from .operator import ShellInterface
 DIAGONAL_INFLATION = 0.2  # relative: keeps E above the exact one (monopole error ~1%; measured)
 NEAR_REACH = 1  # blocks this far apart (Chebyshev, in blocks) are summed pixel pair by pair
 BLOCK = 16  # the aggregates' block side (pixels)
-MAX_FRACTION = 0.3  # the largest contact fraction the two-level form is used at (measured)
+MAX_FRACTION = 0.1  # the largest contact fraction the two-level form is used at (measured)
 FFT_PRODUCTS = 8  # per b^2 and near pair: the FFT pair sums' cost in direct products (measured)
 
 
@@ -64,8 +64,11 @@ class TwoLevelOptions:
         ``-petsc_contact_two_level_block``: the aggregates' block side in pixels.
     max_fraction
         ``-petsc_contact_two_level_max_fraction``: the largest fraction of the grid in contact
-        at which it is used (at 2048^2 it halves the iterations at 53% contact too, but its
-        builds and its second round trip then cost as much as it saves; docs/performance.md).
+        at which it is used.  Above 10% it pays on paper-bandwidth surfaces of 1024^2 and more
+        (at 2048^2 and 17.6% contact 77 -> 31 iterations, 10.2 -> 6.8 s) but not where the
+        held compliance alone converges in about 35 iterations (fewer, larger contact
+        patches) or at 512^2, where its builds cost more than the iterations it saves
+        (docs/performance.md).
     """
 
     enabled: bool = True

@@ -237,10 +237,9 @@ def _arguments() -> argparse.Namespace:
         "--at",
         type=float,
         nargs="+",
-        default=[1e-6, 1e-4],
         metavar="P",
         help="the loads p0/E* of the stiffness distributions (the nearest computed; default "
-        "1e-6, below p_c, and 1e-4, above)",
+        "with --data 1e-6, below p_c, and 1e-4, above; else 1e-3 and 1e-2, resolved at 128^2)",
     )
     ap.add_argument("--fit-points", type=int, default=4, help="loads of each seed's fit (4)")
     ap.add_argument(
@@ -258,7 +257,8 @@ def _arguments() -> argparse.Namespace:
 def main() -> None:
     args = _arguments()
     curves, n = (_read if args.data else _solved)(args)
-    d = analyse(curves, n, 1.0, args.at, args.fit_points)
+    at = args.at or ([1e-6, 1e-4] if args.data else [1e-3, 1e-2])
+    d = analyse(curves, n, 1.0, at, args.fit_points)
     for line in report(d):
         print(line)
     scenes.save(f"{args.output}.h5", d, hurst=HURST, grid=n, study_data=args.data or "")

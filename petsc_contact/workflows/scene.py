@@ -118,8 +118,9 @@ def prepare_scene(run: Run, comm: Any = None, default_solver: bool = True) -> Sc
 
         cutoff = run.cutoff_ratio if run.cutoff_ratio is not None else nyquist_ratio(grid)
         resolved["cutoff_ratio"] = cutoff
+        parent: dict[str, float] = {}
         if run.cut_from == 1:
-            heights, parent = generated(run, grid, fft, 1, cutoff), {}
+            heights = generated(run, grid, fft, 1, cutoff)
         else:
             heights, parent = cut_face(run, grid, cutoff)
         check_height_scale(np.array([grid.max(float(np.max(np.abs(heights))))]), grid.lengths)

@@ -35,20 +35,26 @@ def theory_per_seed(h_rms: float, rolloff_ratio: float) -> tuple[float, float]:
 LINEAR_AREA = (0.01, 0.1)  # the contact areas where a seed's own u0 = p/K is read
 
 
+def own_linear_law(p: np.ndarray, k: np.ndarray, area: np.ndarray) -> float:
+    """A seed's ``u0``: the median of ``p/K`` at 1-10% contact area (as Fig. 1's crossover),
+    NaN without such a load."""
+    linear = np.isfinite(k) & (k > 0) & (area > LINEAR_AREA[0]) & (area < LINEAR_AREA[1])
+    return float(np.median(p[linear] / k[linear])) if linear.any() else float("nan")
+
+
 def simulated_crossover(
-    p: np.ndarray, k: np.ndarray, area: np.ndarray, resolved: np.ndarray, points: int
-) -> tuple[float, float, float]:
-    """One seed's ``p_c``, ``alpha`` and ``u0``: the power law fitted to its ``points`` lowest
-    resolved loads (at least 16 contact pixels, the study's rule) met with its own linear
-    law ``K = p/u0``, ``u0`` the median of ``p/K`` at 1-10% contact area (as Fig. 1's
-    crossover); NaN when too few loads are resolved."""
-    ok = resolved & np.isfinite(k) & (k > 0)
-    linear = ok & (area > LINEAR_AREA[0]) & (area < LINEAR_AREA[1])
-    if np.count_nonzero(ok) < points or not linear.any():
-        return float("nan"), float("nan"), float("nan")
-    u0 = float(np.median(p[linear] / k[linear]))
-    fit = power_law_fit(p[ok], k[ok], points)
-    return linear_crossover(fit.prefactor, fit.alpha, u0), fit.alpha, u0
+    p: np.ndarray, k: np.ndarray, area: np.ndarray, fitted: np.ndarray, alpha: float
+) -> tuple[float, float]:
+    """One seed's ``p_c`` and ``u0``: the ensemble's power law ``K = c p^alpha`` with this
+    seed's prefactor ``c`` (the geometric mean of ``K/p^alpha`` over the ``fitted`` loads)
+    met with its own linear law ``K = p/u0`` (:func:`own_linear_law`).
+
+    The exponent is the ensemble's: a seed's own four-point fit over a quarter of a decade
+    scatters so much (its ``alpha`` reaches 1) that ``(c u0)^(1/(1 - alpha))`` is no
+    reading of anything."""
+    u0 = own_linear_law(p, k, area)
+    c = float(np.exp(np.mean(np.log(k[fitted]) - alpha * np.log(p[fitted]))))
+    return linear_crossover(c, alpha, u0), u0
 
 
 def log_spread(values: np.ndarray) -> float:
@@ -68,10 +74,16 @@ def analyse(curves: dict, n: int, rolloff_ratio: float, at: list[float], points:
     scaled = np.where(resolved, curves["stiffness"] * h[:, None], np.nan)
     index = [int(np.argmin(np.abs(np.log(p / v)))) for v in at]
     prefactors, pc_theory = np.array([theory_per_seed(v, rolloff_ratio) for v in h]).T
-    pc_sim, alphas, u0 = np.array(
+    every = np.all(resolved, axis=0)  # the loads every seed resolves
+    fitted = np.zeros_like(every)
+    fitted[np.flatnonzero(every)[:points]] = True
+    mean_k = np.exp(np.mean(np.log(curves["stiffness"][:, fitted]), axis=0))
+    alpha = power_law_fit(p[fitted], mean_k, points).alpha
+    own = [power_law_fit(p[fitted], k[fitted], points).alpha for k in curves["stiffness"]]
+    pc_sim, u0 = np.array(
         [
             simulated_crossover(
-                p, curves["stiffness"][s], curves["area_fraction"][s], resolved[s], points
+                p, curves["stiffness"][s], curves["area_fraction"][s], fitted, alpha
             )
             for s in range(h.size)
         ]
@@ -82,7 +94,9 @@ def analyse(curves: dict, n: int, rolloff_ratio: float, at: list[float], points:
         "scaled_stiffness": scaled[:, index],
         "eq12_scaled_stiffness": (prefactors * h)[:, None] * p[index] ** (1 / (1 + HURST)),
         "pc_simulation": pc_sim,
-        "alpha": alphas,
+        "alpha": alpha,
+        "alphas": np.array(own),
+        "fitted": fitted,
         "u0": u0,
         "pc_eq13": pc_theory,
         "spread_simulation": np.array(
@@ -140,7 +154,7 @@ def _draw(args: argparse.Namespace, d: dict, n: int) -> None:
     _histogram(
         axes[0, 1],
         {
-            "simulation (fit meets its own $p/u_0$)": d["pc_simulation"],
+            "simulation (power law meets its own $p/u_0$)": d["pc_simulation"],
             "Eq. 13, each seed's $h_\\mathrm{rms}$": d["pc_eq13"],
         },
         "$p_c/E^*$",
@@ -209,12 +223,15 @@ def report(d: dict) -> list[str]:
             f"{load / theory.GAMMA:.3g}; correlation of ln K h_rms with ln h_rms "
             f"{_correlation(d['h_rms'], sim):.2f}"
         )
+    p_fit = d["nominal_pressure"][0][d["fitted"]]
     lines.append(
         f"p_c/E*: simulation median {np.nanmedian(d['pc_simulation']):.3g} (range "
         f"{np.nanmin(d['pc_simulation']):.3g}-{np.nanmax(d['pc_simulation']):.3g}, std of ln "
         f"{log_spread(d['pc_simulation']):.3f}); Eq. 13 median {np.median(d['pc_eq13']):.3g} "
-        f"(std of ln {log_spread(d['pc_eq13']):.3f}); fitted alpha "
-        f"{np.nanmean(d['alpha']):.3f} +- {np.nanstd(d['alpha'], ddof=1):.3f} (seeds' std)"
+        f"(std of ln {log_spread(d['pc_eq13']):.3f}); alpha {d['alpha']:.3f} (the seeds' "
+        f"geometric-mean K at p0/E* {p_fit.min():.2g}-{p_fit.max():.2g}; each seed's own: "
+        f"{np.mean(d['alphas']):.3f} +- {np.std(d['alphas'], ddof=1):.3f}, "
+        f"{d['alphas'].min():.2f}-{d['alphas'].max():.2f})"
     )
     lines.append(
         f"h_rms: std of ln {log_spread(d['h_rms']):.3f} over {d['h_rms'].size} seeds; u0/h_rms "

@@ -317,3 +317,20 @@ def test_punch_figure_redraws_from_study_files(tmp_path):
     with h5py.File(f"{out}.h5") as f:
         assert sorted(f) == ["cut_r1", "cut_r8", "periodic_r1", "periodic_r8"]
         assert all(len(f[v]) == 8 for v in f)
+
+
+def test_sweeps_whose_loads_differ_by_rounding_are_one_sweep(tmp_path):
+    """numpy 1 and 2 round ``geomspace`` a unit in the last place apart: files of the same
+    sweep written under each are read together; loads apart by more are refused."""
+    import numpy as np
+
+    from petsc_contact.workflows.scenes import curves_from_files
+
+    for name, scale in (("a.h5", 1.0), ("b.h5", 1 + 2e-16), ("c.h5", 1 + 1e-9)):
+        _sweep_file(tmp_path / name, 1, 6, True)
+        with h5py.File(tmp_path / name, "r+") as f:
+            f["nominal_pressure"][...] = f["nominal_pressure"][:] * scale
+    same = curves_from_files([str(tmp_path / "a.h5"), str(tmp_path / "b.h5")])
+    assert same["stiffness"].shape == (2, 6) and np.isfinite(same["stiffness"]).all()
+    with pytest.raises(ValueError, match="same loads"):
+        curves_from_files([str(tmp_path / "a.h5"), str(tmp_path / "c.h5")])

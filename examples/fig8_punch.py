@@ -36,12 +36,14 @@ def linear_width(p: np.ndarray, ratio: np.ndarray, tolerance: float) -> tuple:
     return best
 
 
-def linearity(p: np.ndarray, k: np.ndarray) -> str:
-    """How far ``K ~ p`` holds: the widest windows of :func:`linear_width` at each of
-    :data:`TOLERANCES`."""
-    parts = []
+def linearity(p: np.ndarray, k: np.ndarray, resolved: np.ndarray) -> str:
+    """How far ``K ~ p`` holds over the ``resolved`` loads (at least 16 contact pixels): the
+    widest windows of :func:`linear_width` at each of :data:`TOLERANCES`, and the smallest
+    ``K/p``'s load."""
+    ratio = np.where(resolved, k / p, np.nan)
+    parts = [f"K/p smallest at p/E* {p[np.nanargmin(ratio)]:.2g}"]
     for tolerance in TOLERANCES:
-        width, low, high = linear_width(p, k / p, tolerance)
+        width, low, high = linear_width(p, ratio, tolerance)
         parts.append(f"K/p within {tolerance:.0%} over {width:.2f} decades ({low:.2g}-{high:.2g})")
     return ", ".join(parts)
 
@@ -74,6 +76,7 @@ def punch_rows(paths: list[str]) -> dict:
                 )
                 / area,
                 "h_rms": float(f.attrs["rms_height"]),
+                "pixels": int(np.prod(np.atleast_1d(f.attrs["grid"])[[0, -1]])),  # n x n
                 "seed": int(f.attrs["seed"]),
                 "converged": ok,
             }
@@ -130,9 +133,12 @@ def _draw(args: argparse.Namespace, variants: dict, references: dict) -> None:
             for n, row in enumerate(rows):
                 p = row["nominal_pressure"]
                 k = row["interfacial_stiffness"] * row["h_rms"] / p
+                ok = scenes.contact_resolved(row["area_fraction"], row["pixels"])
                 count = f"{len(rows)} seed{'s' if len(rows) > 1 else ''}"
                 label = f"{face} face, Eq. 2 ({count})" if n == 0 else None
-                ax.loglog(p, k, marker + "-", color=color, mfc="none", ms=4, lw=0.8, label=label)
+                ax.loglog(p, k, "-", color=color, lw=0.8)
+                ax.loglog(p[ok], k[ok], marker, color=color, mfc="none", ms=4, label=label)
+                ax.loglog(p[~ok], k[~ok], ".", color=color, ms=3)
                 kp = row["pharr_stiffness"] * row["h_rms"] / p
                 label = f"{face} face, Eq. 2 with Pharr's flat punch" if n == 0 else None
                 ax.loglog(p, np.where(kp > 0, kp, np.nan), ":", color=color, lw=1, label=label)
@@ -150,6 +156,7 @@ def _draw(args: argparse.Namespace, variants: dict, references: dict) -> None:
                 ms=3,
                 label="Fig. 1's punch (periodic face, seed 1)",
             )
+        ax.plot([], [], ".", color="gray", ms=3, label="< 16 contact pixels")
         ax.axhline(1 / theory.GAMMA, color="k", ls="--", lw=0.8, label=r"$1/\gamma$")
         ax.set(
             xlabel="$p/E^*$",
@@ -171,12 +178,13 @@ def report(face: str, ratio: int, rows: list) -> list[str]:
     lines = []
     for row in rows:
         p = row["nominal_pressure"]
-        ok = row["converged"]
+        ok = row["converged"] & scenes.contact_resolved(row["area_fraction"], row["pixels"])
         text = (
-            f"{face} face, L_p/lambda_r = {ratio}, seed {row['seed']}: {ok.sum()}/{ok.size} "
-            f"converged, p/E* {np.nanmin(p[p > 0]):.2g}-{np.nanmax(p):.2g}, area up to "
+            f"{face} face, L_p/lambda_r = {ratio}, seed {row['seed']}: "
+            f"{row['converged'].sum()}/{ok.size} converged ({ok.sum()} resolved), p/E* "
+            f"{np.nanmin(p[p > 0]):.2g}-{np.nanmax(p):.2g}, area up to "
             f"{np.nanmax(row['area_fraction']):.1%}; Eq. 2: "
-            f"{linearity(p, row['interfacial_stiffness'])}"
+            f"{linearity(p, row['interfacial_stiffness'], ok)}"
         )
         pharr = row["pharr_stiffness"] / row["interfacial_stiffness"]
         top = np.nanargmax(row["area_fraction"])
@@ -189,7 +197,7 @@ def report(face: str, ratio: int, rows: list) -> list[str]:
             ratio_k = row["mean_gap_stiffness"] / row["interfacial_stiffness"]
             mid = (row["area_fraction"] > 1e-3) & (row["area_fraction"] < 0.2)
             text += (
-                f"; -dp/du_bar: {linearity(p, row['mean_gap_stiffness'])}, "
+                f"; -dp/du_bar: {linearity(p, row['mean_gap_stiffness'], ok)}, "
                 f"{np.nanmin(ratio_k[mid]):.2f}-{np.nanmax(ratio_k[mid]):.2f} x Eq. 2 at "
                 "0.1-20% area"
             )
@@ -236,7 +244,7 @@ def main() -> None:
         if ref is not None:
             p, k = ref["nominal_pressure"], ref["stiffness"]
             ok = scenes.resolved(ref["area_fraction"], 8192)
-            print(f"periodic cell (Fig. 1), L/lambda_r = {ratio}: {linearity(p[ok], k[ok])}")
+            print(f"periodic cell (Fig. 1), L/lambda_r = {ratio}: {linearity(p, k, ok)}")
     scenes.save(f"{args.output}.h5", data, hurst=HURST, cut_from=CUT_FROM, study_data=args.data)
     _draw(args, variants, references)
     print(f"wrote {args.output}.png and {args.output}.h5")

@@ -591,6 +591,26 @@ def test_study_computes_a_shared_run_once():
     assert all(p.figure == "fig2" and p.grid == 8192 for p in shared)
 
 
+def test_issue_36_pieces_reuse_the_paper_figures_runs():
+    """The seed distribution's seeds 1-4 are Fig. 3's ``ratio512`` files (not computed again),
+    seeds 5-64 its own; the punch has 8 seeds of each face and ``L_p/lambda_r``, the cut faces
+    from a 4x larger surface; the Hertz pieces put ``lambda_1`` at 16, 32 and 64 pixels."""
+    from petsc_contact.workflows.paper_study import pieces
+
+    todo = pieces()
+    seeds = [p for p in todo if "seeds" in (p.figure, *p.used_by)]
+    assert sorted(p.run.seed for p in seeds) == list(range(1, 65))
+    assert {p.figure for p in seeds if p.run.seed <= 4} == {"fig3"}
+    assert all(p.figure == "seeds" and p.grid == 1024 for p in seeds if p.run.seed > 4)
+    punch = [p for p in todo if p.figure == "punch"]
+    variants = {(p.run.cut_from, p.run.rolloff_ratio) for p in punch}
+    assert variants == {(1, 1.0), (1, 8.0), (4, 1.0), (4, 8.0)} and len(punch) == 32
+    assert all(p.grid == 2048 and p.run.geometry == "punch" for p in punch)
+    assert [p.run.seed for p in punch[:4]] == [1, 1, 1, 1]  # each variant's first seed first
+    hertz = [p for p in todo if p.figure == "hertz"]
+    assert sorted({p.grid / p.run.cutoff_ratio for p in hertz}) == [16, 32, 64]  # lambda_1, px
+
+
 def test_resumed_file_marks_a_new_column_missing_before_it(tmp_path):
     """A run resumed by a version that records one more scalar: the steps written before
     read NaN (floats) or -1 (counts) in that column, never a plausible 0."""

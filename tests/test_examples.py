@@ -18,6 +18,8 @@ from conftest import ROOT
             "--grid 64 --ratios 8 16 32 --seeds 2 --pressures 1e-4 3e-2 8 --fit-points 3".split(),
         ),
         ("fig1_stiffness.py", ["--grid", "64", "--pressures", "1e-5", "1e-2", "6"]),
+        ("fig6_hertz.py", "--grid 64 --pixels 8 16 --seeds 2 --pressures 1e-6 1e-3 7".split()),
+        ("fig7_seed_distribution.py", "--grid 32 --seeds 4 --pressures 1e-4 1e-1 7".split()),
         (
             "fig3_finite_size.py",
             [
@@ -280,3 +282,55 @@ def test_the_gallery_draws_every_picture(tmp_path):
     documented = (ROOT / "docs" / "gallery.md").read_text()
     assert drawn and all(f"gallery/{name}" in documented for name in drawn), drawn
     assert all((tmp_path / name).stat().st_size > 5000 for name in drawn)
+
+
+def test_punch_figure_redraws_from_study_files(tmp_path):
+    """The punch pieces at a toy size (16^2 faces, the cut ones from 64^2) draw the punch
+    figure: every variant has its 8 seeds, and -dp/du_bar stands beside Eq. 2."""
+    data = tmp_path / "paper"
+    env = {
+        "PYTHONPATH": str(ROOT),
+        "PATH": "/usr/bin:/bin",
+        "OMPI_ALLOW_RUN_AS_ROOT": "1",
+        "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+    }
+    study = ["-m", "petsc_contact.cli", "study", "--figure", "punch", "--shrink", "128"]
+    r = subprocess.run(
+        [sys.executable, *study, "--data", str(data), "--quiet"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
+    )
+    assert r.returncode == 0, r.stderr
+    out = tmp_path / "f8"
+    r = subprocess.run(
+        [sys.executable, str(ROOT / "examples" / "fig8_punch.py"), "--data", str(data)]
+        + ["--output", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+    )
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.count("-dp/du_bar") == 32
+    with h5py.File(f"{out}.h5") as f:
+        assert sorted(f) == ["cut_r1", "cut_r8", "periodic_r1", "periodic_r8"]
+        assert all(len(f[v]) == 8 for v in f)
+
+
+def test_sweeps_whose_loads_differ_by_rounding_are_one_sweep(tmp_path):
+    """numpy 1 and 2 round ``geomspace`` a unit in the last place apart: files of the same
+    sweep written under each are read together; loads apart by more are refused."""
+    import numpy as np
+
+    from petsc_contact.workflows.scenes import curves_from_files
+
+    for name, scale in (("a.h5", 1.0), ("b.h5", 1 + 2e-16), ("c.h5", 1 + 1e-9)):
+        _sweep_file(tmp_path / name, 1, 6, True)
+        with h5py.File(tmp_path / name, "r+") as f:
+            f["nominal_pressure"][...] = f["nominal_pressure"][:] * scale
+    same = curves_from_files([str(tmp_path / "a.h5"), str(tmp_path / "b.h5")])
+    assert same["stiffness"].shape == (2, 6) and np.isfinite(same["stiffness"]).all()
+    with pytest.raises(ValueError, match="same loads"):
+        curves_from_files([str(tmp_path / "a.h5"), str(tmp_path / "c.h5")])

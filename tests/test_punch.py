@@ -173,3 +173,22 @@ def test_edge_singularity_at_high_load(rough, solver):
     corners = step.pressure[[0, 0, -1, -1], [0, -1, 0, -1]]
     assert s["max_pressure"] == pytest.approx(corners.max(), rel=1e-12)
     assert s["max_pressure"] > 5 * s["nominal_pressure"]
+
+
+def test_mean_gap_over_the_face(rough):
+    """``u_bar``: the mean recess at first touch (no deformation yet), zero under a flat punch
+    in full contact, and its ``-dp/du_bar`` the interfacial stiffness of Eq. 2 within 10%
+    from 1% to 30% contact area (both measure the interface's compliance alone: Eq. 2 takes
+    the flat punch's out of the total, ``u_bar`` never holds it)."""
+    (first,) = punch_contact(rough, 1.0, 1.0, approaches=[0.0])
+    assert first.scalars["mean_gap"] == pytest.approx(np.mean(rough.max() - rough), rel=1e-12)
+    (flat,) = punch_contact(np.zeros((32, 32)), 1.0, 1.0, approaches=[1e-3])
+    assert flat.scalars["area_fraction"] == 1.0 and abs(flat.scalars["mean_gap"]) < 1e-9
+    eps = 2e-5
+    for d in (1e-3, 3e-3, 6e-3):
+        lo, mid, hi = (s.scalars for s in punch_contact(rough, 1.0, 1.0, [d - eps, d, d + eps]))
+        assert 0.01 < mid["area_fraction"] < 0.31
+        dp_du = -(hi["nominal_pressure"] - lo["nominal_pressure"]) / (
+            hi["mean_gap"] - lo["mean_gap"]
+        )
+        assert dp_du == pytest.approx(mid["interfacial_stiffness"], rel=0.1)

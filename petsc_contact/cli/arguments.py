@@ -114,6 +114,17 @@ def _seed(text: str) -> int:
     return value
 
 
+def _cut_from(text: str) -> int:
+    """``--cut-from M``: a whole number, 1 or more."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"M is 1 or more, got {text}")
+    return value
+
+
 def _minutes(text: str) -> float:
     """A time budget: minutes, zero or more and finite."""
     try:
@@ -234,6 +245,15 @@ def _surface_arguments(p: argparse.ArgumentParser) -> None:
         "--exact-rms",
         action="store_true",
         help="rescale the realisation to hit the rms target exactly",
+    )
+    s.add_argument(
+        "--cut-from",
+        type=_cut_from,
+        default=1,
+        metavar="M",
+        help="punch: cut the face from the periodic surface of M times the sides (same pixel "
+        "size and spectrum), its central patch, with the tilt and edges of the longer "
+        "wavelengths (default 1: the face is a periodic surface)",
     )
     s.add_argument(
         "--skip-memory-check",
@@ -527,7 +547,13 @@ def _theory_parser(sub: Any) -> None:
 
 def _study_parser(sub: Any) -> None:
     p = _command(sub, "study")
-    p.add_argument("--figure", choices=("1", "2", "3", "all"), default="all", help="default all")
+    p.add_argument(
+        "--figure",
+        choices=("1", "2", "3", "hertz", "seeds", "punch", "all"),
+        default="all",
+        help="the paper's Figs. 1-3, or issue 36's datasets: the Hertz regime, the "
+        "distribution over 64 seeds, the punch's periodic and cut faces (default all)",
+    )
     p.add_argument("--minutes", type=_minutes, default=45.0, help="time budget (default 45)")
     p.add_argument("--data", default=os.path.join("data", "paper"), help="default data/paper")
     p.add_argument("--shrink", type=int, default=1, help="divide every grid (a quick look)")

@@ -20,7 +20,7 @@ from .common import EXIT_INTERRUPTED, EXIT_PAUSED
 
 def chosen(args: argparse.Namespace) -> list[Piece]:
     """The pieces of ``--figure`` (all of them for ``all``), the smaller grids first."""
-    figure = f"fig{args.figure}"
+    figure = f"fig{args.figure}" if args.figure.isdigit() else args.figure
     todo = [
         p for p in pieces(args.shrink) if args.figure == "all" or figure in (p.figure, *p.used_by)
     ]

@@ -15,7 +15,9 @@ TAO sees ``x = p / p_s`` with ``p_s = E* l / a`` and ``l`` the rms of the recess
 (``N = nx ny``), so
 ``-tao_gatol 1e-8`` asks for gaps on the contact set within ``1e-8 l`` rms.
 
-Per step: approach, force ``F = a^2 sum(p)``, nominal pressure ``F / (Lx Ly)``, area fraction
+Per step: approach, force ``F = a^2 sum(p)``, nominal pressure ``F / (Lx Ly)``, the mean gap
+``u_bar`` over the footprint (whose ``-dp/du_bar`` is the interfacial stiffness without
+Eq. 2's flat-punch reference), area fraction
 (of footprint pixels; contact when ``p > k g``, ``k = 1/G_00``), exact total stiffness
 ``dF/dδ`` with the contact set fixed, and the interfacial stiffness per area from springs in
 series (paper Eq. 2), ``1/K_int = 1/K_tot - 1/K_flat``, ``K = K_int / (Lx Ly)``.  ``K_flat`` is
@@ -219,11 +221,12 @@ def punch_observables(
     contact = fp & (pressure > k * gap)
     sizes = patch_sizes(grid, contact, periodic=False)
     r = np.where(fp, np.minimum(gap, pressure / k), 0.0)
-    p_sum, n_contact, pg, r2 = grid.sum(
+    p_sum, n_contact, pg, r2, g_sum = grid.sum(
         pressure.sum(),
         np.count_nonzero(contact),
         np.vdot(pressure, np.maximum(gap, 0.0)),
         np.vdot(r, r),
+        np.where(fp, gap, 0.0).sum(),
     )
     ell = problem.scale_length
     area = grid.area
@@ -232,6 +235,7 @@ def punch_observables(
         "approach": problem.approach,
         "force": force,
         "nominal_pressure": force / area,
+        "mean_gap": g_sum / problem.footprint_pixels,
         "area_fraction": n_contact / problem.footprint_pixels,
         "contact_patches": sizes.size,
         "max_pressure": grid.max(float(pressure.max(initial=0.0))),

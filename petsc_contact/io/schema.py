@@ -137,6 +137,7 @@ PERIODIC_COLUMNS = _entries(
 PUNCH_COLUMNS = _entries(
     approach=("length", "rigid approach beyond first touch"),
     force=("pressure*length^2", "total force F"),
+    mean_gap=("length", "mean gap u_bar over the footprint (-dp/du_bar: K without paper Eq. 2)"),
     total_stiffness=("pressure*length", "dF/d delta with the contact set held fixed"),
     interfacial_stiffness=("pressure/length", "interfacial stiffness per area (paper Eq. 2)"),
     flat_punch_stiffness=("pressure*length", "the flat punch's stiffness used in paper Eq. 2"),
@@ -365,6 +366,8 @@ RUN_ATTRIBUTES = (
     "units",
     "rms_height",
     "rms_slope",
+    "parent_rms_height",  # a punch face cut from a larger surface (--cut-from): the parent's
+    "parent_rms_slope",
     "fft_backend",
     "seed",
     "hurst",

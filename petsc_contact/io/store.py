@@ -535,13 +535,15 @@ class StepStore:
     def _write_table(self, f: Any) -> None:
         """The scalars of every step, on the dimension ``step`` (1, 2, ...)."""
         count = len(next(iter(self.table.values()), []))  # the steps committed with this table
-        step = f.create_dataset("step", data=np.arange(1, count + 1), maxshape=(None,))
+        # contiguous columns (the table is rewritten whole at every commit): a chunked column's
+        # index and 8 KB chunk made a study piece's file 300 KB instead of 80 KB
+        step = f.create_dataset("step", data=np.arange(1, count + 1))
         describe(step, self._entry("step"))
         step.make_scale("step")
         for key, column in self.table.items():
             dtype = h5_dtype(column[0]) if column else np.float64
             values = np.array(column, dtype=dtype)
-            d = f.create_dataset(key, data=values, maxshape=(None, *values.shape[1:]))
+            d = f.create_dataset(key, data=values)
             describe(d, self._entry(key))
             d.dims[0].attach_scale(step)
             if values.ndim == 2:  # a per-step array: its second axis is a named dimension

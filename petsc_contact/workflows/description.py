@@ -43,6 +43,12 @@ class Run:
         A generated surface (paper Eq. 5): ``N`` or ``(NX, NY)``, the Hurst exponent, one
         rms target, ``L/lambda_r``, ``L/lambda_1`` (default: the Nyquist limit), the seed,
         and whether the realisation is rescaled to the target exactly.
+    cut_from
+        A punch face cut from a larger surface: ``M`` (> 1) generates the periodic surface
+        of ``M`` times the sides with the same pixel size and spectrum (its ``L/lambda_r``
+        and ``L/lambda_1`` are ``M`` times the run's) and keeps its central footprint, with
+        the tilt and edges of the longer wavelengths; 1 (default): the face is itself a
+        periodic surface.
     length, modulus
         The sides (``"100um"``, ``"150um,100um"``, ``1.0`` or ``(Lx, Ly)``; default: the
         file's, else 1) and the contact modulus ``E*`` (``1e9``, or ``"1GPa"``: pressures
@@ -79,6 +85,7 @@ class Run:
     cutoff_ratio: float | None = None
     seed: int = 0
     exact_rms: bool = False
+    cut_from: int = 1
     length: Any = None
     modulus: float | str = 1.0
     pressures: Sequence[float | str] | None = None
@@ -103,6 +110,8 @@ class Run:
         if self.geometry not in GEOMETRIES:
             raise ValueError(f"geometry must be one of {', '.join(GEOMETRIES)}: {self.geometry}")
         positive("--modulus", self.modulus_value)
+        if self.cut_from < 1:
+            raise ValueError(f"--cut-from must be a whole number >= 1, got {self.cut_from}")
         if self.stop_after is not None:
             non_negative("--stop-after", self.stop_after)
         for name, units in (("pressures", PASCALS), ("approaches", METRES), ("forces", NEWTONS)):

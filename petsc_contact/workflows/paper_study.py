@@ -28,13 +28,32 @@ FIG3_RATIOS = (512, 768, 2048, 4096)  # lambda_r/lambda_1, L = lambda_r
 # least four resolved points lie below the crossover p_c (4e-6 E* on 1024^2, the paper's recipe)
 FINITE_SIZE_SWEEP = (25, 1e-8, 1e-2)
 FIG1_SWEEP = (16, 1e-7, 3e-1)
+# Issue 36's datasets beyond the paper's figures: the Hertz regime (lambda_1 of 16, 32 and 64
+# pixels on 512^2, four loads per decade from below single-patch contact), the seed
+# distribution (Fig. 3's lambda_r/lambda_1 = 512 over 64 seeds) and the punch settled (eight
+# seeds of periodic and cut faces at L_p/lambda_r = 1 and 8)
+HERTZ_GRID = 512
+HERTZ_PIXELS = (16, 32, 64)  # lambda_1 in pixels
+HERTZ_SWEEP = (29, 1e-9, 1e-2)
+DISTRIBUTION_RATIO = 512
+DISTRIBUTION_SEEDS = tuple(range(1, 65))
+PUNCH_SEEDS = tuple(range(1, 9))
+PUNCH_RATIOS = (1, 8)  # L_p/lambda_r
+# (face, L_p/lambda_r), those Fig. 1's punch (a periodic face at 1) leaves untested first
+PUNCH_VARIANTS = (("cut", 1), ("periodic", 8), ("cut", 8), ("periodic", 1))
+CUT_FROM = 4  # a cut face: the central patch of a periodic surface of 4 L_p
+# approaches from below 1e-7 E* to past 20% area, in the face's expected rms heights (the
+# parent surface's for a cut face), by L_p/lambda_r: the smoother faces of L_p/lambda_r = 8
+# need the longer travel (on 256^2 trial faces 20 rms heights gave 62-76% area at 1 and 31% at
+# 8, and 2048^2 faces have about half the area of 256^2 ones at the same approach)
+PUNCH_APPROACHES = {1: (0.03, 20.0, 16), 8: (0.03, 40.0, 16)}
 
 
 @dataclass(frozen=True)
 class Piece:
     """One run of the study: its figure, its file name and its description."""
 
-    figure: str  # "fig1", "fig2" or "fig3": where the file is kept
+    figure: str  # "fig1", "fig2", "fig3", "hertz", "seeds" or "punch": where the file is kept
     name: str
     run: Run
     used_by: tuple[str, ...] = ()  # further figures drawn from the same file
@@ -115,7 +134,65 @@ def pieces(shrink: int = 1) -> list[Piece]:
             )
             for k in SEEDS
         ]
-    return _once(out)
+    return _once(out + hertz_pieces(shrink) + distribution_pieces(shrink) + punch_pieces(shrink))
+
+
+def hertz_pieces(shrink: int = 1) -> list[Piece]:
+    """The Hertz regime (``hertz/lambda{P}_seed{k}``): ``lambda_1`` of :data:`HERTZ_PIXELS`
+    pixels on :data:`HERTZ_GRID`^2, ``H = 0.7``, ``L = lambda_r``, four seeds."""
+    n = HERTZ_GRID // shrink
+    return [
+        Piece(
+            "hertz",
+            f"lambda{px}_seed{k}",
+            Run(**_surface(n, 0.7, 1, HERTZ_GRID / px, k), sweep=HERTZ_SWEEP),
+        )
+        for px in HERTZ_PIXELS
+        for k in SEEDS
+    ]
+
+
+def distribution_pieces(shrink: int = 1) -> list[Piece]:
+    """The seed distribution (``seeds/ratio512_seed{k}``): Fig. 3's pieces at
+    ``lambda_r/lambda_1 = 512`` over :data:`DISTRIBUTION_SEEDS` (seeds 1-4 are Fig. 3's own
+    files, :func:`_once`)."""
+    m = max(2 * DISTRIBUTION_RATIO // shrink, 16)
+    return [
+        Piece(
+            "seeds",
+            f"ratio{DISTRIBUTION_RATIO}_seed{k}",
+            Run(**_surface(m, 0.3, 1, m / 2, k), sweep=FINITE_SIZE_SWEEP),
+        )
+        for k in DISTRIBUTION_SEEDS
+    ]
+
+
+def punch_approaches(rolloff_ratio: float, cutoff_ratio: float, cut_from: int) -> tuple[float, ...]:
+    """:data:`PUNCH_APPROACHES` in the expected rms height of the face (of its parent surface,
+    ``cut_from`` times the sides, for a cut face) at the study's rms slope."""
+    low, high, count = PUNCH_APPROACHES[int(rolloff_ratio)]
+    ratios = cut_from * rolloff_ratio, cut_from * cutoff_ratio  # the parent's, of sides cut_from
+    h_rms = RMS_SLOPE * cut_from * rms_height_per_slope(0.7, *ratios)
+    return tuple(float(f"{d:.4g}") for d in np.geomspace(low, high, int(count)) * h_rms)
+
+
+def punch_pieces(shrink: int = 1) -> list[Piece]:
+    """The punch settled (``punch/{face}_r{R}_seed{k}``): ``L_p/lambda_1 = 1024`` on 2048^2,
+    ``H = 0.7``, ``L_p/lambda_r = R`` of :data:`PUNCH_RATIOS`, faces ``periodic`` (a periodic
+    surface) and ``cut`` (cut from one of :data:`CUT_FROM` times the sides), by approaches;
+    seed by seed in the order of :data:`PUNCH_VARIANTS`, so that every variant has its
+    first seeds early."""
+    n = PAPER_GRID // 4 // shrink
+    out = []
+    for k in PUNCH_SEEDS:
+        for face, r in PUNCH_VARIANTS:
+            m = CUT_FROM if face == "cut" else 1
+            surface = _surface(n, 0.7, r, n / 2, k)
+            run = Run(
+                geometry="punch", **surface, cut_from=m, approaches=punch_approaches(r, n / 2, m)
+            )
+            out.append(Piece("punch", f"{face}_r{r}_seed{k}", run))
+    return out
 
 
 def _once(todo: list[Piece]) -> list[Piece]:

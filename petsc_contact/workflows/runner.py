@@ -170,6 +170,7 @@ def prepare(run: Run, command_line: str | None = None) -> Prepared:
     realised = {
         "rms_height": rms_of(grid, fft, heights),
         "rms_slope": rms_of(grid, fft, heights, slope=True),
+        **scene.realised,
     }
     plan = _punch_plan(run, scene) if run.geometry == "punch" else _periodic_plan(run, scene)
     loads, resolved, intro, solve, close, backend = plan

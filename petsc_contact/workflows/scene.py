@@ -43,11 +43,14 @@ class Scene:
     record: dict[str, Any] = field(default_factory=dict)  # what was read, and how
     reading: str = ""  # one line on the map read ("" for a generated surface)
     filled: np.ndarray | None = None  # this rank's pixels whose heights were filled
+    realised: dict[str, float] = field(default_factory=dict)  # the parent of a cut face
 
 
 def check_surface(run: Run) -> None:
     """``ValueError`` for a surface that is neither generated nor given, or both."""
     defaults = Run()
+    if run.cut_from != 1 and (run.measured or run.geometry != "punch"):
+        raise ValueError("--cut-from makes a punch face from a generated surface")
     if run.measured:
         given = [o for o in GENERATION if getattr(run, o) is not None]
         if given:
@@ -111,28 +114,71 @@ def prepare_scene(run: Run, comm: Any = None, default_solver: bool = True) -> Sc
     fft = make_fft(grid)
     resolved: dict[str, Any] = {"length": list(grid.lengths), "length_unit": lengths.unit or ""}
     if full is None:
-        from ..physics.surface import nyquist_ratio, self_affine
+        from ..physics.surface import nyquist_ratio
 
         cutoff = run.cutoff_ratio if run.cutoff_ratio is not None else nyquist_ratio(grid)
         resolved["cutoff_ratio"] = cutoff
-        heights = self_affine(
-            grid,
-            fft,
-            hurst=run.hurst,  # type: ignore[arg-type]
-            rolloff_ratio=run.rolloff_ratio,
-            cutoff_ratio=cutoff,
-            seed=run.seed,
-            rms_height=run.rms_height,
-            rms_slope=run.rms_slope,
-            exact=run.exact_rms,
-        )
+        parent: dict[str, float] = {}
+        if run.cut_from == 1:
+            heights = generated(run, grid, fft, 1, cutoff)
+        else:
+            heights, parent = cut_face(run, grid, cutoff)
         check_height_scale(np.array([grid.max(float(np.max(np.abs(heights))))]), grid.lengths)
-        return Scene(grid, fft, heights, resolved)
+        return Scene(grid, fft, heights, resolved, realised=parent)
     local = grid.scatter(full)
     check_finite(grid, local)
     mask = record.pop("filled")
     filled = grid.scatter(mask).astype(bool) if record["filled_fraction"] > 0 else None
     return Scene(grid, fft, local, resolved, record, reading, filled)
+
+
+def generated(run: Run, grid: Grid, fft: Any, scale: int, cutoff: float) -> np.ndarray:
+    """This rank's slab of the run's surface (paper Eq. 5) on ``grid``, whose sides are
+    ``scale`` times the run's: ``L/lambda_r`` and ``L/lambda_1`` scaled with them, so that
+    ``lambda_r`` and ``lambda_1`` are the run's."""
+    from ..physics.surface import self_affine
+
+    return self_affine(
+        grid,
+        fft,
+        hurst=run.hurst,  # type: ignore[arg-type]
+        rolloff_ratio=scale * run.rolloff_ratio,
+        cutoff_ratio=scale * cutoff,
+        seed=run.seed,
+        rms_height=run.rms_height,
+        rms_slope=run.rms_slope,
+        exact=run.exact_rms,
+    )
+
+
+def cut_face(run: Run, grid: Grid, cutoff: float) -> tuple[np.ndarray, dict[str, float]]:
+    """A punch face cut from a larger surface (``run.cut_from``, :class:`Run`): the central
+    ``nx x ny`` patch of the periodic surface of ``M`` times the sides with the same pixel
+    size, spectrum, rms target and seed (its own ``L/lambda_r = M L_p/lambda_r``), this rank's
+    slab; with that parent surface's realised ``rms_height`` and ``rms_slope`` (spectral: the
+    cut face's own are its edges' too)."""
+    from ..physics.surface import rms_of
+
+    m = run.cut_from
+    parent = grid_for(
+        (m * grid.shape[0], m * grid.shape[1]),
+        (m * grid.lengths[0], m * grid.lengths[1]),
+        grid.comm,
+    )
+    parent_fft = make_fft(parent)
+    heights = generated(run, parent, parent_fft, m, cutoff)
+    stats = {
+        "parent_rms_height": rms_of(parent, parent_fft, heights),
+        "parent_rms_slope": rms_of(parent, parent_fft, heights, slope=True),
+    }
+    full = parent.gather(heights)
+    patch = None
+    if full is not None:
+        i, j = ((m - 1) * n // 2 for n in grid.shape)
+        patch = np.ascontiguousarray(full[i : i + grid.shape[0], j : j + grid.shape[1]])
+    del full, heights
+    patch = grid.comm.bcast(patch, root=0) if grid.comm.size > 1 else patch
+    return grid.scatter(patch), stats  # type: ignore[arg-type]
 
 
 def _topography(run: Run) -> Topography:

@@ -206,12 +206,16 @@ def finite_size_fit(
     }
 
 
+SAME_LOAD = 1e-12  # loads equal to this: one sweep (numpy 1 and 2 round geomspace apart)
+
+
 def curves_from_files(paths: Sequence[str]) -> dict[str, Any]:
     """A study's periodic sweeps of several seeds (``petsc-contact study`` files) as the
     arrays of :func:`ensemble_curves` (steps that did not converge are ``nan``), with each
     file's ``seed``.  An unfinished piece's ``.partial`` file is read as far as it goes, and
     then every file only over the loads they all have; files that do not sweep the same loads
-    (complete ones of different lengths, or different values) are a ``ValueError``."""
+    (complete ones of different lengths, or values apart by more than :data:`SAME_LOAD`
+    relative) are a ``ValueError``."""
     import h5py
 
     rows: list[dict[str, np.ndarray]] = []
@@ -235,7 +239,8 @@ def curves_from_files(paths: Sequence[str]) -> dict[str, Any]:
         r["converged"].size for r, path in zip(rows, paths, strict=True) if not is_partial(path)
     }
     loads = np.array([r["nominal_pressure"][:shared] for r in rows])
-    if len(complete_sizes) > 1 or np.any(loads != loads[0]):
+    same = np.allclose(loads, loads[0], rtol=SAME_LOAD, atol=0)
+    if len(complete_sizes) > 1 or not same:
         raise ValueError(f"the files {list(paths)} do not sweep the same loads")
     out: dict[str, Any] = {k: np.array([r[k][:shared] for r in rows]) for k in rows[0]}
     out["h_rms"], out["seed"] = np.array(h_rms), np.array(seeds)

@@ -64,7 +64,7 @@ def punch_rows(paths: list[str]) -> dict:
                 "area_fraction",
                 "interfacial_stiffness",
                 "total_stiffness",
-                "mean_gap",  # from the punches of issue 36 on
+                "mean_gap",  # recorded by punch runs of 0.2.0 on
                 "contact_patches",
             )
             row = {k: np.where(ok, f[k][:], np.nan) for k in keys if k in f}

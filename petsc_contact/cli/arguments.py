@@ -551,7 +551,7 @@ def _study_parser(sub: Any) -> None:
         "--figure",
         choices=("1", "2", "3", "hertz", "seeds", "punch", "all"),
         default="all",
-        help="the paper's Figs. 1-3, or issue 36's datasets: the Hertz regime, the "
+        help="the paper's Figs. 1-3, or the datasets beyond them: the Hertz regime, the "
         "distribution over 64 seeds, the punch's periodic and cut faces (default all)",
     )
     p.add_argument("--minutes", type=_minutes, default=45.0, help="time budget (default 45)")

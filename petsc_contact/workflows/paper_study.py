@@ -28,7 +28,7 @@ FIG3_RATIOS = (512, 768, 2048, 4096)  # lambda_r/lambda_1, L = lambda_r
 # least four resolved points lie below the crossover p_c (4e-6 E* on 1024^2, the paper's recipe)
 FINITE_SIZE_SWEEP = (25, 1e-8, 1e-2)
 FIG1_SWEEP = (16, 1e-7, 3e-1)
-# Issue 36's datasets beyond the paper's figures: the Hertz regime (lambda_1 of 16, 32 and 64
+# Datasets beyond the paper's figures: the Hertz regime (lambda_1 of 16, 32 and 64
 # pixels on 512^2, four loads per decade from below single-patch contact), the seed
 # distribution (Fig. 3's lambda_r/lambda_1 = 512 over 64 seeds) and the punch settled (eight
 # seeds of periodic and cut faces at L_p/lambda_r = 1 and 8)

@@ -7,6 +7,14 @@ import h5py
 import pytest
 from conftest import ROOT
 
+# a study run in a subprocess: this checkout, a plain PATH, mpiexec allowed as root
+STUDY_ENV = {
+    "PYTHONPATH": str(ROOT),
+    "PATH": "/usr/bin:/bin",
+    "OMPI_ALLOW_RUN_AS_ROOT": "1",
+    "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+}
+
 
 @pytest.mark.parametrize(
     "script, args",
@@ -57,12 +65,7 @@ def test_example_runs(tmp_path, script, args):
 def test_figure_1_redraws_from_study_files(tmp_path):
     """Fig. 1 from the study's two sweeps and punch at a toy size (grids divided by 128)."""
     data = tmp_path / "paper"
-    env = {
-        "PYTHONPATH": str(ROOT),
-        "PATH": "/usr/bin:/bin",
-        "OMPI_ALLOW_RUN_AS_ROOT": "1",
-        "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
-    }
+    env = STUDY_ENV
     study = ["-m", "petsc_contact.cli", "study", "--figure", "1", "--shrink", "128", "--data"]
     r = subprocess.run(
         [sys.executable, *study, str(data), "--quiet"],
@@ -115,12 +118,7 @@ def test_figures_redraw_from_study_files(tmp_path):
             capture_output=True,
             text=True,
             timeout=900,
-            env={
-                "PYTHONPATH": str(ROOT),
-                "PATH": "/usr/bin:/bin",
-                "OMPI_ALLOW_RUN_AS_ROOT": "1",
-                "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
-            },
+            env=STUDY_ENV,
         )
         assert r.returncode == 0, r.stderr
     redraws = (
@@ -288,12 +286,7 @@ def test_punch_figure_redraws_from_study_files(tmp_path):
     """The punch pieces at a toy size (16^2 faces, the cut ones from 64^2) draw the punch
     figure: every variant has its 8 seeds, and -dp/du_bar stands beside Eq. 2."""
     data = tmp_path / "paper"
-    env = {
-        "PYTHONPATH": str(ROOT),
-        "PATH": "/usr/bin:/bin",
-        "OMPI_ALLOW_RUN_AS_ROOT": "1",
-        "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
-    }
+    env = STUDY_ENV
     study = ["-m", "petsc_contact.cli", "study", "--figure", "punch", "--shrink", "128"]
     r = subprocess.run(
         [sys.executable, *study, "--data", str(data), "--quiet"],

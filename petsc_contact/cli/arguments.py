@@ -406,8 +406,9 @@ COMMANDS = {  # name: (one-line help, description)
     ),
     "study": (
         "the paper's datasets at the paper's parameters, in resumable pieces",
-        "Runs the pieces of the paper's figures (periodic sweeps and the punch, with the "
-        "exact stiffness, scalars only) into DATA/figN/, skipping complete pieces and "
+        "Runs the pieces of the paper's figures and of the datasets beyond them (periodic "
+        "sweeps and punches, with the exact stiffness, scalars only) into DATA/FIGURE/ "
+        "(fig1, ..., hertz, seeds, punch), skipping complete pieces and "
         "stopping cleanly after --minutes; run it again to go on.",
     ),
     "schema": (

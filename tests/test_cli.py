@@ -579,6 +579,31 @@ def test_study_runs_in_resumable_pieces(tmp_path):
     assert sum(f.stat().st_size for f in files) < 2e6  # scalars only
 
 
+def test_studies_on_the_same_data_share_the_pieces(tmp_path):
+    """A piece another run is writing (its lock held here) is left to it: the study computes
+    the others, says which it left and exits 75; once the lock is free, the next call
+    computes it and exits 0."""
+    from petsc_contact.io.store import OutputLock
+
+    data = tmp_path / "paper"
+    base = ["study", "--figure", "1", "--shrink", "128", "--data", str(data), "--quiet"]
+    held = data / "fig1" / "punch.h5"
+    held.parent.mkdir(parents=True)
+    with OutputLock(str(held)):
+        r = cli(*base, "--minutes", "10")
+    assert r.returncode == 75, r.stderr
+    assert f"{held} is being written by another run; left to it" in r.stdout
+    assert "1 of 3 pieces are being written by other runs" in r.stdout
+    assert sorted(f.name for f in (data / "fig1").glob("*.h5")) == [
+        "periodic_r1.h5",
+        "periodic_r8.h5",
+    ]
+    r = cli(*base, "--minutes", "10")
+    assert r.returncode == 0 and held.exists(), r.stderr
+    with h5py.File(held) as f:
+        assert f.attrs["complete"] and np.all(f["converged"][:])
+
+
 def test_study_computes_a_shared_run_once():
     """Fig. 3's largest ratio is the same run as Fig. 2's H = 0.3: listed for both figures,
     kept once (in fig2/)."""
@@ -591,7 +616,7 @@ def test_study_computes_a_shared_run_once():
     assert all(p.figure == "fig2" and p.grid == 8192 for p in shared)
 
 
-def test_issue_36_pieces_reuse_the_paper_figures_runs():
+def test_dataset_pieces_reuse_the_paper_figures_runs():
     """The seed distribution's seeds 1-4 are Fig. 3's ``ratio512`` files (not computed again),
     seeds 5-64 its own; the punch has 8 seeds of each face and ``L_p/lambda_r``, the cut faces
     from a 4x larger surface; the Hertz pieces put ``lambda_1`` at 16, 32 and 64 pixels."""

@@ -37,6 +37,8 @@ def test_cut_face_is_the_centre_of_the_larger_surface():
     )
     assert np.array_equal(prepare_scene(Run(**FACE)).heights, own)
     assert cut.realised["parent_rms_slope"] == pytest.approx(0.1, rel=0.1)
+    inside = cut.realised["rms_slope_inside"]  # the face's own, by differences within it
+    assert inside == rms_slope(cut.heights, (1 / N, 1 / N)) == pytest.approx(0.1, rel=0.25)
 
 
 def test_cut_face_keeps_the_roughness_and_loses_periodicity():

@@ -409,7 +409,8 @@ COMMANDS = {  # name: (one-line help, description)
         "Runs the pieces of the paper's figures and of the datasets beyond them (periodic "
         "sweeps and punches, with the exact stiffness, scalars only) into DATA/FIGURE/ "
         "(fig1, ..., hertz, seeds, punch), skipping complete pieces and "
-        "stopping cleanly after --minutes; run it again to go on.",
+        "stopping cleanly after --minutes; run it again to go on. Pieces another run is "
+        "writing are left to it: start one study per core on the same DATA to share them.",
     ),
     "schema": (
         "print the HDF5 output schema (docs/output-schema.md)",

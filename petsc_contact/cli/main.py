@@ -151,8 +151,7 @@ def _dispatch(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[st
     if args.command == "study":
         with storage(args.data):
             os.makedirs(args.data, exist_ok=True)
-        with locked(os.path.join(args.data, ".study")):  # one study per folder
-            return run_study(args, petsc_args)
+        return run_study(args, petsc_args)  # each piece locked: studies may share a folder
     if args.command not in LOCKED:
         return run(args, argv, petsc_args)
     with locked(args.output):

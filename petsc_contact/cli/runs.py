@@ -94,8 +94,9 @@ def _introduce(command: str, description: Any, prepared: Any) -> None:
     record = prepared.record
     inside = record.get("rms_slope_inside", float("nan"))
     slope = f"h'_rms = {record['rms_slope']:.4g}"
+    what = "face" if "parent_rms_slope" in record else "map"
     if abs(inside - record["rms_slope"]) > 0.2 * record["rms_slope"]:  # NaN: never
-        slope += f" (the map taken as periodic; {inside:.4g} inside it)"
+        slope += f" (the {what} taken as periodic; {inside:.4g} inside it)"
     print(
         f"# {command} {scene.grid.describe()}{' ' + unit if unit else ''}, "
         f"E* = {description.modulus_value:g}{unit_p}, h_rms = {record['rms_height']:.4g}, "

@@ -3,7 +3,9 @@
 Each piece is one ``periodic`` or ``punch`` run with ``--stiffness --scalars-only``, written
 to ``DATA/figN/NAME.h5``.  A piece already complete is skipped; an unfinished one continues
 from its ``.partial`` file; the study stops cleanly after the step that ends past
-``--minutes`` (exit status 75) and the next call goes on from there.
+``--minutes`` (exit status 75) and the next call goes on from there.  A piece that another
+run is writing is left to that run, so several studies started on the same ``--data`` share
+the pieces between them, one core each.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import os
 import time
 from collections.abc import Sequence
 
-from ..io.store import tidy
+from ..io.store import OutputBusy, OutputLock, tidy
 from ..workflows.paper_study import Piece, complete, finished_steps, pieces
 from .common import EXIT_INTERRUPTED, EXIT_PAUSED
 
@@ -35,6 +37,7 @@ def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
     _petsc.init(petsc_args)
     todo = chosen(args)
     began = time.perf_counter()
+    elsewhere = []  # pieces other runs are writing
     for number, piece in enumerate(todo, 1):
         path = piece.path(args.data)
         if complete(path):
@@ -44,14 +47,38 @@ def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
         if left <= 0:
             return _paused(todo, number - 1)
         os.makedirs(os.path.dirname(path), exist_ok=True)
+        try:
+            with OutputLock(path):  # free now, and still unfinished once we hold it
+                if complete(path):
+                    continue
+        except OutputBusy:
+            _elsewhere(number, len(todo), path)
+            elsewhere.append(path)
+            continue
         run = piece.to_run(args.data, round(left, 3))
         print(f"# study {number}/{len(todo)}: {path}", flush=True)
         shown = argparse.Namespace(command=run.geometry, quiet=args.quiet, plot=None)
-        code = execute(run, shown, ["study", *run.arguments()])
+        try:
+            code = execute(run, shown, ["study", *run.arguments()])
+        except OutputBusy:  # another study took it between our look and our start
+            _elsewhere(number, len(todo), path)
+            elsewhere.append(path)
+            continue
         if code in (EXIT_PAUSED, EXIT_INTERRUPTED):
             return code
+    if elsewhere:
+        print(
+            f"# study: {len(elsewhere)} of {len(todo)} pieces are being written by other runs; "
+            "run the study again once they end to check that every piece is complete",
+            flush=True,
+        )
+        return EXIT_PAUSED
     print(f"# study: all {len(todo)} pieces complete in {args.data}")
     return 0
+
+
+def _elsewhere(number: int, total: int, path: str) -> None:
+    print(f"# study {number}/{total}: {path} is being written by another run; left to it")
 
 
 def _paused(todo: Sequence[Piece], done: int) -> int:

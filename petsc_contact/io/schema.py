@@ -350,7 +350,8 @@ FILE_RECORD = (
     "file_unit",
     "metadata_overridden",
 )
-"""What a run records of its measured map, beside its path and digest."""
+"""What a run records of its measured map, beside its path and digest (of a face cut from a
+larger surface, ``rms_slope_inside``)."""
 
 RUN_ATTRIBUTES = (
     "geometry",

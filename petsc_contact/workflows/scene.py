@@ -156,7 +156,9 @@ def cut_face(run: Run, grid: Grid, cutoff: float) -> tuple[np.ndarray, dict[str,
     ``nx x ny`` patch of the periodic surface of ``M`` times the sides with the same pixel
     size, spectrum, rms target and seed (its own ``L/lambda_r = M L_p/lambda_r``), this rank's
     slab; with that parent surface's realised ``rms_height`` and ``rms_slope`` (spectral: the
-    cut face's own are its edges' too)."""
+    cut face's own are its edges' too) and the face's ``rms_slope_inside`` (finite differences
+    inside it; rank 0, NaN on the others)."""
+    from ..physics.preparation import rms_slope
     from ..physics.surface import rms_of
 
     m = run.cut_from
@@ -176,6 +178,8 @@ def cut_face(run: Run, grid: Grid, cutoff: float) -> tuple[np.ndarray, dict[str,
     if full is not None:
         i, j = ((m - 1) * n // 2 for n in grid.shape)
         patch = np.ascontiguousarray(full[i : i + grid.shape[0], j : j + grid.shape[1]])
+        spacing = (grid.lengths[0] / grid.shape[0], grid.lengths[1] / grid.shape[1])
+    stats["rms_slope_inside"] = float("nan") if patch is None else rms_slope(patch, spacing)
     del full, heights
     patch = grid.comm.bcast(patch, root=0) if grid.comm.size > 1 else patch
     return grid.scatter(patch), stats  # type: ignore[arg-type]

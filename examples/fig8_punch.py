@@ -108,14 +108,126 @@ def periodic_reference(data: str, ratio: int) -> dict | None:
     return {k: v[0] for k, v in c.items() if k != "h_rms"} | {"h_rms": float(c["h_rms"][0])}
 
 
+def log_interp(x: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    """``ys(xs)`` at ``x``, interpolated linearly in ``ln x, ln y`` over the positive finite
+    points and ``nan`` outside their range (``xs`` increasing)."""
+    ok = np.isfinite(xs) & np.isfinite(ys) & (xs > 0) & (ys > 0)
+    if ok.sum() < 2:
+        return np.full(np.shape(x), np.nan)
+    lx = np.log(np.asarray(x, dtype=float))
+    return np.exp(np.interp(lx, np.log(xs[ok]), np.log(ys[ok]), left=np.nan, right=np.nan))
+
+
+def normalised(row: dict, key: str = "interfacial_stiffness") -> np.ndarray:
+    """``K h_rms/p`` of a punch piece over its resolved loads (``nan`` elsewhere): constant
+    in a linear regime."""
+    ok = scenes.contact_resolved(row["area_fraction"], row["pixels"])
+    return np.where(ok, row[key] * row["h_rms"] / row["nominal_pressure"], np.nan)
+
+
+def against_cell(row: dict, ref: dict | None) -> np.ndarray:
+    """The punch's ``K h_rms/p`` over the periodic cell's at the same ``p/E*`` (log-log
+    interpolated between the cell's resolved loads), per step."""
+    if ref is None:
+        return np.full(row["nominal_pressure"].shape, np.nan)
+    ok = scenes.resolved(ref["area_fraction"], 8192)
+    p = ref["nominal_pressure"]
+    cell = np.where(ok, ref["stiffness"] * ref["h_rms"] / p, np.nan)
+    return normalised(row) / log_interp(row["nominal_pressure"], p, cell)
+
+
+def seed_median(rows: list, x_key: str, y: list[np.ndarray], x: np.ndarray) -> np.ndarray:
+    """The median over seeds of ``y`` (one array per seed, against its ``x_key`` column) at
+    ``x``, where at least half of the seeds (and two) reach it."""
+    at = np.array([log_interp(x, r[x_key], v) for r, v in zip(rows, y, strict=True)])
+    enough = np.sum(np.isfinite(at), axis=0) >= max(2, (len(rows) + 1) // 2)
+    middle = np.full(x.shape, np.nan)
+    middle[enough] = np.nanmedian(at[:, enough], axis=0)
+    return middle
+
+
+AREAS = (0.01, 0.05, 0.1, 0.2)  # contact area fractions the summary compares at
+SCATTER_LOADS = (1e-6, 1e-4, 1e-3)  # p/E* at which the seed-to-seed scatter is given
+
+
+def _range(values: np.ndarray, digits: int = 2) -> str:
+    """``median [min-max]`` of the finite values."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return "-"
+    return f"{np.median(v):.{digits}f} [{v.min():.{digits}f}-{v.max():.{digits}f}]"
+
+
+def summary(face: str, ratio: int, rows: list, ref: dict | None) -> list[str]:
+    """A variant over its seeds, as Markdown table rows: the punch over the cell at 1, 5, 10
+    and 20% area; ``K h_rms/p`` at 20% area with the grid's and Pharr's flat punch; the
+    widest window within 10% (decades); ``-dp/du_bar`` over Eq. 2 from 0.1% to 10% area;
+    the scatter between seeds (std of ``ln K`` at fixed load). Values are ``median
+    [min-max]`` over the seeds."""
+    areas = np.array(AREAS)
+    vs_cell = np.array([log_interp(areas, r["area_fraction"], against_cell(r, ref)) for r in rows])
+    top = np.array([log_interp(0.2, r["area_fraction"], normalised(r)) for r in rows])
+    pharr = np.array(
+        [log_interp(0.2, r["area_fraction"], normalised(r, "pharr_stiffness")) for r in rows]
+    )
+    widths = []
+    for r in rows:
+        ok = scenes.contact_resolved(r["area_fraction"], r["pixels"])
+        ratio_k = np.where(ok, r["interfacial_stiffness"] / r["nominal_pressure"], np.nan)
+        widths.append(linear_width(r["nominal_pressure"], ratio_k, 0.1)[0])
+    gap = []
+    for r in rows:
+        mid = (r["area_fraction"] >= 1e-3) & (r["area_fraction"] <= 0.1)
+        if "mean_gap_stiffness" in r:
+            gap.extend((r["mean_gap_stiffness"] / r["interfacial_stiffness"])[mid])
+    gap_text = f"{np.nanmin(gap):.2f}-{np.nanmax(gap):.2f}" if np.isfinite(gap).any() else "-"
+    loads = np.array(SCATTER_LOADS)
+    at = np.array([log_interp(loads, r["nominal_pressure"], normalised(r)) for r in rows])
+    scatter = []
+    for column in at.T:
+        column = column[np.isfinite(column)]
+        scatter.append(f"{np.std(np.log(column)):.2f}" if column.size >= 3 else "-")
+    cells = [
+        f"{face} face, `L_p/lambda_r = {ratio}`",
+        str(len(rows)),
+        *(_range(vs_cell[:, i]) for i in range(areas.size)),
+        f"{_range(top)} ({_range(pharr)})",
+        _range(np.array(widths)),
+        gap_text,
+        " / ".join(scatter),
+    ]
+    return ["| " + " | ".join(cells) + " |"]
+
+
+SUMMARY_HEADER = (
+    "| punch | seeds | punch / cell at 1% area | 5% | 10% | 20% | `K h_rms/p` at 20% (Pharr's) "
+    "| within 10% (decades) | `-dp/du_bar` / Eq. 2, 0.1-10% area | std of `ln K` at "
+    + ", ".join(f"{p:.0e}" for p in SCATTER_LOADS)
+    + " E* |\n"
+    + "| --- " * 9
+    + "|"
+)
+
+
 def _draw(args: argparse.Namespace, variants: dict, references: dict) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
 
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8), sharey=True, constrained_layout=True)
-    for ax, ratio in zip(axes, PUNCH_RATIOS, strict=True):
+    fig, axes = plt.subplots(
+        2,
+        2,
+        figsize=(12, 8.4),
+        sharex="row",
+        sharey="row",
+        height_ratios=(3, 2),
+        constrained_layout=True,
+    )
+    for column, ratio in enumerate(PUNCH_RATIOS):
+        ax, below = axes[0, column], axes[1, column]
         ref = references.get(ratio)
         if ref is not None:
             ok = scenes.resolved(ref["area_fraction"], 8192) & np.isfinite(ref["stiffness"])
@@ -124,51 +236,109 @@ def _draw(args: argparse.Namespace, variants: dict, references: dict) -> None:
                 p[ok],
                 (ref["stiffness"] * ref["h_rms"] / p)[ok],
                 "-",
-                color="0.6",
-                lw=2,
-                label=f"periodic cell, $L/\\lambda_r$ = {ratio} (Fig. 1)",
+                color="0.55",
+                lw=2.5,
+                label=f"periodic cell, $L/\\lambda_r$ = {ratio} (Fig. 1, 8192$^2$)",
             )
         for face, color, marker in (("periodic", "C0", "o"), ("cut", "C3", "s")):
             rows = variants.get((face, ratio), [])
-            for n, row in enumerate(rows):
-                p = row["nominal_pressure"]
-                k = row["interfacial_stiffness"] * row["h_rms"] / p
-                ok = scenes.contact_resolved(row["area_fraction"], row["pixels"])
-                count = f"{len(rows)} seed{'s' if len(rows) > 1 else ''}"
-                label = f"{face} face, Eq. 2 ({count})" if n == 0 else None
-                ax.loglog(p, k, "-", color=color, lw=0.8)
-                ax.loglog(p[ok], k[ok], marker, color=color, mfc="none", ms=4, label=label)
-                ax.loglog(p[~ok], k[~ok], ".", color=color, ms=3)
-                kp = row["pharr_stiffness"] * row["h_rms"] / p
-                label = f"{face} face, Eq. 2 with Pharr's flat punch" if n == 0 else None
-                ax.loglog(p, np.where(kp > 0, kp, np.nan), ":", color=color, lw=1, label=label)
-                if "mean_gap_stiffness" in row:
-                    kg = row["mean_gap_stiffness"] * row["h_rms"] / p
-                    label = rf"{face} face, $-dp/d\bar u$" if n == 0 else None
-                    ax.loglog(p, kg, "x", color=color, ms=4, label=label)
+            if not rows:
+                continue
+            for row in rows:
+                ax.loglog(
+                    row["nominal_pressure"], normalised(row), "-", color=color, lw=0.6, alpha=0.35
+                )
+                below.semilogx(
+                    row["area_fraction"],
+                    against_cell(row, ref),
+                    "-",
+                    color=color,
+                    lw=0.6,
+                    alpha=0.35,
+                )
+            lo = min(
+                np.nanmin(np.where(r["nominal_pressure"] > 0, r["nominal_pressure"], np.nan))
+                for r in rows
+            )
+            hi = max(np.nanmax(r["nominal_pressure"]) for r in rows)
+            p = np.geomspace(lo, hi, 60)
+            n = len(rows)
+            eq2 = seed_median(rows, "nominal_pressure", [normalised(r) for r in rows], p)
+            ax.loglog(
+                p,
+                eq2,
+                marker,
+                ls="-",
+                color=color,
+                ms=3.5,
+                mfc="none",
+                lw=1.6,
+                markevery=4,
+                label=f"{face} face, Eq. 2: median of {n} seeds (thin: each)",
+            )
+            pharr = [normalised(r, "pharr_stiffness") for r in rows]
+            ax.loglog(
+                p,
+                seed_median(rows, "nominal_pressure", pharr, p),
+                ":",
+                color=color,
+                lw=1.3,
+                label=f"{face} face, Eq. 2 with Pharr's flat punch (median)",
+            )
+            if all("mean_gap_stiffness" in r for r in rows):
+                gap = [normalised(r, "mean_gap_stiffness") for r in rows]
+                ax.loglog(
+                    p[::3],
+                    seed_median(rows, "nominal_pressure", gap, p)[::3],
+                    "x",
+                    color=color,
+                    ms=4,
+                    label=rf"{face} face, $-dp/d\bar u$ (median)",
+                )
+            a = np.geomspace(1e-4, 0.5, 60)
+            cell = seed_median(rows, "area_fraction", [against_cell(r, ref) for r in rows], a)
+            below.semilogx(
+                a,
+                cell,
+                marker,
+                ls="-",
+                color=color,
+                ms=3.5,
+                mfc="none",
+                lw=1.6,
+                markevery=4,
+                label=f"{face} face: median (thin: each seed)",
+            )
         for row in references.get(("fig1 punch", ratio), []):
             p = row["nominal_pressure"]
             ax.loglog(
                 p,
-                row["interfacial_stiffness"] * row["h_rms"] / p,
-                "s",
-                color="0.4",
-                ms=3,
+                normalised(row),
+                "^",
+                color="0.3",
+                ms=3.5,
                 label="Fig. 1's punch (periodic face, seed 1)",
             )
-        ax.plot([], [], ".", color="gray", ms=3, label="< 16 contact pixels")
         ax.axhline(1 / theory.GAMMA, color="k", ls="--", lw=0.8, label=r"$1/\gamma$")
         ax.set(
-            xlabel="$p/E^*$",
             title=f"$L_p/\\lambda_r$ = {ratio}, $L_p/\\lambda_1$ = 1024, 2048$^2$",
             xlim=(1e-8, 0.1),
+            xlabel="$p/E^*$",
         )
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=7, loc="upper right")
-    axes[0].set(ylabel=r"$K h_\mathrm{rms}/p$ (flat: linear regime)", ylim=(0.5, 300))
+        below.axhline(1, color="k", lw=0.8)
+        below.set(xlabel="contact area fraction", xlim=(1e-4, 0.6), yscale="log")
+        below.grid(alpha=0.3, which="both")
+        below.legend(fontsize=7, loc="lower left")
+    axes[0, 0].set(ylabel=r"$K h_\mathrm{rms}/p$ (flat: linear regime)", ylim=(0.5, 300))
+    axes[1, 0].set(ylabel="punch / periodic cell at the same $p$", ylim=(0.3, 3))
+    ticks = (0.3, 0.5, 0.7, 1, 1.5, 2, 3)
+    axes[1, 0].set_yticks(ticks, [f"{t:g}" for t in ticks])
+    axes[1, 0].yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     fig.suptitle(
         f"Rough punch, H = {HURST}, rms slope 0.1: periodic faces and faces cut from a "
-        f"{CUT_FROM}x larger surface ($h_\\mathrm{{rms}}$: the face's own)"
+        f"{CUT_FROM}x larger surface ($h_\\mathrm{{rms}}$: the face's own; resolved loads)"
     )
     fig.savefig(f"{args.output}.png", dpi=120)
 
@@ -245,6 +415,10 @@ def main() -> None:
             p, k = ref["nominal_pressure"], ref["stiffness"]
             ok = scenes.resolved(ref["area_fraction"], 8192)
             print(f"periodic cell (Fig. 1), L/lambda_r = {ratio}: {linearity(p, k, ok)}")
+    print(SUMMARY_HEADER)
+    for (face, ratio), rows in sorted(variants.items(), key=lambda v: (v[0][1], v[0][0])):
+        for line in summary(face, ratio, rows, references[ratio]):
+            print(line)
     scenes.save(f"{args.output}.h5", data, hurst=HURST, cut_from=CUT_FROM, study_data=args.data)
     _draw(args, variants, references)
     print(f"wrote {args.output}.png and {args.output}.h5")

@@ -284,7 +284,8 @@ def test_the_gallery_draws_every_picture(tmp_path):
 
 def test_punch_figure_redraws_from_study_files(tmp_path):
     """The punch pieces at a toy size (16^2 faces, the cut ones from 64^2) draw the punch
-    figure: every variant has its 8 seeds, and -dp/du_bar stands beside Eq. 2."""
+    figure: every variant has its 8 seeds, -dp/du_bar stands beside Eq. 2, and each variant's
+    summary over its seeds is one table row."""
     data = tmp_path / "paper"
     env = STUDY_ENV
     study = ["-m", "petsc_contact.cli", "study", "--figure", "punch", "--shrink", "128"]
@@ -306,7 +307,10 @@ def test_punch_figure_redraws_from_study_files(tmp_path):
         env=env,
     )
     assert r.returncode == 0, r.stderr
-    assert r.stdout.count("-dp/du_bar") == 32
+    lines = r.stdout.splitlines()
+    assert sum(", seed " in line and "-dp/du_bar" in line for line in lines) == 32
+    summary = [line for line in lines if line.startswith("| ") and " face, " in line]
+    assert len(summary) == 4 and all(line.split(" | ")[1] == "8" for line in summary), summary
     with h5py.File(f"{out}.h5") as f:
         assert sorted(f) == ["cut_r1", "cut_r8", "periodic_r1", "periodic_r8"]
         assert all(len(f[v]) == 8 for v in f)

@@ -103,7 +103,7 @@ def _draw(args: argparse.Namespace, results: dict) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(5.5, 4.2), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(7.8, 4.2), constrained_layout=True)
     print(
         f"{'H':>4} {'alpha (fit)':>16} {'paper (sim.)':>12} {'1/(1+H)':>8}  "
         "K/K_Eq.12 at the fitted loads: seed-averaged (seeds)"
@@ -150,7 +150,7 @@ def _draw(args: argparse.Namespace, results: dict) -> None:
         ylabel=r"$K h_\mathrm{rms}/E^*$",
         title=f"paper Fig. 2: L = $\\lambda_r$, {args.grid}$^2$",
     )
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1))  # beside: no data hidden
     ax.grid(alpha=0.3, which="both")
     fig.savefig(f"{args.output}.png", dpi=120)
 

@@ -15,7 +15,7 @@ import os
 import time
 from collections.abc import Sequence
 
-from ..io.store import OutputBusy, OutputLock, tidy
+from ..io.store import OutputBusy, tidy
 from ..workflows.paper_study import Piece, complete, finished_steps, pieces
 from .common import EXIT_INTERRUPTED, EXIT_PAUSED
 
@@ -32,6 +32,7 @@ def chosen(args: argparse.Namespace) -> list[Piece]:
 def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
     """Run the pieces of the chosen figures in order within ``--minutes``."""
     from ..backend import _petsc
+    from ..workflows.runner import locked
     from .runs import execute
 
     _petsc.init(petsc_args)
@@ -48,7 +49,7 @@ def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
             return _paused(todo, number - 1)
         os.makedirs(os.path.dirname(path), exist_ok=True)
         try:
-            with OutputLock(path):  # free now, and still unfinished once we hold it
+            with locked(path):  # free now, and still unfinished once we hold it (every rank)
                 if complete(path):
                     continue
         except OutputBusy:
@@ -56,7 +57,7 @@ def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
             elsewhere.append(path)
             continue
         run = piece.to_run(args.data, round(left, 3))
-        print(f"# study {number}/{len(todo)}: {path}", flush=True)
+        _say(f"# study {number}/{len(todo)}: {path}")
         shown = argparse.Namespace(command=run.geometry, quiet=args.quiet, plot=None)
         try:
             code = execute(run, shown, ["study", *run.arguments()])
@@ -67,22 +68,29 @@ def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
         if code in (EXIT_PAUSED, EXIT_INTERRUPTED):
             return code
     if elsewhere:
-        print(
+        _say(
             f"# study: {len(elsewhere)} of {len(todo)} pieces are being written by other runs; "
-            "run the study again once they end to check that every piece is complete",
-            flush=True,
+            "run the study again once they end to check that every piece is complete"
         )
         return EXIT_PAUSED
-    print(f"# study: all {len(todo)} pieces complete in {args.data}")
+    _say(f"# study: all {len(todo)} pieces complete in {args.data}")
     return 0
 
 
+def _say(line: str) -> None:
+    """A line of the study's progress, from rank 0 only."""
+    from mpi4py import MPI
+
+    if MPI.COMM_WORLD.rank == 0:
+        print(line, flush=True)
+
+
 def _elsewhere(number: int, total: int, path: str) -> None:
-    print(f"# study {number}/{total}: {path} is being written by another run; left to it")
+    _say(f"# study {number}/{total}: {path} is being written by another run; left to it")
 
 
 def _paused(todo: Sequence[Piece], done: int) -> int:
-    print(f"# study: time is up after {done} of {len(todo)} pieces; run it again to go on")
+    _say(f"# study: time is up after {done} of {len(todo)} pieces; run it again to go on")
     return EXIT_PAUSED
 
 

@@ -210,6 +210,9 @@ SUMMARY_HEADER = (
 )
 
 
+MEDIAN = {"ls": "-", "ms": 3.5, "mfc": "none", "lw": 1.6, "markevery": 4}  # median over seeds
+
+
 def _draw(args: argparse.Namespace, variants: dict, references: dict) -> None:
     import matplotlib
 
@@ -264,18 +267,8 @@ def _draw(args: argparse.Namespace, variants: dict, references: dict) -> None:
             p = np.geomspace(lo, hi, 60)
             n = len(rows)
             eq2 = seed_median(rows, "nominal_pressure", [normalised(r) for r in rows], p)
-            ax.loglog(
-                p,
-                eq2,
-                marker,
-                ls="-",
-                color=color,
-                ms=3.5,
-                mfc="none",
-                lw=1.6,
-                markevery=4,
-                label=f"{face} face, Eq. 2: median of {n} seeds (thin: each)",
-            )
+            label = f"{face} face, Eq. 2: median of {n} seeds (thin: each)"
+            ax.loglog(p, eq2, marker, color=color, label=label, **MEDIAN)
             pharr = [normalised(r, "pharr_stiffness") for r in rows]
             ax.loglog(
                 p,
@@ -297,18 +290,8 @@ def _draw(args: argparse.Namespace, variants: dict, references: dict) -> None:
                 )
             a = np.geomspace(1e-4, 0.5, 60)
             cell = seed_median(rows, "area_fraction", [against_cell(r, ref) for r in rows], a)
-            below.semilogx(
-                a,
-                cell,
-                marker,
-                ls="-",
-                color=color,
-                ms=3.5,
-                mfc="none",
-                lw=1.6,
-                markevery=4,
-                label=f"{face} face: median (thin: each seed)",
-            )
+            label = f"{face} face: median (thin: each seed)"
+            below.semilogx(a, cell, marker, color=color, label=label, **MEDIAN)
         for row in references.get(("fig1 punch", ratio), []):
             p = row["nominal_pressure"]
             ax.loglog(

@@ -161,16 +161,17 @@ def _range(values: np.ndarray, digits: int = 2) -> str:
 
 def summary(face: str, ratio: int, rows: list, ref: dict | None) -> list[str]:
     """A variant over its seeds, as Markdown table rows: the punch over the cell at 1, 5, 10
-    and 20% area; ``K h_rms/p`` at 20% area with the grid's and Pharr's flat punch; the
+    and 20% area; ``K h_rms/p`` at the step nearest 20% area with the grid's and Pharr's flat
+    punch (negative where the punch is stiffer than Pharr's flat one); the
     widest window within 10% (decades); ``-dp/du_bar`` over Eq. 2 from 0.1% to 10% area;
     the scatter between seeds (std of ``ln K`` at fixed load). Values are ``median
     [min-max]`` over the seeds."""
     areas = np.array(AREAS)
     vs_cell = np.array([log_interp(areas, r["area_fraction"], against_cell(r, ref)) for r in rows])
-    top = np.array([log_interp(0.2, r["area_fraction"], normalised(r)) for r in rows])
-    pharr = np.array(
-        [log_interp(0.2, r["area_fraction"], normalised(r, "pharr_stiffness")) for r in rows]
-    )
+    near = [int(np.nanargmin(np.abs(np.log(r["area_fraction"] / 0.2)))) for r in rows]
+    top = np.array([normalised(r)[i] for r, i in zip(rows, near, strict=True)])
+    pharr = np.array([normalised(r, "pharr_stiffness")[i] for r, i in zip(rows, near, strict=True)])
+    reached = np.array([r["area_fraction"][i] for r, i in zip(rows, near, strict=True)])
     widths = []
     for r in rows:
         ok = scenes.contact_resolved(r["area_fraction"], r["pixels"])
@@ -192,7 +193,7 @@ def summary(face: str, ratio: int, rows: list, ref: dict | None) -> list[str]:
         f"{face} face, `L_p/lambda_r = {ratio}`",
         str(len(rows)),
         *(_range(vs_cell[:, i]) for i in range(areas.size)),
-        f"{_range(top)} ({_range(pharr)})",
+        f"{_range(top)} ({_range(pharr)}) at {reached.min():.0%}-{reached.max():.0%}",
         _range(np.array(widths)),
         gap_text,
         " / ".join(scatter),
@@ -201,7 +202,7 @@ def summary(face: str, ratio: int, rows: list, ref: dict | None) -> list[str]:
 
 
 SUMMARY_HEADER = (
-    "| punch | seeds | punch / cell at 1% area | 5% | 10% | 20% | `K h_rms/p` at 20% (Pharr's) "
+    "| punch | seeds | punch / cell at 1% area | 5% | 10% | 20% | `K h_rms/p` near 20% (Pharr's) "
     "| within 10% (decades) | `-dp/du_bar` / Eq. 2, 0.1-10% area | std of `ln K` at "
     + ", ".join(f"{p:.0e}" for p in SCATTER_LOADS)
     + " E* |\n"

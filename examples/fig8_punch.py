@@ -64,6 +64,7 @@ def punch_rows(paths: list[str]) -> dict:
                 "area_fraction",
                 "interfacial_stiffness",
                 "total_stiffness",
+                "flat_punch_stiffness",
                 "mean_gap",  # recorded by punch runs of 0.2.0 on
                 "contact_patches",
             )
@@ -159,14 +160,20 @@ def _range(values: np.ndarray, digits: int = 2) -> str:
     return f"{np.median(v):.{digits}f} [{v.min():.{digits}f}-{v.max():.{digits}f}]"
 
 
-def summary(face: str, ratio: int, rows: list, ref: dict | None) -> list[str]:
-    """A variant over its seeds, as Markdown table rows: the punch over the cell at 1, 5, 10
+def summary(face: str, ratio: int, rows: list, ref: dict | None) -> str:
+    """A variant over its seeds, as a Markdown table row: the punch over the cell at 1, 5, 10
     and 20% area; ``K h_rms/p`` at the step nearest 20% area with the grid's and Pharr's flat
-    punch (negative where the punch is stiffer than Pharr's flat one); the
-    widest window within 10% (decades); ``-dp/du_bar`` over Eq. 2 from 0.1% to 10% area;
-    the scatter between seeds (std of ``ln K`` at fixed load). Values are ``median
-    [min-max]`` over the seeds."""
+    punch (negative where the punch is stiffer than Pharr's flat one); the widest window
+    within 10% (decades); ``-dp/du_bar`` over Eq. 2 from 0.1% to 10% area; the area at which
+    the total stiffness is half the flat punch's (the edges' share); the scatter between
+    seeds (std of ``ln K`` at fixed load). Values are ``median [min-max]`` over the seeds."""
     areas = np.array(AREAS)
+    half = np.array(
+        [
+            log_interp(0.5, r["total_stiffness"] / r["flat_punch_stiffness"], r["area_fraction"])
+            for r in rows
+        ]
+    )
     vs_cell = np.array([log_interp(areas, r["area_fraction"], against_cell(r, ref)) for r in rows])
     near = [int(np.nanargmin(np.abs(np.log(r["area_fraction"] / 0.2)))) for r in rows]
     top = np.array([normalised(r)[i] for r, i in zip(rows, near, strict=True)])
@@ -196,17 +203,19 @@ def summary(face: str, ratio: int, rows: list, ref: dict | None) -> list[str]:
         f"{_range(top)} ({_range(pharr)}) at {reached.min():.0%}-{reached.max():.0%}",
         _range(np.array(widths)),
         gap_text,
+        _range(100 * half, 1),
         " / ".join(scatter),
     ]
-    return ["| " + " | ".join(cells) + " |"]
+    return "| " + " | ".join(cells) + " |"
 
 
 SUMMARY_HEADER = (
     "| punch | seeds | punch / cell at 1% area | 5% | 10% | 20% | `K h_rms/p` near 20% (Pharr's) "
-    "| within 10% (decades) | `-dp/du_bar` / Eq. 2, 0.1-10% area | std of `ln K` at "
+    "| within 10% (decades) | `-dp/du_bar` / Eq. 2, 0.1-10% area | area (%) at `K_tot = "
+    "K_flat/2` | std of `ln K` at "
     + ", ".join(f"{p:.0e}" for p in SCATTER_LOADS)
     + " E* |\n"
-    + "| --- " * 9
+    + "| --- " * 11
     + "|"
 )
 
@@ -401,8 +410,7 @@ def main() -> None:
             print(f"periodic cell (Fig. 1), L/lambda_r = {ratio}: {linearity(p, k, ok)}")
     print(SUMMARY_HEADER)
     for (face, ratio), rows in sorted(variants.items(), key=lambda v: (v[0][1], v[0][0])):
-        for line in summary(face, ratio, rows, references[ratio]):
-            print(line)
+        print(summary(face, ratio, rows, references[ratio]))
     scenes.save(f"{args.output}.h5", data, hurst=HURST, cut_from=CUT_FROM, study_data=args.data)
     _draw(args, variants, references)
     print(f"wrote {args.output}.png and {args.output}.h5")

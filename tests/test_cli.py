@@ -1,6 +1,7 @@
 """The command line as users script it: schema, bad input, atomic output, MPI agreement."""
 
 import json
+import os
 
 import h5py
 import numpy as np
@@ -582,8 +583,9 @@ def test_study_runs_in_resumable_pieces(tmp_path):
 @pytest.mark.parametrize("ranks", [0, 2])
 def test_studies_on_the_same_data_share_the_pieces(tmp_path, ranks):
     """A piece another run is writing (its lock held here) is left to it: the study (on one
-    rank, or on two that agree) computes the others, says once which it left and exits 75;
-    once the lock is free, the next call computes it and exits 0."""
+    rank, or on two that agree) computes the others, says once which it left and who holds
+    it, and exits 75; once the lock is free, the next call computes it and exits 0. A
+    complete piece with a step that did not converge makes every call exit 1, naming it."""
     from petsc_contact.io.store import OutputLock
 
     data = tmp_path / "paper"
@@ -593,16 +595,22 @@ def test_studies_on_the_same_data_share_the_pieces(tmp_path, ranks):
     with OutputLock(str(held)):
         r = cli(*base, "--minutes", "10", mpi=ranks)
     assert r.returncode == 75, r.stderr
-    assert r.stdout.count(f"{held} is being written by another run; left to it") == 1
+    assert r.stdout.count(f"{held} is being written by another run (pid {os.getpid()}") == 1
     assert r.stdout.count("1 of 3 pieces are being written by other runs") == 1
     assert sorted(f.name for f in (data / "fig1").glob("*.h5")) == [
         "periodic_r1.h5",
         "periodic_r8.h5",
     ]
-    r = cli(*base, "--minutes", "10")
+    r = cli(*base, "--minutes", "10", mpi=ranks)
     assert r.returncode == 0 and held.exists(), r.stderr
-    with h5py.File(held) as f:
+    with h5py.File(held, "r+") as f:
         assert f.attrs["complete"] and np.all(f["converged"][:])
+        f["converged"][2] = False  # a piece with a failed step is complete, and said so
+    r = cli(*base, "--minutes", "10", mpi=ranks)
+    assert (
+        r.returncode == 1
+        and r.stdout.count(f"did not converge (flagged converged = False): {held}") == 1
+    )
 
 
 def test_study_computes_a_shared_run_once():

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from contextlib import nullcontext
 from typing import Any
 
 from .common import EXIT_INTERRUPTED, EXIT_NOT_CONVERGED, EXIT_PAUSED, describe, say
@@ -43,13 +44,16 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
     return execute(describe(args), args, argv)
 
 
-def execute(description: Any, args: argparse.Namespace, argv: Sequence[str]) -> int:
+def execute(
+    description: Any, args: argparse.Namespace, argv: Sequence[str], lock: bool = True
+) -> int:
     """Run ``description`` (a :class:`~petsc_contact.workflows.description.Run`), printing as
-    ``args`` asks (``--quiet``, ``--plot``); the exit status."""
+    ``args`` asks (``--quiet``, ``--plot``); the exit status.  Its output is locked for the
+    run unless ``lock`` is False (the caller holds the lock)."""
     from ..io.store import partial_path
     from ..workflows.runner import PAUSED, RunInterrupted, locked, prepare
 
-    with locked(description.output):
+    with locked(description.output) if lock else nullcontext():
         prepared = prepare(description, " ".join(["petsc-contact", *argv]))
         root = prepared.scene.grid.comm.rank == 0
         show = root and not args.quiet

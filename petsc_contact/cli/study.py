@@ -13,11 +13,12 @@ from __future__ import annotations
 import argparse
 import os
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import Any, TypeVar
 
 from ..io.store import OutputBusy, tidy
-from ..workflows.paper_study import Piece, complete, finished_steps, pieces
-from .common import EXIT_INTERRUPTED, EXIT_PAUSED
+from ..workflows.paper_study import Piece, complete, converged, finished_steps, pieces
+from .common import EXIT_INTERRUPTED, EXIT_NOT_CONVERGED, EXIT_PAUSED
 
 
 def chosen(args: argparse.Namespace) -> list[Piece]:
@@ -30,67 +31,91 @@ def chosen(args: argparse.Namespace) -> list[Piece]:
 
 
 def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
-    """Run the pieces of the chosen figures in order within ``--minutes``."""
+    """Run the pieces of the chosen figures in order within ``--minutes``.
+
+    Every decision (a piece complete, the time left) is rank 0's, shared with the other
+    ranks.  A piece is run inside its lock, taken once: a piece another run holds is left to
+    it, one that became complete before the lock was ours is skipped."""
+    from mpi4py import MPI
+
     from ..backend import _petsc
     from ..workflows.runner import locked
     from .runs import execute
 
     _petsc.init(petsc_args)
+    comm = MPI.COMM_WORLD
     todo = chosen(args)
     began = time.perf_counter()
-    elsewhere = []  # pieces other runs are writing
+    elsewhere, unconverged = [], []  # pieces other runs are writing; complete with failures
     for number, piece in enumerate(todo, 1):
         path = piece.path(args.data)
-        if complete(path):
+        if _agreed(comm, complete, path):
             tidy(path)  # what a writer killed after its last rename left
+            if not _agreed(comm, converged, path):
+                unconverged.append(path)
             continue
-        left = args.minutes - (time.perf_counter() - began) / 60
+        left = _agreed(comm, lambda: args.minutes - (time.perf_counter() - began) / 60)
         if left <= 0:
-            return _paused(todo, number - 1)
+            return _paused(comm, todo, number - 1)
         os.makedirs(os.path.dirname(path), exist_ok=True)
-        try:
-            with locked(path):  # free now, and still unfinished once we hold it (every rank)
-                if complete(path):
-                    continue
-        except OutputBusy:
-            _elsewhere(number, len(todo), path)
-            elsewhere.append(path)
-            continue
         run = piece.to_run(args.data, round(left, 3))
-        _say(f"# study {number}/{len(todo)}: {path}")
         shown = argparse.Namespace(command=run.geometry, quiet=args.quiet, plot=None)
         try:
-            code = execute(run, shown, ["study", *run.arguments()])
-        except OutputBusy:  # another study took it between our look and our start
-            _elsewhere(number, len(todo), path)
+            with locked(path):
+                if _agreed(comm, complete, path):  # finished by another run meanwhile
+                    continue
+                _say(comm, f"# study {number}/{len(todo)}: {path}")
+                code = execute(run, shown, ["study", *run.arguments()], lock=False)
+        except OutputBusy as busy:
+            _say(
+                comm,
+                f"# study {number}/{len(todo)}: {path} is being written by another run "
+                f"({busy.holder}); left to it",
+            )
             elsewhere.append(path)
             continue
         if code in (EXIT_PAUSED, EXIT_INTERRUPTED):
             return code
+        if code == EXIT_NOT_CONVERGED:
+            unconverged.append(path)
     if elsewhere:
         _say(
+            comm,
             f"# study: {len(elsewhere)} of {len(todo)} pieces are being written by other runs; "
-            "run the study again once they end to check that every piece is complete"
+            "run the study again once they end to check that every piece is complete",
         )
+    if unconverged:
+        _say(
+            comm,
+            f"# study: {len(unconverged)} of {len(todo)} pieces have steps that did not "
+            f"converge (flagged converged = False): {', '.join(unconverged)}",
+        )
+        return EXIT_NOT_CONVERGED
+    if elsewhere:
         return EXIT_PAUSED
-    _say(f"# study: all {len(todo)} pieces complete in {args.data}")
+    _say(comm, f"# study: all {len(todo)} pieces complete in {args.data}")
     return 0
 
 
-def _say(line: str) -> None:
-    """A line of the study's progress, from rank 0 only."""
-    from mpi4py import MPI
+T = TypeVar("T")
 
-    if MPI.COMM_WORLD.rank == 0:
+
+def _agreed(comm: Any, decide: Callable[..., T], *args: Any) -> T:
+    """Rank 0's ``decide(*args)``, the same on every rank of ``comm``."""
+    if comm.size == 1:
+        return decide(*args)
+    agreed: T = comm.bcast(decide(*args) if comm.rank == 0 else None, root=0)
+    return agreed
+
+
+def _say(comm: Any, line: str) -> None:
+    """A line of the study's progress, from rank 0 only."""
+    if comm.rank == 0:
         print(line, flush=True)
 
 
-def _elsewhere(number: int, total: int, path: str) -> None:
-    _say(f"# study {number}/{total}: {path} is being written by another run; left to it")
-
-
-def _paused(todo: Sequence[Piece], done: int) -> int:
-    _say(f"# study: time is up after {done} of {len(todo)} pieces; run it again to go on")
+def _paused(comm: Any, todo: Sequence[Piece], done: int) -> int:
+    _say(comm, f"# study: time is up after {done} of {len(todo)} pieces; run it again to go on")
     return EXIT_PAUSED
 
 

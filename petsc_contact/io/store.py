@@ -96,7 +96,18 @@ class StorageError(OSError):
 
 
 class OutputBusy(ValueError):
-    """Another run is writing the same output."""
+    """Another run is writing the same output: ``output``, and ``holder``, the holder's own
+    words (process, host, since when)."""
+
+    def __init__(self, output: str, holder: str) -> None:
+        super().__init__(
+            f"'{output}' is being written by another run ({holder}): wait for it to end, or "
+            "choose another --output"
+        )
+        self.output, self.holder = output, holder
+
+    def __reduce__(self) -> tuple[type[OutputBusy], tuple[str, str]]:  # sent between ranks
+        return OutputBusy, (self.output, self.holder)
 
 
 def _reason(exc: BaseException) -> str:
@@ -210,10 +221,7 @@ class OutputLock:
             except BlockingIOError:
                 holder = os.read(fd, 512).decode(errors="replace").strip() or "starting"
                 os.close(fd)
-                raise OutputBusy(
-                    f"'{self.output}' is being written by another run ({holder}): wait for it "
-                    "to end, or choose another --output"
-                ) from None
+                raise OutputBusy(self.output, holder) from None
             try:  # the file we locked may have been removed by the holder we waited for
                 mine = os.fstat(fd).st_ino == os.stat(self.path).st_ino
             except FileNotFoundError:

@@ -217,6 +217,14 @@ def complete(path: str) -> bool:
         return bool(f.attrs.get("complete", False))
 
 
+def converged(path: str) -> bool:
+    """Whether every step of a complete piece's file converged."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        return bool(np.all(f["converged"][:]))
+
+
 def finished_steps(path: str) -> int | None:
     """The steps kept so far in a piece's unfinished file ``path + '.partial'`` (None when
     there is none, or it cannot be read while a run writes it)."""

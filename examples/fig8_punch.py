@@ -48,17 +48,20 @@ def linearity(p: np.ndarray, k: np.ndarray, resolved: np.ndarray) -> str:
     return ", ".join(parts)
 
 
-def punch_rows(paths: list[str]) -> dict:
-    """A punch piece's columns (NaN where a step did not converge), its face's realised
+def punch_rows(paths: list[str]) -> list[dict]:
+    """Each punch piece's columns (NaN where a step did not converge), its face's realised
     ``h_rms`` and seed, ``-dp/du_bar`` by finite differences where ``mean_gap`` is kept, and
     ``K`` from Eq. 2 with Pharr's analytic flat punch, as the paper took it (negative where
-    the discretised punch is already stiffer than Pharr's flat one)."""
+    the discretised punch is already stiffer than Pharr's flat one).  An unfinished piece
+    with no converged step yet is left out."""
     import h5py
 
     rows = []
     for path in paths:
         with h5py.File(path, "r", locking=False) as f:
             ok = f["converged"][:].astype(bool)
+            if not ok.any():
+                continue
             keys = (
                 "nominal_pressure",
                 "area_fraction",
@@ -100,23 +103,34 @@ def _variant_files(data: str, face: str, ratio: int, partial: bool) -> list[str]
 
 
 def periodic_reference(data: str, ratio: int) -> dict | None:
-    """Fig. 1's periodic cell at this ``L/lambda_r`` (8192^2, ``L/lambda_1 = 4096``), if
-    computed."""
+    """Fig. 1's periodic cell at this ``L/lambda_r`` (8192^2 at the study's size), if
+    computed, with its grid size ``n`` and its ``K h_rms/p`` over its resolved loads."""
+    import h5py
+
     paths = piece_files(data, "fig1", rolloff_ratio=f"{ratio:g}")
     if not paths:
         return None
     c = scenes.curves_from_files(paths)
-    return {k: v[0] for k, v in c.items() if k != "h_rms"} | {"h_rms": float(c["h_rms"][0])}
+    with h5py.File(paths[0], "r", locking=False) as f:
+        n = int(np.atleast_1d(f.attrs["grid"])[0])
+    ref = {k: v[0] for k, v in c.items() if k != "h_rms"} | {"h_rms": float(c["h_rms"][0])}
+    p = ref["nominal_pressure"]
+    ok = scenes.resolved(ref["area_fraction"], n) & np.isfinite(ref["stiffness"])
+    return ref | {"n": n, "resolved": ok, "normalised": ref["stiffness"] * ref["h_rms"] / p}
 
 
-def log_interp(x: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
-    """``ys(xs)`` at ``x``, interpolated linearly in ``ln x, ln y`` over the positive finite
-    points and ``nan`` outside their range (``xs`` increasing)."""
-    ok = np.isfinite(xs) & np.isfinite(ys) & (xs > 0) & (ys > 0)
+def log_interp(x: np.ndarray, xs: np.ndarray, ys: np.ndarray, signed: bool = False) -> np.ndarray:
+    """``ys(xs)`` at ``x``, interpolated linearly in ``ln x`` and ``ln y`` (in ``y`` itself
+    when ``signed``, for values that may be negative) over the finite points with ``xs > 0``,
+    taken in order of ``xs``; ``nan`` outside their range."""
+    ok = np.isfinite(xs) & np.isfinite(ys) & (xs > 0) & (signed | (ys > 0))
     if ok.sum() < 2:
         return np.full(np.shape(x), np.nan)
-    lx = np.log(np.asarray(x, dtype=float))
-    return np.exp(np.interp(lx, np.log(xs[ok]), np.log(ys[ok]), left=np.nan, right=np.nan))
+    order = np.argsort(xs[ok])
+    lx, lxs = np.log(np.asarray(x, dtype=float)), np.log(xs[ok][order])
+    if signed:
+        return np.interp(lx, lxs, ys[ok][order], left=np.nan, right=np.nan)
+    return np.exp(np.interp(lx, lxs, np.log(ys[ok][order]), left=np.nan, right=np.nan))
 
 
 def normalised(row: dict, key: str = "interfacial_stiffness") -> np.ndarray:
@@ -131,16 +145,17 @@ def against_cell(row: dict, ref: dict | None) -> np.ndarray:
     interpolated between the cell's resolved loads), per step."""
     if ref is None:
         return np.full(row["nominal_pressure"].shape, np.nan)
-    ok = scenes.resolved(ref["area_fraction"], 8192)
-    p = ref["nominal_pressure"]
-    cell = np.where(ok, ref["stiffness"] * ref["h_rms"] / p, np.nan)
-    return normalised(row) / log_interp(row["nominal_pressure"], p, cell)
+    cell = np.where(ref["resolved"], ref["normalised"], np.nan)
+    return normalised(row) / log_interp(row["nominal_pressure"], ref["nominal_pressure"], cell)
 
 
-def seed_median(rows: list, x_key: str, y: list[np.ndarray], x: np.ndarray) -> np.ndarray:
+def seed_median(
+    rows: list, x_key: str, y: list[np.ndarray], x: np.ndarray, signed: bool = False
+) -> np.ndarray:
     """The median over seeds of ``y`` (one array per seed, against its ``x_key`` column) at
-    ``x``, where at least half of the seeds (and two) reach it."""
-    at = np.array([log_interp(x, r[x_key], v) for r, v in zip(rows, y, strict=True)])
+    ``x``, where at least half of the seeds (and two) reach it (``signed``: see
+    :func:`log_interp`)."""
+    at = np.array([log_interp(x, r[x_key], v, signed) for r, v in zip(rows, y, strict=True)])
     enough = np.sum(np.isfinite(at), axis=0) >= max(2, (len(rows) + 1) // 2)
     middle = np.full(x.shape, np.nan)
     middle[enough] = np.nanmedian(at[:, enough], axis=0)
@@ -152,21 +167,25 @@ SCATTER_LOADS = (1e-6, 1e-4, 1e-3)  # p/E* at which the seed-to-seed scatter is 
 
 
 def _range(values: np.ndarray, digits: int = 2) -> str:
-    """``median [min-max]`` of the finite values."""
+    """``median [min-max]`` of the finite values, with ``(n/N)`` when only ``n`` of the
+    ``N`` seeds have one."""
     v = np.asarray(values, dtype=float)
     v = v[np.isfinite(v)]
     if v.size == 0:
         return "-"
-    return f"{np.median(v):.{digits}f} [{v.min():.{digits}f}-{v.max():.{digits}f}]"
+    text = f"{np.median(v):.{digits}f} [{v.min():.{digits}f}-{v.max():.{digits}f}]"
+    return text if v.size == np.size(values) else f"{text} ({v.size}/{np.size(values)})"
 
 
 def summary(face: str, ratio: int, rows: list, ref: dict | None) -> str:
-    """A variant over its seeds, as a Markdown table row: the punch over the cell at 1, 5, 10
-    and 20% area; ``K h_rms/p`` at the step nearest 20% area with the grid's and Pharr's flat
-    punch (negative where the punch is stiffer than Pharr's flat one); the widest window
-    within 10% (decades); ``-dp/du_bar`` over Eq. 2 from 0.1% to 10% area; the area at which
-    the total stiffness is half the flat punch's (the edges' share); the scatter between
-    seeds (std of ``ln K`` at fixed load). Values are ``median [min-max]`` over the seeds."""
+    """A variant over its seeds, as a Markdown table row.  As ``median [min-max]`` over the
+    seeds: the punch over the cell at 1, 5, 10 and 20% area; ``K h_rms/p`` at the step
+    nearest 20% area with the grid's and Pharr's flat punch (negative where the punch is
+    stiffer than Pharr's flat one); the widest window within 10% (decades); the area at
+    which the total stiffness is half the flat punch's (the edges' share).  Then the range of
+    ``-dp/du_bar`` over Eq. 2 over every step from 0.1% to 10% area of every seed, and the
+    scatter between seeds at fixed loads, the standard deviation (ddof 1) of
+    ``ln(K h_rms)``."""
     areas = np.array(AREAS)
     half = np.array(
         [
@@ -195,7 +214,7 @@ def summary(face: str, ratio: int, rows: list, ref: dict | None) -> str:
     scatter = []
     for column in at.T:
         column = column[np.isfinite(column)]
-        scatter.append(f"{np.std(np.log(column)):.2f}" if column.size >= 3 else "-")
+        scatter.append(f"{np.std(np.log(column), ddof=1):.2f}" if column.size >= 3 else "-")
     cells = [
         f"{face} face, `L_p/lambda_r = {ratio}`",
         str(len(rows)),
@@ -212,7 +231,7 @@ def summary(face: str, ratio: int, rows: list, ref: dict | None) -> str:
 SUMMARY_HEADER = (
     "| punch | seeds | punch / cell at 1% area | 5% | 10% | 20% | `K h_rms/p` near 20% (Pharr's) "
     "| within 10% (decades) | `-dp/du_bar` / Eq. 2, 0.1-10% area | area (%) at `K_tot = "
-    "K_flat/2` | std of `ln K` at "
+    "K_flat/2` | std of `ln(K h_rms)` at "
     + ", ".join(f"{p:.0e}" for p in SCATTER_LOADS)
     + " E* |\n"
     + "| --- " * 11
@@ -243,15 +262,14 @@ def _draw(args: argparse.Namespace, variants: dict, references: dict) -> None:
         ax, below = axes[0, column], axes[1, column]
         ref = references.get(ratio)
         if ref is not None:
-            ok = scenes.resolved(ref["area_fraction"], 8192) & np.isfinite(ref["stiffness"])
-            p = ref["nominal_pressure"]
+            ok = ref["resolved"]
             ax.loglog(
-                p[ok],
-                (ref["stiffness"] * ref["h_rms"] / p)[ok],
+                ref["nominal_pressure"][ok],
+                ref["normalised"][ok],
                 "-",
                 color="0.55",
                 lw=2.5,
-                label=f"periodic cell, $L/\\lambda_r$ = {ratio} (Fig. 1, 8192$^2$)",
+                label=f"periodic cell, $L/\\lambda_r$ = {ratio} (Fig. 1, {ref['n']}$^2$)",
             )
         for face, color, marker in (("periodic", "C0", "o"), ("cut", "C3", "s")):
             rows = variants.get((face, ratio), [])
@@ -280,9 +298,10 @@ def _draw(args: argparse.Namespace, variants: dict, references: dict) -> None:
             label = f"{face} face, Eq. 2: median of {n} seeds (thin: each)"
             ax.loglog(p, eq2, marker, color=color, label=label, **MEDIAN)
             pharr = [normalised(r, "pharr_stiffness") for r in rows]
+            pharr_median = seed_median(rows, "nominal_pressure", pharr, p, signed=True)
             ax.loglog(
                 p,
-                seed_median(rows, "nominal_pressure", pharr, p),
+                np.where(pharr_median > 0, pharr_median, np.nan),
                 ":",
                 color=color,
                 lw=1.3,
@@ -358,11 +377,11 @@ def report(face: str, ratio: int, rows: list) -> list[str]:
         )
         if "mean_gap_stiffness" in row:
             ratio_k = row["mean_gap_stiffness"] / row["interfacial_stiffness"]
-            mid = (row["area_fraction"] > 1e-3) & (row["area_fraction"] < 0.2)
+            mid = (row["area_fraction"] >= 1e-3) & (row["area_fraction"] <= 0.1)
             text += (
                 f"; -dp/du_bar: {linearity(p, row['mean_gap_stiffness'], ok)}, "
                 f"{np.nanmin(ratio_k[mid]):.2f}-{np.nanmax(ratio_k[mid]):.2f} x Eq. 2 at "
-                "0.1-20% area"
+                "0.1-10% area"
             )
         lines.append(text)
     return lines
@@ -406,8 +425,9 @@ def main() -> None:
         ref = references[ratio]
         if ref is not None:
             p, k = ref["nominal_pressure"], ref["stiffness"]
-            ok = scenes.resolved(ref["area_fraction"], 8192)
-            print(f"periodic cell (Fig. 1), L/lambda_r = {ratio}: {linearity(p, k, ok)}")
+            print(
+                f"periodic cell (Fig. 1), L/lambda_r = {ratio}: {linearity(p, k, ref['resolved'])}"
+            )
     print(SUMMARY_HEADER)
     for (face, ratio), rows in sorted(variants.items(), key=lambda v: (v[0][1], v[0][0])):
         print(summary(face, ratio, rows, references[ratio]))

@@ -37,8 +37,6 @@ def test_cut_face_is_the_centre_of_the_larger_surface():
     )
     assert np.array_equal(prepare_scene(Run(**FACE)).heights, own)
     assert cut.realised["parent_rms_slope"] == pytest.approx(0.1, rel=0.1)
-    inside = cut.realised["rms_slope_inside"]  # the face's own, by differences within it
-    assert inside == rms_slope(cut.heights, (1 / N, 1 / N)) == pytest.approx(0.1, rel=0.25)
 
 
 def test_cut_face_keeps_the_roughness_and_loses_periodicity():
@@ -59,3 +57,25 @@ def test_cut_from_is_a_punch_option_recorded_in_the_run():
     run = Run(**FACE, cut_from=M)
     assert run.parameters()["cut_from"] == M
     assert run.arguments()[run.arguments().index("--cut-from") + 1] == str(M)
+
+
+def test_cut_face_records_and_shows_its_slope_inside(tmp_path):
+    """The file records the face's rms slope by differences inside it (``rms_slope_inside``:
+    the parent's slope, about 0.1) beside the spectral one, which counts the step at the
+    edges; the run's first line shows both."""
+    import h5py
+
+    from conftest import cli
+
+    out = tmp_path / "cut.h5"
+    args = ["punch", "--grid", str(N), "--hurst", "0.7", "--rms-slope", "0.1"]
+    args += ["--cutoff-ratio", str(N // 4), "--seed", "3", "--cut-from", str(M)]
+    r = cli(*args, "--approaches", "0.002", "--output", str(out), "--quiet")
+    assert r.returncode == 0, r.stderr
+    with h5py.File(out) as f:
+        inside, spectral = f.attrs["rms_slope_inside"], f.attrs["rms_slope"]
+        assert inside == pytest.approx(rms_slope(f["heights"][:], (1 / N, 1 / N)), rel=1e-12)
+    assert inside == pytest.approx(0.1, rel=0.25) and spectral > 1.2 * inside
+    r = cli(*args, "--approaches", "0.002", "--output", str(tmp_path / "again.h5"))
+    first = r.stdout.splitlines()[0]
+    assert f"h'_rms = {spectral:.4g} (the face taken as periodic; {inside:.4g} inside it)" in first

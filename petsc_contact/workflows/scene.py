@@ -43,7 +43,7 @@ class Scene:
     record: dict[str, Any] = field(default_factory=dict)  # what was read, and how
     reading: str = ""  # one line on the map read ("" for a generated surface)
     filled: np.ndarray | None = None  # this rank's pixels whose heights were filled
-    realised: dict[str, float] = field(default_factory=dict)  # the parent of a cut face
+    realised: dict[str, float] = field(default_factory=dict)  # a cut face: its parent, its inside
 
 
 def check_surface(run: Run) -> None:

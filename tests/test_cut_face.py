@@ -64,7 +64,6 @@ def test_cut_face_records_and_shows_its_slope_inside(tmp_path):
     the parent's slope, about 0.1) beside the spectral one, which counts the step at the
     edges; the run's first line shows both."""
     import h5py
-
     from conftest import cli
 
     out = tmp_path / "cut.h5"

@@ -119,17 +119,14 @@ def periodic_reference(data: str, ratio: int) -> dict | None:
     return ref | {"n": n, "resolved": ok, "normalised": ref["stiffness"] * ref["h_rms"] / p}
 
 
-def log_interp(x: np.ndarray, xs: np.ndarray, ys: np.ndarray, signed: bool = False) -> np.ndarray:
-    """``ys(xs)`` at ``x``, interpolated linearly in ``ln x`` and ``ln y`` (in ``y`` itself
-    when ``signed``, for values that may be negative) over the finite points with ``xs > 0``,
-    taken in order of ``xs``; ``nan`` outside their range."""
-    ok = np.isfinite(xs) & np.isfinite(ys) & (xs > 0) & (signed | (ys > 0))
+def log_interp(x: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    """``ys(xs)`` at ``x``, interpolated linearly in ``ln x`` and ``ln y`` over the finite
+    positive points, taken in order of ``xs``; ``nan`` outside their range."""
+    ok = np.isfinite(xs) & np.isfinite(ys) & (xs > 0) & (ys > 0)
     if ok.sum() < 2:
         return np.full(np.shape(x), np.nan)
     order = np.argsort(xs[ok])
     lx, lxs = np.log(np.asarray(x, dtype=float)), np.log(xs[ok][order])
-    if signed:
-        return np.interp(lx, lxs, ys[ok][order], left=np.nan, right=np.nan)
     return np.exp(np.interp(lx, lxs, np.log(ys[ok][order]), left=np.nan, right=np.nan))
 
 
@@ -149,13 +146,10 @@ def against_cell(row: dict, ref: dict | None) -> np.ndarray:
     return normalised(row) / log_interp(row["nominal_pressure"], ref["nominal_pressure"], cell)
 
 
-def seed_median(
-    rows: list, x_key: str, y: list[np.ndarray], x: np.ndarray, signed: bool = False
-) -> np.ndarray:
+def seed_median(rows: list, x_key: str, y: list[np.ndarray], x: np.ndarray) -> np.ndarray:
     """The median over seeds of ``y`` (one array per seed, against its ``x_key`` column) at
-    ``x``, where at least half of the seeds (and two) reach it (``signed``: see
-    :func:`log_interp`)."""
-    at = np.array([log_interp(x, r[x_key], v, signed) for r, v in zip(rows, y, strict=True)])
+    ``x``, where at least half of the seeds (and two) reach it."""
+    at = np.array([log_interp(x, r[x_key], v) for r, v in zip(rows, y, strict=True)])
     enough = np.sum(np.isfinite(at), axis=0) >= max(2, (len(rows) + 1) // 2)
     middle = np.full(x.shape, np.nan)
     middle[enough] = np.nanmedian(at[:, enough], axis=0)
@@ -298,14 +292,19 @@ def _draw(args: argparse.Namespace, variants: dict, references: dict) -> None:
             label = f"{face} face, Eq. 2: median of {n} seeds (thin: each)"
             ax.loglog(p, eq2, marker, color=color, label=label, **MEDIAN)
             pharr = [normalised(r, "pharr_stiffness") for r in rows]
-            pharr_median = seed_median(rows, "nominal_pressure", pharr, p, signed=True)
+            ends = []  # the last load before a seed's Eq. 2 with Pharr's turns negative
+            for r, v in zip(rows, pharr, strict=True):
+                with np.errstate(invalid="ignore"):
+                    turned = np.flatnonzero(v <= 0)
+                ends.append(r["nominal_pressure"][turned[0] - 1] if turned.size else np.inf)
+            shown = p <= min(ends)
             ax.loglog(
-                p,
-                np.where(pharr_median > 0, pharr_median, np.nan),
+                p[shown],
+                seed_median(rows, "nominal_pressure", pharr, p)[shown],
                 ":",
                 color=color,
                 lw=1.3,
-                label=f"{face} face, Eq. 2 with Pharr's flat punch (median)",
+                label=f"{face} face, Eq. 2 with Pharr's flat punch (median, until one turns < 0)",
             )
             if all("mean_gap_stiffness" in r for r in rows):
                 gap = [normalised(r, "mean_gap_stiffness") for r in rows]

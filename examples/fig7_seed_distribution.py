@@ -10,6 +10,7 @@ from petsc_contact.workflows import scenes
 from petsc_contact.workflows.ensemble import power_law_fit
 from petsc_contact.workflows.paper_study import (
     DISTRIBUTION_RATIO,
+    add_data_options,
     add_pressures_option,
     log_pressures,
     piece_files,
@@ -259,15 +260,7 @@ def _arguments() -> argparse.Namespace:
         "with --data 1e-6, below p_c, and 1e-4, above; else 1e-3 and 1e-2, resolved at 128^2)",
     )
     ap.add_argument("--fit-points", type=int, default=4, help="loads of each seed's fit (4)")
-    ap.add_argument(
-        "--data",
-        metavar="DIR",
-        help="redraw from the study's files (petsc-contact study --figure seeds), e.g. data/paper",
-    )
-    ap.add_argument(
-        "--with-partial", action="store_true", help="also read the pieces still computing"
-    )
-    ap.add_argument("--output", default="fig7", help="prefix of the PNG and HDF5 files")
+    add_data_options(ap, "seeds", "fig7")
     return ap.parse_args()
 
 

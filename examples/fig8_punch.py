@@ -9,7 +9,12 @@ import numpy as np
 from petsc_contact.geometries.punch import flat_punch_stiffness, interfacial_stiffness
 from petsc_contact.physics import theory
 from petsc_contact.workflows import scenes
-from petsc_contact.workflows.paper_study import CUT_FROM, PUNCH_RATIOS, piece_files
+from petsc_contact.workflows.paper_study import (
+    CUT_FROM,
+    PUNCH_RATIOS,
+    add_data_options,
+    piece_files,
+)
 
 HURST = 0.7
 FACES = ("periodic", "cut")
@@ -388,16 +393,7 @@ def report(face: str, ratio: int, rows: list) -> list[str]:
 
 def _arguments() -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument(
-        "--data",
-        metavar="DIR",
-        required=True,
-        help="the study's files (petsc-contact study --figure punch), e.g. data/paper",
-    )
-    ap.add_argument(
-        "--with-partial", action="store_true", help="also read the pieces still computing"
-    )
-    ap.add_argument("--output", default="fig8", help="prefix of the PNG and HDF5 files")
+    add_data_options(ap, "punch", "fig8", required=True)
     return ap.parse_args()
 
 

@@ -256,9 +256,19 @@ def add_redraw_options(parser: argparse.ArgumentParser, figure: int, output: str
         help="a load is resolved, drawn as such and fitted when every seed has at least N "
         f"contact pixels (default {MIN_CONTACT_PIXELS}, the study's rule)",
     )
+    add_data_options(parser, str(figure), output)
+
+
+def add_data_options(
+    parser: argparse.ArgumentParser, figure: str, output: str, required: bool = False
+) -> None:
+    """A figure script's ``--data DIR`` (the files of ``petsc-contact study --figure
+    figure``; ``required`` for scripts that only redraw), ``--with-partial`` and ``--output``
+    options."""
     parser.add_argument(
         "--data",
         metavar="DIR",
+        required=required,
         help=f"redraw from the study's files (petsc-contact study --figure {figure}), "
         "e.g. data/paper",
     )

@@ -178,8 +178,7 @@ def cut_face(run: Run, grid: Grid, cutoff: float) -> tuple[np.ndarray, dict[str,
     if full is not None:
         i, j = ((m - 1) * n // 2 for n in grid.shape)
         patch = np.ascontiguousarray(full[i : i + grid.shape[0], j : j + grid.shape[1]])
-        spacing = (grid.lengths[0] / grid.shape[0], grid.lengths[1] / grid.shape[1])
-    stats["rms_slope_inside"] = float("nan") if patch is None else rms_slope(patch, spacing)
+    stats["rms_slope_inside"] = float("nan") if patch is None else rms_slope(patch, grid.spacing)
     del full, heights
     patch = grid.comm.bcast(patch, root=0) if grid.comm.size > 1 else patch
     return grid.scatter(patch), stats  # type: ignore[arg-type]

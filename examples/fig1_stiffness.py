@@ -9,6 +9,7 @@ from petsc_contact.workflows import scenes
 from petsc_contact.workflows.ensemble import power_law_fit
 from petsc_contact.workflows.paper_study import (
     RMS_SLOPE,
+    add_data_options,
     add_pressures_option,
     log_pressures,
     piece_files,
@@ -85,12 +86,7 @@ def _arguments() -> argparse.Namespace:
     ap.add_argument("--seed", type=int, default=1, help="surface seed (default 1)")
     add_pressures_option(ap, 1e-7, 5e-2, 16)
     ap.add_argument("--punch-grid", type=int, default=None, help="default grid/2")
-    ap.add_argument(
-        "--data",
-        metavar="DIR",
-        help="redraw from the study's files (petsc-contact study --figure 1), e.g. data/paper",
-    )
-    ap.add_argument("--output", default="fig1", help="prefix of the PNG and HDF5 files")
+    add_data_options(ap, "1", "fig1", partial=False)
     return ap.parse_args()
 
 

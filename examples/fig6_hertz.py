@@ -7,7 +7,12 @@ import numpy as np
 
 from petsc_contact.physics import theory
 from petsc_contact.workflows import scenes
-from petsc_contact.workflows.paper_study import add_pressures_option, log_pressures, piece_files
+from petsc_contact.workflows.paper_study import (
+    add_data_options,
+    add_pressures_option,
+    log_pressures,
+    piece_files,
+)
 
 HURST = 0.7
 
@@ -210,12 +215,7 @@ def _arguments() -> argparse.Namespace:
     )
     ap.add_argument("--seeds", type=int, default=2, help="seeds 1..N (default 2)")
     add_pressures_option(ap, 1e-9, 1e-2, 29)
-    ap.add_argument(
-        "--data",
-        metavar="DIR",
-        help="redraw from the study's files (petsc-contact study --figure hertz), e.g. data/paper",
-    )
-    ap.add_argument("--output", default="fig6", help="prefix of the PNG and HDF5 files")
+    add_data_options(ap, "hertz", "fig6", partial=False)
     return ap.parse_args()
 
 

@@ -260,11 +260,15 @@ def add_redraw_options(parser: argparse.ArgumentParser, figure: int, output: str
 
 
 def add_data_options(
-    parser: argparse.ArgumentParser, figure: str, output: str, required: bool = False
+    parser: argparse.ArgumentParser,
+    figure: str,
+    output: str,
+    required: bool = False,
+    partial: bool = True,
 ) -> None:
     """A figure script's ``--data DIR`` (the files of ``petsc-contact study --figure
-    figure``; ``required`` for scripts that only redraw), ``--with-partial`` and ``--output``
-    options."""
+    figure``; ``required`` for scripts that only redraw), ``--with-partial`` (for scripts
+    that read unfinished pieces: ``partial``) and ``--output`` options."""
     parser.add_argument(
         "--data",
         metavar="DIR",
@@ -272,12 +276,13 @@ def add_data_options(
         help=f"redraw from the study's files (petsc-contact study --figure {figure}), "
         "e.g. data/paper",
     )
-    parser.add_argument(
-        "--with-partial",
-        action="store_true",
-        help="also read the pieces still computing (NAME.h5.partial), over the loads every "
-        "seed has so far: a look at an unfinished study, not its result",
-    )
+    if partial:
+        parser.add_argument(
+            "--with-partial",
+            action="store_true",
+            help="also read the pieces still computing (NAME.h5.partial), over the loads "
+            "every seed has so far: a look at an unfinished study, not its result",
+        )
     parser.add_argument(
         "--output", default=output, help=f"prefix of the PNG and HDF5 files (default {output})"
     )

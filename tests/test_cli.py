@@ -613,6 +613,24 @@ def test_studies_on_the_same_data_share_the_pieces(tmp_path, ranks):
     )
 
 
+def test_a_damaged_study_piece_is_named_not_skipped_or_recomputed(tmp_path):
+    """A complete piece overwritten with random bytes: the study stops at it with one line
+    that names the file (exit 2), touching nothing; once it is removed, the next call
+    computes it again."""
+    data = tmp_path / "paper"
+    base = ["study", "--figure", "1", "--shrink", "128", "--data", str(data), "--quiet"]
+    assert cli(*base, "--minutes", "10").returncode == 0
+    piece = data / "fig1" / "punch.h5"
+    piece.write_bytes(np.random.default_rng(3).bytes(4096))
+    r = cli(*base, "--minutes", "10")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert f"the study's piece '{piece}' cannot be read" in r.stderr
+    piece.unlink()
+    assert cli(*base, "--minutes", "10").returncode == 0
+    with h5py.File(piece) as f:
+        assert f.attrs["complete"] and np.all(f["converged"][:])
+
+
 def test_study_computes_a_shared_run_once():
     """Fig. 3's largest ratio is the same run as Fig. 2's H = 0.3: listed for both figures,
     kept once (in fig2/)."""

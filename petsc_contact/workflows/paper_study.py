@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import argparse
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -208,21 +210,33 @@ def _once(todo: list[Piece]) -> list[Piece]:
 
 
 def complete(path: str) -> bool:
-    """Whether a piece's file exists and says it is complete."""
+    """Whether a piece's file exists and says it is complete (``ValueError`` naming it when it
+    cannot be read)."""
     if not os.path.exists(path):
         return False
-    import h5py
-
-    with h5py.File(path, "r") as f:
+    with _piece(path) as f:
         return bool(f.attrs.get("complete", False))
 
 
 def converged(path: str) -> bool:
     """Whether every step of a complete piece's file converged."""
+    with _piece(path) as f:
+        return bool(np.all(f["converged"][:]))
+
+
+@contextmanager
+def _piece(path: str) -> Iterator[Any]:
+    """A piece's file, open for reading; ``ValueError`` naming it when it is damaged."""
     import h5py
 
-    with h5py.File(path, "r") as f:
-        return bool(np.all(f["converged"][:]))
+    try:
+        with h5py.File(path, "r") as f:
+            yield f
+    except (OSError, KeyError) as exc:
+        raise ValueError(
+            f"the study's piece '{path}' cannot be read ({exc}): remove it, and the study "
+            "computes it again"
+        ) from None
 
 
 def finished_steps(path: str) -> int | None:

@@ -634,7 +634,8 @@ def _compare_parser(sub: Any) -> None:
         default=None,
         metavar="S1,S2,...",
         help="TAO types, 'cg' (default solver), 'pk' (Polonsky-Keer) or "
-        "options files (default: cg,pk,tron,bnls,bntr,bqnls,blmvm,bncg,gpcg)",
+        "options files (default: cg,pk,tron,bnls,bntr,bqnls,blmvm,bncg,gpcg, each with "
+        "its options/NAME.opts, which the command line's PETSc options override)",
     )
     cmp_.add_argument(
         "--time-limit",

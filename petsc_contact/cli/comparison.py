@@ -27,6 +27,8 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
         raise InputError("--time-limit and --stall-iterations must not be negative")
     if args.solvers == []:
         raise InputError("--solvers names no solver: give cg,tron,... or leave it out")
+    if "-tao_type" in petsc_args:  # it would follow, and replace, every solver's own
+        raise InputError("compare takes its solvers from --solvers, not -tao_type")
     solvers = args.solvers or list(DEFAULT_SOLVERS)
     for name in solvers:
         solver_options(name)  # unknown options files fail here, before any work
@@ -63,6 +65,7 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
         args.pressure,
         solvers,
         args.time_limit,
+        petsc_args,  # after each solver's options file: the command line wins
         stall_iterations=args.stall_iterations,
         report=report,
         done=done,

@@ -17,7 +17,10 @@ The time axis excludes the cost of these measurements (one FFT per iteration).
 
 Solvers are named by TAO type (``tron``, ``bncg``, ...), ``cg`` (the default, a
 Fourier-preconditioned constrained CG), ``pk`` (Polonsky-Keer, unpreconditioned), or a path
-to a PETSc options file (``options/bqnls.opts``).
+to a PETSc options file (``my-bqnls.opts``).  Each solver of :data:`DEFAULT_SOLVERS` runs with
+the options file the package ships for it (:data:`OPTIONS`, ``options/NAME.opts``: what makes
+it converge); a path runs that file instead, and any other TAO type runs as
+``-tao_type TYPE``.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ import time
 from collections.abc import Callable, Sequence
 from contextlib import suppress
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -45,21 +49,27 @@ from .periodic_sweep import sweep
 REFERENCE_GATOL = 1e-12
 STALL_GAIN = 0.9  # a new low of the natural residual must be 10% below the best so far
 DEFAULT_SOLVERS = ("cg", "pk", "tron", "bnls", "bntr", "bqnls", "blmvm", "bncg", "gpcg")
-ALIASES = {
-    "cg": ["-tao_type", "python", "-tao_python_type", "petsc_contact.backend.cg.PreconditionedCG"],
-    "pk": ["-tao_type", "python", "-tao_python_type", "petsc_contact.backend.cg.PolonskyKeer"],
-}
+OPTIONS = Path(__file__).resolve().parents[1] / "options"
+"""The options file of each solver of :data:`DEFAULT_SOLVERS`, ``NAME.opts``, shipped with the
+package (the repository's ``options/`` links here)."""
 
 
 def solver_options(name: str) -> list[str]:
-    """PETSc options that select a solver given by alias, TAO type or options file."""
-    if name in ALIASES:
-        return list(ALIASES[name])
+    """PETSc options that select a solver: ``-options_file`` with the package's file for a
+    solver of :data:`DEFAULT_SOLVERS` or with the file ``name`` is a path to, else
+    ``-tao_type name``; ``OSError`` (one line) where that file is missing."""
     if name.endswith(".opts") or os.sep in name:
         if not os.path.isfile(name):
             raise OSError(f"options file '{name}' does not exist")
         return ["-options_file", name]
-    return ["-tao_type", name]
+    if name not in DEFAULT_SOLVERS:
+        return ["-tao_type", name]
+    path = OPTIONS / f"{name}.opts"
+    if not path.is_file():
+        raise OSError(
+            f"the options file of solver '{name}' is missing: {path} (reinstall the package)"
+        )
+    return ["-options_file", str(path)]
 
 
 @dataclass
@@ -67,7 +77,7 @@ class Trajectory:
     """Errors of one solver along its iterations (and its final TAO report)."""
 
     name: str
-    options: list[str] = field(default_factory=list)  # the PETSc options that select it
+    options: list[str] = field(default_factory=list)  # the PETSc options it ran with
     time: list[float] = field(default_factory=list)
     iteration: list[int] = field(default_factory=list)
     mean_gap_error: list[float] = field(default_factory=list)
@@ -200,6 +210,9 @@ def compare(
     reference_ready: Callable[[dict[str, Any]], None] | None = None,
 ) -> tuple[dict[str, Any], list[Trajectory]]:
     """Run each solver from first touch and record its error against time.
+
+    Each solver runs with :func:`solver_options` then ``extra_options``, which therefore win
+    over its options file; both are recorded (:attr:`Trajectory.options`).
 
     The solvers of ``done`` (an interrupted comparison's, :func:`read_partial`) are kept as
     they are and not run again; the reference is solved again (the same solve, so the same

@@ -105,6 +105,14 @@ def petsc() -> ModuleType:
     return init()
 
 
+def petsc_comm(comm: Any) -> Any:
+    """A grid's communicator as petsc4py's ``comm=`` takes it: mpi4py's as it is, PETSc's
+    ``COMM_SELF`` for the one-rank stand-in (:class:`~petsc_contact.conventions.grid.OneRank`)."""
+    from ..conventions.grid import OneRank
+
+    return petsc().COMM_SELF if isinstance(comm, OneRank) else comm
+
+
 OptionsArg: TypeAlias = Sequence[str] | str | Mapping[str, Any] | None
 
 

@@ -174,7 +174,8 @@ class _Run:
         from petsc4py import PETSc
 
         self.tao, self.reasons = tao, PETSc.TAO.Reason
-        self.comm = tao.getComm().tompi4py()
+        comm = tao.getComm()  # mpi4py's for the sums of several ranks only (the mpi extra)
+        self.comm = comm.tompi4py() if comm.size > 1 else comm
         self.x = tao.getSolution()
         lower_vec, upper_vec = tao.getVariableBounds()
         self.hessian = tao.getHessian()[0]

@@ -18,6 +18,7 @@ import numpy as np
 from ..conventions.grid import Grid, block_rows
 from ..numerics import kernels
 from ..numerics.fft import FFT, half_spectrum_weights, make_fft, single_entries
+from . import _petsc
 
 
 def twice(values: np.ndarray) -> np.ndarray:
@@ -282,7 +283,9 @@ def shell_matrix(petsc: Any, op: ShellInterface) -> Any:
     """A PETSc Python ``Mat`` of the grid's row-slab layout whose ``mult`` is ``op``."""
     n_local = op.grid.local_shape[0] * op.grid.shape[1]
     mat = petsc.Mat().createPython(
-        ((n_local, op.grid.size), (n_local, op.grid.size)), context=op, comm=op.grid.comm
+        ((n_local, op.grid.size), (n_local, op.grid.size)),
+        context=op,
+        comm=_petsc.petsc_comm(op.grid.comm),
     )
     mat.setOption(petsc.Mat.Option.SYMMETRIC, True)
     mat.setUp()

@@ -210,7 +210,8 @@ class FreeSetPreconditioner:
         self.op = op
         self.tao = tao
         self.gradient = gradient
-        self.comm = tao.getComm().tompi4py()
+        comm = tao.getComm()  # mpi4py's for the sums of several ranks only (the mpi extra)
+        self.comm = comm.tompi4py() if comm.size > 1 else comm
         self.contact = op if isinstance(op, ContactPreconditioner) else None
         self.lower, self.upper = compact_bound(lower.array_r), compact_bound(upper.array_r)
         self.size = lower.getSize()
@@ -288,7 +289,7 @@ class BoundSolver:
         self.use_h0 = preconditioner is not None and self.tao_type in H0_TYPES and use_j0
         wants_pc = (self.tao_type in J0_TYPES and use_j0) or self.tao_type == "python"
         if preconditioner is not None and wants_pc:
-            self.pc = petsc.PC().createPython(preconditioner, comm=grid.comm)
+            self.pc = petsc.PC().createPython(preconditioner, comm=_petsc.petsc_comm(grid.comm))
             self.pc.setOperators(self.hessian)
             self.pc.setUp()
         self._reasons = _reason_names(petsc)
@@ -359,7 +360,7 @@ class BoundSolver:
         """The restricted compliance as ``tao``'s ``H0`` (:class:`FreeSetPreconditioner`)."""
         op = self.preconditioner_op
         context = FreeSetPreconditioner(op, tao, gradient, self.lower, self.upper)
-        pc = self.petsc.PC().createPython(context, comm=self.grid.comm)
+        pc = self.petsc.PC().createPython(context, comm=_petsc.petsc_comm(self.grid.comm))
         pc.setOperators(self.hessian)
         pc.setUp()
         h0 = initial_matrix(self.petsc, pc, self.x)
@@ -391,7 +392,7 @@ class BoundSolver:
         def tao_hessian(tao: Any, x: Any, H: Any, P: Any) -> None:
             pass  # the Hessian is constant: the shell Mat already is it
 
-        tao = self.petsc.TAO().create(comm=self.grid.comm)
+        tao = self.petsc.TAO().create(comm=_petsc.petsc_comm(self.grid.comm))
         tao.setType(self.tao_type)
         if self.tao_type == "python":
             tao.setPythonType(DEFAULT_PYTHON_TYPE)

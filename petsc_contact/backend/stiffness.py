@@ -74,8 +74,9 @@ def restricted_solve(
     mat = shell_matrix(petsc, a_ctx)
     # a PC of its own: one taken from ksp.getPC() keeps its Python context alive after
     # ksp.destroy() (petsc4py 3.18), two field-sized arrays leaked per solve
-    pcobj = petsc.PC().createPython(m_ctx, comm=grid.comm)
-    ksp = petsc.KSP().create(comm=grid.comm)
+    comm = _petsc.petsc_comm(grid.comm)
+    pcobj = petsc.PC().createPython(m_ctx, comm=comm)
+    ksp = petsc.KSP().create(comm=comm)
     try:
         ksp.setType("cg")
         ksp.setPC(pcobj)  # before the operators, which the KSP hands on to its PC

@@ -51,7 +51,8 @@ def record_for(
 
 
 def say(message: str, kind: str = "error") -> None:
-    from mpi4py import MPI
+    """``petsc-contact: KIND: MESSAGE`` on standard error, from rank 0 only."""
+    from ..conventions.grid import world_rank
 
-    if MPI.COMM_WORLD.rank == 0:
+    if world_rank() == 0:
         print(f"petsc-contact: {kind}: {message}", file=sys.stderr)

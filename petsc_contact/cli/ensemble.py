@@ -11,9 +11,8 @@ from .common import EXIT_INTERRUPTED, EXIT_PAUSED, describe
 
 def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
     """One periodic run per seed (each resumable), then statistics over seeds in OUT.h5."""
-    from mpi4py import MPI
-
     from ..backend import _petsc
+    from ..conventions.grid import world
     from ..io.store import check_writable
     from ..workflows.seeds import ensemble_record, seed_runs, summarise, write_summary
     from .runs import execute
@@ -35,7 +34,7 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
     files = [str(r.output) for r in runs]
     pressures = [float(p) for p in runs[0].pressures or []]
     record = ensemble_record(base, args.seeds, pressures, " ".join(["petsc-contact", *argv]))
-    if MPI.COMM_WORLD.rank == 0:
+    if world().rank == 0:
         summary = summarise(args.seeds, files)
         write_summary(args.output, summary, files, record)
         if args.plot:

@@ -36,14 +36,13 @@ def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
     Every decision (a piece complete, the time left) is rank 0's, shared with the other
     ranks.  A piece is run inside its lock, taken once: a piece another run holds is left to
     it, one that became complete before the lock was ours is skipped."""
-    from mpi4py import MPI
-
     from ..backend import _petsc
+    from ..conventions.grid import world
     from ..workflows.runner import locked
     from .runs import execute
 
     _petsc.init(petsc_args)
-    comm = MPI.COMM_WORLD
+    comm = world()
     todo = chosen(args)
     began = time.perf_counter()
     elsewhere, unconverged = [], []  # pieces other runs are writing; complete with failures

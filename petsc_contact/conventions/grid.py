@@ -5,19 +5,105 @@ contiguous rows ``grid.rows`` (the first ``n % size`` ranks one row more), which
 layout of both PETSc's default ownership (with local sizes set per row) and mpi4py-fft's
 slab decomposition.  Reductions go through :meth:`Grid.sum` so that every observable is
 the same on every rank.
+
+mpi4py is the ``mpi`` extra: the communicators come from :func:`world` and
+:func:`self_comm`, which give the stand-in :class:`OneRank` where it is not installed and the
+run has one rank, and raise :class:`MPIUnavailable` (saying how to install it) on several.
 """
 
 from __future__ import annotations
 
+import os
+import sys
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, SupportsFloat
+from typing import TYPE_CHECKING, Any, SupportsFloat, TypeVar
 
 import numpy as np
 
-if TYPE_CHECKING:  # mpi4py is loaded when a grid is made, not when this module is imported
+if TYPE_CHECKING:  # mpi4py (the mpi extra) is loaded when a grid is made, if at all
     from mpi4py import MPI
 
 from .validation import per_axis, positive
+
+MPI_INSTALL_HINT = (
+    "pip install 'petsc-contact[mpi]' (in the set-up's venv: .venv/bin/pip install mpi4py)"
+)
+LAUNCHER_VARIABLES = {
+    "size": ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE"),  # Open MPI's mpiexec, MPICH's (Hydra)
+    "rank": ("OMPI_COMM_WORLD_RANK", "PMI_RANK"),
+}
+T = TypeVar("T")
+
+
+class MPIUnavailable(ImportError):
+    """A run on several ranks without mpi4py: the message says how to install it."""
+
+
+class OneRank:
+    """The communicator of a one-rank run without mpi4py: what the package calls of
+    ``COMM_WORLD`` on one rank (petsc4py takes PETSc's ``COMM_SELF`` for it,
+    :func:`~petsc_contact.backend._petsc.petsc_comm`)."""
+
+    size = 1
+    rank = 0
+
+    def bcast(self, value: T, root: int = 0) -> T:
+        """``value``: this rank is the root."""
+        return value
+
+    def gather(self, value: T, root: int = 0) -> list[T]:
+        """``[value]``: every rank's value, this rank's."""
+        return [value]
+
+    def Barrier(self) -> None:
+        """Nothing to wait for."""
+
+
+def launched(what: str) -> int:
+    """The ``"size"`` of the run or this process's ``"rank"`` without mpi4py: PETSc's
+    ``COMM_WORLD`` where PETSc is loaded, else the launcher's environment (Open MPI, MPICH);
+    1 and 0 outside a launcher."""
+    petsc = sys.modules.get("petsc4py.PETSc")
+    if petsc is not None:
+        return int(getattr(petsc.COMM_WORLD, what))
+    for name in LAUNCHER_VARIABLES[what]:
+        if name in os.environ:
+            return int(os.environ[name])
+    return 1 if what == "size" else 0
+
+
+def world() -> Any:
+    """mpi4py's ``COMM_WORLD``; :class:`OneRank` where mpi4py is not installed and the run
+    has one rank; :class:`MPIUnavailable` where it has several."""
+    try:
+        from mpi4py import MPI
+    except ImportError:
+        size = launched("size")
+        if size > 1:
+            raise MPIUnavailable(
+                f"a run on {size} MPI ranks needs mpi4py, which is not installed: "
+                + MPI_INSTALL_HINT
+            ) from None
+        return OneRank()
+    return MPI.COMM_WORLD
+
+
+def self_comm() -> Any:
+    """mpi4py's ``COMM_SELF``, or :class:`OneRank` where mpi4py is not installed."""
+    try:
+        from mpi4py import MPI
+    except ImportError:
+        return OneRank()
+    return MPI.COMM_SELF
+
+
+def world_rank() -> int:
+    """This process's rank in the run, whatever is installed (for messages: never raises)."""
+    try:
+        from mpi4py import MPI
+    except ImportError:
+        return launched("rank")
+    return int(MPI.COMM_WORLD.rank)
 
 
 def block_rows(n: int, size: int, rank: int) -> slice:
@@ -52,7 +138,8 @@ class Grid:
     lengths
         Sides ``(Lx, Ly)`` (any length unit; all outputs use the same unit).
     comm
-        The MPI communicator of the run.
+        The MPI communicator of the run (:func:`world` by default; :class:`OneRank` without
+        mpi4py).
     """
 
     shape: tuple[int, int]
@@ -73,11 +160,7 @@ class Grid:
         positive("length", ly)
         object.__setattr__(self, "shape", (nx, ny))
         object.__setattr__(self, "lengths", (lx, ly))
-        if comm is None:
-            from mpi4py import MPI
-
-            comm = MPI.COMM_WORLD
-        object.__setattr__(self, "comm", comm)
+        object.__setattr__(self, "comm", world() if comm is None else comm)
 
     @property
     def square(self) -> bool:
@@ -168,7 +251,7 @@ class Grid:
 
     def sum(self, *values: SupportsFloat) -> np.ndarray:
         """Sum scalars over all ranks (one reduction for all of them)."""
-        local = np.array(values, dtype=float)
+        local = np.array([float(v) for v in values])  # a device's scalars come to the host
         if self.comm.size == 1:
             return local
         total = np.empty_like(local)

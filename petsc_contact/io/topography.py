@@ -14,7 +14,9 @@ them, and the channel read.  The readers, in the order they are tried for an ext
   formats, the field's maintained reader: sides, unit, undefined points and channels as it
   reads them).  A text matrix (``.txt``, ``.dat``, ``.csv``, ``.asc``; whitespace or commas,
   ``#`` comments) is read by numpy when SurfaceTopography is not installed or cannot parse it;
-  NetCDF (``.nc``) likewise through h5py (NetCDF-4) or scipy (NetCDF-3).
+  NetCDF (``.nc``) likewise through h5py (NetCDF-4) or scipy (NetCDF-3).  Without
+  SurfaceTopography (the ``measured`` extra) any other file is refused with an
+  ``ImportError`` that says how to install it.
 
 A file the first reader cannot parse goes to the next (a Zygo ``.dat`` is no text matrix,
 an ``.h5`` with several maps is read by SurfaceTopography's channels); when none can, the
@@ -41,7 +43,10 @@ TEXT = (".txt", ".dat", ".csv", ".asc")
 HDF5 = (".h5", ".hdf5")
 NETCDF = (".nc", ".nc4")
 NUMPY = (".npy", ".npz")
-INSTALL_HINT = "pip install 'SurfaceTopography>=1.27' into the venv (the README's set-up does this)"
+INSTALL_HINT = (
+    "pip install 'petsc-contact[measured]' "
+    "(in the set-up's venv: .venv/bin/pip install 'SurfaceTopography>=1.27')"
+)
 
 GUESSES = {"HGTReader": (".hgt",)}
 """SurfaceTopography readers that recognise a file by its size alone (any file of 2 n^2 bytes
@@ -256,6 +261,8 @@ def read_topography(path: str, channel: Channel = None) -> Topography:
     ------
     OSError
         The file does not exist or is not readable.
+    ImportError
+        Only SurfaceTopography reads it (an instrument file), and it is not installed.
     ValueError
         No reader can parse it (with each reader's reason), or it holds no usable map.
     """
@@ -263,8 +270,14 @@ def read_topography(path: str, channel: Channel = None) -> Topography:
         raise OSError(f"heights file '{path}' does not exist")
     if not os.access(path, os.R_OK):
         raise OSError(f"heights file '{path}' is not readable")
+    readers = _readers(path)
+    if not readers:
+        raise ImportError(
+            f"'{path}' is read by SurfaceTopography (instrument files; the text, .npy, .npz, "
+            f".h5 and .nc readers are the package's own), which is not installed: {INSTALL_HINT}"
+        )
     reasons = []
-    for name, reader in _readers(path):
+    for name, reader in readers:
         try:
             topo = reader(path, channel)
         except NotAMap:

@@ -151,12 +151,10 @@ def periodic_contact(
     list of Step
         One per load, in order; only the last keeps ``state``, the field to go on from.
     """
-    from mpi4py import MPI
-
     array, length = map_and_lengths(heights, length)
     pressures = check_pressures(pressures)
     with _petsc.scoped_options(options):
-        grid = grid_for(array.shape, length, comm or MPI.COMM_WORLD)
+        grid = grid_for(array.shape, length, comm)
         local = grid.scatter(array)
         check_finite(grid, local)
         problem = PeriodicProblem(grid, make_fft(grid), local, modulus)

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..conventions.grid import Grid, grid_for
+from ..conventions.grid import Grid, grid_for, self_comm
 from ..io.topography import SurfaceTopographyMap, map_and_lengths
 from ..numerics.fft import FFT, SerialFFT
 from ..physics import theory
@@ -261,9 +261,7 @@ def predict_map(
     array, length = map_and_lengths(heights, length)
     grid = grid_for(array.shape, length)
     if grid.comm.size > 1:
-        from mpi4py import MPI
-
-        grid = grid_for(array.shape, length, MPI.COMM_SELF)
+        grid = grid_for(array.shape, length, self_comm())
     lo, hi, n = DEFAULT_LOADS
     p = np.geomspace(lo * modulus, hi * modulus, n) if pressures is None else pressures
     values = np.asarray(array, dtype=float)

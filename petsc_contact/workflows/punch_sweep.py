@@ -218,11 +218,9 @@ def punch_contact(
     values = [float(v) for v in (approaches if approaches is not None else forces or [])]
     if (approaches is None) == (forces is None) or not values:
         raise ValueError("give either approaches or forces, at least one of them")
-    from mpi4py import MPI
-
     array, length = map_and_lengths(heights, length)
     with _petsc.scoped_options(options):
-        grid = grid_for(array.shape, length, comm or MPI.COMM_WORLD)
+        grid = grid_for(array.shape, length, comm)
         local = grid.scatter(array)
         check_finite(grid, local)
         mask = None if footprint is None else grid.scatter(footprint).astype(bool)

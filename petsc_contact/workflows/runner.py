@@ -29,6 +29,7 @@ import numpy as np
 
 from ..backend import _petsc
 from ..backend.solve import Monitor
+from ..conventions.grid import world
 from ..geometries.step import FIELD_NAMES, Step
 from ..io.schema import FILE_RECORD
 from ..io.store import Finished, OutputLock, StepStore, StorageError, check_writable, read_resume
@@ -215,9 +216,7 @@ def run_contact(
 def locked(path: str | None) -> Iterator[None]:
     """Hold the exclusive right to write ``path`` (rank 0 takes it; every rank raises the same
     error when another run holds it: :class:`~petsc_contact.io.store.OutputBusy`)."""
-    from mpi4py import MPI
-
-    comm = MPI.COMM_WORLD
+    comm = world()
     lock = OutputLock(path) if path is not None and comm.rank == 0 else None
     failure: Exception | None = None
     if lock is not None:

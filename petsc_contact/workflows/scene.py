@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ..conventions.grid import Grid, grid_for
+from ..conventions.grid import Grid, grid_for, world
 from ..conventions.units import Lengths, factor, parse_lengths, unit_name
 from ..conventions.validation import check_finite
 from ..io.topography import SurfaceTopographyMap, Topography, from_surface_topography
@@ -293,11 +293,9 @@ def check_height_scale(heights: np.ndarray, length: Any) -> None:
 def _warn(run: Run, full: np.ndarray, spacing: tuple[float, float]) -> float:
     """Warn about implausible slopes and mismatched edges; the rms slope from finite
     differences inside the map (rank 0; NaN on the others, which skip the passes)."""
-    from mpi4py import MPI
-
     from ..physics.preparation import EDGE_MISMATCH_LIMIT, SLOPE_RANGE, edge_mismatch, rms_slope
 
-    if MPI.COMM_WORLD.rank != 0:  # only rank 0 speaks: the others skip the passes over the map
+    if world().rank != 0:  # only rank 0 speaks: the others skip the passes over the map
         return float("nan")
     slope = rms_slope(full, spacing)
     if slope > 0 and not SLOPE_RANGE[0] <= slope <= SLOPE_RANGE[1]:

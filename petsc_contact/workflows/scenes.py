@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from ..backend.stiffness import sweep_stiffness
-from ..conventions.grid import Grid, fundamental_wavevector
+from ..conventions.grid import Grid, fundamental_wavevector, self_comm
 from ..io.schema import write_attributes
 from ..io.store import atomic_h5, is_partial
 from ..numerics.fft import make_fft
@@ -38,9 +38,7 @@ def surface(
 
     Generated on one rank (``COMM_SELF``), so a figure script can run under any launcher.
     """
-    from mpi4py import MPI
-
-    grid = Grid(n, length, MPI.COMM_SELF)
+    grid = Grid(n, length, self_comm())
     fft = make_fft(grid)
     h = self_affine(
         grid,

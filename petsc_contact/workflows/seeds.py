@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from ..conventions.grid import world
 from ..conventions.units import pressure_value
 from ..io.schema import ENSEMBLE, annotate, ensemble_entry, write_attributes
 from ..io.store import atomic_h5
@@ -140,8 +141,6 @@ def run_ensemble(
 ) -> EnsembleResult:
     """Run ``base`` for every seed (each resumable; with ``base.resume`` the seeds whose files
     are complete are not run again), then the statistics, written to ``base.output`` if any."""
-    from mpi4py import MPI
-
     if base.output is None:
         raise ValueError("an ensemble keeps its seeds in files: give it an output")
     runs = seed_runs(base, seeds)
@@ -155,6 +154,6 @@ def run_ensemble(
         line = " ".join(["petsc-contact", "ensemble", *base.arguments()[1:]])
         record = ensemble_record(base, seeds, pressures, line)
         summary = summarise(seeds, files)
-        if MPI.COMM_WORLD.rank == 0:
+        if world().rank == 0:
             write_summary(base.output, summary, files, record)
     return EnsembleResult(summary, files)

@@ -10,6 +10,7 @@ from petsc_contact.backend import _petsc, coarse
 from petsc_contact.backend.coarse import DIAGONAL_INFLATION, CoarseSpace, TwoLevelOptions
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.geometries.periodic import PeriodicProblem
+from petsc_contact.numerics import aggregates
 from petsc_contact.numerics.fft import make_fft
 from petsc_contact.numerics.schur import _fold
 from petsc_contact.physics.surface import self_affine
@@ -111,8 +112,8 @@ def test_fft_pair_sums_are_the_pixel_pair_sums(shape, block, fraction):
     lookup = np.full((bx, by), -1, dtype=np.int64)
     lookup[block_rc[:, 0], block_rc[:, 1]] = np.arange(len(ids))
     rows, cols = rows[order].copy(), cols[order].copy()
-    pairs = coarse._near_pairs(block_rc, lookup, coarse.NEAR_REACH)
-    direct = coarse._pair_sums_direct(rows, cols, starts, pairs, quarter, nx, ny)
+    pairs = aggregates.near_pairs(block_rc, lookup, coarse.NEAR_REACH)
+    direct = aggregates.pair_sums_direct(rows, cols, starts, pairs, quarter, nx, ny)
     fft = coarse._pair_sums_fft(rows, cols, starts, block_rc * block, pairs, quarter, shape, block)
     assert np.abs(fft - direct).max() <= 1e-12 * np.abs(direct).max()
 

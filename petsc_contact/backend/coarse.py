@@ -37,10 +37,10 @@ from typing import Any
 
 import numpy as np
 import scipy.fft
-from numba import njit, prange
 from scipy.linalg import LinAlgError, cho_factor, cho_solve
 
 from ..conventions.grid import Grid
+from ..numerics.aggregates import grouped, monopoles, near_pairs, pair_sums_direct, spectral_dots
 from ..numerics.schur import allgather
 from . import _petsc
 from .operator import ShellInterface
@@ -93,163 +93,7 @@ class TwoLevelOptions:
         return self.enabled and bound_count <= self.max_fraction * size
 
 
-@njit(cache=True, nogil=True)
-def changed_count(before: np.ndarray, now: np.ndarray) -> int:
-    """How many entries of two boolean masks differ."""
-    count = 0
-    for i in range(before.size):
-        count += before[i] != now[i]
-    return count
-
-
-@njit(cache=True, nogil=True)
-def _grouped(labels: np.ndarray, starts: np.ndarray) -> np.ndarray:
-    """The indices of ``labels`` grouped by label, in order within each (a counting sort;
-    label ``I`` has the places ``starts[I]:starts[I+1]``)."""
-    order = np.empty(labels.size, dtype=np.int64)
-    place = starts[:-1].copy()
-    for i in range(labels.size):
-        order[place[labels[i]]] = i
-        place[labels[i]] += 1
-    return order
-
-
-@njit(cache=True, nogil=True)
-def _fold(d: int, n: int) -> int:
-    """The offset ``|d| < n`` of two pixels folded into the even kernel's quarter."""
-    d = abs(d)
-    return min(d, n - d)
-
-
-@njit(cache=True, nogil=True)
-def _interpolate(quarter: np.ndarray, dx: float, dy: float, nx: int, ny: int) -> float:
-    """``G`` at a real offset ``|dx| < nx``, ``|dy| < ny``, bilinear in the folded quarter."""
-    dx = abs(dx)
-    dy = abs(dy)
-    dx = min(dx, nx - dx)
-    dy = min(dy, ny - dy)
-    hx, hy = quarter.shape[0] - 1, quarter.shape[1] - 1
-    i, j = min(int(dx), hx), min(int(dy), hy)
-    i1, j1 = min(i + 1, hx), min(j + 1, hy)
-    fx, fy = dx - i, dy - j
-    if fx == 0.0 and fy == 0.0:  # a pixel offset (single-pixel aggregates)
-        return quarter[i, j]
-    return (1.0 - fx) * ((1.0 - fy) * quarter[i, j] + fy * quarter[i, j1]) + fx * (
-        (1.0 - fy) * quarter[i1, j] + fy * quarter[i1, j1]
-    )
-
-
-@njit(cache=True, nogil=True, parallel=True)
-def _monopoles(
-    rows: np.ndarray, cols: np.ndarray, starts: np.ndarray, quarter: np.ndarray, nx: int, ny: int
-) -> np.ndarray:
-    """``|A_I| |A_J| G(c_I - c_J)`` for aggregates ``I`` holding the pixels
-    ``starts[I]:starts[I+1]`` of ``(rows, cols)`` (``c`` their centroids), upper triangle
-    only (rows in parallel)."""
-    k = starts.size - 1
-    sizes = np.empty(k)
-    centre = np.empty((k, 2))
-    for a in range(k):
-        s, e = starts[a], starts[a + 1]
-        sizes[a] = e - s
-        # the centroid (an aggregate lies in one block, which does not wrap)
-        centre[a, 0] = rows[s:e].astype(np.float64).mean()
-        centre[a, 1] = cols[s:e].astype(np.float64).mean()
-    e_mat = np.zeros((k, k))
-    for a in prange(k):
-        ra, ca, sa = centre[a, 0], centre[a, 1], sizes[a]
-        for b in range(a, k):
-            e_mat[a, b] = (
-                sa * sizes[b] * _interpolate(quarter, ra - centre[b, 0], ca - centre[b, 1], nx, ny)
-            )
-    return e_mat
-
-
-@njit(cache=True, nogil=True)
-def _near_pairs(block_rc: np.ndarray, lookup: np.ndarray, reach: int) -> np.ndarray:
-    """The pairs ``(I, J)``, ``I <= J``, of aggregates whose blocks are at most ``reach``
-    blocks apart (``lookup[bi, bj]``: the aggregate of a block, ``-1`` for none), each once
-    (a small grid's blocks wrap onto the same neighbour)."""
-    k = block_rc.shape[0]
-    bx, by = lookup.shape
-    width = (2 * reach + 1) ** 2
-    found = np.full((k, width), -1, dtype=np.int64)
-    for a in range(k):
-        count = 0
-        for di in range(-reach, reach + 1):
-            for dj in range(-reach, reach + 1):
-                b = lookup[(block_rc[a, 0] + di) % bx, (block_rc[a, 1] + dj) % by]
-                if b < a:  # none, or found from b's side
-                    continue
-                known = False
-                for t in range(count):
-                    known = known or found[a, t] == b
-                if not known:
-                    found[a, count] = b
-                    count += 1
-    total = 0
-    for a in range(k):
-        for t in range(width):
-            total += found[a, t] >= 0
-    pairs = np.empty((total, 2), dtype=np.int64)
-    i = 0
-    for a in range(k):
-        for t in range(width):
-            if found[a, t] >= 0:
-                pairs[i, 0] = a
-                pairs[i, 1] = found[a, t]
-                i += 1
-    return pairs
-
-
-@njit(cache=True, nogil=True, parallel=True)
-def _pair_sums_direct(
-    rows: np.ndarray,
-    cols: np.ndarray,
-    starts: np.ndarray,
-    pairs: np.ndarray,
-    near: np.ndarray,
-    nx: int,
-    ny: int,
-) -> np.ndarray:
-    """``sum G(p - q)`` over the pixels ``p`` of ``I`` and ``q`` of ``J`` for each pair, pixel
-    pair by pixel pair; ``near`` is the corner of ``G``'s quarter the offsets reach."""
-    out = np.empty(pairs.shape[0])
-    for t in prange(pairs.shape[0]):
-        a, b = pairs[t, 0], pairs[t, 1]
-        total = 0.0
-        for p in range(starts[a], starts[a + 1]):
-            rp, cp = rows[p], cols[p]
-            for q in range(starts[b], starts[b + 1]):
-                total += near[_fold(rp - rows[q], nx), _fold(cp - cols[q], ny)]
-        out[t] = total
-    return out
-
-
 AGGREGATES_PER_BATCH = 128  # the FFT pair sums transform this many aggregates at a time
-
-
-@njit(cache=True, nogil=True, parallel=True)
-def _spectral_dots(
-    spectra: np.ndarray,
-    kernels: np.ndarray,
-    pairs: np.ndarray,
-    kind: np.ndarray,
-    weight: np.ndarray,
-    out: np.ndarray,
-    where: np.ndarray,
-) -> None:
-    """``out[where[t]] = sum_k weight Re(conj(A^) T^ B^)`` for the ``t``-th pair of rows
-    ``(A, B)`` of ``spectra`` and its kernel ``kernels[kind[t]]`` (half spectra)."""
-    rows, cols = spectra.shape[1], spectra.shape[2]
-    for t in prange(pairs.shape[0]):
-        a, b, c = pairs[t, 0], pairs[t, 1], kind[t]
-        total = 0.0
-        for i in range(rows):
-            for j in range(cols):
-                z = np.conj(spectra[a, i, j]) * kernels[c, i, j] * spectra[b, i, j]
-                total += weight[j] * z.real
-        out[where[t]] = total
 
 
 def _pair_sums_fft(
@@ -262,7 +106,8 @@ def _pair_sums_fft(
     shape: tuple[int, int],
     block: int,
 ) -> np.ndarray:
-    """The sums of :func:`_pair_sums_direct` by FFTs on ``2b x 2b`` cells.
+    """The sums of :func:`~petsc_contact.numerics.aggregates.pair_sums_direct` by FFTs on
+    ``2b x 2b`` cells.
 
     With ``u``, ``v`` the pixels' positions in their blocks (``origin``: each aggregate's
     block corner), a pair's sum is ``sum_{u,v} A(u) B(v) T(u - v)``, ``T(w) = G(o_I - o_J + w)``
@@ -304,7 +149,7 @@ def _pair_sums_fft(
             s, e = starts[a], starts[a + 1]
             cells[i, rows[s:e] - origin[a, 0], cols[s:e] - origin[a, 1]] = 1.0
         spectra = scipy.fft.rfft2(cells)
-        _spectral_dots(spectra, kernels, index.reshape(-1, 2), kind[chosen], weight, out, chosen)
+        spectral_dots(spectra, kernels, index.reshape(-1, 2), kind[chosen], weight, out, chosen)
     return out
 
 
@@ -328,8 +173,8 @@ def coarse_matrix(
     costs fewer products (``|A_I| |A_J|`` against :data:`FFT_PRODUCTS` ``b^2`` per pair).
     """
     nx, ny = shape
-    e_mat = _monopoles(rows, cols, starts, quarter, nx, ny)
-    pairs = _near_pairs(block_rc, lookup, NEAR_REACH)
+    e_mat = monopoles(rows, cols, starts, quarter, nx, ny)
+    pairs = near_pairs(block_rc, lookup, NEAR_REACH)
     sizes = np.diff(starts).astype(float)
     direct = float(np.dot(sizes[pairs[:, 0]], sizes[pairs[:, 1]]))
     if direct > FFT_PRODUCTS * block**2 * len(pairs):
@@ -337,7 +182,7 @@ def coarse_matrix(
     else:
         reach = (NEAR_REACH + 1) * block  # the largest folded offset of a near pair, plus one
         near = np.ascontiguousarray(quarter[:reach, :reach])
-        sums = _pair_sums_direct(rows, cols, starts, pairs, near, nx, ny)
+        sums = pair_sums_direct(rows, cols, starts, pairs, near, nx, ny)
     e_mat[pairs[:, 0], pairs[:, 1]] = sums
     return e_mat
 
@@ -393,7 +238,7 @@ class CoarseSpace:
         self.size = k = len(ids)
         self.sizes = counts[ids].astype(float)
         starts = np.concatenate([[0], np.cumsum(counts[ids])]).astype(np.int64)
-        order = _grouped(labels, starts)
+        order = grouped(labels, starts)
         lookup = np.full((bx, by), -1, dtype=np.int64)
         block_rc = np.stack(np.divmod(ids, by), axis=1)
         lookup[block_rc[:, 0], block_rc[:, 1]] = np.arange(k)

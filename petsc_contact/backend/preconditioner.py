@@ -8,8 +8,9 @@ import numpy as np
 
 from ..conventions.grid import Grid
 from ..numerics.fft import FFT
+from ..numerics.kernels import changed_count
 from ..numerics.schur import ContactSchur, response_quarter
-from .coarse import CoarseSpace, TwoLevelOptions, add_correction, changed_count
+from .coarse import CoarseSpace, TwoLevelOptions, add_correction
 from .operator import FourierOperator
 
 SCHUR_MAX = 4096  # the most bound variables for the Schur form (dense matrix: 134 MB)

@@ -39,6 +39,7 @@ from ..conventions.grid import Grid
 from ..conventions.validation import non_negative, positive
 from ..numerics import kernels
 from ..numerics.fft import FFT, wavevector_magnitude
+from ..numerics.kernels import compile_kernels
 from ..numerics.schur import response_quarter
 from ..physics.greens import mean_mode_compliance, periodic_stiffness
 from ..physics.observables import step_observables
@@ -76,6 +77,7 @@ class PeriodicProblem:
 
     def __init__(self, grid: Grid, fft: FFT, heights: np.ndarray, modulus: float) -> None:
         positive("modulus", modulus)
+        compile_kernels(announce=grid.comm.rank == 0)  # before any step's timer
         self.grid = grid
         self.modulus = float(modulus)
         self.filled: np.ndarray | None = None  # this rank's filled pixels (a measured map)

@@ -37,6 +37,7 @@ from ..backend.solve import SolveInfo
 from ..backend.stiffness import punch_stiffness_exact
 from ..conventions.grid import Grid
 from ..conventions.validation import non_negative, positive
+from ..numerics.kernels import compile_kernels
 from ..physics.greens import hockney_kernel
 from ..physics.observables import distributions, patch_sizes
 from ..reference import flat_punch
@@ -91,6 +92,7 @@ class PunchProblem:
         beta: float = PHARR_BETA,
     ) -> None:
         positive("modulus", modulus)
+        compile_kernels(announce=grid.comm.rank == 0)  # before any step's timer
         if flat not in ("grid", "analytic"):
             raise ValueError(f"flat-punch stiffness must be 'grid' or 'analytic', got {flat}")
         self.flat = flat

@@ -5,14 +5,25 @@ vector work is memory-bound, so the number of passes is its cost (docs/solvers.m
 Bounds are given as a float (the same everywhere) or an array of the vector's length.
 Sums are reassociated (``fastmath`` reassociation and contraction only: infinite bounds and
 NaNs keep their IEEE meaning), so they differ from numpy's in rounding only.
-Compiled on first use and cached next to the package (``__pycache__``).
+
+The kernels are compiled once into numba's cache (beside the package in ``__pycache__``, or
+in ``NUMBA_CACHE_DIR``): by the set-up, ``python -m petsc_contact.numerics.kernels``, or else
+when a problem is set up (:func:`compile_kernels`, which says so in one line while it
+compiles), never inside a step's timer.
 """
 
 from __future__ import annotations
 
+import sys
+import time
+from typing import Any
+
 import numpy as np
 from numba import njit, types
+from numba.core import event
 from numba.extending import overload
+
+from . import aggregates
 
 FAST = {"reassoc", "contract"}
 Bound = float | np.ndarray  # a bound the same everywhere, or one per entry
@@ -116,6 +127,15 @@ def advance(
     return below, above
 
 
+@njit(cache=True, nogil=True)
+def changed_count(before: np.ndarray, now: np.ndarray) -> int:
+    """How many entries of two boolean masks differ."""
+    count = 0
+    for i in range(before.size):
+        count += before[i] != now[i]
+    return count
+
+
 @njit(cache=True, fastmath=FAST, nogil=True)
 def clip(x: np.ndarray, lower: Bound, upper: Bound) -> None:
     """``x <- min(max(x, lower), upper)``."""
@@ -159,3 +179,101 @@ def add_dot(y: np.ndarray, base: np.ndarray, d: np.ndarray) -> float:
         y[i] += b
         total += d[i] * b
     return total
+
+
+COMPILE_SECONDS = 5  # about how long compiling every kernel takes (4.7 s on 2 shared cores)
+COLD_CACHE = f"compiling the numba kernels once (about {COMPILE_SECONDS} s)..."
+
+
+def specimen_calls() -> list[tuple[Any, tuple[Any, ...]]]:
+    """Each kernel of this module with tiny arguments of every type the package passes it, so
+    that compiling these compiles what any run calls (:func:`compile_kernels`).
+
+    Vectors are float64, writable or read-only (a PETSc ``Vec.array_r``: the input of the
+    held-set stiffness solve and of
+    :class:`~petsc_contact.backend.solve.FreeSetPreconditioner`); a lower bound is a float
+    (``0``), an upper one a float (``inf``) or a read-only array (the punch's disk
+    footprint); masks are bool arrays.
+    """
+
+    def vector() -> np.ndarray:
+        return np.zeros(2)
+
+    read_only, mask = np.zeros(2), np.zeros(2, dtype=bool)
+    read_only.setflags(write=False)
+    calls: list[tuple[Any, tuple[Any, ...]]] = []
+    for upper in (np.inf, read_only):
+        calls += [(advance, (vector(), vector(), 1.0, 0.0, upper)), (clip, (vector(), 0.0, upper))]
+        for x in (vector(), read_only):  # the CG's own vectors; TAO's, in a preconditioner
+            calls.append((free_set, (x, x, 0.0, upper, mask, vector())))
+    return calls + [
+        (restrict_dot, (vector(), mask, vector())),
+        (restrict, (vector(), vector(), mask)),
+        (restrict, (vector(), read_only, mask)),
+        (fill_outside, (vector(), read_only, mask)),
+        (extend_direction, (vector(), vector(), mask, 1.0, vector())),
+        (changed_count, (mask, mask)),
+        (scale_spectrum, (vector(), vector(), np.zeros(1, dtype=np.int64))),
+        (add_dot, (vector(), vector(), vector())),
+    ]
+
+
+class _ColdCache(event.Listener):
+    """Says :data:`COLD_CACHE` on stderr once, when numba starts compiling a kernel (one
+    loaded from the cache is not compiled, and says nothing)."""
+
+    def __init__(self, announce: bool) -> None:
+        self.announce = announce
+        self.compiled = False
+
+    def on_start(self, ev: Any) -> None:
+        if self.announce and not self.compiled:
+            print(COLD_CACHE, file=sys.stderr, flush=True)
+        self.compiled = True
+
+    def on_end(self, ev: Any) -> None:
+        """Nothing to do: the line is said when compiling starts."""
+
+
+_done = False  # whether compile_kernels has run in this process
+
+
+def compile_kernels(announce: bool = True) -> bool:
+    """Compile every numba kernel of the package (or load it from numba's cache) for every
+    type the package passes it, once per process: before a step, so that no step's
+    ``solve_time`` holds a compilation.
+
+    Parameters
+    ----------
+    announce
+        Say :data:`COLD_CACHE` on stderr when something is compiled (a cold cache); ``False``
+        on all MPI ranks but the first.
+
+    Returns
+    -------
+    bool
+        Whether anything was compiled (``False`` on a warm cache, and once done).
+    """
+    global _done
+    if _done:
+        return False
+    watch = _ColdCache(announce)
+    with event.install_listener("numba:compile", watch):
+        for kernel, args in specimen_calls() + aggregates.specimen_calls():
+            kernel(*args)
+    _done = True
+    return watch.compiled
+
+
+def main() -> None:
+    """``python -m petsc_contact.numerics.kernels`` (run by the set-up): compile every kernel
+    into numba's cache and say so in one line."""
+    start = time.perf_counter()
+    compiled = compile_kernels(announce=False)
+    count = len({kernel for kernel, _ in specimen_calls() + aggregates.specimen_calls()})
+    done = "compiled" if compiled else "loaded from the cache"
+    print(f"numba kernels {done} ({count} kernels, {time.perf_counter() - start:.1f} s)")
+
+
+if __name__ == "__main__":
+    main()

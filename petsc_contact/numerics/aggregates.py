@@ -1,0 +1,180 @@
+"""Sums of the compliance over aggregates of contact pixels (numba): the loops of the coarse
+matrix of the two-level preconditioner (:mod:`petsc_contact.backend.coarse`), without PETSc.
+
+An aggregate ``I`` holds the pixels ``starts[I]:starts[I+1]`` of ``(rows, cols)`` (global
+pixel indices, grouped by :func:`grouped`); ``quarter`` is the compliance ``G`` at the offsets
+``0 .. nx/2`` and ``0 .. ny/2`` (the kernel is periodic and even,
+:func:`~petsc_contact.numerics.schur.quarter`).  Compiled once, with the passes of
+:mod:`~petsc_contact.numerics.kernels` (:func:`~petsc_contact.numerics.kernels.compile_kernels`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numba import njit, prange
+
+
+@njit(cache=True, nogil=True)
+def grouped(labels: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """The indices of ``labels`` grouped by label, in order within each (a counting sort;
+    label ``I`` has the places ``starts[I]:starts[I+1]``)."""
+    order = np.empty(labels.size, dtype=np.int64)
+    place = starts[:-1].copy()
+    for i in range(labels.size):
+        order[place[labels[i]]] = i
+        place[labels[i]] += 1
+    return order
+
+
+@njit(cache=True, nogil=True)
+def _fold(d: int, n: int) -> int:
+    """The offset ``|d| < n`` of two pixels folded into the even kernel's quarter."""
+    d = abs(d)
+    return min(d, n - d)
+
+
+@njit(cache=True, nogil=True)
+def _interpolate(quarter: np.ndarray, dx: float, dy: float, nx: int, ny: int) -> float:
+    """``G`` at a real offset ``|dx| < nx``, ``|dy| < ny``, bilinear in the folded quarter."""
+    dx = abs(dx)
+    dy = abs(dy)
+    dx = min(dx, nx - dx)
+    dy = min(dy, ny - dy)
+    hx, hy = quarter.shape[0] - 1, quarter.shape[1] - 1
+    i, j = min(int(dx), hx), min(int(dy), hy)
+    i1, j1 = min(i + 1, hx), min(j + 1, hy)
+    fx, fy = dx - i, dy - j
+    if fx == 0.0 and fy == 0.0:  # a pixel offset (single-pixel aggregates)
+        return quarter[i, j]
+    return (1.0 - fx) * ((1.0 - fy) * quarter[i, j] + fy * quarter[i, j1]) + fx * (
+        (1.0 - fy) * quarter[i1, j] + fy * quarter[i1, j1]
+    )
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def monopoles(
+    rows: np.ndarray, cols: np.ndarray, starts: np.ndarray, quarter: np.ndarray, nx: int, ny: int
+) -> np.ndarray:
+    """``|A_I| |A_J| G(c_I - c_J)`` for aggregates ``I`` holding the pixels
+    ``starts[I]:starts[I+1]`` of ``(rows, cols)`` (``c`` their centroids), upper triangle
+    only (rows in parallel)."""
+    k = starts.size - 1
+    sizes = np.empty(k)
+    centre = np.empty((k, 2))
+    for a in range(k):
+        s, e = starts[a], starts[a + 1]
+        sizes[a] = e - s
+        # the centroid (an aggregate lies in one block, which does not wrap)
+        centre[a, 0] = rows[s:e].astype(np.float64).mean()
+        centre[a, 1] = cols[s:e].astype(np.float64).mean()
+    e_mat = np.zeros((k, k))
+    for a in prange(k):
+        ra, ca, sa = centre[a, 0], centre[a, 1], sizes[a]
+        for b in range(a, k):
+            e_mat[a, b] = (
+                sa * sizes[b] * _interpolate(quarter, ra - centre[b, 0], ca - centre[b, 1], nx, ny)
+            )
+    return e_mat
+
+
+@njit(cache=True, nogil=True)
+def near_pairs(block_rc: np.ndarray, lookup: np.ndarray, reach: int) -> np.ndarray:
+    """The pairs ``(I, J)``, ``I <= J``, of aggregates whose blocks are at most ``reach``
+    blocks apart (``lookup[bi, bj]``: the aggregate of a block, ``-1`` for none), each once
+    (a small grid's blocks wrap onto the same neighbour)."""
+    k = block_rc.shape[0]
+    bx, by = lookup.shape
+    width = (2 * reach + 1) ** 2
+    found = np.full((k, width), -1, dtype=np.int64)
+    for a in range(k):
+        count = 0
+        for di in range(-reach, reach + 1):
+            for dj in range(-reach, reach + 1):
+                b = lookup[(block_rc[a, 0] + di) % bx, (block_rc[a, 1] + dj) % by]
+                if b < a:  # none, or found from b's side
+                    continue
+                known = False
+                for t in range(count):
+                    known = known or found[a, t] == b
+                if not known:
+                    found[a, count] = b
+                    count += 1
+    total = 0
+    for a in range(k):
+        for t in range(width):
+            total += found[a, t] >= 0
+    pairs = np.empty((total, 2), dtype=np.int64)
+    i = 0
+    for a in range(k):
+        for t in range(width):
+            if found[a, t] >= 0:
+                pairs[i, 0] = a
+                pairs[i, 1] = found[a, t]
+                i += 1
+    return pairs
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def pair_sums_direct(
+    rows: np.ndarray,
+    cols: np.ndarray,
+    starts: np.ndarray,
+    pairs: np.ndarray,
+    near: np.ndarray,
+    nx: int,
+    ny: int,
+) -> np.ndarray:
+    """``sum G(p - q)`` over the pixels ``p`` of ``I`` and ``q`` of ``J`` for each pair, pixel
+    pair by pixel pair; ``near`` is the corner of ``G``'s quarter the offsets reach."""
+    out = np.empty(pairs.shape[0])
+    for t in prange(pairs.shape[0]):
+        a, b = pairs[t, 0], pairs[t, 1]
+        total = 0.0
+        for p in range(starts[a], starts[a + 1]):
+            rp, cp = rows[p], cols[p]
+            for q in range(starts[b], starts[b + 1]):
+                total += near[_fold(rp - rows[q], nx), _fold(cp - cols[q], ny)]
+        out[t] = total
+    return out
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def spectral_dots(
+    spectra: np.ndarray,
+    kernels: np.ndarray,
+    pairs: np.ndarray,
+    kind: np.ndarray,
+    weight: np.ndarray,
+    out: np.ndarray,
+    where: np.ndarray,
+) -> None:
+    """``out[where[t]] = sum_k weight Re(conj(A^) T^ B^)`` for the ``t``-th pair of rows
+    ``(A, B)`` of ``spectra`` and its kernel ``kernels[kind[t]]`` (half spectra)."""
+    rows, cols = spectra.shape[1], spectra.shape[2]
+    for t in prange(pairs.shape[0]):
+        a, b, c = pairs[t, 0], pairs[t, 1], kind[t]
+        total = 0.0
+        for i in range(rows):
+            for j in range(cols):
+                z = np.conj(spectra[a, i, j]) * kernels[c, i, j] * spectra[b, i, j]
+                total += weight[j] * z.real
+        out[where[t]] = total
+
+
+def specimen_calls() -> list[tuple[Any, tuple[Any, ...]]]:
+    """Each kernel with tiny arguments of the types :mod:`petsc_contact.backend.coarse` passes
+    it (int64 pixel indices, float64 compliances, complex128 spectra, Python ints), for
+    :func:`~petsc_contact.numerics.kernels.compile_kernels`: one aggregate of two pixels."""
+    rows, cols, starts = np.array([0, 1]), np.array([0, 0]), np.array([0, 2])
+    pair, quarter = np.zeros((1, 2), dtype=np.int64), np.ones((2, 2))
+    spectra = np.zeros((1, 2, 2), dtype=complex)
+    index, weight = np.zeros(1, dtype=np.int64), np.ones(2)
+    return [
+        (grouped, (np.zeros(2, dtype=np.int64), starts)),
+        (monopoles, (rows, cols, starts, quarter, 2, 2)),
+        (near_pairs, (pair, np.zeros((1, 1), dtype=np.int64), 1)),
+        (pair_sums_direct, (rows, cols, starts, pair, quarter, 2, 2)),
+        (spectral_dots, (spectra, spectra, pair, index, weight, np.zeros(1), index)),
+    ]

@@ -1,13 +1,14 @@
 """petsc-contact: non-adhesive contact of rough elastic solids with PETSc/TAO.
 
 The folders are the layers, and imports run from the later to the earlier ones
-(docs/architecture.md): ``conventions`` (grid, FFTs, units, input checks), ``reference``
+(docs/architecture.md): ``conventions`` (grid, units, input checks, memory estimates),
+``numerics`` (FFT backends, numba kernels, Schur algebra; no PETSc), ``reference``
 (analytic solutions), ``physics`` (pure numpy), ``io`` (HDF5, height maps, plots),
-``backend`` (PETSc: operators, TAO driver, the package's TAO types, stiffness solves),
-``geometries`` (the contact core: periodic and punch), ``workflows`` (runs, sweeps, compare,
-ensembles, figures, the paper's study) and ``cli``.  The names below are loaded when first
-used, so that importing the package is quick; PETSc is initialised by the backend
-(:func:`petsc_contact.backend._petsc.init`) when a run needs it.
+``backend`` (PETSc: operators, TAO driver, the package's TAO types, preconditioners,
+stiffness solves), ``geometries`` (the contact core: periodic and punch), ``workflows``
+(runs, sweeps, compare, ensembles, figures, the paper's study) and ``cli``.  The names below
+are loaded when first used, so that importing the package is quick; PETSc is initialised by
+the backend (:func:`petsc_contact.backend._petsc.init`) when a run needs it.
 """
 
 import os

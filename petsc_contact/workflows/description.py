@@ -1,10 +1,10 @@
 """A run, described: the scene, its loads, the solver's options and what to keep.
 
 :class:`Run` is what ``petsc-contact periodic`` and ``punch`` take on the command line, as one
-typed value; :func:`~petsc_contact.workflows.runner.run` runs it, resume and pause included,
-and the ensemble and the paper's study are lists of runs.  Its field names are the command
-line's options (``rms_slope`` is ``--rms-slope``), so a file's ``parameters`` record is the
-description, and :meth:`Run.arguments` gives the command line back.
+typed value; :func:`~petsc_contact.workflows.runner.run_contact` runs it, resume and pause
+included, and the ensemble and the paper's study are lists of runs.  Its field names are the
+command line's options (``rms_slope`` is ``--rms-slope``), so a file's ``parameters`` record
+is the description, and :meth:`Run.arguments` gives the command line back.
 
 A surface is generated (``grid``, ``hurst`` and ``rms_slope`` or ``rms_height``: paper Eq. 5)
 or given as ``heights``: a file of any supported format, a 2-D array, or a SurfaceTopography

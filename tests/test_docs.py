@@ -1,0 +1,101 @@
+"""The README and docs/cli.md describe the package as it is: its folders and modules, and every
+option each command's ``--help`` shows."""
+
+from __future__ import annotations
+
+import argparse
+import re
+
+from conftest import ROOT
+
+import petsc_contact
+from petsc_contact.cli.arguments import build_parser
+
+PACKAGE = ROOT / "petsc_contact"
+UNLISTED = {"__init__", "__main__"}  # modules of a folder the layout need not name
+
+
+def _layout() -> tuple[dict[str, str], list[str]]:
+    """The README's layout block: each package folder's description (continuation lines joined)
+    and the top-level paths it names."""
+    readme = (ROOT / "README.md").read_text()
+    section = readme.split("\n## Layout\n", 1)[1].split("\n## ", 1)[0]
+    block = re.search(r"```\n(.*?)```", section, flags=re.S)
+    assert block, "the layout section holds a code block"
+    folders: dict[str, str] = {}
+    top: list[str] = []
+    current = None
+    for line in block.group(1).splitlines():
+        name, _, text = line.strip().partition(" ")
+        if not line.startswith(" "):  # a top-level path
+            top.append(name)
+            current = None
+        elif not line.startswith("   "):  # "  folder/   description": a package folder
+            current = name.rstrip("/")
+            folders[current] = text.strip()
+        else:  # the description of the folder above goes on
+            assert current is not None, f"a continuation line under no folder: {line!r}"
+            folders[current] += " " + line.strip()
+    return folders, top
+
+
+def _modules_named(description: str) -> list[str]:
+    """``prose: module (what it holds), module, more prose: module, ...``: the modules a
+    folder's description names (the first word of each comma-separated item, with
+    parentheses and the prose before a colon left out)."""
+    while re.search(r"\([^()]*\)", description):
+        description = re.sub(r"\s*\([^()]*\)", "", description)
+    items = [item.rsplit(":", 1)[-1] for item in description.split(",")]
+    return [item.split()[0] for item in items if item.strip()]
+
+
+def test_the_readme_layout_lists_every_folder_and_module():
+    """Every folder of the package is in the README's layout, every module named there is in
+    its folder, and every module of a folder is named (``__init__`` and ``__main__`` aside)."""
+    folders, top = _layout()
+    assert top[0] == "petsc_contact/"
+    for path in top[1:]:
+        assert (ROOT / path).is_dir(), f"the layout names {path}, which is not a folder"
+    real = sorted(p.parent.name for p in PACKAGE.glob("*/__init__.py"))
+    assert sorted(folders) == real, "the layout's folders are the package's"
+    for folder, description in folders.items():
+        named = _modules_named(description)
+        present = {p.stem for p in (PACKAGE / folder).glob("*.py")} - UNLISTED
+        missing = [m for m in named if m not in present]
+        assert not missing, f"{folder}/ has no module {missing} (named in the README layout)"
+        unnamed = sorted(present - set(named))
+        assert not unnamed, f"{folder}/ {unnamed} are not named in the README layout"
+        assert len(named) == len(set(named)), f"{folder}/ names a module twice"
+
+
+def test_the_package_docstring_names_every_folder():
+    """The package's docstring names each folder (its layers) in ``double backquotes``."""
+    doc = petsc_contact.__doc__ or ""
+    for init in PACKAGE.glob("*/__init__.py"):
+        assert f"``{init.parent.name}``" in doc, init.parent.name
+
+
+def _commands() -> dict[str, argparse.ArgumentParser]:
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return dict(sub.choices)
+
+
+def test_cli_docs_list_every_option_of_every_command():
+    """Every long option any command's ``--help`` shows is in docs/cli.md.  The page is
+    organised by groups of options shared by several commands (surface, run, plot,
+    compare), so an option counts wherever the page names it, as a whole word
+    (``--sweep`` is not found in ``--sweep-x``)."""
+    doc = (ROOT / "docs" / "cli.md").read_text()
+    commands = _commands()
+    assert len(commands) >= 10  # the parser's commands were found
+    missing = {}
+    for name, parser in commands.items():
+        options = {s for a in parser._actions for s in a.option_strings if s.startswith("--")}
+        absent = [
+            o for o in sorted(options) if not re.search(rf"(?<![\w-]){re.escape(o)}(?![\w-])", doc)
+        ]
+        if absent:
+            missing[name] = absent
+        assert re.search(rf"^petsc-contact {name}\b", doc, flags=re.M), f"no usage of {name}"
+    assert not missing, f"options not in docs/cli.md: {missing}"

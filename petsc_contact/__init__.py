@@ -2,8 +2,9 @@
 
 The folders are the layers, and imports run from the later to the earlier ones
 (docs/architecture.md): ``conventions`` (grid, units, input checks, memory estimates),
-``numerics`` (FFT backends, numba kernels, Schur algebra; no PETSc), ``reference``
-(analytic solutions), ``physics`` (pure numpy), ``io`` (HDF5, height maps, plots),
+``numerics`` (FFT backends, numba kernels, Schur algebra, devices; no PETSc), ``reference``
+(analytic solutions), ``physics`` (pure numpy), ``solver`` (the package's own solver on
+arrays of any device), ``io`` (HDF5, height maps, plots),
 ``backend`` (PETSc: operators, TAO driver, the package's TAO types, preconditioners,
 stiffness solves), ``geometries`` (the contact core: periodic and punch), ``workflows``
 (runs, sweeps, compare, ensembles, figures, the paper's study) and ``cli``.  The names below

@@ -449,6 +449,7 @@ def test_modules_import_only_from_layers_above():
         "numerics",
         "reference",
         "physics",
+        "solver",
         "io",
         "backend",
         "geometries",

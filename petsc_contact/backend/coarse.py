@@ -41,6 +41,7 @@ from scipy.linalg import LinAlgError, cho_factor, cho_solve
 
 from ..conventions.grid import Grid
 from ..numerics.aggregates import grouped, monopoles, near_pairs, pair_sums_direct, spectral_dots
+from ..numerics.device import CPU, Device
 from ..numerics.schur import allgather
 from . import _petsc
 from .operator import ShellInterface
@@ -202,6 +203,9 @@ class CoarseSpace:
         The aggregates' smallest block side ``b`` in pixels.
     max_size
         The most aggregates: ``b`` grows until there are at most this many.
+    device
+        Where the fields it corrects live: built on the host, applied on the device (the
+        factor's triangular solves too, :meth:`~petsc_contact.numerics.device.Device.cho_solve`).
 
     Attributes
     ----------
@@ -216,14 +220,22 @@ class CoarseSpace:
     """
 
     def __init__(
-        self, grid: Grid, quarter: np.ndarray, bound: np.ndarray, block: int, max_size: int
+        self,
+        grid: Grid,
+        quarter: np.ndarray,
+        bound: np.ndarray,
+        block: int,
+        max_size: int,
+        device: Device = CPU,
     ) -> None:
         self.grid = grid
-        self.local = np.flatnonzero(bound)
+        self.device = device
+        local = np.flatnonzero(bound)
+        self.local = device.asarray(local)
         nx, ny = grid.shape
-        rows, cols = np.divmod(self.local, ny)
+        rows, cols = np.divmod(local, ny)
         both = allgather(np.stack([rows + grid.rows.start, cols], axis=1), grid.comm)
-        offset = 0 if grid.comm.size == 1 else int(grid.comm.exscan(len(self.local)) or 0)
+        offset = 0 if grid.comm.size == 1 else int(grid.comm.exscan(len(local)) or 0)
         while True:
             bx, by = -(-nx // block), -(-ny // block)
             block_id = (both[:, 0] // block) * by + both[:, 1] // block
@@ -234,7 +246,7 @@ class CoarseSpace:
             block = max(block + 1, int(np.ceil(block * np.sqrt(len(ids) / max_size))))
         labels = (np.cumsum(counts > 0) - 1)[block_id]
         self.block = block
-        self.labels = labels[offset : offset + len(self.local)]
+        self.labels = device.asarray(labels[offset : offset + len(local)])
         self.size = k = len(ids)
         self.sizes = counts[ids].astype(float)
         starts = np.concatenate([[0], np.cumsum(counts[ids])]).astype(np.int64)
@@ -260,16 +272,20 @@ class CoarseSpace:
             self.factorised = False
             return
         self.factorised = True
-        self._e_w = cho_solve(self._factor, self.sizes, check_finite=False)  # E^-1 W^T 1
-        self._w_e_w = float(self.sizes @ self._e_w)
+        e_w = cho_solve(self._factor, self.sizes, check_finite=False)  # E^-1 W^T 1
+        self._w_e_w = float(self.sizes @ e_w)
+        self._e_w, self._device_sizes = device.asarray(e_w), device.asarray(self.sizes)
+        if not device.on_host:  # the factor's solves run where the fields are
+            self._factor = (device.asarray(self._factor[0]), self._factor[1])
 
-    def solve(self, g_r: np.ndarray, r_sum: float) -> tuple[np.ndarray, float]:
+    def solve(self, g_r: Any, r_sum: float) -> tuple[Any, float]:
         """``(W a on this rank's bound pixels, c)`` for ``G r`` (local slab) and ``sum(r)``."""
-        f = np.bincount(self.labels, weights=-g_r.reshape(-1)[self.local], minlength=self.size)
+        xp = self.device.xp
+        f = xp.bincount(self.labels, weights=-g_r.reshape(-1)[self.local], minlength=self.size)
         if self.grid.comm.size > 1:
             f = self.grid.comm.allreduce(f)
-        y = cho_solve(self._factor, f, check_finite=False)
-        c = (float(self.sizes @ y) + r_sum) / self._w_e_w
+        y = self.device.cho_solve(self._factor, f)
+        c = (float(self._device_sizes @ y) + r_sum) / self._w_e_w
         a = y - c * self._e_w
         return a[self.labels], c
 

@@ -16,7 +16,6 @@ from typing import Any
 import numpy as np
 
 from ..conventions.grid import Grid, block_rows
-from ..numerics import kernels
 from ..numerics.fft import FFT, half_spectrum_weights, make_fft, single_entries
 from . import _petsc
 
@@ -90,9 +89,9 @@ class SpectralOperator(ShellInterface):
     def transform(self, x: np.ndarray) -> float:
         """:meth:`begin_mult` without counting an application (for objective evaluations)."""
         self._forward(x)
-        values = self.fft.spectrum.view(np.float64)
-        values.shape = (-1,)  # in place, never a copy: raises if the spectrum were strided
-        return kernels.scale_spectrum(values, self.multiplier.reshape(-1), self._single)
+        values = self.fft.spectrum.view(np.float64).reshape(-1)  # a view: spectra are dense
+        passes = self.fft.device.passes
+        return float(passes.scale_spectrum(values, self.multiplier.reshape(-1), self._single))
 
     def end_mult(self, out: np.ndarray) -> np.ndarray:
         """``out <- A x`` for the ``x`` of the last :meth:`begin_mult`."""
@@ -120,7 +119,7 @@ class SpectralOperator(ShellInterface):
         """The multiplier summed over the full spectrum of ``grid`` (the FFT's grid), all ranks:
         the operator's diagonal entry."""
         w = half_spectrum_weights(grid, self.fft)
-        return float(grid.sum((w * self.spectrum).sum())[0])
+        return float(grid.sum((w * self.fft.device.to_host(self.spectrum)).sum())[0])
 
     def _forward(self, x: np.ndarray) -> None:
         raise NotImplementedError
@@ -144,8 +143,8 @@ class FourierOperator(SpectralOperator):
         self.grid = grid
         self.fft = fft
         self.transform_size = grid.size
-        self.multiplier = twice(self.normalised(kernel))
-        self._single = single_entries(grid, fft)
+        self.multiplier = fft.device.asarray(twice(self.normalised(kernel)))
+        self._single = fft.device.asarray(single_entries(grid, fft))
         self.applications = 0
 
     def scaled(self, factor: float) -> FourierOperator:

@@ -8,7 +8,6 @@ import numpy as np
 
 from ..conventions.grid import Grid
 from ..numerics.fft import FFT
-from ..numerics.kernels import changed_count
 from ..numerics.schur import ContactSchur, response_quarter
 from .coarse import CoarseSpace, TwoLevelOptions, add_correction
 from .operator import FourierOperator
@@ -58,6 +57,9 @@ class MeanModePreconditioner(FourierOperator):
         self._hessian = hessian
         self.schur_max = schur_max  # the Schur form's largest bound set
         self.options = TwoLevelOptions()
+        self.device = fft.device
+        # the two-level options of the array path; None: PETSc's options database at invert
+        self.given_options: TwoLevelOptions | None = None
         self.hessian_diagonal = 1.0
         self.base_mean_mode = self.mean_mode = 0.0
         self.expected_bound_count = 0  # contact pixels Persson's theory expects at this load
@@ -92,8 +94,9 @@ class MeanModePreconditioner(FourierOperator):
         is ``hessian_diagonal``), with ``mean_mode`` as its ``q = 0`` entry; ``support >= 0``
         is the interfacial stiffness in the Hessian's normalised units, and
         ``expected_bound_count`` the contact the load is expected to bring (a scale for the
-        CG's growth limit).  The two-level form's options are read from the PETSc options
-        database (:class:`~petsc_contact.backend.coarse.TwoLevelOptions`).
+        CG's growth limit).  The two-level form's options are :attr:`given_options`, or else
+        read from the PETSc options database (:class:`~petsc_contact.backend.coarse.
+        TwoLevelOptions`).
 
         Computed in place, with no copy of the kernel kept: with ``N = n^2`` the normalised
         multipliers are ``c K/N`` for the Hessian, ``s = c K_i/N`` for the support and
@@ -105,7 +108,7 @@ class MeanModePreconditioner(FourierOperator):
         self.base_mean_mode = mean_mode
         self._set_mean_mode(self.base_mean_mode)
         self.hessian_diagonal = hessian_diagonal
-        self.options = TwoLevelOptions.from_database()
+        self.options = self.given_options or TwoLevelOptions.from_database()
         self.correction = self._quarter = self._built_free = None
         self._last_count = self.builds = 0
 
@@ -124,9 +127,8 @@ class MeanModePreconditioner(FourierOperator):
         """
         last, self._last_count = self._last_count, bound_count
         if 0 < bound_count <= self.schur_max:
-            self.correction = ContactSchur(
-                self.grid, self._exact_compliance(), ~free.reshape(self.grid.local_shape)
-            )
+            bound = self.device.to_host(~free).reshape(self.grid.local_shape)
+            self.correction = ContactSchur(self.grid, self._exact_compliance(), bound, self.device)
             return True
         settled = last > 0 and abs(bound_count - last) <= SETTLE_FRACTION * last
         if self.options.covers(bound_count, self.grid.size):
@@ -150,7 +152,9 @@ class MeanModePreconditioner(FourierOperator):
             self._fill(0.0)
         self._set_mean_mode(0.0)
         if self._quarter is None:
-            self._quarter = response_quarter(self.grid, super().apply_array, self.work_fields())
+            self._quarter = response_quarter(
+                self.grid, super().apply_array, self.work_fields(), self.device
+            )
         return self._quarter
 
     def work_fields(self) -> np.ndarray:
@@ -158,13 +162,13 @@ class MeanModePreconditioner(FourierOperator):
         use (:func:`~petsc_contact.backend.coarse.add_correction`); lent to the held-set
         stiffness solve after a contact solve."""
         if self._spread is None:
-            self._spread = np.zeros((2, int(np.prod(self.grid.local_shape))))
+            self._spread = self.device.xp.zeros((2, int(np.prod(self.grid.local_shape))))
         return self._spread
 
     def _stale(self, free: np.ndarray, bound_count: int) -> bool:
         """Whether more than :data:`REBUILD_FRACTION` of the set changed since the build."""
         assert self._built_free is not None
-        (changed,) = self.grid.sum(changed_count(self._built_free, free))
+        (changed,) = self.grid.sum(self.device.passes.changed_count(self._built_free, free))
         return bool(changed > REBUILD_FRACTION * bound_count)
 
     def _build(self, free: np.ndarray) -> bool:
@@ -172,9 +176,10 @@ class MeanModePreconditioner(FourierOperator):
         coarse = CoarseSpace(
             self.grid,
             self._exact_compliance(),
-            ~free.reshape(self.grid.local_shape),
+            self.device.to_host(~free).reshape(self.grid.local_shape),
             self.options.block,
             coarse_limit(self.grid.size),
+            self.device,
         )
         if not coarse.factorised:
             return False

@@ -32,13 +32,13 @@ from __future__ import annotations
 import ctypes
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from ..conventions.grid import Grid
 from ..numerics import kernels
+from ..solver.report import SolveInfo
 from . import _petsc
 from .cg import ContactPreconditioner, compact_bound
 from .operator import SpectralOperator, shell_matrix
@@ -77,41 +77,6 @@ class TakesPreconditioner(Protocol):
     """A Python TAO type that is given the Fourier preconditioner (a ``PC``) before it runs."""
 
     def set_preconditioner(self, pc: Any) -> None: ...
-
-
-@dataclass
-class SolveInfo:
-    """What TAO reports for one solve (``reason`` is TAO's name, e.g. ``CONVERGED_GATOL``)."""
-
-    tao_type: str
-    reason: str
-    reason_code: int
-    iterations: int
-    objective_gradient_evaluations: int
-    hessian_applications: int
-    preconditioner_applications: int
-    gradient_norm: float
-    solve_time: float
-    tolerance: float
-    relative_tolerance: float = 0.0  # TAO's grtol
-    initial_gradient_norm: float = np.inf  # TAO's gnorm at the start point
-
-    def scalars(self, verdict: str) -> dict[str, Any]:
-        """The per-step output columns of this report, with the package's verdict."""
-        return {
-            "iterations": self.iterations,
-            "solve_time": self.solve_time,
-            "converged": verdict == "ok",
-            "verification": verdict,
-            "tao_type": self.tao_type,
-            "tao_reason": self.reason,
-            "tao_reason_code": self.reason_code,
-            "objective_gradient_evaluations": self.objective_gradient_evaluations,
-            "hessian_applications": self.hessian_applications,
-            "preconditioner_applications": self.preconditioner_applications,
-            "gradient_norm": self.gradient_norm,
-            "tolerance": self.tolerance,
-        }
 
 
 def _reason_names(petsc: Any) -> dict[int, str]:

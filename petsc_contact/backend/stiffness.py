@@ -20,34 +20,16 @@ from typing import Any
 import numpy as np
 
 from ..conventions.grid import Grid
-from ..numerics import kernels
+from ..numerics.device import CPU
+from ..solver.linear import Restricted
 from . import _petsc
 from .operator import ShellInterface, shell_matrix
 
 STIFFNESS_RTOL = 1e-6  # K to 2e-8 relative of a 1e-8 solve (docs/performance.md)
 
 
-class Restricted(ShellInterface):
-    """``P A P + (I - P)`` for a 0/1 mask ``P`` and an operator ``A`` with ``apply_array``."""
-
-    def __init__(self, op: Any, mask: np.ndarray) -> None:
-        self.op = op
-        self.grid = op.grid
-        self.mask = mask.reshape(-1)
-        self._masked = np.empty(self.mask.shape)  # reused by every application
-        self.applications = 0
-
-    def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
-        self.applications += 1
-        out = out.reshape(-1)
-        flat = x.reshape(-1)
-        kernels.restrict(self._masked, flat, self.mask)
-        self.op.apply_array(self._masked, out)
-        kernels.fill_outside(out, flat, self.mask)
-        return out
-
-    def diagonal(self) -> float:
-        return self.op.diagonal()
+class _Shell(Restricted, ShellInterface):
+    """:class:`~petsc_contact.solver.linear.Restricted` as a shell ``Mat``/``PC`` context."""
 
 
 def restricted_solve(
@@ -69,7 +51,7 @@ def restricted_solve(
     RuntimeError
         If CG does not converge (the stiffness would be wrong, not approximate).
     """
-    a_ctx, m_ctx = Restricted(op, mask), Restricted(pc, mask)
+    a_ctx, m_ctx = _Shell(op, mask, CPU), _Shell(pc, mask, CPU)
     petsc = _petsc.petsc()
     mat = shell_matrix(petsc, a_ctx)
     # a PC of its own: one taken from ksp.getPC() keeps its Python context alive after
@@ -104,11 +86,18 @@ def restricted_solve(
 
 
 def periodic_stiffness_exact(
-    grid: Grid, stiffness: ShellInterface, compliance: ShellInterface, contact: np.ndarray
+    grid: Grid,
+    stiffness: ShellInterface,
+    compliance: ShellInterface,
+    contact: np.ndarray,
+    solve: Any = restricted_solve,
 ) -> tuple[float, int]:
     """``K = -dp0/du_bar`` with the contact set held fixed (per apparent area).
 
     ``inf`` at full contact (no open pixel), 0 without contact (the surfaces separate freely).
+    ``solve(grid, op, pc, mask)`` is the held-set solve: PETSc's ``KSPCG``
+    (:func:`restricted_solve`) or the array path's
+    (:func:`~petsc_contact.solver.linear.held_set_solve`).
     """
     free = ~contact
     n_free, n_contact = grid.sum(np.count_nonzero(free), np.count_nonzero(contact))
@@ -116,7 +105,7 @@ def periodic_stiffness_exact(
         return np.inf, 0
     if n_contact == 0:
         return 0.0, 0
-    y, its = restricted_solve(grid, stiffness, compliance, free)
+    y, its = solve(grid, stiffness, compliance, free)
     return grid.size / float(grid.sum(y.sum())[0]), its
 
 

@@ -21,11 +21,12 @@ The Hessian is ``s l K``.
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 from scipy.special import erf
 
-from ..backend.coarse import CoarseCorrected, CoarseSpace
+from ..backend.coarse import BLOCK, MAX_FRACTION, CoarseCorrected, CoarseSpace, TwoLevelOptions
 from ..backend.operator import FourierOperator, ShellInterface
 from ..backend.preconditioner import (
     MeanModePreconditioner,
@@ -34,16 +35,17 @@ from ..backend.preconditioner import (
     set_mean_mode,
 )
 from ..backend.solve import SolveInfo
-from ..backend.stiffness import periodic_stiffness_exact
+from ..backend.stiffness import periodic_stiffness_exact, restricted_solve
 from ..conventions.grid import Grid
 from ..conventions.validation import non_negative, positive
-from ..numerics import kernels
 from ..numerics.fft import FFT, wavevector_magnitude
 from ..numerics.kernels import compile_kernels
 from ..numerics.schur import response_quarter
 from ..physics.greens import mean_mode_compliance, periodic_stiffness
 from ..physics.observables import step_observables
 from ..physics.theory import linear_stiffness
+from ..solver.driver import ArraySettings
+from ..solver.linear import held_set_solve
 from .step import Step, contact_fields, residual_verdict
 
 ROUNDING_FACTOR = 1000.0  # see PeriodicProblem.rounding_floor
@@ -79,10 +81,13 @@ class PeriodicProblem:
         positive("modulus", modulus)
         compile_kernels(announce=grid.comm.rank == 0)  # before any step's timer
         self.grid = grid
+        self.device = fft.device
         self.modulus = float(modulus)
         self.filled: np.ndarray | None = None  # this rank's filled pixels (a measured map)
-        self.heights = np.ascontiguousarray(heights - grid.mean(heights), dtype=float)
-        self.h_rms = grid.rms(self.heights)
+        host = np.asarray(heights, dtype=float)
+        self.heights_host = np.ascontiguousarray(host - grid.mean(host))  # for observables
+        self.heights = self.device.asarray(self.heights_host)  # the solver's (a GPU's) copy
+        self.h_rms = grid.rms(self.heights_host)
         self.scale_length = self.h_rms if self.h_rms > 0 else max(grid.lengths)
         q = wavevector_magnitude(grid, fft)
         self.stiffness = FourierOperator(grid, fft, periodic_stiffness(q, modulus))
@@ -90,13 +95,35 @@ class PeriodicProblem:
         limit = schur_limit(grid.size)
         self.preconditioner = MeanModePreconditioner(grid, fft, self.hessian, limit)
         self.pixel_stiffness = self.stiffness.diagonal()
-        kh = self.stiffness.apply_array(self.heights, np.empty(grid.local_shape))
+        kh = self.stiffness.apply_array(self.heights, self.device.xp.empty(grid.local_shape))
         self.elastic_pressure_rms = grid.rms(kh)  # rms(K h) ~ E* h'_rms / 2
         self._min_kh = grid.min(float(kh.min()))
         self.nominal_pressure = np.nan
         self.interfacial_stiffness = np.nan
         self._s = np.nan
         self._held: FourierOperator | None = None
+        # the held-set solve of the exact stiffness: PETSc's KSPCG on the cpu device
+        self.held_set_solve: Any = restricted_solve
+        self.settings = ArraySettings()  # the array path's options (configure)
+        if self.device.name != "cpu":
+            self.held_set_solve = self._array_held_set_solve
+
+    def configure(self, settings: ArraySettings) -> None:
+        """Take the array path's options: the two-level form's and the stiffness solve's
+        (the PETSc path reads them from PETSc's options database)."""
+        self.settings = settings
+        self.preconditioner.given_options = TwoLevelOptions(
+            enabled=settings.two_level,
+            block=settings.block or BLOCK,
+            max_fraction=MAX_FRACTION if settings.max_fraction is None else settings.max_fraction,
+        )
+
+    def _array_held_set_solve(
+        self, grid: Grid, op: Any, pc: Any, mask: np.ndarray
+    ) -> tuple[np.ndarray, int]:
+        """The array path's held-set solve (:func:`~petsc_contact.solver.linear.held_set_solve`)."""
+        s = self.settings
+        return held_set_solve(grid, op, pc, mask, s.stiffness_rtol, self.device, s.stiffness_max_it)
 
     def set_pressure(self, p0: float, interfacial_stiffness: float | None = None) -> None:
         """Set the nominal pressure ``p0 > 0`` and rescale the TAO-facing operators.
@@ -138,11 +165,12 @@ class PeriodicProblem:
         """The step of a solution ``x`` (TAO's scaled gap) at the current nominal pressure:
         observables, TAO's report, the package's verdict and, if asked, the exact stiffness
         ``-dp0/du_bar`` with the contact set held fixed."""
-        grid, ell, p0 = self.grid, self.scale_length, self.nominal_pressure
-        gap = x.reshape(grid.local_shape) * ell
-        pressure = self.pressure(gap)
+        grid, ell, p0, device = self.grid, self.scale_length, self.nominal_pressure, self.device
+        gap_on_device = x.reshape(grid.local_shape) * ell
+        pressure = device.to_host(self.pressure(gap_on_device))
+        gap = device.to_host(gap_on_device)
         obs = step_observables(
-            grid, gap, pressure, self.heights, p0, self.pixel_stiffness, self.filled
+            grid, gap, pressure, self.heights_host, p0, self.pixel_stiffness, self.filled
         )
         contact = obs.pop("contact")
         verdict = verify(info, obs, ell)
@@ -156,7 +184,11 @@ class PeriodicProblem:
             start = time.perf_counter()
             k, its = (
                 periodic_stiffness_exact(
-                    grid, self.stiffness, self.stiffness_preconditioner(contact), contact
+                    grid,
+                    self.stiffness,
+                    self.stiffness_preconditioner(contact),
+                    contact,
+                    self.held_set_solve,
                 )
                 if verdict == "ok"
                 else (np.nan, 0)
@@ -195,10 +227,11 @@ class PeriodicProblem:
         work = pre.work_fields()  # the contact solve is over: its work fields are free
         space = CoarseSpace(
             self.grid,
-            response_quarter(self.grid, compliance.apply_array, work),
+            response_quarter(self.grid, compliance.apply_array, work, self.device),
             contact.reshape(self.grid.local_shape),
             1 if exact else pre.options.block,
             self.grid.size if exact else coarse_limit(self.grid.size),
+            self.device,
         )
         if not space.factorised:
             return self.held_compliance(self.interfacial_stiffness)
@@ -232,7 +265,7 @@ class PeriodicProblem:
 
     def pressure(self, gap: np.ndarray) -> np.ndarray:
         """Contact pressure ``p = K(g + h) + p0`` of a gap field (local slab)."""
-        p = self.stiffness.apply_array(gap + self.heights, np.empty(self.grid.local_shape))
+        p = self.stiffness.apply_array(gap + self.heights, self.device.xp.empty_like(gap))
         p += self.nominal_pressure
         return p
 
@@ -240,7 +273,7 @@ class PeriodicProblem:
         """Take ``x0`` as the reference point of :meth:`objective_gradient` (one FFT) and
         as :attr:`start_point`.  ``x0`` is kept, not copied: it must not change until the
         next :meth:`start` (a field less at 8192^2 is 512 MB)."""
-        self._x_ref = np.asarray(x0, dtype=float).reshape(-1)
+        self._x_ref = self.device.asarray(x0, dtype=float).reshape(-1)
         p_ref = self.pressure(self._x_ref.reshape(self.grid.local_shape) * self.scale_length)
         self._sp_ref = (self._s * p_ref).reshape(-1)  # the scaled gradient at x_ref
 
@@ -263,7 +296,7 @@ class PeriodicProblem:
         np.subtract(x, self._x_ref, out=d)
         d_skd = self.hessian.transform(d)  # the Hessian is s l K
         self.hessian.end_mult(grad)  # s l K d
-        d_sp = kernels.add_dot(grad, self._sp_ref, d)
+        d_sp = self.device.passes.add_dot(grad, self._sp_ref, d)
         d_sp, d_skd = self.grid.sum(d_sp, d_skd)
         return float(d_sp + 0.5 * d_skd)
 

@@ -17,6 +17,7 @@ import numpy as np
 from ..backend.operator import SpectralOperator
 from ..backend.solve import BoundSolver, Monitor, SolveInfo
 from ..conventions.grid import Grid
+from ..solver.driver import ArraySolver
 
 FIELD_NAMES = ("gap", "pressure", "contact")
 VERIFY_FACTOR = 10.0  # a step's natural residual may exceed the tolerance asked for by this
@@ -111,7 +112,7 @@ class ContactProblem(Protocol):
 
 
 def solve_step(
-    solver: BoundSolver,
+    solver: BoundSolver | ArraySolver,
     problem: ContactProblem,
     start: np.ndarray,
     monitor: Monitor | None = None,

@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from ..conventions.grid import Grid, fft_order
+from .device import CPU, ArrayFFT
 
 PLANNER_EFFORT = "FFTW_MEASURE"
 WISDOM_VARIABLE = "PETSC_CONTACT_FFTW_WISDOM"  # a file for FFTW's wisdom, or "off"
@@ -134,6 +135,7 @@ class SerialFFT:
         self.spectral_index = (slice(0, nx), slice(0, m))
 
     transposed = False
+    device = CPU
 
     def forward(self) -> None:
         """``spectrum <- FFT(real)``."""
@@ -198,6 +200,7 @@ class SlabFFT:
         self.spectral_index = tuple(self._pfft.local_slice(True))
 
     transposed = False
+    device = CPU
 
     def forward(self) -> None:
         self._pfft.forward(self.real, self.spectrum, normalize=False)
@@ -341,6 +344,7 @@ class FFTWMPI:
     """
 
     transposed = True
+    device = CPU
 
     def __init__(self, plans: _FFTWMPIPlans) -> None:
         self._plans = plans
@@ -382,7 +386,7 @@ def _aligned(size: int, dtype: Any) -> np.ndarray:
     return raw[offset : offset + size * np.dtype(dtype).itemsize].view(dtype)
 
 
-FFT = SerialFFT | SlabFFT | FFTWMPI
+FFT = SerialFFT | SlabFFT | FFTWMPI | ArrayFFT
 
 
 def make_fft(grid: Grid) -> FFT:

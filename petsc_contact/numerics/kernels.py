@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit, types
 from numba.core import event
 from numba.extending import overload
+from scipy.linalg import blas
 
 from . import aggregates
 
@@ -134,6 +135,11 @@ def changed_count(before: np.ndarray, now: np.ndarray) -> int:
     for i in range(before.size):
         count += before[i] != now[i]
     return count
+
+
+def axpy(a: float, x: np.ndarray, y: np.ndarray) -> None:
+    """``y <- y + a x`` (BLAS)."""
+    blas.daxpy(x, y, a=a)
 
 
 @njit(cache=True, fastmath=FAST, nogil=True)

@@ -23,6 +23,7 @@ import numpy as np
 from scipy.linalg import lu_factor, lu_solve
 
 from ..conventions.grid import Grid
+from .device import CPU, Device
 
 
 class ContactSchur:
@@ -35,17 +36,24 @@ class ContactSchur:
     quarter
         ``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, on every rank (:func:`quarter`).
     bound
-        This rank's slab of the bound-set mask (``True`` on ``B``).
+        This rank's slab of the bound-set mask (``True`` on ``B``), on the host.
+    device
+        Where the fields it corrects live (:attr:`local` is an index array of it); the
+        bordered system is factorised and solved on the host (``m <= 4096``).
     """
 
-    def __init__(self, grid: Grid, quarter: np.ndarray, bound: np.ndarray) -> None:
+    def __init__(
+        self, grid: Grid, quarter: np.ndarray, bound: np.ndarray, device: Device = CPU
+    ) -> None:
         self.grid = grid
-        self.local = np.flatnonzero(bound)
+        self.device = device
+        local = np.flatnonzero(bound)
+        self.local = device.asarray(local)
         nx, ny = grid.shape
-        rows, cols = np.divmod(self.local, ny)
+        rows, cols = np.divmod(local, ny)
         rows = rows + grid.rows.start
         both = allgather(np.stack([rows, cols], axis=1), grid.comm)
-        self.offset = 0 if grid.comm.size == 1 else int(grid.comm.exscan(len(self.local)) or 0)
+        self.offset = 0 if grid.comm.size == 1 else int(grid.comm.exscan(len(local)) or 0)
         di, dj = (
             _fold(both[:, k][:, None] - both[:, k][None, :], period)
             for k, period in ((0, nx), (1, ny))
@@ -60,33 +68,36 @@ class ContactSchur:
     def solve(self, g_r: np.ndarray, r_sum: float) -> tuple[np.ndarray, float]:
         """``(lambda on this rank's bound pixels, c)`` for ``G r`` (local slab) and ``sum(r)``."""
         rhs = np.empty(self.size + 1)
-        rhs[: self.size] = -allgather(g_r.reshape(-1)[self.local], self.grid.comm)
+        mine = self.device.to_host(g_r.reshape(-1)[self.local])
+        rhs[: self.size] = -allgather(mine, self.grid.comm)
         rhs[self.size] = -r_sum
         sol = lu_solve(self._lu, rhs, check_finite=False)
-        return sol[self.offset : self.offset + len(self.local)], float(sol[self.size])
+        reactions = sol[self.offset : self.offset + len(self.local)]
+        return self.device.asarray(reactions), float(sol[self.size])
 
 
-def quarter(grid: Grid, column: np.ndarray) -> np.ndarray:
-    """``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, on every rank.
+def quarter(grid: Grid, column: Any, device: Device = CPU) -> np.ndarray:
+    """``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, on every rank, on the host.
 
     ``column`` is this rank's slab of ``G e_0``, the response to a unit value at pixel
-    ``(0, 0)``; by periodicity and evenness ``G(i, j) = G(min(i, nx - i), min(j, ny - j))``.
+    ``(0, 0)`` (an array of ``device``); by periodicity and evenness
+    ``G(i, j) = G(min(i, nx - i), min(j, ny - j))``.
     """
     half_x, half_y = (m // 2 + 1 for m in grid.shape)
     mine = column[: max(0, min(grid.rows.stop, half_x) - grid.rows.start), :half_y]
-    return allgather(np.ascontiguousarray(mine), grid.comm)
+    return allgather(np.ascontiguousarray(device.to_host(mine)), grid.comm)
 
 
-def response_quarter(grid: Grid, apply: Any, work: np.ndarray) -> np.ndarray:
+def response_quarter(grid: Grid, apply: Any, work: Any, device: Device = CPU) -> np.ndarray:
     """:func:`quarter` of an operator's response to a unit value at pixel ``(0, 0)``;
     ``apply(x, out)`` applies it to this rank's slab, ``work`` is two flat field-sized
-    arrays, the first zero (it is left zero)."""
+    arrays of ``device``, the first zero (it is left zero)."""
     impulse, response = (w.reshape(grid.local_shape) for w in work)
     if grid.rows.start == 0:
         impulse[0, 0] = 1.0
     apply(impulse, response)
     impulse[0, 0] = 0.0
-    return quarter(grid, response)
+    return quarter(grid, response, device)
 
 
 def allgather(local: np.ndarray, comm: Any) -> np.ndarray:

@@ -128,11 +128,14 @@ def self_affine(
     )
     s0, s2 = spectrum_sums(grid, fft, shape)
     c0 = target**2 / (s2 if slope else s0)
-    fft.real[...] = white_noise(grid, seed)
+    device = fft.device  # the noise is drawn on the host: the same surface on every device
+    fft.real[...] = device.asarray(white_noise(grid, seed))
     fft.forward()
-    fft.spectrum *= np.sqrt(c0 * shape * grid.dq[0] * grid.dq[1] * grid.size) / grid.size
+    fft.spectrum *= device.asarray(
+        np.sqrt(c0 * shape * grid.dq[0] * grid.dq[1] * grid.size) / grid.size
+    )
     fft.backward()
-    h = fft.result.copy()
+    h = np.array(device.to_host(fft.result))
     if exact and target > 0:
         realised = rms_of(grid, fft, h, slope=slope)
         h *= target / realised

@@ -26,8 +26,10 @@ from ..conventions.validation import check_finite
 from ..geometries.periodic import PeriodicProblem, verify
 from ..geometries.step import VERIFY_FACTOR, Step, collect, solve_step
 from ..io.topography import SurfaceTopographyMap, map_and_lengths
+from ..numerics.device import get_device
 from ..numerics.fft import make_fft
 from ..physics.continuation import ConvergedStep, LoadPath
+from ..solver.driver import ArraySettings, ArraySolver
 
 __all__ = [
     "VERIFY_FACTOR",  # re-exported with Step and verify: scripts import them from here
@@ -50,9 +52,17 @@ def check_pressures(pressures: Sequence[float]) -> list[float]:
     return out
 
 
-def problem_solver(problem: PeriodicProblem) -> BoundSolver:
-    """The TAO solver of ``problem`` (its type validated from the options database)."""
-    return BoundSolver(problem.grid, problem.hessian, problem.preconditioner)
+def problem_solver(
+    problem: PeriodicProblem, options: Sequence[str] = ()
+) -> BoundSolver | ArraySolver:
+    """The solver of ``problem``: TAO on the ``cpu`` device (its type validated from the
+    options database), the array path's CG on the others (``options`` are PETSc's names for
+    what it reads, :class:`~petsc_contact.solver.driver.ArraySettings`)."""
+    if problem.device.name == "cpu":
+        return BoundSolver(problem.grid, problem.hessian, problem.preconditioner)
+    settings = ArraySettings.from_options(options, problem.device.name)
+    problem.configure(settings)
+    return ArraySolver(problem.hessian, problem.preconditioner, problem.device, settings)
 
 
 def sweep(
@@ -62,7 +72,7 @@ def sweep(
     monitor: Monitor | None = None,
     stiffness: bool = False,
     start: np.ndarray | None = None,
-    solver: BoundSolver | None = None,
+    solver: BoundSolver | ArraySolver | None = None,
 ) -> Iterator[Step]:
     """Solve the pressures in the given order, each warm-started from the last converged steps.
 
@@ -89,8 +99,8 @@ def sweep(
     loads = check_pressures(pressures)
     for p0 in loads:
         problem.check_pressure(p0)
-    ell = problem.scale_length
-    x = (problem.initial_gap() if start is None else start).reshape(-1) / ell
+    ell, device = problem.scale_length, problem.device
+    x = (problem.initial_gap() if start is None else device.asarray(start)).reshape(-1) / ell
     path = LoadPath()
     with nullcontext(solver) if solver is not None else problem_solver(problem) as solver:
         for p0 in loads:
@@ -103,7 +113,7 @@ def sweep(
                 x = x_new
                 k = step.scalars.get("stiffness", np.nan)
                 path.add(ConvergedStep(p0, step.scalars["mean_gap"], x, k))
-            step.state = x.reshape(problem.grid.local_shape) * ell
+            step.state = device.to_host(x).reshape(problem.grid.local_shape) * ell
             yield step
 
 
@@ -118,6 +128,7 @@ def periodic_contact(
     stiffness: bool = False,
     monitor: Monitor | None = None,
     progress: Callable[[int, int, dict[str, Any]], None] | None = None,
+    device: str = "cpu",
 ) -> list[Step]:
     """Solve the periodic contact of ``heights`` for each nominal pressure.
 
@@ -145,6 +156,11 @@ def periodic_contact(
         Called as ``monitor(iteration, f, gnorm)`` at every TAO iteration; ``True`` stops.
     progress
         Called as ``progress(index, total, scalars)`` after each step (``index`` from 0).
+    device
+        ``cpu`` (TAO, every solver type), ``gpu`` (the package's solver on CuPy) or
+        ``cpu-array`` (the GPU's code on NumPy); :mod:`petsc_contact.numerics.device`.
+        The array devices run on one rank without petsc4py, and read the options they
+        understand (:class:`~petsc_contact.solver.driver.ArraySettings`).
 
     Returns
     -------
@@ -153,6 +169,15 @@ def periodic_contact(
     """
     array, length = map_and_lengths(heights, length)
     pressures = check_pressures(pressures)
+    where = get_device(device)
+    if where.name != "cpu":
+        grid = grid_for(array.shape, length, comm)
+        local = grid.scatter(array)
+        check_finite(grid, local)
+        problem = PeriodicProblem(grid, where.fft(grid), local, modulus)
+        solver = problem_solver(problem, _petsc.option_list(options))
+        steps = sweep(problem, pressures, fields, monitor, stiffness, solver=solver)
+        return collect(_reported(steps, len(pressures), progress))
     with _petsc.scoped_options(options):
         grid = grid_for(array.shape, length, comm)
         local = grid.scatter(array)

@@ -1,0 +1,229 @@
+"""The array path's solver: the package's constrained CG on a device, without PETSc.
+
+:class:`ArraySolver` is what :class:`~petsc_contact.backend.solve.BoundSolver` is on the PETSc
+path: ``solve(objective_gradient, start, ...)`` runs one load step and returns the solution
+with a :class:`~petsc_contact.solver.report.SolveInfo`.  It runs
+:class:`~petsc_contact.solver.cg.ConstrainedCG` with the problem's Hessian and preconditioner
+on the arrays of a :class:`~petsc_contact.numerics.device.Device` (``gpu``, or its CPU
+stand-in ``cpu-array``).
+
+Its options are PETSc's names for what it reads (:class:`ArraySettings`), so a command line
+keeps its meaning on every device; any other option is refused in one line rather than
+ignored.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ..numerics.device import Device
+from .cg import MONITOR, USER, ConstrainedCG, ContactPreconditioner, Tolerances
+from .report import REASON_CODES, SolveInfo
+
+DEFAULT_GATOL = 1e-8  # as the PETSc path's (backend.solve)
+DEFAULT_MAX_IT = 5000
+STIFFNESS_RTOL = 1e-6  # as the PETSc path's -stiffness_ksp_rtol default
+TYPE_NAME = "python:PreconditionedCG"  # the algorithm, as the PETSc path names it
+
+
+def _flag(value: str | None) -> bool:
+    if value is None or value.lower() in ("1", "true", "yes", "on"):
+        return True
+    if value.lower() in ("0", "false", "no", "off"):
+        return False
+    raise ValueError(f"not a true/false value: {value}")
+
+
+@dataclass(frozen=True)
+class ArraySettings:
+    """What the array path reads of PETSc's options (the same names, the same defaults).
+
+    Attributes
+    ----------
+    gatol, grtol, max_it
+        ``-tao_gatol``, ``-tao_grtol``, ``-tao_max_it``.
+    monitor
+        ``-tao_monitor``: a line per iteration.
+    two_level, block, max_fraction
+        ``-petsc_contact_two_level``, ``-petsc_contact_two_level_block`` and
+        ``-petsc_contact_two_level_max_fraction`` (the preconditioner's two-level form).
+    stiffness_rtol, stiffness_max_it
+        ``-stiffness_ksp_rtol``, ``-stiffness_ksp_max_it`` (the held-set stiffness solve).
+    """
+
+    gatol: float = DEFAULT_GATOL
+    grtol: float = 0.0
+    max_it: int = DEFAULT_MAX_IT
+    monitor: bool = False
+    two_level: bool = True
+    block: int | None = None
+    max_fraction: float | None = None
+    stiffness_rtol: float = STIFFNESS_RTOL
+    stiffness_max_it: int = 0
+
+    READS: ClassVar[dict[str, tuple[str, Callable[[Any], Any]]]] = {
+        "tao_gatol": ("gatol", float),
+        "tao_grtol": ("grtol", float),
+        "tao_max_it": ("max_it", int),
+        "tao_monitor": ("monitor", _flag),
+        "petsc_contact_two_level": ("two_level", _flag),
+        "petsc_contact_two_level_block": ("block", int),
+        "petsc_contact_two_level_max_fraction": ("max_fraction", float),
+        "stiffness_ksp_rtol": ("stiffness_rtol", float),
+        "stiffness_ksp_max_it": ("stiffness_max_it", int),
+    }
+
+    @classmethod
+    def from_options(cls, options: Sequence[str], device: str) -> ArraySettings:
+        """Parse ``["-tao_gatol", "1e-10", "-tao_monitor", ...]``; ``ValueError`` in one line
+        for an option the array path does not read (``-tao_type`` among them)."""
+        values: dict[str, Any] = {}
+        items = list(options)
+        i = 0
+        while i < len(items):
+            name = items[i]
+            if not name.startswith("-") or len(name) < 2:
+                raise ValueError(f"--device {device}: expected a PETSc option, not '{name}'")
+            key = name.lstrip("-")
+            value = None
+            if i + 1 < len(items) and not _is_option(items[i + 1]):
+                value = items[i + 1]
+                i += 1
+            i += 1
+            if key == "tao_type" or key.startswith("tao_python"):
+                raise ValueError(
+                    f"--device {device} runs the package's own solver: {name} needs --device cpu"
+                )
+            if key not in cls.READS:
+                known = ", ".join(f"-{k}" for k in cls.READS)
+                raise ValueError(f"--device {device} does not read {name} (it reads {known})")
+            field, kind = cls.READS[key]
+            try:
+                values[field] = kind(value) if value is not None or kind is _flag else None
+            except ValueError:
+                raise ValueError(f"{name}: cannot read '{value}'") from None
+            if values[field] is None:
+                raise ValueError(f"{name} needs a value")
+        settings = cls(**values)
+        if settings.block is not None and settings.block < 1:
+            block = settings.block
+            raise ValueError(f"-petsc_contact_two_level_block must be positive, not {block}")
+        return settings
+
+
+def _is_option(text: str) -> bool:
+    """Whether ``text`` names an option (``-x``), not a value (``-1e-3``)."""
+    if not text.startswith("-"):
+        return False
+    try:
+        float(text)
+    except ValueError:
+        return True
+    return False
+
+
+class ArraySolver:
+    """One load step after another with the constrained CG on a device (module docstring).
+
+    Parameters
+    ----------
+    hessian
+        The scaled Hessian (a :class:`~petsc_contact.solver.cg.SplitHessian` with
+        ``applications``).
+    preconditioner
+        Its approximate inverse (``apply_array``; a
+        :class:`~petsc_contact.solver.cg.ContactPreconditioner` follows the free set).
+    device
+        Where the arrays live.
+    settings
+        Tolerances and the monitor.
+    """
+
+    def __init__(
+        self, hessian: Any, preconditioner: Any, device: Device, settings: ArraySettings
+    ) -> None:
+        self.hessian, self.preconditioner = hessian, preconditioner
+        self.device, self.settings = device, settings
+
+    def __enter__(self) -> ArraySolver:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Nothing to destroy (the arrays go with their owners); as ``BoundSolver.close``."""
+
+    def solve(
+        self,
+        objgrad: Callable[[Any, Any], float],
+        x0: Any,
+        lower: float = 0.0,
+        monitor: Callable[[int, float, float], object] | None = None,
+        upper: Any = None,
+        gatol_floor: float = 0.0,
+    ) -> tuple[Any, SolveInfo]:
+        """Run the CG from ``x0``; the solution (an array of the device) and its report.
+
+        The arguments mean what they mean for
+        :meth:`~petsc_contact.backend.solve.BoundSolver.solve`.
+        """
+        device, settings, xp = self.device, self.settings, self.device.xp
+        x = device.asarray(x0, dtype=float).reshape(-1).copy()
+        gatol = max(settings.gatol, gatol_floor)
+        counts = {"objgrad": 0}
+        first: list[float] = []
+
+        def gradient(xa: Any, g: Any) -> float:
+            counts["objgrad"] += 1
+            return objgrad(xa, g)
+
+        def watch(it: int, f: float, rnorm: float) -> bool:
+            if not first:
+                first.append(rnorm)
+            if settings.monitor:
+                print(f"{it:4d} TAO,  Function value: {f:g},  Residual: {rnorm:g}", flush=True)
+            return bool(monitor is not None and monitor(it, f, rnorm))
+
+        pre = self.preconditioner
+        h0, p0 = self.hessian.applications, pre.applications
+        device.synchronize()
+        start = time.perf_counter()
+        cg = ConstrainedCG(
+            x,
+            lower,
+            np.inf if upper is None else device.asarray(upper).reshape(-1),
+            gradient,
+            self.hessian,
+            pre.apply_array,
+            pre if isinstance(pre, ContactPreconditioner) else None,
+            Tolerances(gatol, settings.grtol, settings.max_it),
+            watch,
+            device.passes,
+            lambda: xp.empty_like(x),
+        )
+        outcome = cg.run()
+        device.synchronize()
+        elapsed = time.perf_counter() - start
+        reason = USER if outcome.reason == MONITOR else outcome.reason
+        rnorm = float(np.sqrt(cg.allsum(float(xp.dot(cg.r, cg.r)))[0]))
+        info = SolveInfo(
+            tao_type=TYPE_NAME,
+            reason=reason,
+            reason_code=REASON_CODES[reason],
+            iterations=outcome.iterations,
+            objective_gradient_evaluations=counts["objgrad"],
+            hessian_applications=self.hessian.applications - h0,
+            preconditioner_applications=pre.applications - p0,
+            gradient_norm=rnorm,
+            solve_time=elapsed,
+            tolerance=float(gatol),
+            relative_tolerance=float(settings.grtol),
+            initial_gradient_norm=first[0] if first else np.inf,
+        )
+        return x, info

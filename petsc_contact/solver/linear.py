@@ -1,0 +1,106 @@
+"""The held-set linear solve on arrays: ``A_MM y = 1_M`` by preconditioned conjugate gradients.
+
+The exact stiffness (Barber 2003, :mod:`petsc_contact.backend.stiffness`) is one linear solve
+with the contact set held fixed.  On the PETSc path PETSc's ``KSPCG`` solves it; on the array
+path (``--device gpu`` and its CPU stand-in) :func:`held_set_solve` does, with the same
+operators, the same zero start and the same test as ``KSPCG``'s default: the 2-norm of the
+preconditioned residual against ``rtol`` times its first value.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..conventions.grid import Grid
+from ..numerics.device import Device
+
+
+class Restricted:
+    """``P A P + (I - P)`` for a 0/1 mask ``P`` and an operator ``A`` with ``apply_array``.
+
+    Parameters
+    ----------
+    op
+        The operator (``apply_array(x, out)``, ``diagonal()``, ``grid``).
+    mask
+        ``P`` as a boolean array of ``op``'s fields.
+    device
+        Where the fields live (its element-wise passes).
+    """
+
+    def __init__(self, op: Any, mask: Any, device: Device) -> None:
+        self.op = op
+        self.grid = op.grid
+        self.mask = mask.reshape(-1)
+        self.passes = device.passes
+        self._masked = device.xp.empty(self.mask.shape)  # reused by every application
+        self.applications = 0
+
+    def apply_array(self, x: Any, out: Any) -> Any:
+        self.applications += 1
+        out = out.reshape(-1)
+        flat = x.reshape(-1)
+        self.passes.restrict(self._masked, flat, self.mask)
+        self.op.apply_array(self._masked, out)
+        self.passes.fill_outside(out, flat, self.mask)
+        return out
+
+    def diagonal(self) -> float:
+        return float(self.op.diagonal())
+
+
+def held_set_solve(
+    grid: Grid, op: Any, pc: Any, mask: Any, rtol: float, device: Device, max_it: int = 0
+) -> tuple[Any, int]:
+    """Solve ``A_MM y = 1_M`` on the pixels of ``mask`` by preconditioned CG (one rank).
+
+    Parameters
+    ----------
+    op, pc
+        ``A`` and its preconditioner (``apply_array``), restricted here to the mask.
+    mask
+        The held set, a boolean array of the device (or a host one, copied there).
+    rtol
+        Stop when ``||M r|| <= rtol ||M b||`` (``KSPCG``'s default test).
+    max_it
+        The most iterations (default: ten times the grid's points, as on the PETSc path).
+
+    Returns
+    -------
+    y, iterations
+        ``y`` (zero off the mask) as a field of the device, and the CG iterations.
+
+    Raises
+    ------
+    RuntimeError
+        If CG does not converge (the stiffness would be wrong, not approximate).
+    """
+    xp = device.xp
+    mask = device.asarray(mask).reshape(-1)
+    a, m = Restricted(op, mask, device), Restricted(pc, mask, device)
+    limit = max_it or 10 * grid.size
+    b = mask.astype(float)
+    y, r = xp.zeros_like(b), b.copy()
+    z, q = xp.empty_like(b), xp.empty_like(b)
+    m.apply_array(r, z)
+    first = float(xp.linalg.norm(z))
+    if not first > 0:
+        return y.reshape(grid.local_shape), 0
+    p = z.copy()
+    rz = float(xp.dot(r, z))
+    for its in range(1, limit + 1):
+        a.apply_array(p, q)
+        pq = float(xp.dot(p, q))
+        if not pq > 0:
+            break  # a Hessian that is not positive definite on the set: not converged
+        alpha = rz / pq
+        y += alpha * p
+        r -= alpha * q
+        m.apply_array(r, z)
+        if float(xp.linalg.norm(z)) <= rtol * first:
+            return y.reshape(grid.local_shape), its
+        rz_new = float(xp.dot(r, z))
+        p *= rz_new / rz
+        p += z
+        rz = rz_new
+    raise RuntimeError(f"stiffness solve did not converge in {its} iterations")

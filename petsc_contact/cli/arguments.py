@@ -385,6 +385,12 @@ def _output_arguments(p: argparse.ArgumentParser, d: dict[str, Any]) -> None:
         "finished steps are kept, not recomputed",
     )
     p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="start afresh even where OUT.h5.partial holds finished steps of an "
+        "interrupted run (they are deleted)",
+    )
+    p.add_argument(
         "--stop-after",
         type=_minutes,
         default=None,
@@ -662,6 +668,11 @@ def _compare_parser(sub: Any) -> None:
         "--resume",
         action="store_true",
         help="go on from OUT.h5.partial (same options): finished solvers are kept",
+    )
+    cmp_.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="start afresh even where OUT.h5.partial holds finished solvers (they are deleted)",
     )
     cmp_.add_argument("--quiet", action="store_true", help="no table on standard output")
 

@@ -298,7 +298,7 @@ def read_resume(path: str, parameters: dict[str, Any]) -> Finished:
     return Finished(steps, table, state, problem)
 
 
-RESUME_FREE = ("resume", "quiet", "stop_after")  # options a resume may change
+RESUME_FREE = ("resume", "overwrite", "quiet", "stop_after")  # options a resume may change
 
 
 def check_same_run(partial: str, theirs: dict[str, Any], mine: dict[str, Any]) -> None:

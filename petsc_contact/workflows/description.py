@@ -60,10 +60,12 @@ class Run:
     footprint, flat_stiffness, stiffness
         The punch's outline (``square``, ``disk``) and its flat-punch reference (``grid``,
         ``analytic``); whether every step adds the exact stiffness.
-    output, fields, scalars_only, resume, stop_after
+    output, fields, scalars_only, resume, overwrite, stop_after
         The HDF5 file (none: results only in memory), whether the fields of every step are
-        stored, whether the height map is left out, whether an interrupted run is continued,
-        and after how many minutes the run pauses (between steps).
+        stored, whether the height map is left out, whether an interrupted run is continued
+        or (``overwrite``) its finished steps deleted to start afresh (neither: an output
+        with finished steps is refused), and after how many minutes the run pauses (between
+        steps).
     options
         PETSc options for this run (``("-tao_type", "bncg")``).
     skip_memory_check
@@ -99,6 +101,7 @@ class Run:
     fields: bool = False
     scalars_only: bool = False
     resume: bool = False
+    overwrite: bool = False
     stop_after: float | None = None
     skip_memory_check: bool = False
     options: tuple[str, ...] = field(default=(), compare=False)

@@ -110,12 +110,17 @@ def periodic_stiffness_exact(
 
 
 def punch_stiffness_exact(
-    grid: Grid, compliance: ShellInterface, inverse: ShellInterface, contact: np.ndarray
+    grid: Grid,
+    compliance: ShellInterface,
+    inverse: ShellInterface,
+    contact: np.ndarray,
+    solve: Any = restricted_solve,
 ) -> tuple[float, int]:
-    """Total stiffness ``dF/dδ`` of a punch with the contact set held fixed (0 if none)."""
+    """Total stiffness ``dF/dδ`` of a punch with the contact set held fixed (0 if none);
+    ``solve`` as for :func:`periodic_stiffness_exact`."""
     if grid.sum(np.count_nonzero(contact))[0] == 0:
         return 0.0, 0
-    y, its = restricted_solve(grid, compliance, inverse, contact)
+    y, its = solve(grid, compliance, inverse, contact)
     return grid.pixel_area * float(grid.sum(y.sum())[0]), its
 
 

@@ -20,6 +20,7 @@ change its answer (the solver and its verification decide that):
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,8 +53,14 @@ class ConvergedStep:
 class LoadPath:
     """The last two converged steps of a sweep, and what they predict for the next load."""
 
-    def __init__(self) -> None:
-        self._steps: list[ConvergedStep] = []
+    def __init__(self, steps: Sequence[ConvergedStep] = ()) -> None:
+        self._steps: list[ConvergedStep] = list(steps)[-2:]
+
+    @property
+    def steps(self) -> tuple[ConvergedStep, ...]:
+        """The converged steps held, oldest first (at most two): what a resumed sweep needs
+        to go on exactly as an uninterrupted one (``LoadPath(path.steps)``)."""
+        return tuple(self._steps)
 
     def add(self, step: ConvergedStep) -> None:
         """Record a converged step (the oldest of three is forgotten)."""

@@ -16,22 +16,19 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
     from ..physics.surface import rms_of
     from ..workflows.compare import (
         DEFAULT_SOLVERS,
+        check_solvers,
         commit_partial,
         compare,
-        read_partial,
-        solver_options,
+        finished_solvers,
         write_compare,
     )
 
     if not args.time_limit >= 0 or args.stall_iterations < 0:
         raise InputError("--time-limit and --stall-iterations must not be negative")
-    if args.solvers == []:
-        raise InputError("--solvers names no solver: give cg,tron,... or leave it out")
     if "-tao_type" in petsc_args:  # it would follow, and replace, every solver's own
         raise InputError("compare takes its solvers from --solvers, not -tao_type")
-    solvers = args.solvers or list(DEFAULT_SOLVERS)
-    for name in solvers:
-        solver_options(name)  # unknown options files fail here, before any work
+    solvers = list(DEFAULT_SOLVERS) if args.solvers is None else args.solvers
+    check_solvers(solvers)  # before any work
     petsc, run, scene = scene_for(args, petsc_args)
     grid, fft, heights = scene.grid, scene.fft, scene.heights
     problem = PeriodicProblem(grid, fft, heights, run.modulus_value)
@@ -45,7 +42,14 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
 
     realised = {"rms_height": rms_of(grid, fft, heights), "pressure": args.pressure}  # collective
     attrs = record_for(run, argv, petsc, realised, scene)
-    done = read_partial(args.output, attrs["parameters"]) if args.resume else []
+    attrs["parameters"] |= {  # what the comparison is, beyond its scene
+        "command": "compare",
+        "pressure": args.pressure,
+        "solvers": solvers,
+        "time_limit": args.time_limit,
+        "stall_iterations": args.stall_iterations,
+    }
+    done = finished_solvers(args.output, attrs["parameters"], args.resume, args.overwrite)
     finished: list[Any] = list(done)
     root = grid.comm.rank == 0
     for t in done if show else ():

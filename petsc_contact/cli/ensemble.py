@@ -3,18 +3,19 @@
 from __future__ import annotations
 
 import argparse
-import os
 from collections.abc import Sequence
 
 from .common import EXIT_INTERRUPTED, EXIT_PAUSED, describe
 
 
 def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
-    """One periodic run per seed (each resumable), then statistics over seeds in OUT.h5."""
+    """One periodic run per seed (each resumable), then statistics over seeds in OUT.h5; what
+    an earlier ensemble left is continued, cleared or refused (``--resume``, ``--overwrite``,
+    neither: :func:`~petsc_contact.workflows.seeds.seeds_to_run`)."""
     from ..backend import _petsc
     from ..conventions.grid import world
     from ..io.store import check_writable
-    from ..workflows.seeds import ensemble_record, seed_runs, summarise, write_summary
+    from ..workflows.seeds import ensemble_record, seed_runs, seeds_to_run, summarise, write_summary
     from .runs import execute
 
     base = describe(args)
@@ -23,9 +24,7 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
     _petsc.init(petsc_args)
     runs = seed_runs(base, args.seeds)
     status = 0
-    for run in runs:
-        if args.resume and run.output is not None and os.path.exists(run.output):
-            continue  # finished earlier: nothing recomputed
+    for run in seeds_to_run(base, runs):  # a seed finished earlier is not recomputed
         seed_args = argparse.Namespace(command="periodic", quiet=args.quiet, plot=None)
         code = execute(run, seed_args, argv)
         if code in (EXIT_INTERRUPTED, EXIT_PAUSED):

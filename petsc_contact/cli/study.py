@@ -5,7 +5,9 @@ to ``DATA/figN/NAME.h5``.  A piece already complete is skipped; an unfinished on
 from its ``.partial`` file; the study stops cleanly after the step that ends past
 ``--minutes`` (exit status 75) and the next call goes on from there.  A piece that another
 run is writing is left to that run, so several studies started on the same ``--data`` share
-the pieces between them, one core each.
+the pieces between them, one core each.  A piece's file (complete, or its ``.partial``)
+of other parameters (another ``--shrink`` in the same ``--data``) is refused before anything
+runs, never joined.
 """
 
 from __future__ import annotations
@@ -16,13 +18,18 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
 
-from ..io.store import OutputBusy, tidy
-from ..workflows.paper_study import Piece, complete, converged, finished_steps, pieces
+from ..io.store import OutputBusy, partial_path, storage, tidy
+from ..workflows.paper_study import Piece, check_piece, complete, converged, finished_steps, pieces
 from .common import EXIT_INTERRUPTED, EXIT_NOT_CONVERGED, EXIT_PAUSED
 
 
 def chosen(args: argparse.Namespace) -> list[Piece]:
-    """The pieces of ``--figure`` (all of them for ``all``), the smaller grids first."""
+    """The pieces of ``--figure`` (all of them for ``all``), the smaller grids first
+    (``ValueError`` for an empty ``--data``, one not a folder, a bad ``--shrink``)."""
+    if not args.data:
+        raise ValueError("give a data folder (--data is empty)")
+    if os.path.exists(args.data) and not os.path.isdir(args.data):
+        raise ValueError(f"--data '{args.data}' is not a folder")
     figure = f"fig{args.figure}" if args.figure.isdigit() else args.figure
     todo = [
         p for p in pieces(args.shrink) if args.figure == "all" or figure in (p.figure, *p.used_by)
@@ -41,9 +48,14 @@ def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
     from ..workflows.runner import locked
     from .runs import execute
 
+    todo = chosen(args)
+    with storage(args.data):
+        os.makedirs(args.data, exist_ok=True)
     _petsc.init(petsc_args)
     comm = world()
-    todo = chosen(args)
+    foreign = _agreed(comm, _foreign, args.data, todo)
+    if foreign:  # before anything is computed
+        raise ValueError(foreign)
     began = time.perf_counter()
     elsewhere, unconverged = [], []  # pieces other runs are writing; complete with failures
     for number, piece in enumerate(todo, 1):
@@ -94,6 +106,20 @@ def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
         return EXIT_PAUSED
     _say(comm, f"# study: all {len(todo)} pieces complete in {args.data}")
     return 0
+
+
+def _foreign(data: str, todo: Sequence[Piece]) -> str:
+    """Why a file of the pieces ``todo`` in ``data`` (complete, or a ``.partial``) is not the
+    study's (:func:`check_piece`), or ``""``."""
+    for piece in todo:
+        path = piece.path(data)
+        for kept in (path, partial_path(path)):
+            try:
+                if os.path.exists(kept):
+                    check_piece(kept, piece.to_run(data))
+            except ValueError as exc:
+                return str(exc)
+    return ""
 
 
 T = TypeVar("T")

@@ -72,6 +72,24 @@ def solver_options(name: str) -> list[str]:
     return ["-options_file", str(path)]
 
 
+def group_name(name: str) -> str:
+    """The HDF5 group of solver ``name`` in a comparison's file (a path's ``/`` as ``_``)."""
+    return name.replace("/", "_")
+
+
+def check_solvers(solvers: Sequence[str]) -> None:
+    """``ValueError`` (one line) unless ``solvers`` names at least one solver and no two
+    share a group of the file; ``OSError`` where an options file is missing."""
+    if not solvers:
+        raise ValueError("--solvers names no solver: give cg,tron,... or leave it out")
+    groups = [group_name(name) for name in solvers]
+    twice = sorted({n for n, g in zip(solvers, groups, strict=True) if groups.count(g) > 1})
+    if twice:
+        raise ValueError(f"--solvers names a solver twice (each is one group): {', '.join(twice)}")
+    for name in solvers:
+        solver_options(name)
+
+
 @dataclass
 class Trajectory:
     """Errors of one solver along its iterations (and its final TAO report)."""
@@ -231,6 +249,7 @@ def compare(
         ``natural_residual``, ``tolerance``, ``iterations``); one :class:`Trajectory` per
         solver, in order.
     """
+    check_solvers(solvers)
     reference = reference_solve(problem, pressure)
     if reference_ready is not None:
         reference_ready(reference.scalars())
@@ -287,8 +306,7 @@ def write_compare(
             f.write(",".join(str(v) for v in row) + "\n")
     png = stem + ".png"
     plot_compare(png, trajectories, reference)
-    with suppress(FileNotFoundError):
-        os.remove(partial_path(path))
+    _remove(partial_path(path))
     return csv, png
 
 
@@ -301,6 +319,35 @@ def commit_partial(
     """Replace ``path + '.partial'`` by one holding every finished solver (atomically)."""
     with atomic_h5(partial_path(path)) as f:
         _write_groups(f, reference, trajectories, {**attributes, "complete": False})
+
+
+def finished_solvers(
+    path: str, parameters: dict[str, Any], resume: bool, overwrite: bool
+) -> list[Trajectory]:
+    """What a comparison into ``path`` starts from (the caller holds the output's lock): with
+    ``resume``, the finished solvers of its ``.partial`` file (:func:`read_partial`); with
+    ``overwrite``, none, that file removed (by rank 0); with neither, none, and
+    ``ValueError`` where that file holds finished solvers."""
+    from ..conventions.grid import world
+    from ..io.store import on_root
+
+    partial = partial_path(path)
+    if resume and overwrite:
+        raise ValueError("--resume continues a comparison, --overwrite starts it afresh: not both")
+    if resume:
+        return read_partial(path, parameters)
+    if os.path.exists(partial) and not overwrite:
+        raise ValueError(
+            f"'{partial}' holds the finished solvers of an interrupted comparison: --resume "
+            "continues it, --overwrite deletes them and starts afresh"
+        )
+    on_root(world(), lambda: _remove(partial))
+    return []
+
+
+def _remove(path: str) -> None:
+    with suppress(FileNotFoundError):
+        os.remove(path)
 
 
 def read_partial(path: str, parameters: dict[str, Any]) -> list[Trajectory]:
@@ -316,7 +363,7 @@ def read_partial(path: str, parameters: dict[str, Any]) -> list[Trajectory]:
             check_same_run(partial, json.loads(f.attrs["parameters"]), parameters)
             out = []
             for name in json.loads(f.attrs["solvers"]):
-                g = f[name.replace("/", "_")]
+                g = f[group_name(name)]
                 t = Trajectory(name, str(g.attrs["petsc_options"]).split())
                 for k in COMPARE:
                     setattr(t, k, g[k][...].tolist())
@@ -338,7 +385,7 @@ def _write_groups(
     write_attributes(f, {**attrs, "solvers": [t.name for t in trajectories]})
     write_attributes(f, {f"reference_{k}": v for k, v in reference.items()})
     for t in trajectories:
-        g = f.create_group(t.name.replace("/", "_"))
+        g = f.create_group(group_name(t.name))
         for k in COMPARE:
             g[k] = np.asarray(getattr(t, k))
         annotate(g, COMPARE.__getitem__)

@@ -37,6 +37,7 @@ FIG1_SWEEP = (16, 1e-7, 3e-1)
 HERTZ_GRID = 512
 HERTZ_PIXELS = (16, 32, 64)  # lambda_1 in pixels
 HERTZ_SWEEP = (29, 1e-9, 1e-2)
+MAX_SHRINK = HERTZ_GRID // 4  # --shrink: the smallest grid, the Hertz regime's, keeps 4 pixels
 DISTRIBUTION_RATIO = 512
 DISTRIBUTION_SEEDS = tuple(range(1, 65))
 PUNCH_SEEDS = tuple(range(1, 9))
@@ -107,8 +108,20 @@ def rms_height_per_slope(hurst: float, rolloff_ratio: float, cutoff_ratio: float
     return float(np.sqrt(np.trapezoid(q * c, q) / np.trapezoid(q**3 * c, q)))
 
 
+def check_shrink(shrink: int) -> None:
+    """``ValueError`` (one line) unless ``shrink`` is a whole number from 1 to
+    :data:`MAX_SHRINK`."""
+    if not 1 <= shrink <= MAX_SHRINK:
+        raise ValueError(
+            f"--shrink must be a whole number from 1 to {MAX_SHRINK} (every grid keeps "
+            f"{HERTZ_GRID // MAX_SHRINK} pixels a side), got {shrink}"
+        )
+
+
 def pieces(shrink: int = 1) -> list[Piece]:
-    """The study at the paper's parameters (grids divided by ``shrink`` for a quick look)."""
+    """The study at the paper's parameters (grids divided by ``shrink`` for a quick look;
+    ``ValueError`` unless :func:`check_shrink` accepts it)."""
+    check_shrink(shrink)
     n = PAPER_GRID // shrink
     out = [
         Piece("fig1", f"periodic_r{r}", Run(**_surface(n, 0.7, r, n / 2, 1), sweep=FIG1_SWEEP))
@@ -216,6 +229,21 @@ def complete(path: str) -> bool:
         return False
     with _piece(path) as f:
         return bool(f.attrs.get("complete", False))
+
+
+def check_piece(path: str, run: Run) -> None:
+    """``ValueError`` (one line) unless the piece's file ``path`` (complete, or its
+    ``.partial``) was written by ``run`` (:func:`~petsc_contact.workflows.seeds.check_kept`):
+    a folder of another study (another ``--shrink``) is never joined."""
+    from .seeds import check_kept
+
+    try:
+        check_kept(path, run)
+    except ValueError as exc:
+        raise ValueError(
+            f"{exc}, not this study's piece: remove it, or give this study a --data folder of "
+            "its own"
+        ) from None
 
 
 def converged(path: str) -> bool:

@@ -6,13 +6,22 @@ pressures for every seed (:func:`ensemble_loads`), then write the mean, standard
 and standard error over seeds of every per-step quantity to ``OUT.h5``
 (:func:`write_summary`; statistics by
 :func:`~petsc_contact.workflows.ensemble.ensemble_statistics`).
+
+What an earlier ensemble left on the same output is never joined blindly
+(:func:`seeds_to_run`): without ``resume`` or ``overwrite`` it is refused; ``overwrite``
+clears it first; ``resume`` keeps the seed files and continues the interrupted seed run
+only where their ``parameters`` are this ensemble's (:func:`check_kept`), and refuses the
+rest.
 """
 
 from __future__ import annotations
 
 import json
 import os
+import re
+import shutil
 from collections.abc import Sequence
+from contextlib import suppress
 from dataclasses import dataclass
 from typing import Any
 
@@ -21,7 +30,7 @@ import numpy as np
 from ..conventions.grid import world
 from ..conventions.units import pressure_value
 from ..io.schema import ENSEMBLE, annotate, ensemble_entry, write_attributes
-from ..io.store import atomic_h5
+from ..io.store import OutputLock, atomic_h5, check_same_run, on_root, partial_path, tidy
 from .description import Run
 from .ensemble import ensemble_statistics
 from .runner import Progress, locked, run_contact, swept
@@ -84,6 +93,129 @@ def seed_runs(base: Run, seeds: Sequence[int]) -> list[Run]:
     ]
 
 
+def recorded_parameters(run: Run) -> dict[str, Any]:
+    """The ``parameters`` a run of a generated surface records, found without making the
+    surface: its description with what its defaults become (the sides, their unit, the
+    cutoff ratio) and a periodic run's sweep as its pressures."""
+    from ..conventions.grid import grid_for
+    from ..conventions.units import Lengths
+    from ..physics.surface import nyquist_ratio
+    from .scene import given_lengths, shape_of
+
+    lengths = given_lengths(run) or Lengths((1.0,), None)
+    grid = grid_for(shape_of(run, None), lengths.pair)
+    cutoff = nyquist_ratio(grid) if run.cutoff_ratio is None else run.cutoff_ratio
+    out = run.parameters() | {
+        "length": list(grid.lengths),
+        "length_unit": lengths.unit or "",
+        "cutoff_ratio": cutoff,
+    }
+    if run.geometry == "periodic" and run.sweep is not None:
+        out |= {"pressures": ensemble_loads(run, run.seed), "sweep": None}
+    return out
+
+
+def check_kept(path: str, run: Run) -> None:
+    """``ValueError`` (one line) unless the file ``path``, a run's output or its ``.partial``
+    file, was written by ``run``: its ``parameters`` are the ones ``run`` records
+    (:func:`recorded_parameters`, compared by
+    :func:`~petsc_contact.io.store.check_same_run`).  Where the file is kept is not compared
+    (it is found by its place), and the loads given with a unit are compared as given (their
+    values in the run's units, ``*_resolved``, follow from them)."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as f:
+            theirs = json.loads(f.attrs["parameters"])
+    except (OSError, KeyError, ValueError) as exc:
+        raise ValueError(f"cannot read the parameters of '{path}' ({exc})") from None
+    derived = {k: v for k, v in theirs.items() if k.endswith("_resolved")}
+    mine = recorded_parameters(run) | derived | {"output": theirs.get("output")}
+    check_same_run(path, theirs, mine)
+
+
+def seeds_to_run(base: Run, runs: Sequence[Run]) -> list[Run]:
+    """The seed runs of ``runs`` still to compute, once what an earlier ensemble on
+    ``base.output`` left is dealt with (the caller holds the output's lock).
+
+    With ``base.overwrite`` every file of the earlier ensemble is removed first; with
+    ``base.resume`` a complete seed file is kept and an interrupted seed run continues
+    where their ``parameters`` are this ensemble's, and any other is refused; with
+    neither, an earlier ensemble's summary or seed files are refused.  Refusals are
+    ``ValueError`` with one line."""
+    if base.resume and base.overwrite:
+        raise ValueError("--resume continues an ensemble, --overwrite starts it afresh: not both")
+    if base.overwrite:
+        on_root(world(), lambda: clear_ensemble(str(base.output)))
+        return list(runs)
+    if not base.resume:
+        left = [os.path.basename(p) for p in _earlier(base, runs) if os.path.exists(p)]
+        if left:
+            folder = os.path.dirname(os.path.abspath(str(base.output)))
+            raise ValueError(
+                f"an earlier ensemble left {_listed(left)} in {folder}: --resume continues it, "
+                "--overwrite deletes it and starts afresh"
+            )
+        return list(runs)
+    return [run for run in runs if not _kept(run)]
+
+
+def _listed(paths: Sequence[str], shown: int = 3) -> str:
+    """``a, b, c and 5 more``."""
+    more = f" and {len(paths) - shown} more" if len(paths) > shown else ""
+    return ", ".join(paths[:shown]) + more
+
+
+def _earlier(base: Run, runs: Sequence[Run]) -> list[str]:
+    """The files an earlier ensemble on ``base.output`` with these seeds would have left."""
+    seeds = [p for run in runs if run.output for p in (run.output, partial_path(run.output))]
+    return [str(base.output), *seeds]
+
+
+def _kept(run: Run) -> bool:
+    """Whether the seed run's file is complete and this ensemble's (then what its writer
+    left is tidied); ``ValueError`` when its file or its ``.partial`` is another run's."""
+    assert run.output is not None
+    for path in (run.output, partial_path(run.output)):
+        if os.path.exists(path):
+            try:
+                check_kept(path, run)
+            except ValueError as exc:
+                raise ValueError(
+                    f"{exc}, not this ensemble's: --overwrite starts the ensemble afresh"
+                ) from None
+            if path == run.output:
+                tidy(path)
+                return True
+            return False
+    return False
+
+
+def clear_ensemble(output: str) -> None:
+    """Remove the summary ``output`` and every seed's files beside it (``OUT_seedK.h5``, its
+    table, what an interrupted seed run left), each seed's output locked meanwhile."""
+    folder, name = os.path.split(os.path.abspath(output))
+    seed = re.compile(rf"({re.escape(name.removesuffix('.h5'))}_seed\d+)\.(h5|csv)\b.*")
+    files: dict[str, list[str]] = {}
+    for entry in os.listdir(folder):
+        found = seed.fullmatch(entry)
+        if found:
+            files.setdefault(found.group(1), []).append(os.path.join(folder, entry))
+    with suppress(FileNotFoundError):
+        os.remove(output)
+    for stem, paths in sorted(files.items()):
+        lock = OutputLock(os.path.join(folder, f"{stem}.h5"))
+        with lock:
+            for path in paths:
+                if path == lock.path:
+                    continue
+                if os.path.isdir(path):
+                    shutil.rmtree(path, ignore_errors=True)
+                else:
+                    with suppress(FileNotFoundError):
+                        os.remove(path)
+
+
 def summarise(seeds: Sequence[int], files: Sequence[str]) -> dict[str, np.ndarray]:
     """Per-seed tables of every quantity (NaN where a step did not converge) and their
     statistics over seeds, read from the seeds' files."""
@@ -140,14 +272,13 @@ def run_ensemble(
     base: Run, seeds: Sequence[int], progress: Progress | None = None
 ) -> EnsembleResult:
     """Run ``base`` for every seed (each resumable; with ``base.resume`` the seeds whose files
-    are complete are not run again), then the statistics, written to ``base.output`` if any."""
+    are complete are not run again; what an earlier ensemble left: :func:`seeds_to_run`),
+    then the statistics, written to ``base.output``."""
     if base.output is None:
         raise ValueError("an ensemble keeps its seeds in files: give it an output")
     runs = seed_runs(base, seeds)
     with locked(base.output):
-        for run in runs:
-            if base.resume and run.output is not None and os.path.exists(run.output):
-                continue
+        for run in seeds_to_run(base, runs):
             run_contact(run, progress)
         files = [r.output for r in runs if r.output is not None]
         pressures = [float(p) for p in runs[0].pressures or []]

@@ -1,0 +1,132 @@
+"""What the composite commands join: an ensemble's seed files, a comparison's finished solvers
+and a study's pieces are kept only where they are this command's (their ``parameters``);
+anything else is refused in one line (``--overwrite`` starts afresh), and bad study inputs end
+in one line, not a traceback."""
+
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+from conftest import ROOT, cli, python
+
+ENSEMBLE = "ensemble --grid 32 --rms-slope 0.1 --pressures 1e-3,1e-2 --seeds 1-3 --quiet"
+COMPARE = "compare --grid 32 --hurst 0.7 --rms-slope 0.1 --pressure 1e-3 --solvers cg,pk,bnls"
+STUDY = "study --figure 1 --quiet"
+
+
+def _killed(spec: str, command: str, *extra: str) -> subprocess.CompletedProcess:
+    """``command`` run under tests/kill_at.py, SIGKILLed at ``spec``."""
+    return python(str(ROOT / "tests" / "kill_at.py"), spec, "--", *command.split(), *extra)
+
+
+def _refused(r: subprocess.CompletedProcess, *words: str) -> None:
+    """Exit status 2, one line on stderr naming every word, no traceback."""
+    assert r.returncode == 2, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr, r.stderr
+    for word in words:
+        assert word in r.stderr, (word, r.stderr)
+
+
+def _hurst(path: Path) -> float:
+    with h5py.File(path) as f:
+        return float(json.loads(f.attrs["parameters"])["hurst"])
+
+
+def test_ensemble_joins_only_its_own_seed_files(tmp_path, petsc):
+    out = tmp_path / "ens.h5"
+    at = ["--output", str(out)]
+    h3, h7 = [*at, "--hurst", "0.3"], [*at, "--hurst", "0.7"]
+    seed = {k: tmp_path / f"ens_seed{k}.h5" for k in (1, 2, 3)}
+    assert _killed("after:commit:2", ENSEMBLE, *h3).returncode == -signal.SIGKILL  # in seed 1
+    _refused(
+        cli(*ENSEMBLE.split(), *h7, "--resume"), "ens_seed1.h5.partial", "hurst", "--overwrite"
+    )
+    _refused(cli(*ENSEMBLE.split(), *h7), "--resume", "--overwrite")
+    assert cli(*ENSEMBLE.split(), *h3, "--resume").returncode == 0  # its own partial continued
+    before = seed[2].stat().st_mtime_ns
+    _refused(cli(*ENSEMBLE.split(), *h7, "--resume"), "ens_seed1.h5", "hurst", "--overwrite")
+    _refused(cli(*ENSEMBLE.split(), *h3, "--grid", "48", "--resume"), "grid")
+    _refused(cli(*ENSEMBLE.split(), *h7), "--resume", "--overwrite")
+    assert seed[2].stat().st_mtime_ns == before and _hurst(out) == 0.3
+    from petsc_contact import Run, run_ensemble
+
+    base = Run(grid=32, hurst=0.7, rms_slope=0.1, pressures=(1e-3, 1e-2), output=str(out))
+    with pytest.raises(ValueError, match="hurst"):
+        run_ensemble(base.with_(resume=True), [1, 2, 3])
+    # --overwrite clears the earlier ensemble first: killed in seed 2, nothing of H = 0.3 is left
+    r = _killed("after:commit:5", ENSEMBLE, *h7, "--overwrite")
+    assert r.returncode == -signal.SIGKILL, r.stderr
+    assert not out.exists() and not seed[3].exists() and _hurst(seed[1]) == 0.7
+    assert Path(f"{seed[2]}.partial").exists() and not seed[2].exists()
+    r = cli(*ENSEMBLE.split(), *h7, "--resume")  # seed 2 goes on from its partial
+    assert r.returncode == 0, r.stderr
+    with h5py.File(out) as f:
+        assert _hurst(out) == 0.7 and list(f["seeds"][...]) == [1, 2, 3]
+        assert json.loads(f.attrs["seed_files"]) == [str(seed[k]) for k in (1, 2, 3)]
+        for row, k in zip(f["mean_gap"][...], (1, 2, 3), strict=True):
+            assert _hurst(seed[k]) == 0.7
+            with h5py.File(seed[k]) as s:
+                assert np.array_equal(s["mean_gap"][...], row)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        ["ens.h5", *(f"ens_seed{k}.{e}" for k in (1, 2, 3) for e in ("h5", "csv"))]
+    )
+
+
+def test_compare_resumes_only_its_own_solvers(tmp_path, petsc):
+    out = tmp_path / "cmp.h5"
+    partial = Path(f"{out}.partial")
+    at = ["--output", str(out), "--quiet"]
+    assert _killed("after:commit:2", COMPARE, *at).returncode == -signal.SIGKILL  # cg, pk kept
+    kept = partial.read_bytes()
+    _refused(cli(*COMPARE.split(), *at), "cmp.h5.partial", "--resume", "--overwrite")
+    other = COMPARE.replace("--pressure 1e-3", "--pressure 2e-3")
+    _refused(cli(*other.split(), *at, "--resume"), "pressure")
+    assert partial.read_bytes() == kept
+    r = cli(*COMPARE.split(), *at, "--overwrite")
+    assert r.returncode == 0, r.stderr
+    assert not partial.exists()
+    with h5py.File(out) as f:
+        assert json.loads(f.attrs["solvers"]) == ["cg", "pk", "bnls"]
+    # a solver named twice fails before anything is solved or written, in one line
+    again = tmp_path / "again.h5"
+    _refused(cli(*COMPARE.replace("cg,pk,bnls", "cg,cg").split(), "--output", str(again)))
+    assert sorted(p.name for p in tmp_path.glob("again*")) == []
+    from petsc_contact.workflows.compare import check_solvers, compare
+
+    with pytest.raises(ValueError, match="twice"):
+        compare(None, 1e-3, ["cg", "cg"])  # type: ignore[arg-type]
+    for name in ("o/x.opts", "o_x.opts"):
+        (tmp_path / name).parent.mkdir(exist_ok=True)
+        (tmp_path / name).write_text("-tao_type bncg\n")
+    with pytest.raises(ValueError, match="twice"):  # the same group of the file
+        check_solvers([str(tmp_path / "o/x.opts"), str(tmp_path / "o_x.opts")])
+
+
+def test_study_reuses_only_its_own_pieces_and_refuses_bad_inputs(tmp_path):
+    data, cut = tmp_path / "d", tmp_path / "cut"
+    assert cli(*STUDY.split(), "--shrink", "128", "--data", str(data)).returncode == 0
+    kept = {p: p.stat().st_mtime_ns for p in data.rglob("*")}
+    r = cli(*STUDY.split(), "--shrink", "64", "--data", str(data))  # the same names, other grids
+    _refused(r, "fig1", "grid", "--data")
+    assert {p: p.stat().st_mtime_ns for p in data.rglob("*")} == kept
+    r = _killed("after:commit:2", STUDY, "--shrink", "128", "--data", str(cut))
+    assert r.returncode == -signal.SIGKILL, r.stderr
+    _refused(cli(*STUDY.split(), "--shrink", "64", "--data", str(cut)), ".partial", "grid")
+    for shrink in ("0", "-1", "129"):
+        _refused(cli("study", "--shrink", shrink, "--data", str(tmp_path / "s")), "--shrink")
+        _refused(cli("study", "--list", "--shrink", shrink), "--shrink")
+
+
+@pytest.mark.parametrize("listed", [[], ["--list"]], ids=["run", "list"])
+def test_study_data_folder_is_checked_before_it_is_made(tmp_path, listed):
+    _refused(cli("study", "--data", "", *listed), "give a data folder (--data is empty)")
+    (tmp_path / "file").write_text("")
+    _refused(cli("study", "--data", str(tmp_path / "file"), *listed), "is not a folder")
+    _refused(cli("study", "--shrink", "0", "--data", str(tmp_path / "new"), *listed), "--shrink")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]  # no folder made

@@ -1,7 +1,10 @@
 """Reading measured files as SurfaceTopography reads them: undefined points, channels, the
 content deciding over the extension, whole refusals, overrides recorded, and SurfaceTopography
-``Topography`` objects in the Python API.  Every file is made here (SurfaceTopography's own
-writers, h5py, numpy)."""
+``Topography`` objects in the Python API; text maps as their bytes come (byte-order marks, line
+ends, separators) read as the plain file or refused in one line.  Every file is made here
+(SurfaceTopography's own writers, h5py, numpy, bytes)."""
+
+import codecs
 
 import h5py
 import numpy as np
@@ -11,6 +14,7 @@ from SurfaceTopography import Topography as STTopography
 from SurfaceTopography import open_topography
 
 from petsc_contact import periodic_contact, punch_contact
+from petsc_contact.io import topography as topography_module
 from petsc_contact.io.topography import NotAMap, read_topography
 from petsc_contact.physics.preparation import fill_undefined
 from petsc_contact.workflows.predictions import predict_map
@@ -134,7 +138,9 @@ def test_line_scans_and_nonsense_are_refused_with_every_reason(tmp_path):
     np.savetxt(tmp_path / "profile.csv", np.c_[x, np.sin(6 * x)], delimiter=",")
     with pytest.raises(NotAMap, match="line scan"):
         read_topography(str(tmp_path / "profile.csv"))
-    (tmp_path / "notes.txt").write_text("these are my notes\nnot a map\n")
+    (tmp_path / "notes.txt").write_text(
+        "my notes of 3 May\nnot a map\n"
+    )  # a number: every reader is asked
     with pytest.raises(ValueError) as refused:
         read_topography(str(tmp_path / "notes.txt"))
     text = str(refused.value)
@@ -234,3 +240,154 @@ def test_filled_points_are_recorded_and_warned_about(tmp_path):
         expected = [(c & mask).sum() / c.sum() for c in contact]
         assert filled_share == pytest.approx(expected, rel=1e-12)
         assert np.all((f["filled_load_fraction"][:] >= 0) & (f["filled_load_fraction"][:] <= 1))
+
+
+GRID = np.round(np.random.default_rng(3).standard_normal((16, 16)), 4)
+
+
+def _matrix(sep=" ", rows=GRID):
+    """``rows`` as a text matrix, one line a row (``:g`` writes each value exactly)."""
+    return "".join(sep.join(f"{v:g}" for v in row) + "\n" for row in rows)
+
+
+PLAIN, CSV = _matrix(), _matrix(",")
+
+SAME = {  # name: (extension, the file's bytes), each read as the plain file
+    "utf-8 byte-order mark": (".txt", codecs.BOM_UTF8 + PLAIN.encode()),
+    "utf-16 le byte-order mark": (".txt", codecs.BOM_UTF16_LE + PLAIN.encode("utf-16-le")),
+    "utf-16 be byte-order mark": (".dat", codecs.BOM_UTF16_BE + PLAIN.encode("utf-16-be")),
+    "crlf": (".txt", PLAIN.replace("\n", "\r\n").encode()),
+    "cr": (".asc", PLAIN.replace("\n", "\r").encode()),
+    "tabs": (".txt", _matrix("\t").encode()),
+    "trailing blank lines": (".txt", (PLAIN + "\n \n\t\n").encode()),
+    "trailing whitespace": (".txt", PLAIN.replace("\n", " \t\n").encode()),
+    "comment lines": (".txt", ("# a map\n" + PLAIN + "# end\n").encode()),
+    "csv": (".csv", CSV.encode()),
+    "csv, byte-order mark and crlf": (".csv", codecs.BOM_UTF8 + CSV.replace("\n", "\r\n").encode()),
+    "csv, trailing commas and blank lines": (".csv", (CSV.replace("\n", ",\n") + "\n\n").encode()),
+    "csv, spaces after commas": (".csv", _matrix(", ").encode()),
+}
+
+
+@pytest.mark.parametrize("with_st", [True, False], ids=["SurfaceTopography", "text reader"])
+@pytest.mark.parametrize("name", SAME)
+def test_text_maps_read_as_the_plain_file(tmp_path, monkeypatch, name, with_st):
+    """A byte-order mark (UTF-8, UTF-16), any line ends, tabs, trailing blank lines and
+    whitespace: the map the plain file holds, with SurfaceTopography or without it."""
+    monkeypatch.setattr(topography_module, "surface_topography_available", lambda: with_st)
+    (tmp_path / "plain.txt").write_text(PLAIN)
+    ext, data = SAME[name]
+    (tmp_path / f"map{ext}").write_bytes(data)
+    plain = read_topography(str(tmp_path / "plain.txt"))
+    topo = read_topography(str(tmp_path / f"map{ext}"))
+    assert np.array_equal(plain.heights, GRID) and np.array_equal(topo.heights, GRID)
+    assert (topo.lengths, topo.unit) == (None, None)
+
+
+@pytest.mark.parametrize("marks", ["byte-order mark", "utf-16 and crlf"])
+def test_text_headers_survive_a_byte_order_mark(tmp_path, marks):
+    """A text export with a header, marked: the same sides, unit and heights (the mark made
+    the first header line unreadable, no harm; on a bare matrix it cost the first row)."""
+    STTopography(_map(), SIDES, unit="um").to_matrix(str(tmp_path / "export.txt"))
+    text = (tmp_path / "export.txt").read_text()
+    data = {
+        "byte-order mark": codecs.BOM_UTF8 + text.encode(),
+        "utf-16 and crlf": text.replace("\n", "\r\n").encode("utf-16"),
+    }[marks]
+    (tmp_path / "marked.txt").write_bytes(data)
+    plain, topo = (read_topography(str(tmp_path / n)) for n in ("export.txt", "marked.txt"))
+    assert np.array_equal(topo.heights, plain.heights)
+    assert (topo.lengths, topo.unit) == (plain.lengths, plain.unit) == (SIDES, "um")
+
+
+def _cell(text, row, col, value, sep=" "):
+    """``text`` with the value at ``row``, ``col`` (from 0) replaced by ``value``."""
+    lines = text.splitlines()
+    fields = lines[row].split(sep)
+    fields[col] = value
+    lines[row] = sep.join(fields)
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.parametrize(
+    "ext, text",
+    [
+        (".txt", _cell(PLAIN, 3, 4, "nan")),
+        (".txt", _cell(PLAIN, 3, 4, "NaN")),
+        (".dat", _cell(PLAIN, 3, 4, "Bad")),  # SurfaceTopography's word for it
+        (".csv", _cell(CSV, 3, 4, "", ",")),
+        (".csv", _cell(CSV, 3, 4, " NAN ", ",")),
+    ],
+    ids=["nan", "NaN", "Bad", "empty csv cell", "csv NAN"],
+)
+def test_undefined_heights_stay_undefined(tmp_path, ext, text):
+    """An undefined height reads as NaN (never 0), every other height as written."""
+    (tmp_path / f"map{ext}").write_text(text)
+    topo = read_topography(str(tmp_path / f"map{ext}"))
+    expected = GRID.copy()
+    expected[3, 4] = np.nan
+    assert topo.undefined == 1 and np.array_equal(topo.heights, expected, equal_nan=True)
+
+
+def _pandas():
+    """GRID as ``pandas.DataFrame(GRID).to_csv()`` writes it: column numbers, then each row
+    after its number."""
+    labels = "," + ",".join(str(j) for j in range(16)) + "\n"
+    return labels + "".join(f"{i}," + line for i, line in enumerate(CSV.splitlines(True)))
+
+
+RAGGED = "".join(
+    " ".join(f"{v:g}" for v in (row[:-1] if i == 5 else row)) + "\n" for i, row in enumerate(GRID)
+)
+REFUSED = {  # name: (extension, text, the refusal)
+    "a short row": (".txt", RAGGED, "line 6 has 15 values, the rows above it 16"),
+    "a short row after a header": (
+        ".txt",
+        "# Width: 4 um\n\nValue units: um\n" + RAGGED,
+        "line 9 has 15 values, the rows above it 16",
+    ),
+    "a long csv row": (".csv", _cell(CSV, 2, 4, "1,2", ","), "line 3 has 17 values"),
+    "decimal commas": (".txt", PLAIN.replace(".", ","), "line 1: value 1 .* \\(a decimal comma"),
+    "a word in a row": (".txt", _cell(PLAIN, 3, 4, "abc"), "line 4: value 5 'abc' is not a number"),
+    "a word in the first row": (".txt", _cell(PLAIN, 0, 0, "NA"), "line 1: value 1 'NA'"),
+    "a dash in the last row": (".dat", _cell(PLAIN, 15, 9, "-"), "line 16: value 10 '-'"),
+    "a word in a csv row": (".csv", _cell(CSV, 7, 0, "n/a", ","), "line 8: value 1 'n/a'"),
+    "a comment on a row": (".txt", _cell(PLAIN, 2, 15, "1 # x"), "line 3: value 17 '#'"),
+    "a comment on the first row": (".txt", _cell(PLAIN, 0, 15, "1 #x"), "line 1: value 17 '#x'"),
+    "a row of words inside the map": (".txt", _cell(PLAIN, 4, 0, "x y z"), "line 5: value 1 'x'"),
+    "pandas' labels": (".csv", _pandas(), "line 1 is column numbers, not heights"),
+    "a single row": (".txt", _matrix(rows=GRID[:1]), "at least 2 x 2 points.*\\(1, 16\\)"),
+    "a single column": (".txt", _matrix(rows=GRID[:, :1]), "line scan"),
+    "only a header": (".txt", "x y z\n# nothing measured\n", "holds no numbers, only text"),
+    "only blank lines": (".txt", "\n  \n\n", "holds no numbers"),
+}
+
+
+@pytest.mark.parametrize("name", REFUSED)
+def test_misread_text_maps_are_refused_in_one_line(tmp_path, name):
+    """A text map that would read wrong (a row dropped as a header, rows shifted, a decimal
+    comma, a placeholder for an undefined height) is refused, naming the line as the file
+    counts it."""
+    ext, text, refusal = REFUSED[name]
+    path = tmp_path / f"map{ext}"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=refusal) as refused:
+        read_topography(str(path))
+    assert "\n" not in str(refused.value) and str(path) in str(refused.value)
+
+
+def test_empty_files_and_folders_are_refused(tmp_path):
+    """Not a file with heights: an empty file, a folder, a name not in use; the CLI exits 2
+    with the reason on one line for a short row."""
+    (tmp_path / "empty.txt").write_bytes(b"")
+    for path, reason in [
+        (tmp_path / "empty.txt", "is empty"),
+        (tmp_path, "is not a regular file"),
+        (tmp_path / "none.txt", "does not exist"),
+    ]:
+        with pytest.raises(OSError, match=reason):
+            read_topography(str(path))
+    (tmp_path / "ragged.txt").write_text(RAGGED)
+    r, _ = _run(tmp_path, "ragged", "--heights", str(tmp_path / "ragged.txt"), "--length", "1")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert "line 6 has 15 values, the rows above it 16" in r.stderr

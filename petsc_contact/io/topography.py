@@ -12,9 +12,10 @@ them, and the channel read.  The readers, in the order they are tried for an ext
   present.  This includes the package's own output files, whose ``heights`` are the input;
 - everything else, text included, goes first to SurfaceTopography (about 40 instrument
   formats, the field's maintained reader: sides, unit, undefined points and channels as it
-  reads them).  A text matrix (``.txt``, ``.dat``, ``.csv``, ``.asc``; whitespace or commas,
-  ``#`` comments) is read by numpy when SurfaceTopography is not installed or cannot parse it;
-  NetCDF (``.nc``) likewise through h5py (NetCDF-4) or scipy (NetCDF-3).  Without
+  reads them).  A text matrix (``.txt``, ``.dat``, ``.asc`` separated by whitespace, ``.csv``
+  by commas; ``#`` comment lines) is read by the package when SurfaceTopography is not
+  installed or cannot parse it; NetCDF (``.nc``) likewise through h5py (NetCDF-4) or scipy
+  (NetCDF-3).  Without
   SurfaceTopography (the ``measured`` extra) any other file is refused with an
   ``ImportError`` that says how to install it.
 
@@ -22,10 +23,18 @@ A file the first reader cannot parse goes to the next (a Zygo ``.dat`` is no tex
 an ``.h5`` with several maps is read by SurfaceTopography's channels); when none can, the
 error gives every reader's whole reason.  A file that parses but is no map (a line scan, a
 3-D array, a channel that is not a height) is refused at once.
+
+A text file is checked before any reader reads it (see :func:`text_rows`): a UTF-8 or
+UTF-16 byte-order mark is removed (readers would take the first row for a header), any line
+ends are read; rows of different lengths, a row with a value that is no number (a decimal
+comma, ``NA``, ``-``) and a file with no row of numbers are refused in one line that names
+the line.  ``nan``, ``inf``, ``bad`` and an empty ``.csv`` cell are undefined heights (NaN).
 """
 
 from __future__ import annotations
 
+import codecs
+import io
 import os
 import re
 import warnings
@@ -48,6 +57,19 @@ INSTALL_HINT = (
     "(in the set-up's venv: .venv/bin/pip install 'SurfaceTopography>=1.27')"
 )
 
+BOMS = (
+    (codecs.BOM_UTF8, "utf-8-sig"),
+    (codecs.BOM_UTF16_LE, "utf-16"),
+    (codecs.BOM_UTF16_BE, "utf-16"),
+)
+"""Byte-order marks a text file may begin with (Windows editors, Excel's Unicode text), and
+the codec that removes them."""
+
+UNDEFINED = ("nan", "bad", "inf", "infinite")
+"""The words SurfaceTopography's text reader reads as undefined heights (in any case)."""
+
+DECIMAL_COMMA = re.compile(r"[-+]?\d*,\d+(?:[eE][-+]?\d+)?")
+
 GUESSES = {"HGTReader": (".hgt",)}
 """SurfaceTopography readers that recognise a file by its size alone (any file of 2 n^2 bytes
 is an elevation tile to ``HGTReader``): trusted only with their own extensions."""
@@ -63,6 +85,29 @@ class NotAMap(ValueError):
 
 class Unparsable(ValueError):
     """This reader cannot parse the file (the next one may)."""
+
+
+@dataclass(frozen=True)
+class TextRows:
+    """What a text file holds, as :func:`text_rows` reads it.
+
+    Attributes
+    ----------
+    text
+        The file's text (without its byte-order mark).
+    marked
+        Whether the file began with a byte-order mark.
+    heights
+        The map when the file is a bare matrix (rows of numbers and ``#`` comments only; NaN
+        where undefined), else ``None``.
+    problem
+        Why it is no bare matrix (its first header line, ...), ``""`` when it is.
+    """
+
+    text: str
+    marked: bool
+    heights: np.ndarray | None
+    problem: str = ""
 
 
 @dataclass(frozen=True)
@@ -266,10 +311,7 @@ def read_topography(path: str, channel: Channel = None) -> Topography:
     ValueError
         No reader can parse it (with each reader's reason), or it holds no usable map.
     """
-    if not os.path.isfile(path):
-        raise OSError(f"heights file '{path}' does not exist")
-    if not os.access(path, os.R_OK):
-        raise OSError(f"heights file '{path}' is not readable")
+    _check_file(path)
     readers = _readers(path)
     if not readers:
         raise ImportError(
@@ -292,6 +334,18 @@ def read_topography(path: str, channel: Channel = None) -> Topography:
     if not surface_topography_available():
         reasons.append(f"SurfaceTopography is not installed ({INSTALL_HINT})")
     raise ValueError(f"cannot read heights from '{path}': " + "; ".join(reasons))
+
+
+def _check_file(path: str) -> None:
+    """``OSError`` (one line) unless ``path`` is a readable, non-empty regular file."""
+    if not os.path.exists(path):
+        raise OSError(f"heights file '{path}' does not exist")
+    if not os.path.isfile(path):
+        raise OSError(f"heights file '{path}' is not a regular file (a folder or a device)")
+    if not os.access(path, os.R_OK):
+        raise OSError(f"heights file '{path}' is not readable")
+    if os.path.getsize(path) == 0:
+        raise OSError(f"heights file '{path}' is empty")
 
 
 def surface_topography_available() -> bool:
@@ -348,25 +402,182 @@ def _numpy(path: str, channel: Channel) -> Topography:
         return _pick(dict(data), channel, path, "numpy")
 
 
-def _text(path: str, channel: Channel) -> Topography:
+def text_rows(path: str) -> TextRows | None:
+    """The rows of numbers of a text file, checked; ``None`` for a file that is not text
+    (binary, or neither UTF-8 nor marked UTF-16: the readers decide).
+
+    A line is a row of numbers when every field is one (``.csv``: fields between commas, an
+    empty one undefined; else: between whitespace), a ``#`` line a comment, and any other
+    line a header line (sides, unit) that SurfaceTopography reads.
+
+    Raises
+    ------
+    NotAMap
+        Rows of different lengths in one block of rows; a row of numbers with a value that is
+        none (a decimal comma, ``NA``, a comment), which a reader would take for a header line
+        and drop (see ``_refuse_broken_row``); a file with no number at all.
+    """
+    with open(path, "rb") as f:
+        text, marked = _decoded(f.read())
+    if text is None:
+        return None
+    csv = path.lower().endswith(".csv")
+    numbered = [(n, _fields(line, csv)) for n, line in enumerate(text.splitlines(), 1)]
+    lines = [(n, fields) for n, fields in numbered if fields]  # blank lines aside
+    values = [_numbers(fields) for _, fields in lines]
+    others = [i for i, (_, fields) in enumerate(lines) if values[i] is None and fields != ["#"]]
+    for i in others:
+        _refuse_broken_row(path, *lines[i], _neighbours(lines, values, i))
+    _check_lengths(path, lines, values)
+    rows = [v for v in values if v is not None]
+    first = next((n for (n, _), v in zip(lines, values, strict=True) if v is not None), 0)
+    if rows:
+        _refuse_labels(path, first, rows[0])
+    if not rows and not re.search(r"\d", text):
+        raise NotAMap(f"'{path}' holds no numbers, only text: no row of heights")
+    if others:
+        n = lines[others[0]][0]
+        return TextRows(text, marked, None, f"line {n}: '{text.splitlines()[n - 1].strip()[:40]}'")
+    if not rows:
+        return TextRows(text, marked, None, "no row of numbers")
+    if len({v.size for v in rows}) > 1:
+        return TextRows(text, marked, None, "blocks of rows of different lengths")
+    return TextRows(text, marked, np.array(rows))
+
+
+def _decoded(data: bytes) -> tuple[str | None, bool]:
+    """A file's text and whether it had a byte-order mark; ``None`` when it is not text."""
+    for bom, codec in BOMS:
+        if data.startswith(bom):
+            try:
+                return data.decode(codec), True
+            except UnicodeDecodeError:
+                return None, True
+    if b"\0" in data:
+        return None, False
     try:
-        heights = np.loadtxt(path, delimiter="," if path.endswith(".csv") else None, ndmin=2)
-    except ValueError as exc:
-        raise Unparsable(f"not a numeric matrix ({_flat(exc)})") from None
-    except UnicodeDecodeError as exc:
-        raise Unparsable(f"not text ({_flat(exc)})") from None
+        return data.decode("utf-8"), False
+    except UnicodeDecodeError:
+        return None, False
+
+
+def _fields(line: str, csv: bool) -> list[str]:
+    """A line's fields (``["#"]`` for a comment, ``[]`` for a blank line); a trailing comma of
+    a ``.csv`` line ends it, it opens no empty cell."""
+    line = line.strip()
+    if line.startswith("#"):
+        return ["#"]
+    if not csv:
+        return line.split()
+    line = line.removesuffix(",")
+    return [field.strip() for field in line.split(",")] if line else []
+
+
+def _numbers(fields: list[str]) -> np.ndarray | None:
+    """The numbers of a line's fields (NaN for an undefined one), ``None`` when one is not."""
+    try:
+        return np.array([_number(field) for field in fields])
+    except ValueError:
+        return None
+
+
+def _number(field: str) -> float:
+    if field == "" or field.lower() in UNDEFINED:
+        return float("nan")
+    return float(field)
+
+
+def _neighbours(
+    lines: list[tuple[int, list[str]]], values: list[np.ndarray | None], i: int
+) -> list[int]:
+    """The lengths of the rows of numbers just before and after line ``i`` (blank lines
+    aside)."""
+    near = [j for j in (i - 1, i + 1) if 0 <= j < len(lines)]
+    return [len(lines[j][1]) for j in near if values[j] is not None]
+
+
+def _refuse_broken_row(path: str, n: int, fields: list[str], neighbours: list[int]) -> None:
+    """``NotAMap`` when line ``n`` is a row of numbers with a value that is none: at least half
+    its values (the fields before a ``#``) are numbers, and a row next to it has as many or it
+    lies between two rows of one length; or all are numbers or decimal commas."""
+    comment = next((k for k, f in enumerate(fields) if f.startswith("#")), len(fields))
+    numeric = [_numbers([f]) is not None or DECIMAL_COMMA.fullmatch(f) is not None for f in fields]
+    inside = len(neighbours) == 2 and neighbours[0] == neighbours[1]
+    row = sum(numeric[:comment]) * 2 >= comment and (comment in neighbours or inside)
+    if not (row or (all(numeric) and len(fields) > 1)):
+        return
+    k, bad = next((k, f) for k, f in enumerate(fields, 1) if _numbers([f]) is None)
+    raise NotAMap(f"'{path}' line {n}: value {k} '{bad}' is not a number ({_hint(bad)})")
+
+
+def _hint(field: str) -> str:
+    """What to write instead of ``field`` in a row of numbers."""
+    if DECIMAL_COMMA.fullmatch(field):
+        return "a decimal comma: write decimal points"
+    if field.startswith("#"):
+        return "a comment goes on a line of its own"
+    return "an undefined height is written nan"
+
+
+def _refuse_labels(path: str, n: int, row: np.ndarray) -> None:
+    """``NotAMap`` when the first row of numbers is an empty corner and column numbers (0, 1,
+    ... or 1, 2, ...): the labels a spreadsheet or ``pandas.DataFrame.to_csv`` writes, not
+    heights (its rows then begin with their numbers)."""
+    labels = row[1:]
+    counting = labels.size > 1 and np.array_equal(labels, labels[0] + np.arange(labels.size))
+    if np.isnan(row[0]) and counting and labels[0] in (0, 1):
+        raise NotAMap(
+            f"'{path}' line {n} is column numbers, not heights (a spreadsheet's labels): "
+            "write the map alone (pandas: to_csv(..., header=False, index=False))"
+        )
+
+
+def _check_lengths(
+    path: str, lines: list[tuple[int, list[str]]], values: list[np.ndarray | None]
+) -> None:
+    """``NotAMap`` naming the first row whose length differs from the rows above it in its
+    block (rows of numbers between two other lines)."""
+    width = 0
+    for (n, _), v in zip(lines, values, strict=True):
+        if v is None:
+            width = 0
+        elif not width:
+            width = len(v)
+        elif len(v) != width:
+            raise NotAMap(
+                f"'{path}' line {n} has {len(v)} values, the rows above it {width}: "
+                "every row of a map has the same number of values"
+            )
+
+
+def _text(path: str, channel: Channel) -> Topography:
+    """A bare text matrix (rows of numbers and ``#`` comments only)."""
+    rows = text_rows(path)
+    if rows is None:
+        raise Unparsable("not text (neither UTF-8 nor marked UTF-16)")
+    return _bare(rows, path, channel)
+
+
+def _bare(rows: TextRows, path: str, channel: Channel) -> Topography:
+    if rows.heights is None:
+        raise Unparsable(f"not a numeric matrix ({rows.problem})")
     _single(channel, path)
-    return Topography(heights, reader="text")
+    return Topography(rows.heights, reader="text")
 
 
 def _text_with_metadata(path: str, channel: Channel) -> Topography:
     """A text file as SurfaceTopography reads it (sides and unit from a header, x y z lists,
     line scans), except a bare matrix: with no sides and no unit it keeps the package's
-    orientation (rows are x, as numpy reads it; SurfaceTopography takes columns as x)."""
-    read = _surface_topography(path, channel)
+    orientation (rows are x, as numpy reads it; SurfaceTopography takes columns as x).  A
+    text file is checked first (:func:`text_rows`), and read without its byte-order mark."""
+    rows = text_rows(path)
+    if rows is None:
+        return _surface_topography(path, channel)
+    source = io.BytesIO(rows.text.encode()) if rows.marked else None
+    read = _surface_topography(path, channel, source)
     if read.lengths is None and read.unit is None:
         try:
-            bare = _text(path, channel)
+            bare = _bare(rows, path, channel)
         except Unparsable:
             return read
         if bare.heights.shape == read.heights.T.shape:
@@ -473,14 +684,18 @@ def _unit(value: Any) -> str | None:
     return unit_name(value.decode() if isinstance(value, bytes) else str(value))
 
 
-def _surface_topography(path: str, channel: Channel) -> Topography:
-    """An instrument file through SurfaceTopography: the channel asked for, else its default."""
+def _surface_topography(
+    path: str, channel: Channel, source: io.BytesIO | None = None
+) -> Topography:
+    """An instrument file through SurfaceTopography: the channel asked for, else its default.
+    ``source``: the file's content to read instead of ``path`` (a text without its
+    byte-order mark)."""
     from SurfaceTopography import open_topography
 
     with warnings.catch_warnings(), np.errstate(all="ignore"):  # its sniffers' noise
         warnings.simplefilter("ignore")
         try:
-            reader = open_topography(path)
+            reader = open_topography(path if source is None else source)
         except Exception as exc:
             raise Unparsable(_flat(exc)) from None
         kind, ext = type(reader).__name__, os.path.splitext(path)[1].lower()

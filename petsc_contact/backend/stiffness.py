@@ -21,7 +21,7 @@ import numpy as np
 
 from ..conventions.grid import Grid
 from ..numerics.device import CPU
-from ..solver.linear import Restricted
+from ..solver.linear import Restricted, unconverged
 from . import _petsc
 from .operator import ShellInterface, shell_matrix
 
@@ -44,12 +44,8 @@ def restricted_solve(
     Returns
     -------
     y, iterations
-        The local slab of ``y`` (zero off the mask) and the CG iterations.
-
-    Raises
-    ------
-    RuntimeError
-        If CG does not converge (the stiffness would be wrong, not approximate).
+        The local slab of ``y`` (zero off the mask) and the CG iterations; NaN if CG did not
+        converge (:func:`~petsc_contact.solver.linear.unconverged`).
     """
     a_ctx, m_ctx = _Shell(op, mask, CPU), _Shell(pc, mask, CPU)
     petsc = _petsc.petsc()
@@ -81,7 +77,8 @@ def restricted_solve(
         pcobj.destroy()
         mat.destroy()
     if reason <= 0:
-        raise RuntimeError(f"stiffness solve did not converge (KSP reason {reason})")
+        names = {v: k for k, v in vars(petsc.KSP.ConvergedReason).items() if isinstance(v, int)}
+        out = unconverged(out, f"KSP {names.get(reason, reason)}")
     return out, int(its)
 
 

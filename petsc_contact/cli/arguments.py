@@ -86,14 +86,23 @@ def _quantity(text: str) -> float | str:
     return text.strip()
 
 
+def _items(text: str, separator: str = ",") -> list[str]:
+    """The items of a list (``1e-3,2e-3``); an empty one (``1e-3,,2e-3``, a trailing comma)
+    is an error, not a load or a name fewer."""
+    items = [v.strip() for v in re.split(separator, text)]
+    if "" in items:
+        raise argparse.ArgumentTypeError(f"an empty item in '{text}'")
+    return items
+
+
 def _quantity_list(text: str) -> list[float | str]:
     """Comma-separated numbers, each with an optional unit (``1e5,2MPa``)."""
-    return [_quantity(v) for v in text.split(",") if v.strip()]
+    return [_quantity(v) for v in _items(text)]
 
 
 def _float_list(text: str) -> list[float]:
     try:
-        return [float(v) for v in text.split(",") if v.strip()]
+        return [float(v) for v in _items(text)]
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"expected comma-separated numbers, got '{text}'"
@@ -138,7 +147,7 @@ def _minutes(text: str) -> float:
 
 def _grid_shape(text: str) -> int | tuple[int, int]:
     """``N`` (square) or ``NX,NY`` / ``NXxNY`` (rectangle)."""
-    parts = [v for v in re.split(r"[,x]", text) if v.strip()]
+    parts = _items(text, "[,x]")
     try:
         sizes = [int(v) for v in parts]
     except ValueError:
@@ -151,7 +160,7 @@ def _grid_shape(text: str) -> int | tuple[int, int]:
 def _sweep_spec(text: str) -> list[float | str]:
     """``N`` or ``N,MIN,MAX``, the bounds with an optional unit (``12,1kPa,10MPa``: checked
     once the run's units are known)."""
-    parts = [v for v in text.split(",") if v.strip()]
+    parts = _items(text)
     if len(parts) not in (1, 3):
         raise argparse.ArgumentTypeError(f"expected N or N,PMIN,PMAX, got '{text}'")
     count = _float_list(parts[0])[0]
@@ -164,13 +173,24 @@ def _sweep_spec(text: str) -> list[float | str]:
     return [count, *bounds]
 
 
+def _solver_list(text: str) -> list[str]:
+    """``compare --solvers``: distinct names (or options files)."""
+    if not text.replace(",", "").strip():
+        raise argparse.ArgumentTypeError("names no solver: give cg,tron,... or leave it out")
+    names = _items(text)
+    twice = sorted({v for v in names if names.count(v) > 1})
+    if twice:
+        raise argparse.ArgumentTypeError(f"a solver named twice: {', '.join(twice)}")
+    return names
+
+
 def _seed_list(text: str) -> list[int]:
     try:
         if "-" in text.strip("-") and "," not in text:
             a, b = (int(v) for v in text.split("-", 1))
             seeds = list(range(a, b + 1))
         else:
-            seeds = [int(v) for v in text.split(",") if v.strip()]
+            seeds = [int(v) for v in _items(text)]
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected K1,K2,... or A-B, got '{text}'") from None
     if not seeds or len(set(seeds)) != len(seeds):
@@ -636,7 +656,7 @@ def _compare_parser(sub: Any) -> None:
     )
     cmp_.add_argument(
         "--solvers",
-        type=lambda t: [v for v in t.split(",") if v],
+        type=_solver_list,
         default=None,
         metavar="S1,S2,...",
         help="TAO types, 'cg' (default solver), 'pk' (Polonsky-Keer) or "

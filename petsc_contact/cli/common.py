@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from collections.abc import Sequence
 from typing import Any
+
+from ..io.paths import Named, check_input, check_outputs
 
 EXIT_NOT_CONVERGED = 1
 EXIT_BAD_INPUT = 2
@@ -17,6 +20,79 @@ EXIT_INTERRUPTED = 130
 
 class InputError(Exception):
     """Bad user input: reported as one line, exit status 2."""
+
+
+TABLED = ("periodic", "punch", "demo", "compare")  # OUT.csv beside OUT.h5
+_OPTION_LINE = re.compile(r"^\s*($|#|alias\s|-[A-Za-z_])")  # PETSc's options file lines
+
+
+def refusal(args: argparse.Namespace, petsc_args: Sequence[str]) -> str | None:
+    """Why the command line is refused before anything is read by PETSc, computed or written
+    (one line), or ``None``: its options files, its inputs, its outputs and their clashes."""
+    from .arguments import options_files
+
+    try:
+        for path in options_files(petsc_args):
+            check_options_file(path)
+        inputs = command_inputs(args)
+        for option, given in inputs:
+            if given is not None:
+                check_input(given, option)
+        check_outputs(command_outputs(args), inputs)
+        if args.command == "theory":
+            from .theory import check_compared
+
+            check_compared(args)
+    except ValueError as exc:
+        return str(exc)
+    return None
+
+
+def check_options_file(path: str) -> None:
+    """``ValueError`` unless ``path`` is a text file of PETSc options (``-name [value]``
+    lines, ``#`` comments): PETSc would otherwise print a dozen lines of errors."""
+    try:
+        check_input(path, "options file")
+        with open(path, encoding="utf-8") as f:
+            lines = f.read().splitlines()
+    except UnicodeDecodeError:
+        raise ValueError(f"options file '{path}' is not text (-options_file)") from None
+    except ValueError as exc:
+        raise ValueError(f"{exc} (-options_file)") from None
+    for number, line in enumerate(lines, 1):
+        if "\0" in line or not _OPTION_LINE.match(line):
+            raise ValueError(
+                f"options file '{path}' line {number} is not a PETSc option: its lines are "
+                "'-name [value]' or # comments (-options_file)"
+            )
+
+
+def command_inputs(args: argparse.Namespace) -> list[Named]:
+    """The files the command reads, as ``(option, path)`` pairs (``None``: not given)."""
+    inputs: list[Named] = [("--heights", getattr(args, "heights", None))]
+    inputs += [("--compare", path) for path in getattr(args, "compare", None) or ()]
+    if args.command == "plot":
+        inputs.append(("the file to plot", args.file))
+    if args.command == "experiment":
+        inputs.append(("--table", args.table))
+    return inputs
+
+
+def command_outputs(args: argparse.Namespace) -> list[Named]:
+    """The files the command writes, as ``(option, path)`` pairs, the names derived from
+    ``--output`` (``OUT.csv``, ``compare``'s ``OUT.png``) among them."""
+    from ..io.plot import plot_file
+    from ..io.store import csv_path
+
+    output, plot = getattr(args, "output", None), getattr(args, "plot", None)
+    if output and args.command == "plot":
+        output = plot_file(output, "--output")
+    outputs: list[Named] = [("--output", output), ("--plot", plot and plot_file(plot))]
+    if output and args.command in TABLED:
+        outputs.append(("the table of --output", csv_path(output)))
+    if output and args.command == "compare":
+        outputs.append(("the plot of --output", output.removesuffix(".h5") + ".png"))
+    return outputs
 
 
 def describe(args: argparse.Namespace) -> Any:

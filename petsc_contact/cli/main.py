@@ -12,13 +12,14 @@ from typing import Any
 
 from ..io.schema import schema_markdown
 from ..io.store import StorageError, storage
-from .arguments import build_parser, is_petsc_option, options_files, split_arguments
+from .arguments import build_parser, is_petsc_option, split_arguments
 from .common import (
     EXIT_BAD_INPUT,
     EXIT_INTERRUPTED,
     EXIT_STORAGE,
     EXIT_UNAVAILABLE,
     InputError,
+    refusal,
     say,
 )
 
@@ -73,9 +74,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     ours, petsc_args = split_arguments(argv)
     args = build_parser().parse_args(ours)
-    missing = [f for f in options_files(petsc_args) if not os.path.isfile(f)]
-    if missing:  # before PETSc reads it, which would print a dozen lines
-        say(f"options file '{missing[0]}' does not exist (-options_file)")
+    problem = refusal(args, petsc_args)
+    if problem:  # before PETSc reads an options file, before anything is computed or written
+        say(problem)
         return EXIT_BAD_INPUT
     signal.signal(signal.SIGTERM, _interrupt)
     sys.stdout = QuietPipe(sys.stdout)

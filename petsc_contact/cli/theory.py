@@ -40,6 +40,7 @@ def run_theory(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[s
         )
         reading, length_unit = f"{args.heights}: {profile.describe()}", profile.unit or ""
         attributes = _profile_record(run, argv, profile)
+    runs = [(os.path.basename(path), _run_table(path)) for path in args.compare or ()]
     if not args.quiet and reading:
         print(f"# {reading}", flush=True)
     attributes.update(geometry="theory", **result.scalars())
@@ -53,7 +54,6 @@ def run_theory(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[s
     if args.plot:
         from ..io.plot import plot_theory
 
-        runs = [(os.path.basename(path), _run_table(path)) for path in args.compare or ()]
         plot_theory(args.plot, result, modulus, runs, {"length": length_unit})
     print(f"# wrote {args.output}" + (f" and {args.plot}" if args.plot else ""))
     return 0
@@ -131,6 +131,31 @@ def _print(result: Prediction) -> None:
     print(f"{'p0':>12} {'mean_gap':>12} {'K':>12}")
     for row in zip(result.nominal_pressure, result.mean_gap, result.stiffness, strict=True):
         print(" ".join(f"{v:>12.5g}" for v in row))
+
+
+def check_compared(args: argparse.Namespace) -> None:
+    """``ValueError`` unless ``--compare`` comes with ``--plot`` (it draws the runs there) and
+    names periodic runs' files (a punch's mean gap is over its footprint, not a cell's)."""
+    if not args.compare:
+        return
+    if not args.plot:
+        raise ValueError("--compare draws runs beside the theory's plot: give --plot PNG")
+    for path in args.compare:
+        geometry = _geometry(path)
+        if geometry != "periodic":
+            what = f"geometry '{geometry}'" if geometry else "no geometry: not a run's file"
+            raise ValueError(f"--compare takes periodic runs; '{path}' is not one ({what})")
+
+
+def _geometry(path: str) -> str:
+    """The ``geometry`` attribute of a results file ('' when it has none)."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as f:
+            return str(f.attrs.get("geometry", ""))
+    except OSError:
+        raise ValueError(f"--compare: '{path}' is not an HDF5 results file") from None
 
 
 def _run_table(path: str) -> dict[str, np.ndarray]:

@@ -19,15 +19,11 @@ def run_plot(args: argparse.Namespace) -> int:
     """``petsc-contact plot``: one field of one step as a map, or a theory file's prediction."""
     import h5py
 
-    from ..io.store import check_writable
-
-    if not os.path.isfile(args.file):
-        raise InputError(f"'{args.file}' does not exist")
     stem = args.file.removesuffix(".h5")
     with h5py.File(args.file, "r") as f:
         if f.attrs.get("geometry") == "theory":
             out = args.output or f"{stem}.png"
-            check_writable(out)
+            _check_plot_output(out, args.file)
             _plot_theory_file(f, out)
             print(f"# wrote {out}")
             return 0
@@ -37,13 +33,22 @@ def run_plot(args: argparse.Namespace) -> int:
     from ..io.plot import plot_map
 
     out = args.output or f"{stem}_{args.field}" + (f"_step{step}.png" if step else ".png")
-    check_writable(out)
+    _check_plot_output(out, args.file)
     plot_map(
         out, values, (lx, ly), length_unit, args.field, title, label, args.scale, args.vmin,
         args.vmax,
     )  # fmt: skip
     print(f"# wrote {out}")
     return 0
+
+
+def _check_plot_output(out: str, source: str) -> None:
+    """The PNG ``out`` (given, or named after the file) can be written and is not ``source``."""
+    from ..io.paths import check_output
+    from ..io.store import check_writable
+
+    check_output(out, [("the file to plot", source)])
+    check_writable(out)
 
 
 def _field(f: Any, args: argparse.Namespace) -> tuple[np.ndarray, str, str, int]:
@@ -54,8 +59,7 @@ def _field(f: Any, args: argparse.Namespace) -> tuple[np.ndarray, str, str, int]
 
     name = args.field
     if name not in f:
-        hint = " (run with --fields)" if name in ("pressure", "gap", "contact") else ""
-        raise InputError(f"'{args.file}' has no dataset '{name}'{hint}")
+        raise InputError(_missing_map(f, args.file, name))
     data = f[name]
     units = in_unit(ENTRIES[name], str(f.attrs.get("length_unit", "")),
                     str(f.attrs.get("pressure_unit", "")))  # fmt: skip
@@ -80,6 +84,22 @@ def _field(f: Any, args: argparse.Namespace) -> tuple[np.ndarray, str, str, int]
     unit = str(f.attrs.get("pressure_unit", ""))
     load = f"p0 = {p0 / modulus:.3g} E*" + (f" = {p0:.3g} {unit}" if unit else "")
     return data[step - 1] * scale, f"{name}, step {step} of {steps}, {load}", label, step
+
+
+def _missing_map(f: Any, path: str, name: str) -> str:
+    """Why the file ``path`` (open as ``f``) has no map ``name``: an unfinished run keeps its
+    maps apart until it ends, and a run without ``--fields`` has none of every step."""
+    from ..io.store import PARTIAL, is_partial, parts_path
+
+    per_step = name in ("pressure", "gap", "contact")
+    had_fields = json.loads(f.attrs.get("parameters", "{}")).get("fields", False)
+    if is_partial(path) and (had_fields or not per_step):
+        parts = parts_path(path.removesuffix(PARTIAL))
+        return (
+            f"'{path}' is an unfinished run's file: its maps are in {parts} until the run "
+            "ends (--resume finishes it)"
+        )
+    return f"'{path}' has no dataset '{name}'" + (" (run with --fields)" if per_step else "")
 
 
 def _plot_theory_file(f: Any, out: str) -> None:
@@ -109,8 +129,6 @@ def run_experiment(args: argparse.Namespace) -> int:
 
     for name in ("modulus", "thickness"):
         positive(f"--{name}", getattr(args, name))
-    if not os.path.isfile(args.table):
-        raise InputError(f"table '{args.table}' does not exist")
     table = load_table(args.table, 2)
     check_writable(args.output)
     p, disp = table[:, 0], table[:, 1]

@@ -7,10 +7,28 @@ backend switched, shown as it is in a notebook) and writes it to ``path`` when o
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+
+
+def plot_file(path: str, option: str = "--plot") -> str:
+    """The file a figure saved as ``path`` becomes (``X`` without an extension: ``X.png``);
+    ``ValueError`` naming ``option`` when matplotlib cannot write its format (``X.h5``)."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    extension = os.path.splitext(path)[1][1:]
+    if not extension:
+        return f"{path}.png"
+    formats = FigureCanvasBase.get_supported_filetypes()
+    if extension.lower() not in formats:
+        raise ValueError(
+            f"{option} '{path}': a figure cannot be written as '.{extension}' (the extension "
+            f"names the format: {', '.join(sorted(formats))})"
+        )
+    return path
 
 
 def plot_sweep(

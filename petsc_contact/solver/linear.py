@@ -9,10 +9,28 @@ preconditioned residual against ``rtol`` times its first value.
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 from ..conventions.grid import Grid
 from ..numerics.device import Device
+
+
+class StiffnessNotConverged(UserWarning):
+    """The held-set solve of an exact stiffness stopped short of its tolerance."""
+
+
+def unconverged(y: Any, reason: str) -> Any:
+    """``y`` set to NaN, with a warning naming ``reason``: a stiffness from a solve that did
+    not converge would be wrong, not approximate, and the run goes on without it."""
+    warnings.warn(
+        f"the exact stiffness's held-set solve did not converge ({reason}; "
+        "-stiffness_ksp_max_it and -stiffness_ksp_rtol set its limits): that stiffness is NaN",
+        StiffnessNotConverged,
+        stacklevel=3,
+    )
+    y[...] = float("nan")
+    return y
 
 
 class Restricted:
@@ -68,12 +86,8 @@ def held_set_solve(
     Returns
     -------
     y, iterations
-        ``y`` (zero off the mask) as a field of the device, and the CG iterations.
-
-    Raises
-    ------
-    RuntimeError
-        If CG does not converge (the stiffness would be wrong, not approximate).
+        ``y`` (zero off the mask) as a field of the device, and the CG iterations; NaN if
+        CG did not converge (:func:`unconverged`).
     """
     xp = device.xp
     mask = device.asarray(mask).reshape(-1)
@@ -88,11 +102,13 @@ def held_set_solve(
         return y.reshape(grid.local_shape), 0
     p = z.copy()
     rz = float(xp.dot(r, z))
+    reason = "DIVERGED_ITS"
     for its in range(1, limit + 1):
         a.apply_array(p, q)
         pq = float(xp.dot(p, q))
-        if not pq > 0:
-            break  # a Hessian that is not positive definite on the set: not converged
+        if not pq > 0:  # a Hessian that is not positive definite on the set
+            reason = "DIVERGED_INDEFINITE_MAT"
+            break
         alpha = rz / pq
         y += alpha * p
         r -= alpha * q
@@ -103,4 +119,4 @@ def held_set_solve(
         p *= rz_new / rz
         p += z
         rz = rz_new
-    raise RuntimeError(f"stiffness solve did not converge in {its} iterations")
+    return unconverged(y, reason).reshape(grid.local_shape), its

@@ -107,9 +107,18 @@ class Run:
     options: tuple[str, ...] = field(default=(), compare=False)
 
     def __post_init__(self) -> None:
-        """Check the numbers (``ValueError`` naming the option as the command line does)."""
+        """Check the numbers and the files (``ValueError`` naming the option as the command
+        line does): a heights file must be a regular, non-empty file, and the output (with
+        its ``OUT.csv``) a regular file or a new name that is not the heights file."""
         from ..conventions.validation import non_negative, positive
+        from ..io.paths import check_input, check_outputs
+        from ..io.store import csv_path
 
+        if self.heights_file is not None:
+            check_input(self.heights_file, "--heights")
+        if self.output is not None:
+            outputs = [("--output", self.output), ("the table of --output", csv_path(self.output))]
+            check_outputs(outputs, [("--heights", self.heights_file)])
         if self.geometry not in GEOMETRIES:
             raise ValueError(f"geometry must be one of {', '.join(GEOMETRIES)}: {self.geometry}")
         positive("--modulus", self.modulus_value)

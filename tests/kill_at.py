@@ -1,13 +1,17 @@
 """Run ``petsc-contact ARGS`` and SIGKILL it at a chosen point of its write path.
 
-    python tests/kill_at.py WHEN:TARGET:N -- ARGS...
+    python tests/kill_at.py WHEN:TARGET:N[:HOW] -- ARGS...
 
 ``TARGET`` is the file a rename puts in place: ``heights`` and ``step`` (the part files),
 ``commit`` (the ``.partial`` file), ``state`` (the resume state), ``table`` (``OUT.csv``),
 ``final`` (``OUT.h5``),
 ``compare`` (a comparison's ``.partial``).  ``WHEN`` is ``before`` the ``N``-th such rename,
 ``after`` it, or ``during`` the writing of the file it renames (the process dies with the
-temporary file half written).  Nothing of the package is changed: the runner wraps
+temporary file half written).  ``HOW`` is ``KILL`` (the default: ``SIGKILL``), ``TERM``
+(``SIGTERM``, which the package handles) or ``FINALIZER`` (``SIGTERM`` sent from inside a
+finaliser, where Python drops the exception its handler raises).  ``WHEN`` may also be
+``damage``: after the ``N``-th rename, 64 bytes in the middle of the file are inverted, and
+the run goes on.  Nothing of the package is changed: the runner wraps
 ``os.replace`` from outside.
 """
 
@@ -16,6 +20,7 @@ from __future__ import annotations
 import os
 import signal
 import sys
+import weakref
 from pathlib import Path
 
 import h5py
@@ -78,7 +83,31 @@ def _target(path: str) -> str:
     return ""
 
 
-def _install(when: str, target: str, nth: int) -> None:
+def _signal(how: str) -> None:
+    """Send this process ``SIGKILL``, ``SIGTERM``, or ``SIGTERM`` from inside a finaliser."""
+    if how != "FINALIZER":
+        os.kill(os.getpid(), signal.SIGKILL if how == "KILL" else signal.SIGTERM)
+        return
+
+    class Dropped:
+        pass
+
+    dropped = Dropped()
+    weakref.finalize(dropped, os.kill, os.getpid(), signal.SIGTERM)
+    del dropped  # the finaliser runs here; the KeyboardInterrupt it raises is dropped
+
+
+def _damage(path: str) -> None:
+    """Invert 64 bytes in the middle of ``path`` (zeros written there might change nothing)."""
+    middle = os.path.getsize(path) // 2
+    with open(path, "r+b") as f:
+        f.seek(middle)
+        inverted = bytes(255 - b for b in f.read(64))
+        f.seek(middle)
+        f.write(inverted)
+
+
+def _install(when: str, target: str, nth: int, how: str = "KILL") -> None:
     seen = {"count": 0}
     replace = os.replace
 
@@ -93,17 +122,19 @@ def _install(when: str, target: str, nth: int) -> None:
         if hit and when == "during":  # the temporary file half written when the process dies
             os.truncate(src, max(os.path.getsize(src) // 2, 1))
         if hit and when in ("before", "during"):
-            os.kill(os.getpid(), signal.SIGKILL)
+            _signal(how)
         replace(src, dst)
         if hit and when == "after":
-            os.kill(os.getpid(), signal.SIGKILL)
+            _signal(how)
+        if hit and when == "damage":
+            _damage(dst)
 
     os.replace = killing_replace  # type: ignore[assignment]
 
 
 if __name__ == "__main__":
     spec, separator, *args = sys.argv[1:]
-    assert separator == "--", "usage: kill_at.py WHEN:TARGET:N -- ARGS..."
-    when, target, nth = spec.split(":")
-    _install(when, target, int(nth))
+    assert separator == "--", "usage: kill_at.py WHEN:TARGET:N[:HOW] -- ARGS..."
+    when, target, nth, *how = spec.split(":")
+    _install(when, target, int(nth), *how)
     sys.exit(main(args))

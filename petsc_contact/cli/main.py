@@ -11,7 +11,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from ..io.schema import schema_markdown
-from ..io.store import StorageError, storage
+from ..io.store import StorageError, check_interrupt, forget_interrupts, interrupt, storage
 from .arguments import build_parser, is_petsc_option, split_arguments
 from .common import (
     EXIT_BAD_INPUT,
@@ -22,10 +22,6 @@ from .common import (
     refusal,
     say,
 )
-
-
-def _interrupt(signum: int, frame: Any) -> None:
-    raise KeyboardInterrupt
 
 
 def _show_warning(message: Warning | str, category: type[Warning], *args: Any, **kw: Any) -> None:
@@ -78,12 +74,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     if problem:  # before PETSc reads an options file, before anything is computed or written
         say(problem)
         return EXIT_BAD_INPUT
-    signal.signal(signal.SIGTERM, _interrupt)
+    for signum in (signal.SIGTERM, signal.SIGINT):  # remembered: never lost in a finaliser
+        signal.signal(signum, interrupt)
     sys.stdout = QuietPipe(sys.stdout)
     warnings.showwarning = _show_warning
     try:
         status = _dispatch(args, argv, petsc_args)
         _report_unused(petsc_args)
+        if status != EXIT_INTERRUPTED:  # said so already
+            check_interrupt()  # a signal whose exception a finaliser dropped
         return status
     except ImportError as exc:  # before OSError: the installation, not the input
         say(str(exc))
@@ -94,7 +93,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (InputError, ValueError, OSError, MemoryError) as exc:
         say(str(exc) or type(exc).__name__)
         return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:  # a run's says what it kept
+        say(str(exc) or "interrupted", "note")
         return EXIT_INTERRUPTED
     except Exception as exc:
         if type(exc).__name__ == "Error" and "petsc4py" in type(exc).__module__:
@@ -103,6 +103,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         raise
     finally:
         _release_petsc()
+        forget_interrupts()
 
 
 def _release_petsc() -> None:

@@ -14,23 +14,36 @@ While a run with output ``OUT.h5`` is under way, rank 0 keeps beside it:
 ``OUT.h5.parts/``
     the bulky arrays, one HDF5 file each, each written to a temporary name and renamed before
     the step is committed: ``heights.h5``, and ``step-000001.h5``, ... with a step's fields,
-    compressed once, as the final file holds them.
+    compressed once, as the final file holds them.  The commit records each part's SHA-256
+    (the ``.partial``'s attribute ``parts``); a part is used only when its bytes match it.
 ``OUT.h5.state.npz``
     the solution the next step starts from (``after_step`` says which step it ends), written
     after the commit; a resume that finds it missing, damaged or stale starts the next step
     from first touch (the same result to the solver's tolerance, at a different cost).
 
-When the run ends, ``OUT.h5`` is assembled from them (the fields' compressed chunks copied
-as they are), written to a temporary name and renamed into place, and the rest is removed.
-A run killed before that rename leaves everything to ``--resume``; one killed after it has
-its whole result.  Disk errors (full, read-only, I/O) raise :class:`StorageError`, after
-which every committed step is still there.  What is lost to a kill is at most the step being
-computed.  (Power loss is another matter: nothing here calls ``fsync``.)
+When the run ends, every part is checked against its checksum, ``OUT.h5`` is assembled
+from them (the fields' compressed chunks copied as they are), written to a temporary name and
+renamed into place, then its step table ``OUT.csv`` is written, and the rest is removed.  An
+earlier run's ``OUT.csv`` is removed before the new ``OUT.h5`` is renamed into place, so that
+a table is never beside another run's ``OUT.h5``; a table missing beside a complete
+``OUT.h5`` is written again by :func:`tidy` or ``--resume`` (the ``.partial`` is removed
+only after the table is written).  A run killed before that rename leaves everything to
+``--resume``; one killed after it has its whole result.  A resume computes again what a
+missing or damaged part held: the heights are written again, the steps from the first
+damaged one are computed again.  Disk errors (full, read-only, I/O) raise
+:class:`StorageError`, after which every committed step is still there.  What is lost to a
+kill is at most the step being computed.  (Power loss is another matter: nothing here calls
+``fsync``.)
+
+A signal (``SIGTERM``, ``SIGINT``) handled by :func:`interrupt` is remembered as well as
+raised, so that one whose ``KeyboardInterrupt`` Python drops (raised inside a finaliser) still
+ends the run at the next :func:`check_interrupt`.
 """
 
 from __future__ import annotations
 
 import errno
+import hashlib
 import json
 import os
 import re
@@ -46,7 +59,7 @@ import numpy as np
 
 if TYPE_CHECKING:
     from ..conventions.grid import Grid
-from .provenance import source_commit
+from .provenance import file_digest, source_commit
 from .schema import (
     COORDINATES,
     GEOMETRIES,
@@ -64,6 +77,7 @@ STATE = ".state.npz"
 PARTS = ".parts"
 LOCK = ".lock"
 FIELD_CHUNK = 256  # fields are stored in (1, 256, 256) chunks, gzip level 4 with shuffle
+HEIGHTS_PART = "heights.h5"  # the part with the heights (and a measured map's filled mask)
 
 
 def partial_path(path: str) -> str:
@@ -89,6 +103,35 @@ def csv_path(path: str) -> str:
 def parts_path(path: str) -> str:
     """The folder of an unfinished run's bulky arrays (heights, fields)."""
     return path + PARTS
+
+
+def step_part(step: int) -> str:
+    """The name of the part with step ``step``'s fields (counted from 1): ``step-000001.h5``."""
+    return f"step-{step:06d}.h5"
+
+
+_SIGNALLED: list[int] = []  # the signals :func:`interrupt` received
+
+
+def interrupt(signum: int, frame: Any) -> None:
+    """A handler of ``SIGTERM`` and ``SIGINT``: remember the signal, raise ``KeyboardInterrupt``.
+
+    Python prints and drops an exception raised inside a finaliser (``Exception ignored
+    in ...``); :func:`check_interrupt` raises it again at the next point that matters."""
+    _SIGNALLED.append(signum)
+    raise KeyboardInterrupt
+
+
+def check_interrupt() -> None:
+    """Raise ``KeyboardInterrupt`` when :func:`interrupt` was called, even where its own
+    exception was dropped."""
+    if _SIGNALLED:
+        raise KeyboardInterrupt
+
+
+def forget_interrupts() -> None:
+    """Forget the signals received (a process that runs several commands, between them)."""
+    _SIGNALLED.clear()
 
 
 class StorageError(OSError):
@@ -147,7 +190,9 @@ def replaced(path: str) -> Iterator[str]:
 
 
 @contextmanager
-def atomic_h5(path: str, large: bool = False) -> Iterator[Any]:
+def atomic_h5(
+    path: str, large: bool = False, digests: dict[str, str] | None = None
+) -> Iterator[Any]:
     """An HDF5 file written whole under a temporary name and renamed to ``path`` only when
     complete; a failure to write raises :class:`StorageError` and leaves ``path`` as it was.
 
@@ -155,7 +200,8 @@ def atomic_h5(path: str, large: bool = False) -> Iterator[Any]:
     in Python's ``write``, never inside HDF5 (whose objects, left half-closed by a failed
     write, crash the process when HDF5 closes them at exit).  A ``large`` file (a run's
     assembled output) is written by HDF5 itself, after a check that the disk has room for
-    it (:func:`check_room`)."""
+    it (:func:`check_room`).  ``digests``, when given, gains the SHA-256 of the bytes written
+    under the file's name (not for a ``large`` file)."""
     import io
 
     import h5py
@@ -167,8 +213,11 @@ def atomic_h5(path: str, large: bool = False) -> Iterator[Any]:
     image = io.BytesIO()
     with h5py.File(image, "w") as f:
         yield f
+    data = image.getbuffer()
     with storage(path), replaced(path) as temporary, open(temporary, "wb") as out:
-        out.write(image.getbuffer())
+        out.write(data)
+    if digests is not None:
+        digests[os.path.basename(path)] = hashlib.sha256(data).hexdigest()
 
 
 def check_room(folder: str, needed: int, what: str) -> None:
@@ -229,8 +278,17 @@ class OutputLock:
             if mine:
                 break
             os.close(fd)
-        os.ftruncate(fd, 0)
-        os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}, since {_now()}".encode())
+        try:
+            with storage(self.path):
+                os.ftruncate(fd, 0)
+                os.write(
+                    fd, f"pid {os.getpid()} on {socket.gethostname()}, since {_now()}".encode()
+                )
+        except StorageError:  # a full disk: nothing is left behind
+            with suppress(OSError):
+                os.remove(self.path)
+            os.close(fd)
+            raise
         self.fd = fd
 
     def release(self) -> None:
@@ -260,10 +318,101 @@ class Finished:
     table: dict[str, list[Any]] = field(default_factory=dict)
     state: np.ndarray | None = None
     state_problem: str = ""  # why the state could not be used ("" when it can)
+    parts: dict[str, str] = field(default_factory=dict)  # the parts' SHA-256 at their commit
+    rewrite_maps: bool = False  # heights.h5 is missing or damaged: the run writes it again
 
     def rows(self) -> list[dict[str, Any]]:
         """The finished steps' scalars, one dict per step."""
         return [{k: v[i] for k, v in self.table.items()} for i in range(self.steps)]
+
+    def redo(self, check: PartsCheck, path: str) -> Finished:
+        """These finished steps less what ``check`` found missing or damaged in the parts of
+        output ``path``: the steps after ``check.steps`` (computed again, from first touch)
+        and the heights (written again) when ``check.maps``."""
+        if check.steps == self.steps and not check.maps:
+            return self
+        steps = check.steps
+        kept = {step_part(k) for k in range(1, steps + 1)}
+        if not check.maps:
+            kept.add(HEIGHTS_PART)
+        state, problem = self.state, self.state_problem
+        if steps < self.steps:
+            state = None
+            problem = (
+                problem or f"{state_path(path)} is of step {self.steps}, which is computed again"
+            )
+        return Finished(
+            steps,
+            {k: v[:steps] for k, v in self.table.items()},
+            state,
+            problem,
+            {k: v for k, v in self.parts.items() if k in kept},
+            check.maps,
+        )
+
+
+@dataclass
+class PartsCheck:
+    """What the part files of an interrupted run can give (:func:`check_parts`)."""
+
+    steps: int  # the finished steps whose parts are sound: the steps after are computed again
+    maps: bool  # heights.h5 is missing or damaged: it is written again
+    problem: str = ""  # what is wrong and what is done about it, in words ("" when nothing)
+
+
+def check_parts(path: str, finished: Finished, maps: bool, fields: bool) -> PartsCheck:
+    """Check the parts of an interrupted run on output ``path`` against the checksums their
+    commits recorded: ``heights.h5`` where the run stores ``maps``, each finished step's
+    where it stores ``fields`` (up to the first that is missing or damaged); nothing when no
+    step is finished (the run starts afresh).
+
+    A part of a ``.partial`` of an earlier version, which records no checksums, is accepted
+    when every dataset in it can be read."""
+    folder, digests, steps = parts_path(path), finished.parts, finished.steps
+    if not steps:  # the run starts afresh
+        return PartsCheck(0, False)
+    said = []
+    heights = part_problem(folder, HEIGHTS_PART, digests) if maps else ""
+    if heights:
+        said.append(f"{heights}: it is written again from the run's heights")
+    for k in range(1, finished.steps + 1) if fields else ():
+        wrong = part_problem(folder, step_part(k), digests)
+        if wrong:
+            said.append(f"{wrong}: computing {_steps(k, steps)} again")
+            steps = k - 1
+            break
+    return PartsCheck(steps, bool(heights), "; ".join(said))
+
+
+def _steps(first: int, last: int) -> str:
+    """``step 4`` or ``steps 2 to 4``."""
+    return f"step {first}" if first == last else f"steps {first} to {last}"
+
+
+def part_problem(folder: str, name: str, digests: dict[str, str]) -> str:
+    """What is wrong with part ``name`` of ``folder`` ("" when nothing): missing, unreadable,
+    or its bytes are not those its commit recorded in ``digests`` (damaged, or another
+    step's).  Without a recorded checksum every dataset in it must be readable."""
+    path = os.path.join(folder, name)
+    if not os.path.isfile(path):
+        return f"{path} is missing"
+    try:
+        if name not in digests:
+            _read_whole(path)
+        elif file_digest(path) != digests[name]:
+            return f"{path} does not match the checksum its commit recorded (damaged or replaced)"
+    except Exception as exc:  # a truncated or foreign file: any reader failure
+        return f"{path} cannot be read ({_reason(exc)})"
+    return ""
+
+
+def _read_whole(path: str) -> None:
+    """Read every dataset of an HDF5 file: an error when one cannot be read."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        for name in f:
+            np.asarray(f[name])
 
 
 def read_resume(path: str, parameters: dict[str, Any]) -> Finished:
@@ -283,19 +432,54 @@ def read_resume(path: str, parameters: dict[str, Any]) -> Finished:
     try:
         with h5py.File(partial, "r") as f:
             theirs = json.loads(f.attrs["parameters"])
-            table = {
-                k: list(_values(f[k]))
-                for k in f
-                if k not in COORDINATES and f[k].ndim >= 1 and f[k].shape[0] == f["step"].shape[0]
-            }
+            parts = json.loads(f.attrs.get("parts", "{}"))  # none in earlier versions' files
+            table = _read_table(f)
             steps = len(table.get("converged", []))
     except (OSError, KeyError, ValueError) as exc:
         raise ValueError(
-            f"cannot resume '{partial}': it is damaged ({_reason(exc)}); remove it to start afresh"
+            f"cannot resume '{partial}': it is damaged ({_reason(exc)}); --overwrite starts afresh"
         ) from None
     check_same_run(partial, theirs, parameters)
     state, problem = _saved_state(path, steps)
-    return Finished(steps, table, state, problem)
+    return Finished(steps, table, state, problem, parts)
+
+
+def _read_table(f: Any) -> dict[str, list[Any]]:
+    """The per-step datasets of a run's open HDF5 file ``f``, as lists."""
+    return {
+        k: list(_values(f[k]))
+        for k in f
+        if k not in COORDINATES and f[k].ndim >= 1 and f[k].shape[0] == f["step"].shape[0]
+    }
+
+
+def committed_steps(partial: str) -> int:
+    """The finished steps an unfinished file holds (an ``OSError`` when it cannot be read)."""
+    import h5py
+
+    with h5py.File(partial, "r") as f:
+        return int(f["converged"].shape[0]) if "converged" in f else 0
+
+
+def check_nothing_lost(path: str) -> None:
+    """``ValueError`` when a new run on output ``path`` would delete finished steps: those an
+    interrupted run kept in ``path + '.partial'`` (``--resume`` continues it, ``--overwrite``
+    deletes them), or a ``.partial`` that cannot be read.  The ``.partial`` of a finished run
+    left beside its complete ``path`` holds nothing that is not in ``path``."""
+    partial = partial_path(path)
+    if not os.path.exists(partial) or _leftover_table(path) is not None:
+        return
+    try:
+        steps = committed_steps(partial)
+    except OSError as exc:
+        raise ValueError(
+            f"'{partial}' is damaged ({_reason(exc)}): --overwrite starts afresh (deleting it)"
+        ) from None
+    if steps:
+        raise ValueError(
+            f"'{partial}' holds {steps} finished step(s) of an interrupted run: --resume "
+            "continues it, --overwrite starts afresh (deleting them)"
+        )
 
 
 RESUME_FREE = ("resume", "overwrite", "quiet", "stop_after")  # options a resume may change
@@ -376,6 +560,9 @@ class StepStore:
         self.attributes: dict[str, Any] = {}
         self.table: dict[str, list[Any]] = {}
         self.steps = 0
+        self.digests: dict[str, str] = {}  # the parts' SHA-256, recorded at each commit
+        self.maps = False  # whether the run stores heights.h5
+        self.assembled = False  # OUT.h5 is in place
 
     @classmethod
     def create(
@@ -391,16 +578,16 @@ class StepStore:
         holds the output's lock), then the record, the heights and (a measured map's) mask of
         filled heights are written (local slabs)."""
         store = cls(path, grid, fields)
-        maps = {"heights": heights, "filled": filled}
-        full = {k: grid.gather(v) for k, v in maps.items() if v is not None}  # collective
+        store.maps = heights is not None or filled is not None
+        full = _gathered(grid, heights, filled)  # collective
         store.attributes = {**attributes, "created": _now(), "complete": False}
 
         def begin() -> None:
             _clear(path, keep_steps=False)
             os.makedirs(store.parts)
             try:
-                if full:
-                    store._write_part("heights.h5", full, chunked=False)  # type: ignore[arg-type]
+                if store.maps:
+                    store._write_part(HEIGHTS_PART, full, chunked=False)
                 store._commit()
             except BaseException:
                 _clear(path, keep_steps=False)  # nothing was finished: nothing is left
@@ -417,16 +604,24 @@ class StepStore:
         finished: Finished,
         record: dict[str, Any],
         fields: tuple[str, ...] = (),
+        heights: np.ndarray | None = None,
+        filled: np.ndarray | None = None,
     ) -> StepStore:
         """Go on with an interrupted run from its ``finished`` steps; the file's ``resumed``
-        list gains this segment's record (its command line, PETSc options and commit)."""
+        list gains this segment's record (its command line, PETSc options and commit).
+
+        ``heights`` and ``filled`` are the maps the run stores (local slabs), written again
+        when ``finished.rewrite_maps`` (its ``heights.h5`` was missing or damaged)."""
         import h5py
 
         store = cls(path, grid, fields)
         store.steps = finished.steps
+        store.digests = dict(finished.parts)
+        store.maps = heights is not None or filled is not None or HEIGHTS_PART in finished.parts
+        full = _gathered(grid, heights, filled) if finished.rewrite_maps else {}  # collective
         if store.root:
             with h5py.File(store.partial, "r") as f:
-                store.attributes = dict(f.attrs)
+                store.attributes = {k: v for k, v in f.attrs.items() if k != "parts"}
             store.table = {k: list(v) for k, v in finished.table.items()}
         earlier = json.loads(str(store.attributes.get("resumed", "[]")) or "[]")
         segment = {
@@ -441,7 +636,9 @@ class StepStore:
 
         def begin() -> None:
             _clear(path, keep_steps=True)
-            os.makedirs(store.parts, exist_ok=True)
+            _make_folder(store.parts)
+            if full:
+                store._write_part(HEIGHTS_PART, full, chunked=False)
             store._commit()
 
         store._on_root(begin)
@@ -463,7 +660,7 @@ class StepStore:
 
         def commit() -> None:
             if gathered:
-                self._write_part(f"step-{step:06d}.h5", gathered, chunked=True)
+                self._write_part(step_part(step), gathered, chunked=True)
             for key, value in scalars.items():
                 if key not in self.table:  # new, or new since the version a resume began with
                     self.table[key] = [_missing(value)] * self.steps
@@ -475,6 +672,7 @@ class StepStore:
                 for column in self.table.values():
                     column.pop()
                 raise
+            self.steps = step
             if full_state is not None:
                 where = state_path(self.path)
                 with storage(where), replaced(where) as tmp, open(tmp, "wb") as f:
@@ -489,25 +687,41 @@ class StepStore:
         def assemble() -> None:
             import h5py
 
+            self._check_parts()
             parts = [os.path.join(self.parts, p) for p in os.listdir(self.parts)]
             needed = sum(os.path.getsize(p) for p in [self.partial, *parts])
             check_room(os.path.dirname(os.path.abspath(self.path)), needed, self.path)
-            self._write_csv()  # first: once OUT.h5 is in place the run counts as complete
+            table = csv_path(self.path)
+            with storage(table), suppress(FileNotFoundError):
+                os.remove(table)  # an earlier run's, never left beside this run's OUT.h5
             with atomic_h5(self.path, large=True) as f:
                 write_attributes(f, {**self.attributes, "complete": True})
                 self._write_table(f)
-                heights = os.path.join(self.parts, "heights.h5")
-                if os.path.exists(heights):
-                    with h5py.File(heights, "r") as part:
+                if self.maps:
+                    with h5py.File(os.path.join(self.parts, HEIGHTS_PART), "r") as part:
                         for name in part:  # the heights, and a measured map's filled mask
                             f.copy(part[name], name)
                 for name in self.fields:
                     self._copy_field(f, name)
                 self._label_maps(f)
+            self.assembled = True
+            write_csv(table, self.table, self.steps)
             _clear(self.path, keep_steps=False)
 
         self._on_root(assemble)
         self.grid.comm.Barrier()
+
+    def _check_parts(self) -> None:
+        """:class:`StorageError` unless every part the run stores is there, as committed."""
+        checks = [(HEIGHTS_PART, "writes it again")] if self.maps else []
+        for k in range(1, self.steps + 1) if self.fields else ():
+            checks.append((step_part(k), f"computes {_steps(k, self.steps)} again"))
+        for name, redo in checks:
+            wrong = part_problem(self.parts, name, self.digests)
+            if wrong:
+                raise StorageError(
+                    errno.EIO, f"cannot assemble {self.path}: {wrong}; --resume {redo}"
+                )
 
     def discard(self) -> None:
         """Remove everything of a run that finished no step (a failure before the first)."""
@@ -515,8 +729,15 @@ class StepStore:
             _clear(self.path, keep_steps=False)
 
     def abandon(self, why: str = "interrupted") -> str:
-        """The one line to say when a run stops early: its finished steps stay committed."""
-        return f"{why}; {self.steps} finished step(s) kept in {self.partial} (--resume continues)"
+        """The one line to say when a run stops early: its finished steps stay committed (as
+        many as the ``.partial`` holds), or its ``OUT.h5`` is complete already."""
+        if self.assembled and not os.path.exists(self.partial):
+            return f"{why}; {self.path} is complete ({self.steps} steps)"
+        kept = self.steps
+        if self.root:
+            with suppress(OSError):
+                kept = committed_steps(self.partial)
+        return f"{why}; {kept} finished step(s) kept in {self.partial} (--resume continues)"
 
     # -- rank 0's writes ---------------------------------------------------------------------
 
@@ -537,7 +758,7 @@ class StepStore:
     def _commit(self) -> None:
         """Replace the ``.partial`` file by one holding every finished step."""
         with atomic_h5(self.partial) as f:
-            write_attributes(f, self.attributes)
+            write_attributes(f, {**self.attributes, "parts": self.digests})
             self._write_table(f)
 
     def _write_table(self, f: Any) -> None:
@@ -585,20 +806,9 @@ class StepStore:
             for axis, scale in enumerate((f["step"], scales["x"], scales["y"])):
                 f[field_name].dims[axis].attach_scale(scale)
 
-    def _write_csv(self) -> None:
-        """The step table beside the results, ``OUT.csv`` (one row per step)."""
-        import csv
-
-        path = csv_path(self.path)
-        names = [k for k, v in self.table.items() if not (v and isinstance(v[0], np.ndarray))]
-        with storage(path), replaced(path) as temporary, open(temporary, "w", newline="") as out:
-            writer = csv.writer(out)
-            writer.writerow(["step", *names])
-            for i in range(self.steps):
-                writer.writerow([i + 1, *(self.table[k][i] for k in names)])
-
     def _write_part(self, name: str, arrays: dict[str, np.ndarray], chunked: bool) -> None:
-        with atomic_h5(os.path.join(self.parts, name)) as f:
+        """Write part ``name``; its checksum goes into the next commit."""
+        with atomic_h5(os.path.join(self.parts, name), digests=self.digests) as f:
             for key, value in arrays.items():
                 if chunked:
                     d = f.create_dataset(key, data=value[None], **_field_layout(value.shape))
@@ -617,20 +827,19 @@ class StepStore:
             **_field_layout((nx, ny)),
         )  # fmt: skip
         describe(out, self._entry(name))
-        for k in range(self.steps):
-            path = os.path.join(self.parts, f"step-{k + 1:06d}.h5")
-            try:
-                part = h5py.File(path, "r")
-            except OSError:
-                raise StorageError(
-                    errno.EIO, f"cannot assemble {self.path}: {path} is missing or damaged"
-                ) from None
-            with part:
+        for k in range(self.steps):  # every part checked already (_check_parts)
+            with h5py.File(os.path.join(self.parts, step_part(k + 1)), "r") as part:
                 source = part[name].id
                 for i in range(source.get_num_chunks()):
                     info = source.get_chunk_info(i)
                     mask, data = source.read_direct_chunk(info.chunk_offset)
                     out.id.write_direct_chunk((k, *info.chunk_offset[1:]), data, mask)
+
+
+def _gathered(grid: Grid, heights: np.ndarray | None, filled: np.ndarray | None) -> dict[str, Any]:
+    """The maps a run stores, whole on rank 0 (``None`` elsewhere; collective)."""
+    maps = {"heights": heights, "filled": filled}
+    return {k: grid.gather(v) for k, v in maps.items() if v is not None}
 
 
 def _field_layout(shape: tuple[int, ...]) -> dict[str, Any]:
@@ -654,26 +863,47 @@ def _missing(value: Any) -> Any:
     return False if dtype is bool else ""
 
 
+def write_csv(path: str, table: dict[str, list[Any]], steps: int) -> None:
+    """The step table ``path`` (``OUT.csv``): one row per step of ``table``'s scalars."""
+    import csv
+
+    names = [k for k, v in table.items() if not (v and isinstance(v[0], np.ndarray))]
+    with storage(path), replaced(path) as temporary, open(temporary, "w", newline="") as out:
+        writer = csv.writer(out)
+        writer.writerow(["step", *names])
+        for i in range(steps):
+            writer.writerow([i + 1, *(table[k][i] for k in names)])
+
+
 def tidy(path: str) -> None:
-    """Remove the run files a finished ``path`` left behind when its writer was killed between
-    renaming ``path`` into place and removing them: only when they are that very run's (the
-    same ``created`` stamp and steps), and only when no other run holds the output."""
+    """Finish what the writer of a complete ``path`` left undone when it was killed after
+    renaming ``path`` into place: the step table written (again) and the run files removed;
+    only when they are that very run's (the same ``created`` stamp and steps), and only when
+    no other run holds the output."""
+    if not (os.path.exists(partial_path(path)) and os.path.exists(path)):
+        return
+    with suppress(OutputBusy), OutputLock(path):
+        table = _leftover_table(path)
+        if table is not None:
+            write_csv(csv_path(path), table, len(table["converged"]))
+            _clear(path, keep_steps=False)
+
+
+def _leftover_table(path: str) -> dict[str, list[Any]] | None:
+    """The step table of ``path + '.partial'`` when it is what the writer of the complete
+    ``path`` left behind (the same ``created`` stamp and steps), else ``None``."""
     import h5py
 
-    partial = partial_path(path)
-    if not (os.path.exists(partial) and os.path.exists(path)):
-        return
     try:
-        with h5py.File(path, "r") as done, h5py.File(partial, "r") as left:
-            same = (
-                done.attrs.get("created") == left.attrs.get("created")
-                and done["converged"].shape == left["converged"].shape
-            )
+        with h5py.File(path, "r") as done, h5py.File(partial_path(path), "r") as left:
+            if done.attrs.get("created") != left.attrs.get("created") or not done.attrs.get(
+                "complete"
+            ):
+                return None
+            table = _read_table(left)
+            return table if (len(table["converged"]),) == done["converged"].shape else None
     except (OSError, KeyError):
-        return
-    if same:
-        with suppress(OutputBusy), OutputLock(path):
-            _clear(path, keep_steps=False)
+        return None
 
 
 def _clear(path: str, keep_steps: bool) -> None:
@@ -697,10 +927,22 @@ def _clear(path: str, keep_steps: bool) -> None:
                 with suppress(FileNotFoundError):
                     os.remove(os.path.join(parts, entry))
         return
-    for leftover in (state_path(path), partial_path(path)):
+    for leftover in (partial_path(path), state_path(path)):  # the record first
         with suppress(FileNotFoundError):
             os.remove(leftover)
-    shutil.rmtree(parts_path(path), ignore_errors=True)
+    parts = parts_path(path)
+    if os.path.isdir(parts) and not os.path.islink(parts):
+        shutil.rmtree(parts, ignore_errors=True)
+    else:  # a plain file of that name, which no run writes
+        with suppress(FileNotFoundError):
+            os.remove(parts)
+
+
+def _make_folder(folder: str) -> None:
+    """Make the parts' ``folder`` unless it is there (a plain file of its name is removed)."""
+    if os.path.lexists(folder) and not os.path.isdir(folder):
+        os.remove(folder)
+    os.makedirs(folder, exist_ok=True)
 
 
 def on_root(comm: Any, work: Any) -> None:

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import os
 import time
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -32,7 +33,18 @@ from ..backend.solve import Monitor
 from ..conventions.grid import world
 from ..geometries.step import FIELD_NAMES, Step
 from ..io.schema import FILE_RECORD
-from ..io.store import Finished, OutputLock, StepStore, StorageError, check_writable, read_resume
+from ..io.store import (
+    Finished,
+    OutputLock,
+    PartsCheck,
+    StepStore,
+    StorageError,
+    check_interrupt,
+    check_nothing_lost,
+    check_parts,
+    check_writable,
+    read_resume,
+)
 from .description import Run
 from .scene import Scene, prepare_scene
 
@@ -101,32 +113,23 @@ class Prepared:
     def execute(
         self, progress: Progress | None = None, monitor: Monitor | None = None
     ) -> RunResult:
-        """Solve every load not yet finished; commit each step to the output (if any)."""
-        run, grid = self.run, self.scene.grid
+        """Solve every load not yet finished; commit each step to the output (if any).
+
+        A signal (see :func:`~petsc_contact.io.store.interrupt`) is checked after each
+        step's commit and before and after the output is assembled: wherever it came, the
+        run ends with :class:`RunInterrupted` saying what was kept."""
         store, start = self._store()
         table = self.resumable.rows()
         steps: list[Step] = []
-        began = time.perf_counter()
-        limit = np.inf if run.stop_after is None else 60.0 * run.stop_after
-        status = COMPLETE
         try:
-            todo = self.loads[len(table) :]
-            for i, step in enumerate(self.solve(todo, start, monitor) if todo else (), len(table)):
-                if store is not None:
-                    fields: dict[str, Any] | None = (
-                        {n: step.field(n) for n in FIELD_NAMES} if run.fields else None
-                    )
-                    store.append(step.scalars, fields, state=step.state)
-                if steps:
-                    steps[-1].state = None  # a long sweep keeps one field to go on from
-                steps.append(step)
-                table.append(step.scalars)
-                if progress is not None:
-                    progress(i, len(self.loads), step.scalars)
-                elapsed = grid.max(time.perf_counter() - began)  # every rank stops together
-                if i + 1 < len(self.loads) and elapsed > limit:
-                    status = PAUSED
-                    break
+            try:
+                status = self._solve(store, start, table, steps, progress, monitor)
+            finally:
+                self.close()
+            if store is not None and status == COMPLETE:
+                check_interrupt()
+                store.finish()
+                check_interrupt()
         except StorageError as exc:
             kept = store.abandon(exc.strerror or str(exc)) if store is not None else str(exc)
             raise StorageError(exc.errno, kept) from None
@@ -137,11 +140,40 @@ class Prepared:
             if store is not None and store.steps == 0:  # nothing finished: nothing is left
                 store.discard()
             raise
-        finally:
-            self.close()
-        if store is not None and status == COMPLETE:
-            store.finish()
-        return RunResult(status, table, steps, self.record, run.output)
+        return RunResult(status, table, steps, self.record, self.run.output)
+
+    def _solve(
+        self,
+        store: StepStore | None,
+        start: np.ndarray | None,
+        table: list[dict[str, Any]],
+        steps: list[Step],
+        progress: Progress | None,
+        monitor: Monitor | None,
+    ) -> str:
+        """Solve the loads not yet finished, committing each step to ``store`` and adding it
+        to ``table`` and ``steps``; the status (paused once ``stop_after`` has passed)."""
+        run, grid = self.run, self.scene.grid
+        began = time.perf_counter()
+        limit = np.inf if run.stop_after is None else 60.0 * run.stop_after
+        todo = self.loads[len(table) :]
+        for i, step in enumerate(self.solve(todo, start, monitor) if todo else (), len(table)):
+            if store is not None:
+                fields: dict[str, Any] | None = (
+                    {n: step.field(n) for n in FIELD_NAMES} if run.fields else None
+                )
+                store.append(step.scalars, fields, state=step.state)
+            check_interrupt()
+            if steps:
+                steps[-1].state = None  # a long sweep keeps one field to go on from
+            steps.append(step)
+            table.append(step.scalars)
+            if progress is not None:
+                progress(i, len(self.loads), step.scalars)
+            elapsed = grid.max(time.perf_counter() - began)  # every rank stops together
+            if i + 1 < len(self.loads) and elapsed > limit:
+                return PAUSED
+        return COMPLETE
 
     def _store(self) -> tuple[StepStore | None, np.ndarray | None]:
         run, grid = self.run, self.scene.grid
@@ -149,12 +181,19 @@ class Prepared:
             return None, None
         fields = FIELD_NAMES if run.fields else ()
         finished = self.resumable
+        heights, filled = _maps(run, self.scene)
         if not finished.steps:
-            stored = None if run.scalars_only else self.scene.heights
-            filled = self.scene.filled
-            return StepStore.create(run.output, grid, self.record, stored, fields, filled), None
+            store = StepStore.create(run.output, grid, self.record, heights, fields, filled)
+            return store, None
         start = grid.scatter(finished.state) if finished.state is not None else None
-        return StepStore.resume(run.output, grid, finished, self.record, fields), start
+        store = StepStore.resume(run.output, grid, finished, self.record, fields, heights, filled)
+        return store, start
+
+
+def _maps(run: Run, scene: Scene) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The maps ``run`` stores: its heights (unless ``scalars_only``) and a measured map's
+    mask of filled heights."""
+    return (None if run.scalars_only else scene.heights), scene.filled
 
 
 def prepare(run: Run, command_line: str | None = None) -> Prepared:
@@ -179,13 +218,29 @@ def prepare(run: Run, command_line: str | None = None) -> Prepared:
     record = run_record(run, line, petsc, realised, {**scene.resolved, **scene.record, **resolved})
     record["fft_backend"] = backend
     finished = Finished(0)
-    if run.resume and run.output is not None:
-        try:
-            finished = read_resume(run.output, record["parameters"])
-        except BaseException:
-            close()
-            raise
+    try:
+        if run.resume and run.output is not None:
+            finished = _resumable(run.output, run, scene, record["parameters"])
+        elif run.output is not None and not run.overwrite:
+            check_nothing_lost(run.output)
+    except BaseException:
+        close()
+        raise
     return Prepared(run, scene, loads, record, intro, solve, close, finished)
+
+
+def _resumable(output: str, run: Run, scene: Scene, parameters: dict[str, Any]) -> Finished:
+    """What an interrupted ``run`` left in ``output``'s files to go on from, less what its
+    part files cannot give (computed again, with a warning saying what); rank 0 reads the
+    parts."""
+    finished = read_resume(output, parameters)
+    comm = scene.grid.comm
+    maps = any(m is not None for m in _maps(run, scene))
+    mine = check_parts(output, finished, maps, run.fields) if comm.rank == 0 else None
+    check: PartsCheck = comm.bcast(mine, root=0)
+    if check.problem:
+        warnings.warn(check.problem, UserWarning, stacklevel=3)
+    return finished.redo(check, output)
 
 
 def run_contact(

@@ -38,7 +38,7 @@ import numpy as np
 
 from ..conventions.grid import Grid
 from ..numerics import kernels
-from ..solver.report import SolveInfo
+from ..solver.report import DEFAULT_GATOL, SolveInfo
 from . import _petsc
 from .cg import ContactPreconditioner, compact_bound
 from .operator import SpectralOperator, shell_matrix
@@ -65,7 +65,6 @@ KSP_TYPES = ("tron", "gpcg", "bnls", "bntr", "bntl", "bqpip")
 KSP_PC_TYPES = ("tron", "bnls", "bntr", "bntl")  # preconditioned through the Hessian's Pmat
 DEFAULT_TYPE = "python"
 DEFAULT_PYTHON_TYPE = "petsc_contact.backend.cg.PreconditionedCG"
-DEFAULT_GATOL = 1e-8
 DEFAULT_MAX_IT = 5000
 
 ObjGrad = Callable[[np.ndarray, np.ndarray], float]

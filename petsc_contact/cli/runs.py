@@ -27,8 +27,18 @@ def _header(columns: tuple[tuple[str, str, str], ...]) -> str:
     return f"{'step':>7} {head} {'area':>9} {'its':>6} {'time_s':>8} {'kkt':>9}  tao_reason"
 
 
+def _flag(s: dict[str, Any]) -> str:
+    """The marker of a step that did not converge, or whose measured accuracy is beyond the
+    package's (:meth:`~petsc_contact.solver.report.Accuracy.assess`); '' for a good step."""
+    if not s["converged"]:
+        return "   <-- NOT CONVERGED: " + s["verification"]
+    if not s.get("accurate", True):  # a step resumed from an older file has no verdict
+        return "   <-- NOT ACCURATE: " + s["verification"]
+    return ""
+
+
 def _row(i: int, total: int, s: dict[str, Any], columns: tuple[tuple[str, str, str], ...]) -> str:
-    flag = "" if s["converged"] else "   <-- NOT CONVERGED: " + s["verification"]
+    flag = _flag(s)
     values = " ".join(fmt.format(s[key]) for _, key, fmt in columns)
     return (
         f"{f'{i + 1}/{total}':>7} {values} {s['area_fraction']:>9.5f} {s['iterations']:>6d} "
@@ -121,7 +131,8 @@ def _conclude(
     columns: tuple[tuple[str, str, str], ...],
     root: bool,
 ) -> int:
-    """Plot, report the steps that did not converge, and return the exit status."""
+    """Plot, report the steps that did not converge or are not accurate, and return the
+    exit status (:data:`EXIT_NOT_CONVERGED` for either)."""
     table = result.table
     plot = getattr(args, "plot", None)
     if plot and root:
@@ -144,14 +155,19 @@ def _conclude(
             "warning",
         )
     failed = [s for s in table if not s["converged"]]
-    if failed and root:
-        load = columns[0]
-        print(
-            f"petsc-contact: error: {len(failed)} of {len(table)} load steps did NOT converge "
-            f"(first: {load[0]} = {failed[0][load[1]]:g}, {failed[0]['verification']}); "
-            f"they are flagged converged = False in {description.output}",
-            file=sys.stderr,
-        )
+    inaccurate = [s for s in table if s["converged"] and not s.get("accurate", True)]
+    for steps, what, flag in (
+        (failed, "did NOT converge", "converged"),
+        (inaccurate, "are NOT accurate", "accurate"),
+    ):
+        if steps and root:
+            load = columns[0]
+            print(
+                f"petsc-contact: error: {len(steps)} of {len(table)} load steps {what} "
+                f"(first: {load[0]} = {steps[0][load[1]]:g}, {steps[0]['verification']}); "
+                f"they are flagged {flag} = False in {description.output}",
+                file=sys.stderr,
+            )
     if root and not args.quiet:
         print(f"# wrote {description.output}" + (f" and {plot}" if plot else ""))
-    return EXIT_NOT_CONVERGED if failed else 0
+    return EXIT_NOT_CONVERGED if failed or inaccurate else 0

@@ -46,7 +46,8 @@ from ..physics.observables import step_observables
 from ..physics.theory import linear_stiffness
 from ..solver.driver import ArraySettings
 from ..solver.linear import held_set_solve
-from .step import Step, contact_fields, residual_verdict
+from ..solver.report import Accuracy, accuracy_limit
+from .step import MeasuredSolve, Step, contact_fields, requested_stiffness_rtol, residual_verdict
 
 ROUNDING_FACTOR = 1000.0  # see PeriodicProblem.rounding_floor
 RESOLVED = 1e-4  # a load is solved only where rounding leaves its residual this far below p0
@@ -59,9 +60,7 @@ def verify(info: SolveInfo, obs: dict[str, float], scale_length: float) -> str:
         return f"TAO did not converge ({info.reason})"
     if obs["min_gap"] < -1e-12 * scale_length:
         return f"bound violated: min gap {obs['min_gap']:.3e}"
-    relative = info.relative_tolerance
-    tol = max(info.tolerance, relative * info.initial_gradient_norm if relative > 0 else 0.0)
-    return residual_verdict(obs["kkt_residual"], tol)
+    return residual_verdict(obs["kkt_residual"], info.effective_tolerance)
 
 
 class PeriodicProblem:
@@ -159,12 +158,19 @@ class PeriodicProblem:
         """The tolerance double precision can resolve at the current load."""
         return self.rounding_floor(self.nominal_pressure)
 
+    def accuracy(self) -> Accuracy:
+        """The package's accuracy at the current load (:mod:`~petsc_contact.solver.report`):
+        the force balance held to the natural residual's limit, which bounds it."""
+        limit = accuracy_limit(self.tolerance_floor())
+        return Accuracy(limit, limit)
+
     def measure(
         self, x: np.ndarray, info: SolveInfo, stiffness: bool = False, fields: bool = False
     ) -> Step:
         """The step of a solution ``x`` (TAO's scaled gap) at the current nominal pressure:
-        observables, TAO's report, the package's verdict and, if asked, the exact stiffness
-        ``-dp0/du_bar`` with the contact set held fixed."""
+        observables, TAO's report, the package's verdict, the measured accuracy
+        (:meth:`accuracy`) and, if asked, the exact stiffness ``-dp0/du_bar`` with the
+        contact set held fixed."""
         grid, ell, p0, device = self.grid, self.scale_length, self.nominal_pressure, self.device
         gap_on_device = x.reshape(grid.local_shape) * ell
         pressure = device.to_host(self.pressure(gap_on_device))
@@ -177,27 +183,44 @@ class PeriodicProblem:
         scalars = {
             "nominal_pressure": p0,
             **obs,
+            "force_balance": abs(obs["contact_pressure_mean"] - p0) / p0,
             **info.scalars(verdict),
             "preconditioner_stiffness": self.interfacial_stiffness,
         }
         if stiffness:
-            start = time.perf_counter()
-            k, its = (
-                periodic_stiffness_exact(
-                    grid,
-                    self.stiffness,
-                    self.stiffness_preconditioner(contact),
-                    contact,
-                    self.held_set_solve,
-                )
-                if verdict == "ok"
-                else (np.nan, 0)
-            )
-            elapsed = grid.max(time.perf_counter() - start)
-            scalars.update(stiffness=k, stiffness_iterations=its, stiffness_time=elapsed)
+            scalars.update(self.held_set_stiffness(contact, verdict == "ok"))
+        self.accuracy().assess(scalars)
         if not fields:
             return Step(scalars)
         return Step(scalars, *contact_fields(gap, pressure, contact), contact=contact)
+
+    def held_set_stiffness(self, contact: np.ndarray, converged: bool) -> dict[str, Any]:
+        """The exact stiffness ``-dp0/du_bar`` with ``contact`` held fixed (NaN unless
+        ``converged``), its solve's iterations and time, the residual of its answer
+        recomputed (:func:`~petsc_contact.geometries.step.held_set_residual`) and the
+        tolerance asked."""
+        grid = self.grid
+        solve = MeasuredSolve(self.held_set_solve, self.device)
+        start = time.perf_counter()
+        k, its = (
+            periodic_stiffness_exact(
+                grid, self.stiffness, self.stiffness_preconditioner(contact), contact, solve
+            )
+            if converged
+            else (np.nan, 0)
+        )
+        elapsed = grid.max(time.perf_counter() - start)
+        return {
+            "stiffness": k,
+            "stiffness_iterations": its,
+            "stiffness_time": elapsed,
+            "stiffness_residual": solve.residual() if converged else np.nan,
+            "stiffness_tolerance": (
+                requested_stiffness_rtol()
+                if self.device.name == "cpu"
+                else self.settings.stiffness_rtol
+            ),
+        }
 
     def stiffness_estimate(self, p0: float) -> float:
         """Persson's interfacial stiffness ``K = p0/u0``, ``u0 = gamma h_rms`` (paper Eq. 1).

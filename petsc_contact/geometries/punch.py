@@ -34,14 +34,15 @@ import numpy as np
 
 from ..backend.operator import PaddedOperator
 from ..backend.solve import SolveInfo
-from ..backend.stiffness import punch_stiffness_exact
+from ..backend.stiffness import punch_stiffness_exact, restricted_solve
 from ..conventions.grid import Grid
 from ..conventions.validation import non_negative, positive
 from ..numerics.kernels import compile_kernels
 from ..physics.greens import hockney_kernel
 from ..physics.observables import distributions, patch_sizes
 from ..reference import flat_punch
-from .step import Step, contact_fields, residual_verdict
+from ..solver.report import FORCE_ACCURACY, Accuracy, accuracy_limit
+from .step import MeasuredSolve, Step, contact_fields, requested_stiffness_rtol, residual_verdict
 
 PHARR_BETA = flat_punch.SQUARE_BETA
 
@@ -131,6 +132,7 @@ class PunchProblem:
         self.k_flat_analytic = flat_punch_stiffness(
             self.modulus, self.footprint_pixels * grid.pixel_area, beta
         )
+        self.flat_residual = 0.0  # the recomputed residual of the flat punch's held-set solve
         self.k_flat_grid = self.flat_stiffness_on_grid() if flat == "grid" else np.nan
         self.k_flat = self.k_flat_grid if flat == "grid" else self.k_flat_analytic
 
@@ -168,31 +170,43 @@ class PunchProblem:
         return c * float(w)
 
     def flat_stiffness_on_grid(self, petsc: Any = None) -> float:
-        """``dF/dδ`` of the flat punch of the same footprint, on the same grid.
+        """``dF/dδ`` of the flat punch of the same footprint, on the same grid; the
+        residual of its solve becomes :attr:`flat_residual`.
 
         ``petsc`` is accepted for compatibility and not used.
         """
-        k, _ = punch_stiffness_exact(self.grid, self.compliance, self.inverse, self.footprint)
+        solve = MeasuredSolve(restricted_solve)
+        k, _ = punch_stiffness_exact(
+            self.grid, self.compliance, self.inverse, self.footprint, solve
+        )
+        self.flat_residual = solve.residual()
         return k
 
     def tolerance_floor(self) -> float:
         """No floor: the gap residual is not a difference of large stresses."""
         return 0.0
 
+    def accuracy(self) -> Accuracy:
+        """The package's accuracy (:mod:`~petsc_contact.solver.report`): the force of load
+        control held to 100 times Newton's tolerance."""
+        return Accuracy(accuracy_limit(self.tolerance_floor()), FORCE_ACCURACY)
+
     def measure(
         self, x: np.ndarray, info: SolveInfo, stiffness: bool = False, fields: bool = False
     ) -> Step:
         """The step of a solution ``x`` (TAO's scaled pressure) at the current approach:
-        observables, TAO's report, the verdict and the exact total and interfacial stiffness
-        (always: load control needs ``dF/dδ``; ``stiffness`` adds the dataset ``stiffness``)."""
+        observables, TAO's report, the verdict, the measured accuracy (:meth:`accuracy`) and
+        the exact total and interfacial stiffness (always: load control needs ``dF/dδ``;
+        ``stiffness`` adds the dataset ``stiffness``)."""
         pressure = x.reshape(self.grid.local_shape) * self.pressure_scale
         gap = self.gap(pressure)
         obs = punch_observables(self, pressure, gap)
         contact = obs.pop("contact")
         verdict = verify_punch(info, obs)
+        solve = MeasuredSolve(restricted_solve)
         start = time.perf_counter()
         k_tot, k_its = (
-            punch_stiffness_exact(self.grid, self.compliance, self.inverse, contact)
+            punch_stiffness_exact(self.grid, self.compliance, self.inverse, contact, solve)
             if verdict == "ok"
             else (np.nan, 0)
         )
@@ -200,15 +214,21 @@ class PunchProblem:
         k_int = interfacial_stiffness(k_tot, self.k_flat) / self.grid.area
         scalars = {
             **obs,
+            "force_balance": np.nan,  # under load control: PunchSolver.at_force
             "total_stiffness": k_tot,
             "interfacial_stiffness": k_int,
             "flat_punch_stiffness": self.k_flat,
             "stiffness_iterations": k_its,
             "stiffness_time": k_time,
+            "stiffness_residual": (
+                max(solve.residual(), self.flat_residual) if verdict == "ok" else np.nan
+            ),
+            "stiffness_tolerance": requested_stiffness_rtol(),
             **info.scalars(verdict),
         }
         if stiffness:
             scalars["stiffness"] = k_int
+        self.accuracy().assess(scalars)
         if not fields:
             return Step(scalars)
         return Step(scalars, *contact_fields(gap, pressure, contact), contact=contact)
@@ -253,4 +273,4 @@ def verify_punch(info: SolveInfo, obs: dict[str, Any]) -> str:
     """``'ok'`` or the reason a TAO answer cannot be used (natural residual in units of l)."""
     if info.reason_code <= 0:
         return f"TAO did not converge ({info.reason})"
-    return residual_verdict(obs["kkt_residual"], info.tolerance)
+    return residual_verdict(obs["kkt_residual"], info.effective_tolerance)

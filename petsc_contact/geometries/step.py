@@ -14,10 +14,14 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from ..backend import _petsc
 from ..backend.operator import SpectralOperator
 from ..backend.solve import BoundSolver, Monitor, SolveInfo
+from ..backend.stiffness import STIFFNESS_RTOL
 from ..conventions.grid import Grid
+from ..numerics.device import CPU, Device
 from ..solver.driver import ArraySolver
+from ..solver.report import Accuracy
 
 FIELD_NAMES = ("gap", "pressure", "contact")
 VERIFY_FACTOR = 10.0  # a step's natural residual may exceed the tolerance asked for by this
@@ -77,6 +81,64 @@ def residual_verdict(residual: float, tolerance: float) -> str:
     return f"KKT residual {residual:.2e} > {VERIFY_FACTOR:g} x tolerance {tolerance:.1e}"
 
 
+def held_set_residual(
+    grid: Grid, op: Any, pc: Any, mask: Any, y: Any, device: Device = CPU
+) -> float:
+    """``||P M (1_M - A y)|| / ||P M 1_M||``: the residual of the held-set solve
+    ``A_MM y = 1_M`` (:mod:`~petsc_contact.backend.stiffness`) recomputed from its answer
+    ``y``, in the norm of its preconditioner ``M`` restricted to the set (``P``).
+
+    It is the quantity the solve's tolerance bounds (``KSPCG``'s default test), evaluated
+    afresh rather than taken from the recurrence; with ``M`` near ``A^-1`` it is the relative
+    error of ``y``, which is that of the stiffness.  The plain residual is no measure of it:
+    ``1_M`` is smooth, the compliance damps rough residuals, and at 512^2 its relative norm
+    stood at 1.2e-4 where the stiffness was right to 1e-10.  ``inf`` for the NaN answer of
+    a solve that did not converge
+    (:func:`~petsc_contact.solver.linear.unconverged`).
+    """
+    xp = device.xp
+    held = device.asarray(mask).reshape(y.shape)
+    ay = op.apply_array(xp.where(held, y, 0.0), xp.empty_like(y))
+
+    def preconditioned(v: Any) -> float:
+        mv = pc.apply_array(xp.where(held, v, 0.0), xp.empty_like(y))
+        return float(xp.vdot(mv, xp.where(held, mv, 0.0)))
+
+    r2, b2 = grid.sum(preconditioned(1.0 - ay), preconditioned(xp.ones_like(y)))
+    if not b2 > 0:
+        return 0.0
+    residual = float(np.sqrt(r2 / b2))
+    return residual if np.isfinite(residual) else np.inf  # a solve that did not converge
+
+
+class MeasuredSolve:
+    """A held-set solve, ``solve(grid, op, pc, mask) -> (y, iterations)``, that keeps what
+    :meth:`residual` needs to measure its answers afterwards (outside the solve's timer,
+    before the preconditioner is changed)."""
+
+    def __init__(self, solve: Any, device: Device = CPU) -> None:
+        self.solve = solve
+        self.device = device
+        self.answers: list[tuple[Grid, Any, Any, Any, Any]] = []
+
+    def __call__(self, grid: Grid, op: Any, pc: Any, mask: Any) -> tuple[Any, int]:
+        y, its = self.solve(grid, op, pc, mask)
+        self.answers.append((grid, op, pc, mask, y))
+        return y, its
+
+    def residual(self) -> float:
+        """The largest :func:`held_set_residual` of the answers (0 if no solve was needed:
+        no contact, or no open pixel); the answers are dropped."""
+        answers, self.answers = self.answers, []
+        return max((held_set_residual(*a, self.device) for a in answers), default=0.0)
+
+
+def requested_stiffness_rtol() -> float:
+    """The relative tolerance the PETSc path's held-set solve is asked for
+    (``-stiffness_ksp_rtol``, on the preconditioned residual)."""
+    return float(_petsc.petsc().Options().getReal("stiffness_ksp_rtol", STIFFNESS_RTOL))
+
+
 class ContactProblem(Protocol):
     """A contact geometry posed as a scaled bound-constrained QP (lower bound 0)."""
 
@@ -104,6 +166,10 @@ class ContactProblem(Protocol):
 
     def tolerance_floor(self) -> float:
         """The smallest gradient tolerance double precision resolves for the current load."""
+        ...
+
+    def accuracy(self) -> Accuracy:
+        """The largest measured figures of an accurate step at the current load."""
         ...
 
     def measure(self, x: np.ndarray, info: SolveInfo, stiffness: bool, fields: bool) -> Step:

@@ -68,8 +68,22 @@ def _entries(**entries: tuple[str, str]) -> dict[str, Entry]:
 SOLVE_COLUMNS = _entries(
     iterations=("count", "TAO iterations of the step (punch with forces: summed over Newton)"),
     solve_time=("s", "wall time of the solve, the slowest rank's"),
-    converged=("bool", "TAO converged and the package's own verification passed"),
-    verification=("text", "'ok', or why the step's answer cannot be used"),
+    converged=(
+        "bool",
+        "TAO converged and the package's own verification passed (the natural residual within "
+        "10 x effective_tolerance, no negative gap)",
+    ),
+    accurate=(
+        "bool",
+        "every measured accuracy figure (kkt_residual, force_balance, complementarity, "
+        "stiffness_residual) within the package's accuracy, whatever the options asked "
+        "(docs/solvers.md); the exit status is 1 unless every step converged and is accurate",
+    ),
+    verification=(
+        "text",
+        "'ok'; or why the step's answer cannot be used (converged false); or which measured "
+        "figures are beyond the package's accuracy (accurate false)",
+    ),
     tao_type=("text", "TAO type; python:PreconditionedCG for the default"),
     tao_reason=("text", "TAO's converged reason"),
     tao_reason_code=("count", "TAO's converged reason as a number (positive: converged)"),
@@ -81,13 +95,39 @@ SOLVE_COLUMNS = _entries(
     preconditioner_applications=("count", "preconditioner applications"),
     gradient_norm=("1", "TAO's final gradient norm (its own definition, per type)"),
     tolerance=("1", "the absolute gradient tolerance used (raised to the rounding floor)"),
+    effective_tolerance=(
+        "1",
+        "the gradient tolerance the solve stopped against: tolerance, or -tao_grtol times the "
+        "first gradient norm when larger",
+    ),
+    accuracy_limit=(
+        "1",
+        "the package's accuracy at this step: the largest kkt_residual and complementarity "
+        "(periodic: and force_balance) of an accurate step, 100 x the default tolerance 1e-8 "
+        "(or x the rounding floor); punch force_balance and stiffness_residual: 1e-4",
+    ),
     stiffness_iterations=("count", "CG iterations of the exact stiffness solve"),
+    stiffness_residual=(
+        "1",
+        "residual of the exact stiffness solve A_MM y = 1_M recomputed from y, in its "
+        "preconditioner's norm, relative (punch: the larger of the step's and the flat "
+        "punch's); NaN where not solved",
+    ),
+    stiffness_tolerance=(
+        "1",
+        "the relative tolerance the stiffness solve was asked for (-stiffness_ksp_rtol, on "
+        "its preconditioned residual)",
+    ),
     stiffness_time=(
         "s",
         "wall time of the exact stiffness solve with its preconditioner's set-up, the slowest "
         "rank's",
     ),
-    complementarity=("1", "sum(p+ g) / (sum(p+) h_rms), as Tamaas reports it"),
+    complementarity=(
+        "1",
+        "sum(p+ g) / (sum(p+) l): the force-weighted mean gap in units of l = h_rms (punch: "
+        "the rms recess), as Tamaas reports it",
+    ),
     max_pressure=("pressure", "largest contact pressure"),
     min_gap=("length", "smallest gap (negative: the bound is violated)"),
     area_fraction=("1", "fraction of the pixels in contact (punch: of the footprint)"),
@@ -128,6 +168,11 @@ PERIODIC_COLUMNS = _entries(
     elastic_energy=("pressure*length", "elastic energy per apparent area, 1/2 <(g+h)(p-p0)>"),
     min_pressure=("pressure", "smallest pressure over all pixels (negative: tension)"),
     kkt_residual=("1", "natural residual rms(min(k g, p)) / p0"),
+    force_balance=(
+        "1",
+        "abs(contact_pressure_mean - p0) / p0: the force the contact pressure misses (at most "
+        "kkt_residual)",
+    ),
     preconditioner_stiffness=(
         "pressure/length",
         "interfacial stiffness estimate the preconditioner was held by (path, not answer)",
@@ -143,6 +188,11 @@ PUNCH_COLUMNS = _entries(
     flat_punch_stiffness=("pressure*length", "the flat punch's stiffness used in paper Eq. 2"),
     kkt_residual=("1", "natural residual rms(min(g, p/k)) / l, l the rms recess"),
     target_force=("pressure*length^2", "the prescribed force (load control)"),
+    force_balance=(
+        "1",
+        "abs(force - target_force) / target_force (load control; NaN under approach control; "
+        "beyond 1e-4 not converged)",
+    ),
     newton_iterations=("count", "Newton steps on the approach (load control)"),
     stiffness=("pressure/length", "the interfacial stiffness per area (--stiffness)"),
 )

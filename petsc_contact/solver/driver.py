@@ -23,9 +23,8 @@ import numpy as np
 
 from ..numerics.device import Device
 from .cg import MONITOR, USER, ConstrainedCG, ContactPreconditioner, Tolerances
-from .report import REASON_CODES, SolveInfo
+from .report import DEFAULT_GATOL, REASON_CODES, SolveInfo
 
-DEFAULT_GATOL = 1e-8  # as the PETSc path's (backend.solve)
 DEFAULT_MAX_IT = 5000
 STIFFNESS_RTOL = 1e-6  # as the PETSc path's -stiffness_ksp_rtol default
 TYPE_NAME = "python:PreconditionedCG"  # the algorithm, as the PETSc path names it

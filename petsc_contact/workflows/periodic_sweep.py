@@ -8,7 +8,9 @@ This is the Python API behind ``petsc-contact periodic``::
 
 Every step is verified by the package itself, not only by TAO: it is ``converged`` when TAO
 reports convergence, no gap is negative and the natural residual ``rms(min(k g, p))/p0``
-is within ten times the tolerance TAO was asked for.
+is within ten times the tolerance TAO was asked for; and ``accurate`` when its measured
+accuracy (natural residual, force balance, complementarity, the stiffness solve's residual)
+is within the package's, whatever the tolerance asked for (:mod:`petsc_contact.solver.report`).
 """
 
 from __future__ import annotations
@@ -93,8 +95,8 @@ def sweep(
     Yields
     ------
     Step
-        Scalars (observables, TAO report, ``converged``, ``verification``) and, with
-        ``fields``, the local ``gap`` and ``pressure`` slabs.
+        Scalars (observables, TAO report, ``converged``, ``accurate``, ``verification``)
+        and, with ``fields``, the local ``gap`` and ``pressure`` slabs.
     """
     loads = check_pressures(pressures)
     for p0 in loads:

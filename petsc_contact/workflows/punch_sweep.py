@@ -20,9 +20,10 @@ from ..conventions.validation import check_finite, positive
 from ..geometries.punch import PHARR_BETA, PunchProblem
 from ..geometries.step import Step, collect, solve_step
 from ..io.topography import SurfaceTopographyMap, map_and_lengths
+from ..solver.report import FORCE_ACCURACY
 
 FORCE_RTOL = 1e-6
-FORCE_RESOLVED = 1e-4  # a force further than this from its target is not reported converged
+FORCE_RESOLVED = FORCE_ACCURACY  # a force further than this from its target is not converged
 MAX_NEWTON = 60
 
 
@@ -91,7 +92,9 @@ class PunchSolver:
         tangent is the first Newton step (on a convex ``F`` that step lands above the root,
         and Newton then descends to it monotonically); a first solve starts from
         ``force / K_flat`` (a rough punch is never stiffer than the flat one).  The step's
-        scalars add ``target_force`` and ``newton_iterations``.
+        scalars add ``target_force``, ``newton_iterations`` and ``force_balance``,
+        ``|F - force| / force``, which the step's ``accurate`` weighs with the rest of its
+        measured accuracy (:meth:`PunchProblem.accuracy`).
 
         Newton also stops when TAO accepts its warm start at the new approach without an
         iteration: the solve cannot tell the two approaches apart, and the force (stored next
@@ -134,15 +137,17 @@ class PunchSolver:
         if s["converged"] and abs(s["force"] - force) > FORCE_RESOLVED * force:
             s["converged"] = False
             s["verification"] = (
-                f"force {s['force']:.3g} reached, not {force:.3g}: below what this grid "
-                "resolves (the approach is lost in the tolerance on the gap)"
+                f"force {s['force']:.6g} reached, not {force:.6g}: the approach is lost in the "
+                "tolerance on the gap (a load below what this grid resolves, or a loose tolerance)"
             )
         s.update(
             target_force=force,
+            force_balance=abs(s["force"] - force) / force,
             newton_iterations=newton,
             iterations=total_its,
             solve_time=total_time,
         )
+        self.problem.accuracy().assess(s)
         return step
 
 

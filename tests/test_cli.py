@@ -625,7 +625,7 @@ def test_a_damaged_study_piece_is_named_not_skipped_or_recomputed(tmp_path):
     piece.write_bytes(np.random.default_rng(3).bytes(4096))
     r = cli(*base, "--minutes", "10")
     assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
-    assert f"the study's piece '{piece}' cannot be read" in r.stderr
+    assert f"cannot read the parameters of '{piece}'" in r.stderr
     piece.unlink()
     assert cli(*base, "--minutes", "10").returncode == 0
     with h5py.File(piece) as f:

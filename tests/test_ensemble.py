@@ -97,7 +97,8 @@ def test_ensemble_command(tmp_path):
     # --sweep N: the documented default range, the same pressures for every seed, a plot and
     # the run record in the summary
     plot = tmp_path / "ens.png"
-    r = cli(*args[:-6], "--sweep", "4", "--output", str(out), "--plot", str(plot), "--quiet")
+    r = cli(*args[:-6], "--sweep", "4", "--output", str(out), "--plot", str(plot), "--quiet",
+            "--overwrite")  # fmt: skip
     assert r.returncode == 0, r.stderr
     assert plot.stat().st_size > 1000
     with h5py.File(out) as f:

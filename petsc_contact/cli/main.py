@@ -11,7 +11,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from ..io.schema import schema_markdown
-from ..io.store import StorageError, check_interrupt, forget_interrupts, interrupt, storage
+from ..io.store import StorageError, check_interrupt, forget_interrupts, interrupt
 from .arguments import build_parser, is_petsc_option, split_arguments
 from .common import (
     EXIT_BAD_INPUT,
@@ -151,8 +151,6 @@ def _dispatch(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[st
         print(study_plan(args))
         return 0
     if args.command == "study":
-        with storage(args.data):
-            os.makedirs(args.data, exist_ok=True)
         return run_study(args, petsc_args)  # each piece locked: studies may share a folder
     if args.command not in LOCKED:
         return run(args, argv, petsc_args)

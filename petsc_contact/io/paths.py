@@ -41,11 +41,12 @@ def same_file(a: str, b: str) -> bool:
 
 
 def check_input(path: str, option: str) -> None:
-    """``ValueError`` unless ``path`` is a regular, readable, non-empty file."""
+    """``ValueError`` unless ``path`` is a regular, readable, non-empty file
+    (``FileNotFoundError`` when it does not exist)."""
     if not path:
         raise ValueError(f"{option} names no file (it is empty)")
     if not os.path.exists(path):
-        raise ValueError(f"{option} '{path}' does not exist")
+        raise FileNotFoundError(f"{option} '{path}' does not exist")
     what = kind(path)
     if what is not None:
         raise ValueError(f"{option} '{path}' is {what}, not a regular file")

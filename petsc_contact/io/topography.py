@@ -47,6 +47,7 @@ import numpy as np
 
 from ..conventions.grid import sides
 from ..conventions.units import unit_name
+from .paths import check_input
 
 TEXT = (".txt", ".dat", ".csv", ".asc")
 HDF5 = (".h5", ".hdf5")
@@ -304,14 +305,16 @@ def read_topography(path: str, channel: Channel = None) -> Topography:
 
     Raises
     ------
-    OSError
-        The file does not exist or is not readable.
+    FileNotFoundError
+        The file does not exist.
+    ValueError
+        It is not a regular, readable, non-empty file (:func:`~petsc_contact.io.paths.check_input`).
     ImportError
         Only SurfaceTopography reads it (an instrument file), and it is not installed.
     ValueError
         No reader can parse it (with each reader's reason), or it holds no usable map.
     """
-    _check_file(path)
+    check_input(path, "heights file")
     readers = _readers(path)
     if not readers:
         raise ImportError(
@@ -334,18 +337,6 @@ def read_topography(path: str, channel: Channel = None) -> Topography:
     if not surface_topography_available():
         reasons.append(f"SurfaceTopography is not installed ({INSTALL_HINT})")
     raise ValueError(f"cannot read heights from '{path}': " + "; ".join(reasons))
-
-
-def _check_file(path: str) -> None:
-    """``OSError`` (one line) unless ``path`` is a readable, non-empty regular file."""
-    if not os.path.exists(path):
-        raise OSError(f"heights file '{path}' does not exist")
-    if not os.path.isfile(path):
-        raise OSError(f"heights file '{path}' is not a regular file (a folder or a device)")
-    if not os.access(path, os.R_OK):
-        raise OSError(f"heights file '{path}' is not readable")
-    if os.path.getsize(path) == 0:
-        raise OSError(f"heights file '{path}' is empty")
 
 
 def surface_topography_available() -> bool:

@@ -3,9 +3,8 @@
     python tests/kill_at.py WHEN:TARGET:N[:HOW] -- ARGS...
 
 ``TARGET`` is the file a rename puts in place: ``heights`` and ``step`` (the part files),
-``commit`` (the ``.partial`` file), ``state`` (the resume state), ``table`` (``OUT.csv``),
-``final`` (``OUT.h5``),
-``compare`` (a comparison's ``.partial``).  ``WHEN`` is ``before`` the ``N``-th such rename,
+``commit`` (the ``.partial`` file, a comparison's too), ``state`` (the resume state),
+``table`` (``OUT.csv``), ``final`` (``OUT.h5``).  ``WHEN`` is ``before`` the ``N``-th such rename,
 ``after`` it, or ``during`` the writing of the file it renames (the process dies with the
 temporary file half written).  ``HOW`` is ``KILL`` (the default: ``SIGKILL``), ``TERM``
 (``SIGTERM``, which the package handles) or ``FINALIZER`` (``SIGTERM`` sent from inside a
@@ -17,6 +16,7 @@ the run goes on.  Nothing of the package is changed: the runner wraps
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import sys
@@ -46,23 +46,36 @@ POINTS = [  # every point of the write path a kill is tried at
     "during:final:1",
     "after:final:1",
 ]
-RTOL = 1e-6  # the steps after a cut start elsewhere; the solver's tolerance is 1e-8 p0 rms
+RTOL = 1e-6  # a step resumed from first touch starts elsewhere: within the solver's tolerance
+# (1e-8 p0 rms; measured 3e-10 in mean gap and 4e-9 of the largest pressure at 64^2)
+EXACT = 1e-10  # resumed from the saved state and what the sweep held: the same steps, apart
+# from rounding (1e-16) amplified by the operator's condition number (about 1e4 here), x 100
 SCALARS = ("mean_gap", "area_fraction", "stiffness", "force", "approach", "nominal_pressure")
 
 
+def resumed_from_state(f: h5py.File) -> bool:
+    """Whether a results file was resumed, each time from its saved state (not first touch)."""
+    segments = json.loads(str(f.attrs.get("resumed", "[]")) or "[]")
+    return bool(segments) and all(s["from_saved_state"] for s in segments)
+
+
 def same_result(a: Path, b: Path, fields: bool) -> None:
-    """Assert that run ``b`` (cut and resumed) holds every step of run ``a``, equal to the
-    solver's tolerance."""
+    """Assert that run ``b`` (cut and resumed) holds every step of run ``a``: equal to
+    rounding (:data:`EXACT`, the same iterations) when every resume went on from the saved
+    state, else to the solver's tolerance (:data:`RTOL`)."""
     with h5py.File(a) as fa, h5py.File(b) as fb:
         assert fb.attrs["complete"] and fb["converged"].shape == fa["converged"].shape
         assert np.all(fb["converged"][:])
+        rtol = EXACT if resumed_from_state(fb) else RTOL
+        if rtol == EXACT:
+            assert np.array_equal(fb["iterations"][:], fa["iterations"][:])
         for name in SCALARS:
             if name in fa:
-                assert np.allclose(fb[name][:], fa[name][:], rtol=RTOL, atol=0), name
+                assert np.allclose(fb[name][:], fa[name][:], rtol=rtol, atol=0), name
         if fields:
             for name in ("gap", "pressure"):
                 scale = np.abs(fa[name][...]).max()
-                assert np.allclose(fb[name][...], fa[name][...], rtol=0, atol=RTOL * scale), name
+                assert np.allclose(fb[name][...], fa[name][...], rtol=0, atol=rtol * scale), name
             assert np.mean(fb["contact"][...] != fa["contact"][...]) < 1e-3
             h = fa["heights"][...]  # generated on other FFT layouts: equal to rounding
             assert np.allclose(fb["heights"][...], h, rtol=0, atol=1e-12 * np.abs(h).max())

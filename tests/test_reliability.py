@@ -19,7 +19,7 @@ import h5py
 import numpy as np
 import pytest
 from conftest import ROOT, cli, python
-from kill_at import POINTS, RTOL, same_result
+from kill_at import POINTS, RTOL, resumed_from_state, same_result
 
 SWEEP = "periodic --grid 64 --hurst 0.7 --rms-slope 0.1 --seed 3 --sweep 4,1e-4,1e-2 --stiffness"
 PUNCH = "punch --grid 48 --hurst 0.7 --rms-slope 0.1 --seed 3 --forces 1e-4,1e-3,3e-3"
@@ -196,6 +196,24 @@ def test_a_damaged_state_file_costs_a_cold_start_not_the_run(tmp_path):
     Path(f"{out}.partial").write_bytes(b"\x89HDF\r\n\x1a\n" + bytes(200))
     r = cli(*SWEEP.split(), "--quiet", "--output", str(out), "--resume")
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "is damaged" in r.stderr
+
+
+def test_a_resume_from_its_state_goes_on_exactly(tmp_path):
+    """A sweep and a punch by force paused after every step and resumed each time from the
+    saved state and what the sweep held (the load path; the punch's last Newton point): the
+    same steps as the uninterrupted run, to rounding and in iterations."""
+    for name, command in (("sweep", SWEEP), ("punch", PUNCH)):
+        whole = tmp_path / f"{name}-whole.h5"
+        assert cli(*command.split(), "--quiet", "--output", str(whole)).returncode == 0
+        out = tmp_path / f"{name}.h5"
+        step = [*command.split(), "--quiet", "--output", str(out), "--stop-after", "0"]
+        calls = [cli(*step)]
+        while calls[-1].returncode == 75:
+            calls.append(cli(*step, "--resume"))
+        assert calls[-1].returncode == 0 and len(calls) > 2, calls[-1].stderr
+        with h5py.File(out) as f:
+            assert resumed_from_state(f) and len(json.loads(f.attrs["resumed"])) == len(calls) - 1
+        same_result(whole, out, fields=False)  # to EXACT
 
 
 @pytest.fixture

@@ -20,6 +20,7 @@ from ..backend.solve import BoundSolver, Monitor, SolveInfo
 from ..backend.stiffness import STIFFNESS_RTOL
 from ..conventions.grid import Grid
 from ..numerics.device import CPU, Device
+from ..physics.continuation import Held
 from ..solver.driver import ArraySolver
 from ..solver.report import Accuracy
 
@@ -40,7 +41,8 @@ class Step:
     gap: np.ndarray | None = None
     pressure: np.ndarray | None = None
     state: np.ndarray | None = None  # local gap/pressure the next step starts from
-    # (:func:`collect` keeps it on a list's last step only)
+    # (:func:`collect` keeps it and ``held`` on a list's last step only)
+    held: Held | None = None  # what the sweep holds besides, to go on from
     contact: np.ndarray | None = None  # local mask of the pixels in contact
 
     def field(self, name: str) -> np.ndarray | None:
@@ -62,7 +64,7 @@ def collect(steps: Iterable[Step]) -> list[Step]:
     out: list[Step] = []
     for step in steps:
         if out:
-            out[-1].state = None
+            out[-1].state = out[-1].held = None
         out.append(step)
     return out
 

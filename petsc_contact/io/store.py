@@ -59,6 +59,7 @@ import numpy as np
 
 if TYPE_CHECKING:
     from ..conventions.grid import Grid
+from ..physics.continuation import Held
 from .provenance import file_digest, source_commit
 from .schema import (
     COORDINATES,
@@ -318,6 +319,7 @@ class Finished:
     table: dict[str, list[Any]] = field(default_factory=dict)
     state: np.ndarray | None = None
     state_problem: str = ""  # why the state could not be used ("" when it can)
+    held: Held | None = None  # what the sweep held beside the state (whole fields)
     parts: dict[str, str] = field(default_factory=dict)  # the parts' SHA-256 at their commit
     rewrite_maps: bool = False  # heights.h5 is missing or damaged: the run writes it again
 
@@ -335,9 +337,9 @@ class Finished:
         kept = {step_part(k) for k in range(1, steps + 1)}
         if not check.maps:
             kept.add(HEIGHTS_PART)
-        state, problem = self.state, self.state_problem
+        state, problem, held = self.state, self.state_problem, self.held
         if steps < self.steps:
-            state = None
+            state = held = None
             problem = (
                 problem or f"{state_path(path)} is of step {self.steps}, which is computed again"
             )
@@ -346,6 +348,7 @@ class Finished:
             {k: v[:steps] for k, v in self.table.items()},
             state,
             problem,
+            held,
             {k: v for k, v in self.parts.items() if k in kept},
             check.maps,
         )
@@ -440,8 +443,8 @@ def read_resume(path: str, parameters: dict[str, Any]) -> Finished:
             f"cannot resume '{partial}': it is damaged ({_reason(exc)}); --overwrite starts afresh"
         ) from None
     check_same_run(partial, theirs, parameters)
-    state, problem = _saved_state(path, steps)
-    return Finished(steps, table, state, problem, parts)
+    state, held, problem = _saved_state(path, steps)
+    return Finished(steps, table, state, problem, held, parts)
 
 
 def _read_table(f: Any) -> dict[str, list[Any]]:
@@ -505,21 +508,27 @@ def _values(dataset: Any) -> np.ndarray:
     return values
 
 
-def _saved_state(path: str, steps: int) -> tuple[np.ndarray | None, str]:
-    """The state after step ``steps``, or ``None`` and why not."""
+def _saved_state(path: str, steps: int) -> tuple[np.ndarray | None, Held | None, str]:
+    """The state after step ``steps`` and what the sweep held beside it (``None`` in a state
+    file of an earlier version), or ``None`` and why not."""
     where = state_path(path)
     if not steps:
-        return None, ""
+        return None, None, ""
     if not os.path.exists(where):
-        return None, f"{where} is missing"
+        return None, None, f"{where} is missing"
     try:
         with np.load(where) as saved:
             after, state = int(saved["after_step"]), saved["state"]
+            held = None
+            if "held" in saved:
+                count = sum(name.startswith("held_field_") for name in saved.files)
+                fields = tuple(saved[f"held_field_{i}"] for i in range(count))
+                held = Held(saved["held"], fields)
     except Exception as exc:  # a truncated or foreign file: any reader failure
-        return None, f"{where} is damaged ({_reason(exc)})"
+        return None, None, f"{where} is damaged ({_reason(exc)})"
     if after + 1 != steps:
-        return None, f"{where} is of step {after + 1}, not {steps}"
-    return state, ""
+        return None, None, f"{where} is of step {after + 1}, not {steps}"
+    return state, held, ""
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -649,13 +658,20 @@ class StepStore:
         scalars: dict[str, Any],
         fields: dict[str, np.ndarray] | None = None,
         state: np.ndarray | None = None,
+        held: Held | None = None,
     ) -> None:
         """Commit one finished step: its fields (if stored), then its scalars, then the state
-        a resume would start the next step from (collective)."""
+        a resume would start the next step from and what the sweep ``held`` beside it
+        (collective)."""
         gathered: dict[str, Any] = (
             {k: self.grid.gather(fields[k]) for k in self.fields} if fields else {}
         )
         full_state = self.grid.gather(state) if state is not None else None
+        kept: dict[str, Any] = {}
+        if held is not None:
+            kept["held"] = np.asarray(held.scalars, dtype=float)
+            for i, slab in enumerate(held.fields):
+                kept[f"held_field_{i}"] = self.grid.gather(slab)
         step = self.steps + 1
 
         def commit() -> None:
@@ -676,7 +692,7 @@ class StepStore:
             if full_state is not None:
                 where = state_path(self.path)
                 with storage(where), replaced(where) as tmp, open(tmp, "wb") as f:
-                    np.savez(f, state=full_state, after_step=step - 1)
+                    np.savez(f, **kept, state=full_state, after_step=step - 1)
 
         self._on_root(commit)
         self.steps = step

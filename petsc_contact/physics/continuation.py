@@ -21,11 +21,22 @@ change its answer (the solver and its verification decide that):
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 MAX_EXTRAPOLATION = 2.0  # the farthest secant start, in units of the last ln(p0) interval
+
+
+@dataclass
+class Held:
+    """What a sweep holds between its steps beside the field it starts the next from: rows
+    of numbers (a periodic sweep's :class:`LoadPath`, a punch's last Newton point) and local
+    slabs in the units of that field (the older gap of the path).  A resumed sweep given it
+    goes on exactly as the interrupted one would have."""
+
+    scalars: np.ndarray = field(default_factory=lambda: np.empty((0, 3)))
+    fields: tuple[np.ndarray, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,7 @@ from ..geometries.step import VERIFY_FACTOR, Step, collect, solve_step
 from ..io.topography import SurfaceTopographyMap, map_and_lengths
 from ..numerics.device import get_device
 from ..numerics.fft import make_fft
-from ..physics.continuation import ConvergedStep, LoadPath
+from ..physics.continuation import ConvergedStep, Held, LoadPath
 from ..solver.driver import ArraySettings, ArraySolver
 
 __all__ = [
@@ -75,6 +75,7 @@ def sweep(
     stiffness: bool = False,
     start: np.ndarray | None = None,
     solver: BoundSolver | ArraySolver | None = None,
+    held: Held | None = None,
 ) -> Iterator[Step]:
     """Solve the pressures in the given order, each warm-started from the last converged steps.
 
@@ -91,6 +92,9 @@ def sweep(
         Local gap slab to start from (e.g. a resumed run's last state); default: first touch.
     solver
         The TAO solver to use (kept open); default: one made for this sweep and closed after.
+    held
+        What the sweep that ended with ``start`` held (its last step's ``held``): given, this
+        sweep goes on exactly as that one would have (the same starts and preconditioners).
 
     Yields
     ------
@@ -103,7 +107,7 @@ def sweep(
         problem.check_pressure(p0)
     ell, device = problem.scale_length, problem.device
     x = (problem.initial_gap() if start is None else device.asarray(start)).reshape(-1) / ell
-    path = LoadPath()
+    path = LoadPath() if held is None or start is None else _resumed_path(held, x, ell, device)
     with nullcontext(solver) if solver is not None else problem_solver(problem) as solver:
         for p0 in loads:
             problem.set_pressure(p0, path.stiffness_estimate(p0))
@@ -116,7 +120,28 @@ def sweep(
                 k = step.scalars.get("stiffness", np.nan)
                 path.add(ConvergedStep(p0, step.scalars["mean_gap"], x, k))
             step.state = device.to_host(x).reshape(problem.grid.local_shape) * ell
+            step.held = _held(path, ell, device, problem.grid.local_shape)
             yield step
+
+
+def _held(path: LoadPath, ell: float, device: Any, shape: tuple[int, ...]) -> Held:
+    """What a sweep holds after a step: its load path's pressures, mean gaps and stiffnesses,
+    and the older of its two gaps (the newer is the step's ``state``)."""
+    steps = path.steps
+    scalars = np.array([[s.pressure, s.mean_gap, s.stiffness] for s in steps]).reshape(-1, 3)
+    older = tuple(device.to_host(s.gap).reshape(shape) * ell for s in steps[:-1])
+    return Held(scalars, older)
+
+
+def _resumed_path(held: Held, x: Any, ell: float, device: Any) -> LoadPath:
+    """The load path :func:`_held` recorded, its newest gap the start ``x`` (solver units)."""
+    if not len(held.scalars):
+        return LoadPath()
+    gaps = [device.asarray(f).reshape(-1) / ell for f in held.fields] + [x]
+    rows = [(float(p), float(u), float(k)) for p, u, k in held.scalars]
+    return LoadPath(
+        [ConvergedStep(p, u, gap, k) for (p, u, k), gap in zip(rows, gaps, strict=True)]
+    )
 
 
 def periodic_contact(

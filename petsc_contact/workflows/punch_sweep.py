@@ -20,6 +20,7 @@ from ..conventions.validation import check_finite, positive
 from ..geometries.punch import PHARR_BETA, PunchProblem
 from ..geometries.step import Step, collect, solve_step
 from ..io.topography import SurfaceTopographyMap, map_and_lengths
+from ..physics.continuation import Held
 from ..solver.report import FORCE_ACCURACY
 
 FORCE_RTOL = 1e-6
@@ -70,12 +71,16 @@ class PunchSolver:
             s = step.scalars
             self.last = (float(delta), s["force"], s["total_stiffness"])
         step.state = self.x.reshape(pb.grid.local_shape) * pb.pressure_scale
+        step.held = Held(np.array([self.last] if self.last is not None else []).reshape(-1, 3))
         return step
 
-    def restart_from(self, pressure: np.ndarray) -> None:
-        """Start the next solve from this local pressure slab (a resumed run's state)."""
+    def restart_from(self, pressure: np.ndarray, held: Held | None = None) -> None:
+        """Start the next solve from this local pressure slab (a resumed run's state); with
+        what the interrupted sweep ``held`` (its last step's ``held``: the approach, force and
+        ``dF/dδ`` Newton starts from), go on exactly as it would have."""
         self.x = (np.asarray(pressure, dtype=float) / self.problem.pressure_scale).reshape(-1)
-        self.last = None
+        last = held.scalars[-1] if held is not None and len(held.scalars) else None
+        self.last = None if last is None else (float(last[0]), float(last[1]), float(last[2]))
 
     def at_force(
         self,
@@ -159,14 +164,16 @@ def punch_sweep(
     monitor: Monitor | None = None,
     stiffness: bool = False,
     start: np.ndarray | None = None,
+    held: Held | None = None,
 ) -> Iterator[Step]:
     """Solve the approaches (or, ``by_force``, the forces) in order, each from the last
     converged pressure: the punch's counterpart of
     :func:`~petsc_contact.workflows.periodic_sweep.sweep`.
 
-    ``start`` is a local pressure slab to begin from (a resumed run's last state)."""
+    ``start`` is a local pressure slab to begin from (a resumed run's last state), ``held``
+    what the interrupted sweep held (:meth:`PunchSolver.restart_from`)."""
     if start is not None:
-        solver.restart_from(start)
+        solver.restart_from(start, held)
     for v in loads:
         if by_force:
             yield solver.at_force(v, fields, monitor=monitor, stiffness=stiffness)

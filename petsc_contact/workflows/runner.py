@@ -45,8 +45,13 @@ from ..io.store import (
     check_writable,
     read_resume,
 )
+from ..physics.continuation import Held
 from .description import Run
 from .scene import Scene, prepare_scene
+
+Start = tuple[np.ndarray, Held | None] | None
+"""Where a resumed run's sweep goes on from: its last state (a local slab) and what the sweep
+held beside it (``None`` in a state file of an earlier version); ``None``: first touch."""
 
 Progress = Callable[[int, int, dict[str, Any]], None]
 """Called as ``progress(index, total, scalars)`` when a step is finished and committed
@@ -90,6 +95,12 @@ class RunResult:
         """Whether every step converged (and was verified)."""
         return all(bool(s["converged"]) for s in self.table)
 
+    @property
+    def accurate(self) -> bool:
+        """Whether every step met the package's accuracy (docs/solvers.md), whatever the
+        options; a step of an earlier version's file, which does not record it, counts."""
+        return all(bool(s.get("accurate", True)) for s in self.table)
+
     def to_dataframe(self) -> Any:
         """The step table as a pandas ``DataFrame`` (one row per step, from 1)."""
         from ..io.results import table_frame
@@ -106,7 +117,7 @@ class Prepared:
     loads: list[float]
     record: dict[str, Any]
     intro: str  # one line on the problem: full contact pressure, or K_flat
-    solve: Callable[[list[float], np.ndarray | None, Monitor | None], Iterator[Step]]
+    solve: Callable[[list[float], Start, Monitor | None], Iterator[Step]]
     close: Callable[[], None] = lambda: None
     resumable: Finished = field(default_factory=lambda: Finished(0))
 
@@ -145,7 +156,7 @@ class Prepared:
     def _solve(
         self,
         store: StepStore | None,
-        start: np.ndarray | None,
+        start: Start,
         table: list[dict[str, Any]],
         steps: list[Step],
         progress: Progress | None,
@@ -162,10 +173,10 @@ class Prepared:
                 fields: dict[str, Any] | None = (
                     {n: step.field(n) for n in FIELD_NAMES} if run.fields else None
                 )
-                store.append(step.scalars, fields, state=step.state)
+                store.append(step.scalars, fields, state=step.state, held=step.held)
             check_interrupt()
             if steps:
-                steps[-1].state = None  # a long sweep keeps one field to go on from
+                steps[-1].state = steps[-1].held = None  # a long sweep keeps one field
             steps.append(step)
             table.append(step.scalars)
             if progress is not None:
@@ -175,7 +186,7 @@ class Prepared:
                 return PAUSED
         return COMPLETE
 
-    def _store(self) -> tuple[StepStore | None, np.ndarray | None]:
+    def _store(self) -> tuple[StepStore | None, Start]:
         run, grid = self.run, self.scene.grid
         if run.output is None:
             return None, None
@@ -185,7 +196,12 @@ class Prepared:
         if not finished.steps:
             store = StepStore.create(run.output, grid, self.record, heights, fields, filled)
             return store, None
-        start = grid.scatter(finished.state) if finished.state is not None else None
+        start: Start = None
+        if finished.state is not None:
+            held = finished.held
+            if held is not None:
+                held = Held(held.scalars, tuple(grid.scatter(f) for f in held.fields))
+            start = (grid.scatter(finished.state), held)
         store = StepStore.resume(run.output, grid, finished, self.record, fields, heights, filled)
         return store, start
 
@@ -295,7 +311,7 @@ Plan = tuple[
     list[float],
     dict[str, Any],
     str,
-    Callable[[list[float], np.ndarray | None, Monitor | None], Iterator[Step]],
+    Callable[[list[float], Start, Monitor | None], Iterator[Step]],
     Callable[[], None],
     str,
 ]
@@ -348,8 +364,9 @@ def _periodic_plan(run: Run, scene: Scene) -> Plan:
         problem.check_pressure(p0)  # before the output is touched
     solver = problem_solver(problem)
 
-    def solve(loads: list[float], start: np.ndarray | None, monitor: Monitor | None) -> Any:
-        return sweep(problem, loads, run.fields, monitor, run.stiffness, start, solver)
+    def solve(loads: list[float], start: Start, monitor: Monitor | None) -> Any:
+        state, held = start or (None, None)
+        return sweep(problem, loads, run.fields, monitor, run.stiffness, state, solver, held)
 
     intro = f", full contact at p0 = {p_full:.4g}"
     return pressures, resolved, intro, solve, solver.close, type(scene.fft).__name__
@@ -405,8 +422,9 @@ def _punch_plan(run: Run, scene: Scene) -> Plan:
         ]
     solver = PunchSolver(problem)
 
-    def solve(todo: list[float], start: np.ndarray | None, monitor: Monitor | None) -> Any:
-        return punch_sweep(solver, todo, by_force, run.fields, monitor, run.stiffness, start)
+    def solve(todo: list[float], start: Start, monitor: Monitor | None) -> Any:
+        state, held = start or (None, None)
+        return punch_sweep(solver, todo, by_force, run.fields, monitor, run.stiffness, state, held)
 
     intro = (
         f", K_flat = {solver.k_flat:.6g} ({run.flat_stiffness}; analytic "

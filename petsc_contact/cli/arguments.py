@@ -516,7 +516,8 @@ def build_parser() -> argparse.ArgumentParser:
         "-petsc_contact_two_level 0 (off), -petsc_contact_two_level_block B (aggregate "
         "block side, pixels; default 16), -petsc_contact_two_level_max_fraction F (largest "
         "contact fraction it is used at; default 0.1).",
-        epilog="Exit status: 0 converged, 1 a step did not converge, 2 bad input or an output "
+        epilog="Exit status: 0 converged, 1 a step did not converge or is not accurate, 2 bad "
+        "input or an output "
         "in use, 69 a package cannot be loaded, 74 results cannot be written (disk full, "
         "unwritable), 75 paused, 130 interrupted.",
     )

@@ -43,7 +43,7 @@ def refusal(args: argparse.Namespace, petsc_args: Sequence[str]) -> str | None:
             from .theory import check_compared
 
             check_compared(args)
-    except ValueError as exc:
+    except (ValueError, FileNotFoundError) as exc:
         return str(exc)
     return None
 
@@ -57,7 +57,7 @@ def check_options_file(path: str) -> None:
             lines = f.read().splitlines()
     except UnicodeDecodeError:
         raise ValueError(f"options file '{path}' is not text (-options_file)") from None
-    except ValueError as exc:
+    except (ValueError, FileNotFoundError) as exc:
         raise ValueError(f"{exc} (-options_file)") from None
     for number, line in enumerate(lines, 1):
         if "\0" in line or not _OPTION_LINE.match(line):

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..conventions.units import pressure_value
+from ..io.results import trusted
 from ..io.schema import THEORY, annotate, write_attributes
 from ..io.store import atomic_h5
 from ..workflows.predictions import Prediction, predict, predict_profile
@@ -166,7 +167,7 @@ def _run_table(path: str) -> dict[str, np.ndarray]:
         with h5py.File(path, "r") as f:
             table = {k: f[k][...] for k in ("nominal_pressure", "mean_gap", "stiffness") if k in f}
             if "converged" in f:
-                table = {k: v[f["converged"][...]] for k, v in table.items()}
+                table = {k: v[trusted(f)] for k, v in table.items()}
     except OSError as exc:
         raise OSError(f"--compare: cannot read '{path}' ({exc})") from None
     if "mean_gap" not in table:

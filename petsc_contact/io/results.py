@@ -24,6 +24,15 @@ def table_frame(rows: Iterable[Mapping[str, Any]]) -> Any:
     return pd.DataFrame(rows, index=pd.RangeIndex(1, len(rows) + 1, name="step"))
 
 
+def trusted(f: Any) -> np.ndarray:
+    """Which steps of an open results file ``f`` can be used: converged and, where the file
+    records it, accurate (docs/solvers.md)."""
+    ok = np.asarray(f["converged"][:], dtype=bool)
+    if "accurate" in f:
+        ok &= np.asarray(f["accurate"][:], dtype=bool)
+    return ok
+
+
 def read_frame(path: str) -> Any:
     """The step table of a results file (its one-entry-per-step datasets) as a ``DataFrame``."""
     import h5py

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from ..conventions.validation import log_range
+from ..io.results import trusted
 from ..io.store import partial_path
 from ..physics.surface import psd_shape
 from .description import Run
@@ -247,9 +248,9 @@ def check_piece(path: str, run: Run) -> None:
 
 
 def converged(path: str) -> bool:
-    """Whether every step of a complete piece's file converged."""
+    """Whether every step of a complete piece's file converged and is accurate."""
     with _piece(path) as f:
-        return bool(np.all(f["converged"][:]))
+        return bool(np.all(trusted(f)))
 
 
 @contextmanager

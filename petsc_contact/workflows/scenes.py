@@ -13,6 +13,7 @@ import numpy as np
 
 from ..backend.stiffness import sweep_stiffness
 from ..conventions.grid import Grid, fundamental_wavevector, self_comm
+from ..io.results import trusted
 from ..io.schema import write_attributes
 from ..io.store import atomic_h5, is_partial
 from ..numerics.fft import make_fft
@@ -222,7 +223,7 @@ def curves_from_files(paths: Sequence[str]) -> dict[str, Any]:
         with h5py.File(path, "r", locking=False) as f:  # a .partial may be open for writing
             if not (f.attrs.get("complete", False) or is_partial(path)):
                 raise ValueError(f"'{path}' is not complete")
-            ok = f["converged"][:].astype(bool)
+            ok = trusted(f)
             row = {k: f[k][:].astype(float) for k in _CURVE_KEYS if k in f}
             if "contact_patches" not in f:  # files of versions before the count
                 row["contact_patches"] = np.full(ok.size, np.nan)

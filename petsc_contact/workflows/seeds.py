@@ -29,6 +29,7 @@ import numpy as np
 
 from ..conventions.grid import world
 from ..conventions.units import pressure_value
+from ..io.results import trusted
 from ..io.schema import ENSEMBLE, annotate, ensemble_entry, write_attributes
 from ..io.store import OutputLock, atomic_h5, check_same_run, on_root, partial_path, tidy
 from .description import Run
@@ -225,7 +226,7 @@ def summarise(seeds: Sequence[int], files: Sequence[str]) -> dict[str, np.ndarra
     pressure = np.empty(0)
     for path in files:
         with h5py.File(path, "r") as f:
-            ok = f["converged"][:]
+            ok = trusted(f)
             pressure = f["nominal_pressure"][:]
             for q in QUANTITIES:
                 if q in f:

@@ -1,5 +1,6 @@
 """The fault campaign of docs/reliability.md: kills at every point of the write path and at
-random times on every command that writes steps, and a list of bad inputs.
+random times on every command that writes steps, signals and damaged parts, the slips of a
+careless user, and a list of bad inputs.
 
 usage: .venv/bin/python benchmarks/faults.py [--random 4] [--seed 1] [--workdir DIR]
 
@@ -7,9 +8,16 @@ For each command (a periodic sweep and a punch with ``--fields``, an ensemble, a
 comparison, the study at a toy size): an uninterrupted run, then one run killed (SIGKILL) at
 each point of ``tests/kill_at.py``'s write path and ``--random`` runs killed at random
 instants, each followed by ``--resume`` (the study: run again).  A fault is survived when the
-resumed run exits 0 with every step equal to the uninterrupted run's to the solver's
-tolerance.  Then each bad input: clean when it exits with its documented status (2, or 74
-for storage), says so in one line without a traceback, and leaves no file behind.
+resumed run exits 0 with every step equal to the uninterrupted run's: to rounding when it went
+on from the saved state, else to the solver's tolerance (``kill_at.same_result``).  The sweep
+and the punch are also sent SIGTERM at points of the write path (and from inside a
+finaliser), which must end them with exit 130 and one note, and get a part file damaged,
+which must stop the assembly with exit 74 and one line; ``--resume`` then completes them.
+Each slip (the same command again without ``--resume``, a resume over another run's files, a
+swapped part, loosened tolerances, a text map with a byte-order mark ...) must end as
+documented, with nothing lost and nothing wrong unflagged.  Then each bad input: clean when
+it exits with its documented status (2, or 74 for storage), says so in one line without a
+traceback, and leaves no file behind.
 """
 
 from __future__ import annotations
@@ -20,6 +28,7 @@ import os
 import random
 import shutil
 import signal
+import stat
 import subprocess
 import sys
 import tempfile
@@ -129,6 +138,159 @@ def campaign(folder: Path, randoms: int, rng: random.Random) -> tuple[int, int, 
     return tried, survived, failures
 
 
+SIGNALS = ["before:commit:3:TERM", "after:commit:2:TERM", "after:state:2:TERM",
+           "before:final:1:TERM", "after:step:2:FINALIZER"]  # fmt: skip
+DAMAGES = ["damage:heights:1", "damage:step:2"]
+
+
+def signals_and_damage(folder: Path) -> tuple[int, int, list[str]]:
+    """SIGTERM (exit 130, one note) and damaged parts (exit 74, one line) on the sweep and
+    the punch, each completed by ``--resume``."""
+    tried = survived = 0
+    failures = []
+    for kind, command, same in SCENARIOS[:2]:
+        whole = folder / f"{kind}-whole.h5"
+        assert cli(*command.split(), "--output", str(whole), "--quiet").returncode == 0, kind
+        for spec in SIGNALS + DAMAGES:
+            out = folder / f"{kind}-{spec.replace(':', '-')}.h5"
+            args = [*command.split(), "--output", str(out), "--quiet"]
+            cut = cli(*args, killer=spec)
+            tried += 1
+            status, word = (74, "--resume") if spec in DAMAGES else (130, "interrupted")
+            lines = cut.stderr.strip().splitlines()
+            try:
+                assert cut.returncode == status and len(lines) == 1 and word in lines[0], (
+                    cut.returncode, lines[-3:])  # fmt: skip
+                again = cli(*args, "--resume")
+                assert again.returncode == 0, again.stderr
+                same(whole, out)
+                survived += 1
+            except AssertionError as exc:
+                failures.append(f"{kind} {spec}: {str(exc).strip()[:200]}")
+    return tried, survived, failures
+
+
+def _steps(partial: Path) -> int:
+    with h5py.File(partial) as f:
+        return int(f["converged"].shape[0])
+
+
+def _text_maps(folder: Path) -> list[tuple[str, Path]]:
+    """One 16 x 16 map written plainly and as a careless export would write it."""
+    h = np.random.default_rng(5).standard_normal((16, 16))
+    plain = "\n".join(" ".join(f"{v:.17g}" for v in row) for row in h) + "\n"
+    variants = {
+        "plain": plain.encode(),
+        "a UTF-8 byte-order mark": b"\xef\xbb\xbf" + plain.encode(),
+        "UTF-16 with a mark": plain.encode("utf-16"),
+        "CRLF line ends": plain.replace("\n", "\r\n").encode(),
+        "tabs": plain.replace(" ", "\t").encode(),
+        "trailing blank lines": (plain + "\n\n  \n").encode(),
+    }
+    out: list[tuple[str, Path]] = []
+    for what, data in variants.items():
+        path = folder / f"map-{len(out)}.txt"
+        path.write_bytes(data)
+        out.append((what, path))
+    return out
+
+
+def slips(folder: Path) -> tuple[int, int, list[str]]:
+    """What a careless user does: each must end as documented, nothing lost, nothing wrong
+    unflagged."""
+    g = GEN.split()
+    sweep = ["periodic", *g, "--sweep", "4,1e-4,1e-2", "--fields", "--quiet"]
+    checks: list[tuple[str, Callable[[], None]]] = []
+
+    def again_without_resume() -> None:
+        out = folder / "again.h5"
+        cli(*sweep, "--output", str(out), killer="after:commit:3")
+        kept = _steps(Path(f"{out}.partial"))
+        r = cli(*sweep, "--output", str(out))
+        assert r.returncode == 2 and "--overwrite" in r.stderr, r.stderr
+        assert _steps(Path(f"{out}.partial")) == kept == 3
+
+    def swapped_part() -> None:
+        out = folder / "swapped.h5"
+        cli(*sweep, "--output", str(out), killer="after:commit:3")
+        parts = Path(f"{out}.parts")
+        shutil.copy(parts / "step-000001.h5", parts / "step-000002.h5")
+        assert cli(*sweep, "--output", str(out), "--resume").returncode == 0
+        same_result(folder / "sweep-whole.h5", out, fields=True)
+
+    def parts_as_a_file() -> None:
+        out = folder / "plain-parts.h5"
+        cli(*sweep, "--output", str(out), killer="after:commit:3")
+        parts = Path(f"{out}.parts")
+        shutil.rmtree(parts)
+        parts.write_text("not a folder")
+        assert cli(*sweep, "--output", str(out), "--resume").returncode == 0
+        same_result(folder / "sweep-whole.h5", out, fields=True)
+
+    def ensemble_of_another_hurst() -> None:
+        base = ["ensemble", *GEN.replace("--seed 3", "").split(), "--seeds", "0-1",
+                "--pressures", "1e-3", "--quiet", "--output", str(folder / "ens.h5")]  # fmt: skip
+        assert cli(*base).returncode == 0
+        before = (folder / "ens_seed0.h5").read_bytes()
+        r = cli(*[v if v != "0.7" else "0.3" for v in base], "--resume")
+        assert r.returncode == 2 and (folder / "ens_seed0.h5").read_bytes() == before, r.stderr
+
+    def compare_at_another_pressure() -> None:
+        out = folder / "cmp.h5"
+        args = ["compare", *g, "--pressure", "1e-3", "--solvers", "cg,pk,bnls", "--quiet"]
+        cli(*args, "--output", str(out), killer="after:commit:2")
+        before = Path(f"{out}.partial").read_bytes()
+        r = cli(*[v if v != "1e-3" else "2e-3" for v in args], "--output", str(out), "--resume")
+        assert r.returncode == 2 and Path(f"{out}.partial").read_bytes() == before, r.stderr
+
+    def loosened(option: list[str], geometry: str = "periodic") -> Callable[[], None]:
+        def check() -> None:
+            out = folder / f"loose-{len(option)}-{option[0]}-{geometry}.h5"
+            loads = ["--pressures", "1e-2"] if geometry == "periodic" else ["--forces", "1e-3"]
+            r = cli(geometry, *g, *loads, "--stiffness", "--quiet", "--output", str(out), *option)
+            with h5py.File(out) as f:
+                flagged = not (np.all(f["converged"][:]) and np.all(f["accurate"][:]))
+            assert r.returncode == 1 and flagged, (r.returncode, r.stderr[-300:])
+
+        return check
+
+    def same_map(path: Path, plain: Path) -> Callable[[], None]:
+        def check() -> None:
+            outs = [folder / f"{p.stem}.h5" for p in (plain, path)]
+            for p, out in zip((plain, path), outs, strict=True):
+                r = cli("periodic", "--heights", str(p), "--length", "1", "--pressures", "1e-3",
+                        "--quiet", "--overwrite", "--output", str(out))  # fmt: skip
+                assert r.returncode == 0, r.stderr
+            with h5py.File(outs[0]) as a, h5py.File(outs[1]) as b:
+                assert np.array_equal(a["heights"][...], b["heights"][...])
+
+        return check
+
+    checks += [
+        ("the same command again without --resume", again_without_resume),
+        ("step 2's part replaced by step 1's", swapped_part),
+        ("the parts folder a plain file", parts_as_a_file),
+        ("ensemble --resume over another H's seeds", ensemble_of_another_hurst),
+        ("compare --resume at another pressure", compare_at_another_pressure),
+        ("-tao_grtol 0.5", loosened(["-tao_grtol", "0.5"])),
+        ("-tao_gatol 1e-2", loosened(["-tao_gatol", "1e-2"])),
+        ("-stiffness_ksp_rtol 0.5", loosened(["-stiffness_ksp_rtol", "0.5"])),
+        ("-stiffness_ksp_max_it 1", loosened(["-stiffness_ksp_max_it", "1"])),
+        ("punch -tao_gatol 1e-2", loosened(["-tao_gatol", "1e-2"], "punch")),
+    ]
+    maps = _text_maps(folder)
+    checks += [(f"a text map with {what}", same_map(path, maps[0][1])) for what, path in maps[1:]]
+    cli(*sweep, "--output", str(folder / "sweep-whole.h5"))
+    survived, failures = 0, []
+    for what, check in checks:
+        try:
+            check()
+            survived += 1
+        except AssertionError as exc:
+            failures.append(f"{what}: {str(exc).strip()[:200]}")
+    return len(checks), survived, failures
+
+
 def bad_inputs(folder: Path) -> list[tuple[str, list[str], int]]:
     """Each bad input: what it is, its arguments, and its documented exit status."""
     rng = np.random.default_rng(0)
@@ -139,9 +301,45 @@ def bad_inputs(folder: Path) -> list[tuple[str, list[str], int]]:
     (folder / "noise.dat").write_bytes(rng.bytes(2 * 16 * 16))
     (folder / "broken.h5").write_bytes(b"\x89HDF\r\n\x1a\n" + bytes(64))
     (folder / "notes.txt").write_text("not a map\n")
+    (folder / "ragged.txt").write_text("1 2 3\n4 5 6\n7 8\n")
+    (folder / "worded.txt").write_text("1 2 3\n4 NA 6\n7 8 9\n")
+    (folder / "noise.opts").write_bytes(rng.bytes(256))
+    (folder / "a-folder").mkdir(exist_ok=True)
+    if not (folder / "fifo").exists():
+        os.mkfifo(folder / "fifo")
+    if not (folder / "full").exists() and os.geteuid() == 0:  # a device node like /dev/full
+        os.mknod(folder / "full", 0o666 | stat.S_IFCHR, os.makedev(1, 7))
     g, out = GEN.split(), ["--output", str(folder / "out.h5")]
     run = ["periodic", *g, "--pressures", "1e-3"]
+    heights = ["--heights", str(folder / "flat.npy")]
+    devices = [("--output a device node", [*run, "--output", str(folder / "full")], 2)] * (
+        os.geteuid() == 0
+    )
     return [
+        *devices,
+        ("--output a FIFO", [*run, "--output", str(folder / "fifo")], 2),
+        ("--output a folder", [*run, "--output", str(folder / "a-folder")], 2),
+        ("--output the heights file", ["periodic", *heights, "--pressures", "1e-3",
+                                       "--output", str(folder / "flat.npy")], 2),
+        ("--plot the --output", [*run, *out, "--plot", str(folder / "out.h5")], 2),
+        ("compare --solvers cg,cg", ["compare", *g, "--pressure", "1e-3", "--solvers", "cg,cg",
+                                     *out], 2),
+        ("theory --compare without --plot", ["theory", *heights, "--compare",
+                                             str(folder / "cut.h5.partial"), *out], 2),
+        ("an options file of random bytes", [*run, *out, "-options_file",
+                                             str(folder / "noise.opts")], 2),
+        ("--heights a folder", ["periodic", "--heights", str(folder / "a-folder"),
+                                "--pressures", "1e-3", *out], 2),
+        ("--heights /dev/null", ["periodic", "--heights", "/dev/null", "--pressures", "1e-3",
+                                 *out], 2),
+        ("a ragged text map", ["periodic", "--heights", str(folder / "ragged.txt"),
+                               "--length", "1", "--pressures", "1e-3", *out], 2),
+        ("NA in a text map", ["periodic", "--heights", str(folder / "worded.txt"),
+                              "--length", "1", "--pressures", "1e-3", *out], 2),
+        ("study --shrink 0", ["study", "--shrink", "0", "--data", str(folder / "d")], 2),
+        ("study --data ''", ["study", "--data", ""], 2),
+        ("--pressures 1e-3,,2e-3", ["periodic", *g, "--pressures", "1e-3,,2e-3", *out], 2),
+        ("plot of a .partial", ["plot", str(folder / "cut.h5.partial")], 2),
         ("--minutes nan", ["study", "--minutes", "nan", "--data", str(folder / "d")], 2),
         ("--minutes -1", ["study", "--minutes=-1", "--data", str(folder / "d")], 2),
         ("--stop-after nan", [*run, "--stop-after", "nan", *out], 2),
@@ -224,6 +422,17 @@ def main() -> None:
     began = time.perf_counter()
     tried, survived, failures = campaign(folder / "kills", args.random, random.Random(args.seed))
     print(f"faults: {tried} tried, {survived} survived with nothing lost")
+    for line in failures:
+        print(f"  {line}")
+    tried, survived, failures = signals_and_damage(folder / "kills")
+    print(
+        f"signals and damaged parts: {tried} tried, {survived} ended as documented, resumed whole"
+    )
+    for line in failures:
+        print(f"  {line}")
+    (folder / "slips").mkdir(exist_ok=True)
+    tried, survived, failures = slips(folder / "slips")
+    print(f"slips: {tried} tried, {survived} ended as documented, nothing lost or unflagged")
     for line in failures:
         print(f"  {line}")
     cases = len(bad_inputs(folder / "inputs"))

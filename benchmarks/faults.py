@@ -34,6 +34,7 @@ import sys
 import tempfile
 import time
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 
 import h5py
@@ -106,7 +107,7 @@ def _target(kind: str, folder: Path, name: str) -> tuple[list[str], Path]:
 
 def campaign(folder: Path, randoms: int, rng: random.Random) -> tuple[int, int, list[str]]:
     tried = survived = 0
-    failures = []
+    failures: list[str] = []
     for kind, command, same in SCENARIOS:
         where, whole = _target(kind, folder, f"{kind}-whole")
         assert cli(*command.split(), *where, "--quiet").returncode == 0, kind
@@ -128,14 +129,26 @@ def campaign(folder: Path, randoms: int, rng: random.Random) -> tuple[int, int, 
                 process.send_signal(signal.SIGKILL)
                 process.wait()
             tried += 1
-            again = cli(*args, *([] if kind == "study" else ["--resume"]))
-            try:
-                assert again.returncode == 0, again.stderr
-                same(whole, out)
-                survived += 1
-            except AssertionError as exc:
-                failures.append(f"{name}: {str(exc).strip()[:200]}")
+            resume = [] if kind == "study" else ["--resume"]
+            survived += _kept(name, partial(_resumed, args + resume, whole, out, same), failures)
     return tried, survived, failures
+
+
+def _kept(what: str, check: Callable[[], None], failures: list[str]) -> bool:
+    """Whether ``check`` passes; when it fails, ``what`` and its assertion join ``failures``."""
+    try:
+        check()
+        return True
+    except AssertionError as exc:
+        failures.append(f"{what}: {str(exc).strip()[:200]}")
+        return False
+
+
+def _resumed(args: list[str], whole: Path, out: Path, same: Callable[[Path, Path], None]) -> None:
+    """Run ``args`` (a resume) and assert that it ends ``out`` equal to ``whole``."""
+    again = cli(*args)
+    assert again.returncode == 0, again.stderr
+    same(whole, out)
 
 
 SIGNALS = ["before:commit:3:TERM", "after:commit:2:TERM", "after:state:2:TERM",
@@ -143,11 +156,28 @@ SIGNALS = ["before:commit:3:TERM", "after:commit:2:TERM", "after:state:2:TERM",
 DAMAGES = ["damage:heights:1", "damage:step:2"]
 
 
+def _stopped_then_resumed(
+    cut: subprocess.CompletedProcess,
+    said: tuple[int, str],
+    args: list[str],
+    whole: Path,
+    out: Path,
+    same: Callable[[Path, Path], None],
+) -> None:
+    """Assert that ``cut`` ended with status and one line as ``said`` (the status, a word of
+    the line), and that the resume ``args`` ends ``out`` equal to ``whole``."""
+    lines = cut.stderr.strip().splitlines()
+    status, word = said
+    assert cut.returncode == status and len(lines) == 1 and word in lines[0], (
+        cut.returncode, lines[-3:])  # fmt: skip
+    _resumed(args, whole, out, same)
+
+
 def signals_and_damage(folder: Path) -> tuple[int, int, list[str]]:
     """SIGTERM (exit 130, one note) and damaged parts (exit 74, one line) on the sweep and
     the punch, each completed by ``--resume``."""
     tried = survived = 0
-    failures = []
+    failures: list[str] = []
     for kind, command, same in SCENARIOS[:2]:
         whole = folder / f"{kind}-whole.h5"
         assert cli(*command.split(), "--output", str(whole), "--quiet").returncode == 0, kind
@@ -156,17 +186,9 @@ def signals_and_damage(folder: Path) -> tuple[int, int, list[str]]:
             args = [*command.split(), "--output", str(out), "--quiet"]
             cut = cli(*args, killer=spec)
             tried += 1
-            status, word = (74, "--resume") if spec in DAMAGES else (130, "interrupted")
-            lines = cut.stderr.strip().splitlines()
-            try:
-                assert cut.returncode == status and len(lines) == 1 and word in lines[0], (
-                    cut.returncode, lines[-3:])  # fmt: skip
-                again = cli(*args, "--resume")
-                assert again.returncode == 0, again.stderr
-                same(whole, out)
-                survived += 1
-            except AssertionError as exc:
-                failures.append(f"{kind} {spec}: {str(exc).strip()[:200]}")
+            said = (74, "--resume") if spec in DAMAGES else (130, "interrupted")
+            check = partial(_stopped_then_resumed, cut, said, [*args, "--resume"], whole, out, same)
+            survived += _kept(f"{kind} {spec}", check, failures)
     return tried, survived, failures
 
 
@@ -281,13 +303,8 @@ def slips(folder: Path) -> tuple[int, int, list[str]]:
     maps = _text_maps(folder)
     checks += [(f"a text map with {what}", same_map(path, maps[0][1])) for what, path in maps[1:]]
     cli(*sweep, "--output", str(folder / "sweep-whole.h5"))
-    survived, failures = 0, []
-    for what, check in checks:
-        try:
-            check()
-            survived += 1
-        except AssertionError as exc:
-            failures.append(f"{what}: {str(exc).strip()[:200]}")
+    failures: list[str] = []
+    survived = sum(_kept(what, check, failures) for what, check in checks)
     return len(checks), survived, failures
 
 

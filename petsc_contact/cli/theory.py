@@ -11,10 +11,9 @@ import numpy as np
 
 from ..conventions.units import pressure_value
 from ..io.results import trusted
-from ..io.schema import THEORY, annotate, write_attributes
-from ..io.store import atomic_h5
 from ..workflows.predictions import Prediction, predict, predict_profile
 from ..workflows.runner import swept
+from ..workflows.theory_file import write_theory
 from .common import describe, record_for, scene_for
 
 LOAD_RANGE = (1e-7, 1e-1)  # default pressures, in units of E*
@@ -44,12 +43,7 @@ def run_theory(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[s
     runs = [(os.path.basename(path), _run_table(path)) for path in args.compare or ()]
     if not args.quiet and reading:
         print(f"# {reading}", flush=True)
-    attributes.update(geometry="theory", **result.scalars())
-    with atomic_h5(args.output) as f:
-        for name in THEORY:
-            f[name] = getattr(result, name)
-        write_attributes(f, attributes)
-        annotate(f, THEORY.__getitem__, length_unit, run.pressure_unit or "")
+    write_theory(args.output, result, attributes, length_unit, run.pressure_unit or "")
     if not args.quiet:
         _print(result)
     if args.plot:

@@ -1,18 +1,24 @@
-"""Results as tables for analysis: the scalars of every step as a pandas ``DataFrame``.
+"""Results as tables for analysis: every file the package writes as a pandas ``DataFrame``.
 
 :func:`table_frame` takes rows (a run's table, or the ``scalars`` of the steps that
-:func:`~petsc_contact.periodic_contact` returns); :func:`read_frame` reads a results file,
-finished or ``.partial``.  Rows are indexed by ``step``, counted from 1 as the printed table
-counts.  (For the maps, ``xarray.open_dataset(path, engine="h5netcdf")`` gives labelled
-arrays: ``step``, ``x`` and ``y`` are dimension scales of the file.)
+:func:`~petsc_contact.periodic_contact` returns); :func:`read_frame` reads a results file of
+any kind (a run, an ensemble, a theory, a comparison), finished or ``.partial``, its columns
+in the schema's order (:data:`~petsc_contact.io.schema.FRAMES`).  Rows of a run, an ensemble
+or a theory are indexed by ``step``, counted from 1 as the printed table counts.  The writers
+label every dataset with HDF5 dimension scales (:func:`scale`, :func:`labelled`), so that
+``xarray.open_dataset(path, engine="h5netcdf")`` gives arrays on named dimensions (``step``,
+``x``, ``y``, ``seed``, ``wavevector``, ``iteration``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+import json
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
+
+from .schema import FRAMES
 
 
 def table_frame(rows: Iterable[Mapping[str, Any]]) -> Any:
@@ -33,17 +39,88 @@ def trusted(f: Any) -> np.ndarray:
     return ok
 
 
+def scale(group: Any, name: str, values: Any) -> Any:
+    """Dataset ``name`` of the h5py ``group`` holding ``values``, made the dimension scale
+    ``name`` (xarray's dimension of that name, with ``values`` as its coordinate)."""
+    dataset = group.create_dataset(name, data=np.asarray(values))
+    dataset.make_scale(name)
+    return dataset
+
+
+def labelled(group: Any, name: str, values: Any, scales: Sequence[Any]) -> Any:
+    """Dataset ``name`` of the h5py ``group`` holding ``values``, its axes on the dimension
+    ``scales`` in order (from :func:`scale`)."""
+    dataset = group.create_dataset(name, data=np.asarray(values))
+    for axis, dimension in enumerate(scales):
+        dataset.dims[axis].attach_scale(dimension)
+    return dataset
+
+
+def group_name(solver: str) -> str:
+    """The HDF5 group of ``solver`` in a comparison's file (a path's ``/`` as ``_``)."""
+    return solver.replace("/", "_")
+
+
+def file_kind(attributes: Mapping[str, Any]) -> str:
+    """The kind of a results file from its root ``attributes``: ``compare`` for a file with
+    solver groups (root attribute ``solvers``), else its ``geometry`` (a run's ``periodic``
+    or ``punch``, ``periodic ensemble``, ``theory``; ``''`` when it has none)."""
+    if "solvers" in attributes:
+        return "compare"
+    return str(attributes.get("geometry", ""))
+
+
 def read_frame(path: str) -> Any:
-    """The step table of a results file (its one-entry-per-step datasets) as a ``DataFrame``."""
+    """The table of a results file as a ``DataFrame``: a run's steps, an ensemble's per-step
+    statistics, a theory's predictions, or a comparison's iterations (index ``solver`` and
+    ``iteration``); the columns the schema documents for its kind, in that order.
+
+    Raises
+    ------
+    ValueError
+        When the file is none of these kinds.
+    """
     import h5py
 
     with h5py.File(path, "r") as f:
-        columns = {
-            name: [v.decode() if isinstance(v, bytes) else v for v in f[name][...]]
-            for name in f
-            if name != "step"
-            and getattr(f[name], "ndim", 0) == 1
-            and f[name].shape[0] == f["converged"].shape[0]
-        }
-    steps = len(next(iter(columns.values()), []))
-    return table_frame({k: v[i] for k, v in columns.items()} for i in range(steps))
+        kind = file_kind(f.attrs)
+        if kind not in FRAMES:
+            raise ValueError(
+                f"'{path}' is not a file read_frame reads (kind '{kind}'; it reads "
+                f"{', '.join(FRAMES)})"
+            )
+        if kind == "compare":
+            return _compare_frame(f)
+        return _step_frame(f, FRAMES[kind].columns)
+
+
+def _column(dataset: Any) -> np.ndarray:
+    """A dataset's values, strings as ``str``."""
+    import h5py
+
+    return dataset.asstr()[...] if h5py.check_string_dtype(dataset.dtype) else dataset[...]
+
+
+def _step_frame(group: Any, documented: Sequence[str]) -> Any:
+    """The ``documented`` columns that ``group`` holds, one row per step (index from 1)."""
+    import pandas as pd
+
+    columns = {name: _column(group[name]) for name in documented if name in group}
+    steps = len(next(iter(columns.values()), ()))
+    return pd.DataFrame(columns, index=pd.RangeIndex(1, steps + 1, name="step"))
+
+
+def _compare_frame(f: Any) -> Any:
+    """A comparison's iterations: each solver's group in order, on ``solver`` and
+    ``iteration``."""
+    import pandas as pd
+
+    documented = FRAMES["compare"].columns
+    parts = {}
+    for solver in json.loads(f.attrs["solvers"]):
+        group = f[group_name(solver)]
+        index = pd.Index(group["iteration"][...], name="iteration")
+        parts[solver] = pd.DataFrame(
+            {name: group[name][...] for name in documented if name in group}, index=index
+        )
+    return pd.concat(parts, names=["solver"]) if parts else pd.DataFrame(columns=documented)

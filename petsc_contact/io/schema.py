@@ -201,6 +201,7 @@ COORDINATES = _entries(
     bin=("count", "a histogram's bin, counted from 0"),
     edge=("count", "a histogram's bin edge, counted from 0"),
     patch_bin=("count", "the smallest patch size of a patch size bin: 1, 2, 4, ... pixels"),
+    seed=("count", "the seed of each member of an ensemble: the rows of its seeds x steps tables"),
     x=("length", "position of each row of the maps: the pixel centres, (i + 1/2) Lx/nx"),
     y=("length", "position of each column of the maps: the pixel centres, (j + 1/2) Ly/ny"),
 )
@@ -268,10 +269,60 @@ GEOMETRIES = {
 }
 
 
+@dataclass(frozen=True)
+class Frame:
+    """What :func:`~petsc_contact.io.results.read_frame` gives of one kind of file: its rows
+    in words, the names of its index and its columns, in order (those the file holds)."""
+
+    rows: str
+    index: tuple[str, ...]
+    columns: tuple[str, ...]
+
+
+def _run_frame(geometry: str) -> Frame:
+    """A run's step table: its per-step scalars, in the schema's order."""
+    beside = {*COORDINATES, *SECOND_DIMENSION, *FIELDS}  # per-step arrays and maps
+    columns = tuple(k for k in GEOMETRIES[geometry] if k not in beside)
+    return Frame("one per load step", ("step",), columns)
+
+
+FRAMES = {  # by the file's kind: its geometry, or compare (a file with solver groups)
+    "periodic": _run_frame("periodic"),
+    "punch": _run_frame("punch"),
+    "periodic ensemble": Frame(
+        "one per load step",
+        ("step",),
+        (
+            "nominal_pressure",
+            *(
+                f"{quantity}_{statistic}"
+                for quantity in ENSEMBLE
+                if quantity not in ("seeds", "nominal_pressure")
+                for statistic in ENSEMBLE_STATISTICS
+            ),
+        ),
+    ),
+    "theory": Frame(
+        "one per nominal pressure",
+        ("step",),
+        tuple(k for k in THEORY if k not in ("wavevector", "psd")),
+    ),
+    "compare": Frame(
+        "one per solver and TAO iteration, the solvers in the order of the root attribute "
+        "`solvers`",
+        ("solver", "iteration"),
+        tuple(k for k in COMPARE if k != "iteration"),
+    ),
+}
+
+
 def ensemble_entry(name: str) -> Entry:
-    """The entry of an ensemble summary dataset, statistics (``mean_gap_sem``) included."""
+    """The entry of an ensemble summary dataset, statistics (``mean_gap_sem``) and dimension
+    scales (``seed``, ``step``) included."""
     if name in ENSEMBLE:
         return ENSEMBLE[name]
+    if name in COORDINATES:
+        return COORDINATES[name]
     quantity, _, statistic = name.rpartition("_")
     if quantity in ENSEMBLE and statistic in ENSEMBLE_STATISTICS:
         units = "count" if statistic == "count" else ENSEMBLE[quantity].units
@@ -329,7 +380,10 @@ def schema_markdown() -> str:
         "A finished run's file labels its per-step datasets with the dimension `step` (1, 2,",
         "...) and its maps with `x` and `y` (pixel centres) as HDF5 dimension scales, so that",
         '`xarray.open_dataset(path, engine="h5netcdf")` gives labelled arrays; the step table is',
-        "also written beside it as `OUT.csv` (one row per step, the columns below).",
+        "also written beside it as `OUT.csv` (one row per step, the columns below). The",
+        "other files are labelled likewise: an ensemble's datasets with `seed` and `step`, a",
+        "theory's with `step` and `wavevector`, each solver group of a comparison's with",
+        "`iteration`. Every file reads as a table with `read_frame` ([tables](#tables)).",
         "A resumed file adds `resumed`: a JSON list with, for each resume, `after_step`, `time`,",
         "its `command_line` and `petsc_options`, the `petsc_contact_commit` that computed the",
         "steps from there on and `from_saved_state` (false when the state file was missing or",
@@ -344,10 +398,12 @@ def schema_markdown() -> str:
         lines.extend(f"| `{k}` | {e.units} | {e.description} |" for k, e in entries.items())
         lines.append("")
 
+    _frames(lines)
     table(
         "coordinates",
         "Dimension scales of a run's file: `step` for every per-step dataset, `x` and `y` for "
-        "the maps (`heights`, and the fields as `step x x x y`).",
+        "the maps (`heights`, and the fields as `step x x x y`); of an ensemble's, `seed` and "
+        "`step` (its tables `seed x step`); of a theory's, `step` and `wavevector`.",
         COORDINATES,
     )
     table(
@@ -369,7 +425,8 @@ def schema_markdown() -> str:
     )
     table(
         "compare",
-        "One group per solver, one entry per TAO iteration; root attribute `solvers` lists "
+        "One group per solver, one entry per TAO iteration (`iteration`, each group's "
+        "dimension scale); root attribute `solvers` lists "
         "them in order, each committed to `OUT.h5.partial` as it finishes (`compare "
         "--resume` keeps them). Group attributes: `reason`, "
         "`converged`, `iterations`, `solve_time`, `verification`, `petsc_options` and, for an "
@@ -388,6 +445,35 @@ def schema_markdown() -> str:
         THEORY,
     )
     return "\n".join(lines).rstrip() + "\n"
+
+
+def _names(keys: tuple[str, ...]) -> str:
+    return ", ".join(f"`{k}`" for k in keys)
+
+
+def _frames(lines: list[str]) -> None:
+    """The page's section on the tables ``read_frame`` gives (:data:`FRAMES`)."""
+    lines.extend(
+        [
+            "## tables",
+            "",
+            "`read_frame(path)` (`petsc_contact.read_frame`) reads any of these files, finished "
+            "or `.partial`, as a pandas `DataFrame`. Its kind is its root attribute `geometry` "
+            "(a run's, `periodic ensemble`, `theory`), or `compare` for a file with the root "
+            "attribute `solvers`. The columns are those below that the file holds, in this "
+            "order (a run's: its per-step scalars, without the histograms and maps; for those, "
+            '`xarray.open_dataset(path, engine="h5netcdf")`, with `group=SOLVER` for a '
+            "comparison's).",
+            "",
+            "| kind | rows | index | columns |",
+            "| --- | --- | --- | --- |",
+        ]
+    )
+    for kind, frame in FRAMES.items():
+        lines.append(
+            f"| `{kind}` | {frame.rows} | {_names(frame.index)} | {_names(frame.columns)} |"
+        )
+    lines.append("")
 
 
 FILE_RECORD = (

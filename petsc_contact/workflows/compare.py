@@ -41,6 +41,7 @@ from ..backend.solve import BoundSolver, SolveInfo
 from ..geometries.periodic import PeriodicProblem
 from ..geometries.step import residual_verdict
 from ..io.plot import plot_compare
+from ..io.results import group_name, labelled, scale
 from ..io.schema import COMPARE, annotate, write_attributes
 from ..io.store import atomic_h5, check_same_run, partial_path, replaced, storage
 from ..physics.observables import natural_residual
@@ -70,11 +71,6 @@ def solver_options(name: str) -> list[str]:
             f"the options file of solver '{name}' is missing: {path} (reinstall the package)"
         )
     return ["-options_file", str(path)]
-
-
-def group_name(name: str) -> str:
-    """The HDF5 group of solver ``name`` in a comparison's file (a path's ``/`` as ``_``)."""
-    return name.replace("/", "_")
 
 
 def check_solvers(solvers: Sequence[str]) -> None:
@@ -386,8 +382,10 @@ def _write_groups(
     write_attributes(f, {f"reference_{k}": v for k, v in reference.items()})
     for t in trajectories:
         g = f.create_group(group_name(t.name))
+        iteration = scale(g, "iteration", t.iteration)
         for k in COMPARE:
-            g[k] = np.asarray(getattr(t, k))
+            if k != "iteration":
+                labelled(g, k, getattr(t, k), [iteration])
         annotate(g, COMPARE.__getitem__)
         for k in ("reason", "solve_time", "iterations", "converged", "verification"):
             g.attrs[k] = getattr(t, k)

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..conventions.grid import world
 from ..conventions.units import pressure_value
-from ..io.results import trusted
+from ..io.results import labelled, scale, trusted
 from ..io.schema import ENSEMBLE, annotate, ensemble_entry, write_attributes
 from ..io.store import OutputLock, atomic_h5, check_same_run, on_root, partial_path, tidy
 from .description import Run
@@ -241,12 +241,15 @@ def summarise(seeds: Sequence[int], files: Sequence[str]) -> dict[str, np.ndarra
 def write_summary(
     path: str, summary: dict[str, np.ndarray], files: Sequence[str], record: dict[str, Any]
 ) -> None:
-    """The ensemble's ``OUT.h5``: the summary, the seeds' files and the record (atomically)."""
+    """The ensemble's ``OUT.h5``: the summary, the seeds' files and the record (atomically),
+    every dataset on the dimensions ``seed`` (the seeds) and ``step`` (from 1)."""
     with atomic_h5(path) as out:
         write_attributes(out, {"geometry": "periodic ensemble", **record})
         out.attrs["seed_files"] = json.dumps([os.path.abspath(p) for p in files])
+        seed = scale(out, "seed", summary["seeds"])
+        step = scale(out, "step", np.arange(1, len(summary["nominal_pressure"]) + 1))
         for name, values in summary.items():
-            out[name] = values
+            labelled(out, name, values, [seed] if name == "seeds" else [seed, step][-values.ndim :])
         out.attrs["complete"] = True
         annotate(out, ensemble_entry)
 

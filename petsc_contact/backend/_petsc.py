@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import ctypes
 import os
+import re
 import shlex
 import sys
 import warnings
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager, suppress
+from contextvars import ContextVar
 from types import ModuleType
 from typing import Any, TypeAlias
 
@@ -115,6 +117,31 @@ def petsc_comm(comm: Any) -> Any:
 
 OptionsArg: TypeAlias = Sequence[str] | str | Mapping[str, Any] | None
 
+_PREFIX: ContextVar[str] = ContextVar("options_prefix", default="")
+
+
+def check_prefix(prefix: str) -> str:
+    """``prefix`` if it is an options prefix PETSc takes (``a_``: letters, digits and
+    underscores, not starting with a digit; ``""`` for none), else ``ValueError``."""
+    if prefix and not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", prefix):
+        raise ValueError(
+            f"an options prefix is letters, digits and underscores, not starting with a digit "
+            f"or a dash (as 'a_' for -a_tao_type): got '{prefix}'"
+        )
+    return prefix
+
+
+def options_prefix() -> str:
+    """The options prefix of the innermost :func:`scoped_options` block (``""`` outside)."""
+    return _PREFIX.get()
+
+
+def options(prefix: str | None = None) -> Any:
+    """The options database as a solver with ``prefix`` reads it (default: the block's
+    :func:`options_prefix`): ``options().getReal("stiffness_ksp_rtol", ...)`` reads
+    ``-a_stiffness_ksp_rtol`` in a block with the prefix ``a_``."""
+    return init().Options(options_prefix() if prefix is None else prefix)
+
 
 def option_list(options: OptionsArg) -> list[str]:
     """PETSc options as a command-line list, from any of the forms the Python API takes.
@@ -160,22 +187,26 @@ def unused_options(names: Iterable[str] | None = None) -> list[str]:
 
 
 @contextmanager
-def scoped_options(args: OptionsArg) -> Iterator[ModuleType]:
+def scoped_options(args: OptionsArg, prefix: str = "") -> Iterator[ModuleType]:
     """Insert PETSc options for the duration of a ``with`` block, then restore the database.
 
     ``args`` are command-line style (``["-tao_type", "bncg", "-options_file", "f.opts"]``),
     or any form :func:`option_list` takes.  Options of the block that nothing read (a
-    misspelt ``-tao_typo``) are reported as a warning when it ends.
+    misspelt ``-tao_typo``) are reported as a warning when it ends.  The block's solvers
+    read their options with ``prefix`` (``a_``: ``-a_tao_type``, ``-a_petsc_contact_*``,
+    ``-a_stiffness_*``; :func:`options`).
     """
     petsc = init()
     opts = petsc.Options()
     before = opts.getAll()
     given = option_list(args)
+    token = _PREFIX.set(check_prefix(prefix))
     if given:
         opts.insertString(" ".join(shlex.quote(a) for a in given))
     try:
         yield petsc
     finally:
+        _PREFIX.reset(token)
         mine = [k for k, v in opts.getAll().items() if before.get(k) != v]
         unused = unused_options(mine)
         if unused:

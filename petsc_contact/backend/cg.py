@@ -8,18 +8,25 @@ Select them like any TAO type::
 
 The algorithm (an active-set conjugate gradient for ``min f(x), lower <= x <= upper``) lives
 in :class:`~petsc_contact.solver.cg.ConstrainedCG` and works on arrays; here TAO gives it its
-Vecs' arrays, its objective/gradient callback, its Hessian ``Mat``, its tolerances
-(``-tao_gatol``, ``-tao_grtol``, ``-tao_max_it``) and its monitors, and receives its reason.
+Vecs' arrays, its objective/gradient callback and its Hessian ``Mat``, and judges it as it
+judges its own types: every iteration reports the objective, the natural residual (the
+projected gradient's norm, TAO's ``gnorm``) and the step length to TAO's monitors
+(``-tao_monitor``, ``tao.setMonitor``) and runs TAO's convergence test (:func:`check_converged`:
+every TAO tolerance, ``-tao_max_it``, ``-tao_max_funcs``, a user's ``tao.setConvergenceTest``).
+``-tao_view`` describes the solver, its preconditioner and its tolerances.
 A Hessian whose Python context is a :class:`~petsc_contact.solver.cg.SplitHessian` (the
 package's FFT operators) is applied in two halves; any other is multiplied and dotted.
 :class:`PreconditionedCG` applies a ``PC`` (the Fourier compliance the package gives it)
 restricted to the free set; a ``PC`` whose context is a
 :class:`~petsc_contact.solver.cg.ContactPreconditioner` follows the free set.
-:class:`PolonskyKeer` is the unpreconditioned method (``M = I``).
+:class:`PolonskyKeer` is the unpreconditioned method (``M = I``).  The work Vecs are kept
+from one solve to the next and destroyed with the TAO.
 """
 
 from __future__ import annotations
 
+import ctypes
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -32,38 +39,108 @@ from ..solver.cg import (
     ContactPreconditioner,
     Reductions,
     SplitHessian,
-    Tolerances,
     compact_bound,
 )
+from . import _petsc
 
 __all__ = ["ContactPreconditioner", "PolonskyKeer", "PreconditionedCG", "SplitHessian"]
-__all__ += ["compact_bound"]
+__all__ += ["check_converged", "compact_bound"]
 
 
 class _VecArrays:
-    """Work vectors as arrays, each remembering its Vec (the ``PC`` and ``Mat`` take Vecs)."""
+    """The arrays of a solve's Vecs, each remembering its Vec (the ``PC`` and ``Mat`` take
+    Vecs).  The work Vecs are kept from one solve to the next while the solution's layout
+    stays the same."""
 
-    def __init__(self, template: Any) -> None:
-        self.template = template
+    def __init__(self) -> None:
+        self.work: list[tuple[Any, Any]] = []  # (Vec, its array)
         self.vecs: dict[int, Any] = {}
-        self.arrays: list[Any] = []  # kept alive while their ids are keys
+        self.template: Any = None
+        self.handed = 0
 
-    def add(self, vec: Any) -> Any:
-        array = vec.array
-        self.vecs[id(array)] = vec
-        self.arrays.append(array)
-        return array
+    def begin(self, x: Any) -> Any:
+        """Start a solve on the solution ``x``: its array; the work Vecs handed out afresh."""
+        if self.work and self.work[0][0].getSizes() != x.getSizes():
+            self.close()
+        self.template, self.handed = x, 0
+        self.solution = x.array
+        self.vecs = {id(array): vec for vec, array in self.work}
+        self.vecs[id(self.solution)] = x
+        return self.solution
 
     def new(self) -> Any:
-        return self.add(self.template.duplicate())
+        """A work vector's array (a kept one, or a new Vec like the solution's)."""
+        if self.handed == len(self.work):
+            vec = self.template.duplicate()
+            self.work.append((vec, vec.array))
+            self.vecs[id(self.work[-1][1])] = vec
+        self.handed += 1
+        return self.work[self.handed - 1][1]
 
     def vec(self, array: Any) -> Any:
         return self.vecs[id(array)]
 
-    def close(self, keep: Any) -> None:
-        for vec in self.vecs.values():
-            if vec is not keep:
-                vec.destroy()
+    def close(self) -> None:
+        """Destroy the work Vecs."""
+        for vec, _ in self.work:
+            vec.destroy()
+        self.work, self.vecs = [], {}
+
+
+@cache
+def _default_test() -> Any:
+    lib = ctypes.CDLL(_petsc.library_path())
+    lib.TaoDefaultConvergenceTest.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+    lib.TaoDefaultConvergenceTest.restype = ctypes.c_int
+    return lib.TaoDefaultConvergenceTest
+
+
+def check_converged(tao: Any) -> int:
+    """Run TAO's convergence test on its current iteration, as its own types do; its reason.
+
+    petsc4py 3.18 has no ``TAO.checkConverged`` and ``libpetsc`` no call of the test a TAO
+    holds, so this runs what ``TaoSolve`` would: TAO's default test
+    (``TaoDefaultConvergenceTest``: ``-tao_gatol``, ``-tao_grtol``, ``-tao_gttol``,
+    ``-tao_fmin``, ``-tao_max_funcs``, ``-tao_steptol``, ``-tao_max_it``, on what
+    ``tao.monitor`` last reported), then a test given with ``tao.setConvergenceTest``, whose
+    answer means what it means to petsc4py: ``None`` no verdict, ``True`` or ``1``
+    ``CONVERGED_USER``, ``False`` or ``-1`` ``DIVERGED_USER``, or a reason.
+    """
+    code = _default_test()(ctypes.c_void_p(tao.handle), None)
+    if code != 0:
+        raise RuntimeError(f"TaoDefaultConvergenceTest failed (PETSc error {code})")
+    user = tao.getConvergenceTest()
+    if user is not None:
+        converged, args, kargs = user
+        reason = converged(tao, *args, **kargs)
+        reasons = type(tao).Reason
+        if reason is False or reason == -1:
+            tao.setConvergedReason(reasons.DIVERGED_USER)
+        elif reason is True or reason == 1:
+            tao.setConvergedReason(reasons.CONVERGED_USER)
+        elif reason is not None:
+            tao.setConvergedReason(reason)
+    return int(tao.getConvergedReason())
+
+
+class TaoConvergence:
+    """The :class:`~petsc_contact.solver.cg.Convergence` of a solve inside TAO: each iteration
+    goes to TAO's monitors and convergence test (:func:`check_converged`)."""
+
+    def __init__(self, tao: Any) -> None:
+        self.tao = tao
+        reasons = type(tao).Reason
+        self.names = {getattr(reasons, k): k for k in dir(reasons) if k.isupper()}
+
+    def check(self, iteration: int, f: float, residual: float, step: float) -> str | None:
+        tao = self.tao
+        tao.setConvergedReason(0)  # a verdict the solver has gone on from (a confirmation)
+        tao.setIterationNumber(iteration)
+        tao.monitor(its=iteration, f=f, res=residual, cnorm=0.0, step=step)
+        if tao.getConvergedReason() != 0:
+            return MONITOR  # a monitor stopped the solve
+        reason = check_converged(tao)
+        return None if reason == 0 else self.names.get(reason, str(reason))
 
 
 def _reductions(petsc_comm: Any) -> Reductions:
@@ -80,6 +157,15 @@ def _reductions(petsc_comm: Any) -> Reductions:
     return Reductions(sum=allsum, min=lambda v: float(comm.allreduce(v, op=MPI.MIN)))
 
 
+def _context(pc: Any) -> Any:
+    """A preconditioner's Python context (a ``PC`` of type ``python``), or the object itself."""
+    from petsc4py import PETSc
+
+    if isinstance(pc, PETSc.PC) and pc.getType() == "python":
+        return pc.getPythonContext()
+    return pc
+
+
 class PolonskyKeer:
     """Active-set conjugate gradient for ``min f(x), lower <= x <= upper`` (no preconditioner).
 
@@ -94,6 +180,7 @@ class PolonskyKeer:
 
     def __init__(self) -> None:
         self.preconditioner: Any = None
+        self.arrays = _VecArrays()
 
     def set_preconditioner(self, pc: Any) -> None:
         """Use ``pc.apply(r, z)`` as the preconditioner (ignored by :class:`PolonskyKeer`)."""
@@ -101,8 +188,27 @@ class PolonskyKeer:
             self.preconditioner = pc
 
     def view(self, tao: Any, viewer: Any) -> None:
-        pc = "Fourier/user preconditioner" if self.preconditioner is not None else "none"
-        viewer.printfASCII(f"  {type(self).__name__}: active-set CG, preconditioner {pc}\n")
+        """``-tao_view``: the solver, its preconditioner and the tolerances it stops at."""
+        gatol, grtol, gttol = tao.getTolerances()
+        lines = [
+            f"{type(self).__name__}: the package's active-set conjugate gradient",
+            f"  preconditioner: {self._preconditioner_name()}",
+            f"  stops by TAO's convergence test: gatol={gatol:g}, grtol={grtol:g}, "
+            f"gttol={gttol:g}, max_it={tao.getMaximumIterations()}, "
+            f"max_funcs={tao.getMaximumFunctionEvaluations()}",
+        ]
+        for line in lines:
+            viewer.printfASCII(f"  {line}\n")
+
+    def _preconditioner_name(self) -> str:
+        if self.preconditioner is None:
+            return "none"
+        context = _context(self.preconditioner)
+        return f"{type(context).__name__}, restricted to the free set"
+
+    def destroy(self, tao: Any) -> None:
+        """Destroy the kept work Vecs with the TAO."""
+        self.arrays.close()
 
     def solve(self, tao: Any) -> None:
         """Run :class:`~petsc_contact.solver.cg.ConstrainedCG` on ``tao``'s solution vector
@@ -110,13 +216,12 @@ class PolonskyKeer:
         from petsc4py import PETSc
 
         x = tao.getSolution()
-        arrays = _VecArrays(x)
-        xa = arrays.add(x)
+        arrays = self.arrays
+        xa = arrays.begin(x)
         lower_vec, upper_vec = tao.getVariableBounds()
         hessian = tao.getHessian()[0]
-        gatol, grtol, _ = tao.getTolerances()
         pc = self.preconditioner
-        context = pc.getPythonContext() if isinstance(pc, PETSc.PC) else pc
+        context = _context(pc)
         split = hessian.getPythonContext() if hessian.getType() == "python" else None
 
         def gradient(x_array: Any, g: Any) -> float:
@@ -128,30 +233,21 @@ class PolonskyKeer:
         def precondition(r: Any, z: Any) -> None:
             pc.apply(arrays.vec(r), arrays.vec(z))
 
-        def monitor(it: int, f: float, rnorm: float) -> bool:
-            tao.setIterationNumber(it)
-            tao.monitor(its=it, f=f, res=rnorm, cnorm=0.0, step=0.0)
-            return bool(tao.getConvergedReason() != 0)  # a monitor stopped the solve
-
-        try:
-            cg = ConstrainedCG(
-                xa,
-                compact_bound(lower_vec.array_r),
-                compact_bound(upper_vec.array_r),
-                gradient,
-                split if isinstance(split, SplitHessian) else mult,
-                precondition if pc is not None else None,
-                context if isinstance(context, ContactPreconditioner) else None,
-                Tolerances(gatol, grtol, tao.getMaximumIterations()),
-                monitor,
-                CPU.passes,
-                arrays.new,
-                _reductions(tao.getComm()),
-                x.getSize(),
-            )
-            outcome = cg.run()
-        finally:
-            arrays.close(keep=x)
+        cg = ConstrainedCG(
+            xa,
+            compact_bound(lower_vec.array_r),
+            compact_bound(upper_vec.array_r),
+            gradient,
+            split if isinstance(split, SplitHessian) else mult,
+            precondition if pc is not None else None,
+            context if isinstance(context, ContactPreconditioner) else None,
+            TaoConvergence(tao),
+            CPU.passes,
+            arrays.new,
+            _reductions(tao.getComm()),
+            x.getSize(),
+        )
+        outcome = cg.run()
         if outcome.reason != MONITOR:
             tao.setConvergedReason(getattr(PETSc.TAO.Reason, outcome.reason))
 

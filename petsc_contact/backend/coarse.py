@@ -79,7 +79,7 @@ class TwoLevelOptions:
     @classmethod
     def from_database(cls) -> TwoLevelOptions:
         """The options as the PETSc options database gives them."""
-        opts = _petsc.petsc().Options()
+        opts = _petsc.options()
         block = opts.getInt("petsc_contact_two_level_block", BLOCK)
         if block < 1:
             raise ValueError(f"-petsc_contact_two_level_block must be positive, not {block}")

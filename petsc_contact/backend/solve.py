@@ -25,6 +25,13 @@ Newton types whose KSP solves on the free variables (``tron``, ``bnls``, ``bntr`
 get the Fourier preconditioner as the Hessian's preconditioning matrix with ``PCMAT``: TAO
 restricts it to the free set like the Hessian, so the KSP is preconditioned by
 ``P_F K^-1 P_F``.  ``-petsc_contact_no_ksp_pc`` (or any ``-tao_*pc_type``) turns it off.
+
+A :class:`BoundSolver` makes its TAO at its first solve and keeps it, with its Hessian, Vecs
+and initial matrices, for every later one (a sweep's steps): each solve sets the new start,
+bounds and tolerance floor.  It reads its options with an options prefix (``a_``:
+``-a_tao_type``, ``-a_petsc_contact_no_j0``; by default the prefix of the
+:func:`~petsc_contact.backend._petsc.scoped_options` block it is made in), so that solvers
+side by side take different options.
 """
 
 from __future__ import annotations
@@ -32,6 +39,7 @@ from __future__ import annotations
 import ctypes
 import time
 from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
@@ -177,10 +185,16 @@ class FreeSetPreconditioner:
         comm = tao.getComm()  # mpi4py's for the sums of several ranks only (the mpi extra)
         self.comm = comm.tompi4py() if comm.size > 1 else comm
         self.contact = op if isinstance(op, ContactPreconditioner) else None
-        self.lower, self.upper = compact_bound(lower.array_r), compact_bound(upper.array_r)
+        self.bounds = (lower, upper)
+        self.load_bounds()
         self.size = lower.getSize()
         self.free = np.zeros(lower.getLocalSize(), dtype=bool)
         self.work = np.empty(lower.getLocalSize())
+
+    def load_bounds(self) -> None:
+        """Read the bounds' Vecs again (a new solve's)."""
+        lower, upper = self.bounds
+        self.lower, self.upper = compact_bound(lower.array_r), compact_bound(upper.array_r)
 
     def apply(self, pc: Any, x: Any, y: Any) -> None:
         solution = self.tao.getSolution().array_r
@@ -199,15 +213,16 @@ class FreeSetPreconditioner:
     applyTranspose = apply
 
 
-def requested_type(petsc: Any) -> str:
-    """The TAO type the options database asks for (``DEFAULT_TYPE`` if none)."""
-    opts = petsc.Options()
+def requested_type(petsc: Any, prefix: str | None = None) -> str:
+    """The TAO type the options database asks for with ``prefix`` (default: the options
+    block's, :func:`~petsc_contact.backend._petsc.options`), ``DEFAULT_TYPE`` if none."""
+    opts = _petsc.options(prefix)
     return opts.getString("tao_type", DEFAULT_TYPE) if opts.hasName("tao_type") else DEFAULT_TYPE
 
 
-def check_tao_type(petsc: Any) -> str:
+def check_tao_type(petsc: Any, prefix: str | None = None) -> str:
     """Raise ``ValueError`` unless ``-tao_type`` names a bound-constrained TAO type."""
-    t = requested_type(petsc)
+    t = requested_type(petsc, prefix)
     if t not in BOUND_TYPES:
         raise ValueError(
             f"unknown or unbounded TAO type '{t}'; choose one of: " + ", ".join(BOUND_TYPES)
@@ -215,8 +230,21 @@ def check_tao_type(petsc: Any) -> str:
     return t
 
 
+@dataclass
+class _Solve:
+    """One solve's callbacks and what TAO's callbacks count of it."""
+
+    objgrad: ObjGrad
+    monitor: Monitor | None
+    evaluations: int = 0
+    norms: list[float] = field(default_factory=list)  # the first iteration's gradient norm
+
+
 class BoundSolver:
     """Minimise a convex quadratic with ``x >= lower`` by TAO on the grid's row-slab Vecs.
+
+    The TAO is made at the first :meth:`solve` and kept for the later ones until
+    :meth:`close`.
 
     Parameters
     ----------
@@ -226,16 +254,27 @@ class BoundSolver:
         Fourier operator giving the exact Hessian (shell ``Mat``).
     preconditioner
         Fourier operator approximating the inverse Hessian (LMVM ``J0``), or ``None``.
+    options_prefix
+        The prefix of this solver's options (``a_`` reads ``-a_tao_type``); default: the
+        prefix of the options block it is made in (:func:`~petsc_contact.backend._petsc.
+        scoped_options`).
     """
 
     def __init__(
-        self, grid: Grid, hessian: SpectralOperator, preconditioner: SpectralOperator | None
+        self,
+        grid: Grid,
+        hessian: SpectralOperator,
+        preconditioner: SpectralOperator | None,
+        options_prefix: str | None = None,
     ) -> None:
         self.petsc = petsc = _petsc.petsc()
         self.grid = grid
         self.hessian_op = hessian
         self.preconditioner_op = preconditioner
-        self.tao_type = check_tao_type(petsc)
+        given = _petsc.options_prefix() if options_prefix is None else options_prefix
+        self.prefix = _petsc.check_prefix(given)
+        opts = _petsc.options(self.prefix)
+        self.tao_type = check_tao_type(petsc, self.prefix)
         self.hessian = shell_matrix(petsc, hessian)
         self.x = self.hessian.createVecRight()
         self.lower = self.x.duplicate()
@@ -246,10 +285,10 @@ class BoundSolver:
         if (
             preconditioner is not None
             and self.tao_type in KSP_PC_TYPES
-            and not petsc.Options().getBool("petsc_contact_no_ksp_pc", False)
+            and not opts.getBool("petsc_contact_no_ksp_pc", False)
         ):
             self.pmat = shell_matrix(petsc, preconditioner)
-        use_j0 = not petsc.Options().getBool("petsc_contact_no_j0", False)
+        use_j0 = not opts.getBool("petsc_contact_no_j0", False)
         self.use_h0 = preconditioner is not None and self.tao_type in H0_TYPES and use_j0
         wants_pc = (self.tao_type in J0_TYPES and use_j0) or self.tao_type == "python"
         if preconditioner is not None and wants_pc:
@@ -257,6 +296,12 @@ class BoundSolver:
             self.pc.setOperators(self.hessian)
             self.pc.setUp()
         self._reasons = _reason_names(petsc)
+        self.tao: Any = None  # made at the first solve (_create), kept until close
+        self.requested_gatol = DEFAULT_GATOL  # -tao_gatol, read when the TAO is made
+        self.gradient: list[Any] = []  # the Vec the objective was last evaluated into
+        self.initial: list[Any] = []  # the H0 of blmvm/bncg and its PC
+        self.free_set: FreeSetPreconditioner | None = None
+        self.current: _Solve | None = None
 
     def solve(
         self,
@@ -277,59 +322,48 @@ class BoundSolver:
         the tolerance actually used is reported in :class:`SolveInfo`.
         """
         self._load(x0, lower, upper)
-        counts = {"objgrad": 0}
-        norms: list[float] = []  # the first iteration's gradient norm, for the report
-        gradient: list[Any] = []  # the Vec the objective was last evaluated into
-        tao = self._create(objgrad, counts, gradient)
-        initial: list[Any] = []  # the H0 of blmvm/bncg and its PC, destroyed with the TAO
+        tao = self.tao if self.tao is not None else self._create()
+        if self.free_set is not None:
+            self.free_set.load_bounds()
+        self.current = current = _Solve(objgrad, monitor)
+        gatol = max(self.requested_gatol, gatol_floor)
+        tao.setTolerances(gatol=gatol)
+        _, grtol, _ = tao.getTolerances()
+        h0, p0 = self.hessian_op.applications, self._pc_count()
+        start = time.perf_counter()
         try:
-            if self.use_h0:
-                initial = self._attach_h0(tao, gradient)
-            context = tao.getPythonContext() if self.tao_type == "python" else None
-            if self.pc is not None and isinstance(context, TakesPreconditioner):
-                context.set_preconditioner(self.pc)
-            tao.setMonitor(self._monitor(norms, monitor))
-            gatol, grtol, _ = tao.getTolerances()
-            if gatol < gatol_floor:
-                gatol = gatol_floor
-                tao.setTolerances(gatol=gatol)
-            h0, p0 = self.hessian_op.applications, self._pc_count()
-            start = time.perf_counter()
             tao.solve(self.x)
-            elapsed = self.grid.max(time.perf_counter() - start)
-            its, _, gnorm, _, _, code = tao.getSolutionStatus()
-            code = int(code)
-            info = SolveInfo(
-                tao_type=_type_name(tao, context),
-                reason=self._reasons.get(code, str(code)),
-                reason_code=code,
-                iterations=int(its),
-                objective_gradient_evaluations=counts["objgrad"],
-                hessian_applications=self.hessian_op.applications - h0,
-                preconditioner_applications=self._pc_count() - p0,
-                gradient_norm=float(gnorm),
-                solve_time=elapsed,
-                tolerance=float(gatol),
-                relative_tolerance=float(grtol),
-                initial_gradient_norm=norms[0] if norms else np.inf,
-            )
         finally:
-            tao.destroy()
-            for obj in initial:
-                obj.destroy()
-            gradient.clear()
+            self.current = None
+        elapsed = self.grid.max(time.perf_counter() - start)
+        its, _, gnorm, _, _, code = tao.getSolutionStatus()
+        code = int(code)
+        info = SolveInfo(
+            tao_type=_type_name(tao, tao.getPythonContext() if self.tao_type == "python" else None),
+            reason=self._reasons.get(code, str(code)),
+            reason_code=code,
+            iterations=int(its),
+            objective_gradient_evaluations=current.evaluations,
+            hessian_applications=self.hessian_op.applications - h0,
+            preconditioner_applications=self._pc_count() - p0,
+            gradient_norm=float(gnorm),
+            solve_time=elapsed,
+            tolerance=float(gatol),
+            relative_tolerance=float(grtol),
+            initial_gradient_norm=current.norms[0] if current.norms else np.inf,
+        )
         return self.x.array_r.copy(), info
 
-    def _attach_h0(self, tao: Any, gradient: list[Any]) -> list[Any]:
+    def _attach_h0(self, tao: Any) -> None:
         """The restricted compliance as ``tao``'s ``H0`` (:class:`FreeSetPreconditioner`)."""
         op = self.preconditioner_op
-        context = FreeSetPreconditioner(op, tao, gradient, self.lower, self.upper)
-        pc = self.petsc.PC().createPython(context, comm=_petsc.petsc_comm(self.grid.comm))
+        self.free_set = FreeSetPreconditioner(op, tao, self.gradient, self.lower, self.upper)
+        pc = self.petsc.PC().createPython(self.free_set, comm=_petsc.petsc_comm(self.grid.comm))
         pc.setOperators(self.hessian)
         pc.setUp()
         h0 = initial_matrix(self.petsc, pc, self.x)
         attach_h0(tao, self.tao_type, h0)
-        return [h0, pc]
+        self.initial = [h0, pc]
 
     def _load(self, x0: np.ndarray, lower: float, upper: np.ndarray | None) -> None:
         """The start point and the bounds into the solver's Vecs."""
@@ -342,21 +376,24 @@ class BoundSolver:
             with self.upper as ua:
                 ua[...] = upper
 
-    def _create(self, objgrad: ObjGrad, counts: dict[str, int], gradient: list[Any]) -> Any:
-        """A TAO of the requested type with the package's defaults, then the user's options;
-        ``gradient[0]`` becomes the Vec the objective was last evaluated into."""
+    def _create(self) -> Any:
+        """The TAO of the requested type with the package's defaults, then the user's options
+        (read with the solver's prefix); its callbacks serve :attr:`current`."""
 
         def tao_objgrad(tao: Any, x: Any, g: Any) -> float:
-            counts["objgrad"] += 1
+            assert self.current is not None
+            self.current.evaluations += 1
             if self.use_h0:  # only H0 reads it: holding TAO's Vec costs memory otherwise
-                gradient[:] = [g]
+                self.gradient[:] = [g]
             with g as garr:
-                return objgrad(x.array_r, garr)
+                return self.current.objgrad(x.array_r, garr)
 
         def tao_hessian(tao: Any, x: Any, H: Any, P: Any) -> None:
             pass  # the Hessian is constant: the shell Mat already is it
 
         tao = self.petsc.TAO().create(comm=_petsc.petsc_comm(self.grid.comm))
+        self.tao = tao
+        tao.setOptionsPrefix(self.prefix or None)
         tao.setType(self.tao_type)
         if self.tao_type == "python":
             tao.setPythonType(DEFAULT_PYTHON_TYPE)
@@ -368,7 +405,7 @@ class BoundSolver:
         tao.setMaximumFunctionEvaluations(10 * DEFAULT_MAX_IT)
         if self.tao_type in KSP_TYPES:
             tao.getKSP().getPC().setType("none" if self.pmat is None else "mat")
-        opts = self.petsc.Options()
+        opts = _petsc.options(self.prefix)
         default_matrix = self.use_h0 and self.tao_type == "bncg"
         default_matrix = default_matrix and not opts.hasName("tao_bncg_mat_type")
         if default_matrix:  # read by TaoSetFromOptions only
@@ -378,22 +415,27 @@ class BoundSolver:
         finally:
             if default_matrix:
                 opts.delValue("tao_bncg_mat_type")
+        self.requested_gatol = tao.getTolerances()[0]
         if self.pc is not None and self.tao_type in J0_TYPES:
             attach_lmvm_j0(tao, self.pc)
+        if self.use_h0:
+            self._attach_h0(tao)
+        context = tao.getPythonContext() if self.tao_type == "python" else None
+        if self.pc is not None and isinstance(context, TakesPreconditioner):
+            context.set_preconditioner(self.pc)
+        tao.setMonitor(self._monitor)
         return tao
 
-    def _monitor(self, norms: list[float], monitor: Monitor | None) -> Callable[[Any], None]:
-        """TAO's monitor: record the first gradient norm, call ``monitor``, stop if it says so."""
-        stop = self.petsc.TAO.Reason.DIVERGED_USER
-
-        def tao_monitor(tao: Any) -> None:
-            it, f, gnorm = tao.getSolutionStatus()[:3]
-            if not norms:
-                norms.append(float(gnorm))
-            if monitor is not None and monitor(it, f, gnorm):  # True: stop this solve
-                tao.setConvergedReason(stop)
-
-        return tao_monitor
+    def _monitor(self, tao: Any) -> None:
+        """TAO's monitor: record the first gradient norm, call the solve's monitor, stop if it
+        says so."""
+        assert self.current is not None
+        it, f, gnorm = tao.getSolutionStatus()[:3]
+        if not self.current.norms:
+            self.current.norms.append(float(gnorm))
+        monitor = self.current.monitor
+        if monitor is not None and monitor(it, f, gnorm):  # True: stop this solve
+            tao.setConvergedReason(self.petsc.TAO.Reason.DIVERGED_USER)
 
     def _pc_count(self) -> int:
         return self.preconditioner_op.applications if self.preconditioner_op is not None else 0
@@ -406,7 +448,10 @@ class BoundSolver:
 
     def close(self) -> None:
         """Destroy the PETSc objects (PETSc must not finalise with live objects)."""
-        for obj in (self.pc, self.pmat, self.hessian, self.x, self.lower, self.upper):
+        kept = [self.tao, *self.initial, self.pc, self.pmat]
+        for obj in (*kept, self.hessian, self.x, self.lower, self.upper):
             if obj is not None:
                 obj.destroy()
-        self.pc = self.pmat = None
+        self.tao = self.pc = self.pmat = self.free_set = None
+        self.initial = []
+        self.gradient.clear()

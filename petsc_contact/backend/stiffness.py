@@ -60,7 +60,7 @@ def restricted_solve(
         ksp.setPC(pcobj)  # before the operators, which the KSP hands on to its PC
         ksp.setOperators(mat)
         ksp.setTolerances(rtol=rtol, atol=0.0, max_it=10 * grid.size)
-        ksp.setOptionsPrefix("stiffness_")
+        ksp.setOptionsPrefix(_petsc.options_prefix() + "stiffness_")
         ksp.setFromOptions()
         b, y = mat.createVecs()
         with b as barr:

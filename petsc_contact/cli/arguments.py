@@ -419,6 +419,13 @@ def _output_arguments(p: argparse.ArgumentParser, d: dict[str, Any]) -> None:
         "(exit status 75)",
     )
     p.add_argument(
+        "--options-prefix",
+        default="",
+        metavar="PREFIX",
+        help="read the run's PETSc options with this prefix (a_: -a_tao_type bncg, "
+        "-a_petsc_contact_two_level 0, -a_stiffness_ksp_rtol 1e-8)",
+    )
+    p.add_argument(
         "--scalars-only",
         action="store_true",
         help="do not store the height map (for compact result files of large grids)",

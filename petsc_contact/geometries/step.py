@@ -138,7 +138,7 @@ class MeasuredSolve:
 def requested_stiffness_rtol() -> float:
     """The relative tolerance the PETSc path's held-set solve is asked for
     (``-stiffness_ksp_rtol``, on the preconditioned residual)."""
-    return float(_petsc.petsc().Options().getReal("stiffness_ksp_rtol", STIFFNESS_RTOL))
+    return float(_petsc.options().getReal("stiffness_ksp_rtol", STIFFNESS_RTOL))
 
 
 class ContactProblem(Protocol):

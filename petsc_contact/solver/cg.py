@@ -43,10 +43,13 @@ before it is applied; when :meth:`~ContactPreconditioner.adapt` returns ``True``
 depends on the set (the exact Schur form for small contact sets) and the recurrence restarts.
 Without a preconditioner this is Polonsky and Keer's unpreconditioned method (``M = I``).
 
-Convergence follows TAO's tolerances on the projected gradient ``r = P_F g``:
-``||r|| <= gatol`` or ``||r|| <= grtol ||r_0||`` (reason ``CONVERGED_GATOL``/``GRTOL``);
-``max_it`` gives ``DIVERGED_MAXITS``; a direction of non-positive curvature with no bound
-ahead gives ``DIVERGED_USER`` (the quadratic is unbounded below).  When the recurrence meets
+Every iteration reports the objective, the norm of the projected gradient ``r = P_F g``
+(the natural residual) and the last step's length to a :class:`Convergence`, which says
+whether to stop and why, in TAO's names: on the PETSc path TAO's own test (every TAO tolerance,
+its monitors, a user's test), on the array path :class:`ToleranceTest` (``gatol``, ``grtol``
+and ``max_it`` as TAO defines them).  A verdict of convergence is confirmed on an exactly
+evaluated gradient.  A direction of non-positive curvature with no bound ahead gives
+``DIVERGED_USER`` (the quadratic is unbounded below).  When the recurrence meets
 the tolerance but the exactly evaluated residual stays above it, twice in a row without
 falling below 0.9 times its best, the iterate stands at the floor that double precision
 leaves: the solve stops with ``CONVERGED_STEPTOL`` and the residual it reached, which the
@@ -108,13 +111,40 @@ class ContactPreconditioner(Protocol):
         ...
 
 
-@dataclass(frozen=True)
-class Tolerances:
-    """When a solve stops: ``||r|| <= gatol``, ``||r|| <= grtol ||r_0||`` or ``max_it``."""
+@runtime_checkable
+class Convergence(Protocol):
+    """Where each iteration is reported and judged (TAO's monitors and convergence test)."""
+
+    def check(self, iteration: int, f: float, residual: float, step: float) -> str | None:
+        """Report an iteration (objective ``f``, natural residual, the last step's length);
+        the reason to stop (TAO's name, or :data:`MONITOR` when a monitor stopped the solve),
+        or ``None`` to go on."""
+        ...
+
+
+@dataclass
+class ToleranceTest:
+    """TAO's default test of ``gatol``, ``grtol`` and ``max_it``, without PETSc.
+
+    ``||r|| <= gatol`` (``CONVERGED_GATOL``), ``||r|| <= grtol |f|`` (``CONVERGED_GRTOL``),
+    ``max_it`` iterations (``DIVERGED_MAXITS``), in TAO's order;
+    ``monitor(iteration, f, ||r||)`` is told every iteration first, and stops the solve when
+    it returns ``True``.
+    """
 
     gatol: float
     grtol: float
     max_it: int
+    monitor: Callable[[int, float, float], bool] | None = None
+
+    def check(self, iteration: int, f: float, residual: float, step: float) -> str | None:
+        if self.monitor is not None and self.monitor(iteration, f, residual):
+            return MONITOR
+        if residual <= self.gatol:
+            return GATOL
+        if f != 0 and abs(residual / f) <= self.grtol:
+            return GRTOL
+        return MAXITS if iteration >= self.max_it else None
 
 
 @dataclass(frozen=True)
@@ -204,10 +234,8 @@ class ConstrainedCG:
         ``apply(r, z)``: ``z <- M r``, or ``None`` for ``M = I``.
     contact
         The preconditioner's :class:`ContactPreconditioner`, if it follows the bound set.
-    tolerances
-        When to stop.
-    monitor
-        ``monitor(iteration, f, ||r||) -> bool``, every iteration; ``True`` stops the solve.
+    convergence
+        Told every iteration; says when to stop (:class:`Convergence`).
     passes
         The device's element-wise passes (:class:`~petsc_contact.numerics.device.ArrayPasses`).
     vector
@@ -227,15 +255,15 @@ class ConstrainedCG:
         hessian: SplitHessian | Callable[[Array, Array], Any],
         preconditioner: Callable[[Array, Array], Any] | None,
         contact: ContactPreconditioner | None,
-        tolerances: Tolerances,
-        monitor: Callable[[int, float, float], bool],
+        convergence: Convergence,
         passes: Any,
         vector: Callable[[], Array],
         reduce: Reductions = ONE_RANK,
         size: int | None = None,
     ) -> None:
         self.xa, self.lower, self.upper = x, lower, upper
-        self.gradient, self.monitor, self.passes, self.reduce = gradient, monitor, passes, reduce
+        self.gradient, self.passes, self.reduce = gradient, passes, reduce
+        self.convergence = convergence
         self.split: SplitHessian | None = None
         self.mult: Callable[[Array, Array], Any] | None = None
         if isinstance(hessian, SplitHessian):
@@ -243,7 +271,6 @@ class ConstrainedCG:
         else:
             self.mult = hessian
         self.preconditioner, self.contact = preconditioner, contact
-        self.gatol, self.grtol, self.max_it = tolerances.gatol, tolerances.grtol, tolerances.max_it
         self.g, self.d, self.w, self.r, self.z = (vector() for _ in range(5))
         expected = contact.expected_bound_count if contact is not None else 0
         self.min_limit = max(MIN_GROWTH, EXPECTED_GROWTH * expected)
@@ -251,7 +278,7 @@ class ConstrainedCG:
         self.free = np.zeros_like(x, dtype=bool)
         self.pending_changed = self.pending_joined = 0.0  # set changes no direction saw yet
         self.rz_old = self.rd = 0.0
-        self.rnorm0: float | None = None
+        self.step_length = 0.0  # the last step's multiple of its direction (TAO's "step")
         self.since_refresh = 0
         self.confirming, self.confirmed, self.stalls = False, np.inf, 0  # see _test
         self.reason = ""
@@ -292,15 +319,16 @@ class ConstrainedCG:
                 return Outcome(self.reason, it)
 
     def _test(self, it: int, rr: float) -> int:
-        """Monitor, and stop at convergence or the iteration limit."""
+        """Report the iteration; stop where the convergence test says so (a verdict of
+        convergence confirmed on an exactly evaluated gradient)."""
         rnorm = float(np.sqrt(rr))
-        if self.rnorm0 is None:
-            self.rnorm0 = rnorm
-        if self.monitor(it, self.f, rnorm):
+        verdict = self.convergence.check(it, self.f, rnorm, self.step_length)
+        if verdict == MONITOR:
             return self._stop(MONITOR)
+        converged = verdict is not None and verdict.startswith("CONVERGED")
         if self.confirming:  # the exactly evaluated residual after the recurrence's
             self.confirming = False
-            stalled = rnorm > STALL_RATIO * self.confirmed and not self._met(rnorm)
+            stalled = rnorm > STALL_RATIO * self.confirmed and not converged
             self.stalls = self.stalls + 1 if stalled else 0
             if self.stalls >= STALLS:
                 # the recurrence keeps meeting the tolerance and the exact residual does not
@@ -308,18 +336,11 @@ class ConstrainedCG:
                 # caller's verification judges the residual it reached)
                 return self._stop(STEPTOL)
             self.confirmed = min(self.confirmed, rnorm)
-        if self._met(rnorm):
-            if self.since_refresh > 0:  # confirm on an exactly evaluated gradient
-                self._refresh()
-                self.confirming = True
-                return _RETEST
-            return self._stop(GATOL if rnorm <= self.gatol else GRTOL)
-        if it >= self.max_it:
-            return self._stop(MAXITS)
-        return _GO
-
-    def _met(self, rnorm: float) -> bool:
-        return rnorm <= self.gatol or rnorm <= self.grtol * (self.rnorm0 or 0.0)
+        if converged and self.since_refresh > 0:  # confirm on an exactly evaluated gradient
+            self._refresh()
+            self.confirming = True
+            return _RETEST
+        return _GO if verdict is None else self._stop(verdict)
 
     def _direction(self, rr: float, bound_count: int) -> int:
         """The preconditioner follows a changed set; ``z = P_F M r``, then the direction
@@ -380,6 +401,7 @@ class ConstrainedCG:
             fraction = growth_fraction(xa, d, alpha, lower, limit, self.allsum)
             passes.axpy((fraction - 1.0) * alpha, d, xa)
             alpha *= fraction
+        self.step_length = abs(alpha)
         if below or above or self.since_refresh >= REFRESH_EVERY:
             passes.clip(xa, lower, upper)
             self._refresh()

@@ -22,7 +22,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ..numerics.device import Device
-from .cg import MONITOR, USER, ConstrainedCG, ContactPreconditioner, Tolerances
+from .cg import MONITOR, USER, ConstrainedCG, ContactPreconditioner, ToleranceTest
 from .report import DEFAULT_GATOL, REASON_CODES, SolveInfo
 
 DEFAULT_MAX_IT = 5000
@@ -45,7 +45,8 @@ class ArraySettings:
     Attributes
     ----------
     gatol, grtol, max_it
-        ``-tao_gatol``, ``-tao_grtol``, ``-tao_max_it``.
+        ``-tao_gatol``, ``-tao_grtol``, ``-tao_max_it``, tested as TAO tests them
+        (:class:`~petsc_contact.solver.cg.ToleranceTest`).
     monitor
         ``-tao_monitor``: a line per iteration.
     two_level, block, max_fraction
@@ -201,8 +202,7 @@ class ArraySolver:
             self.hessian,
             pre.apply_array,
             pre if isinstance(pre, ContactPreconditioner) else None,
-            Tolerances(gatol, settings.grtol, settings.max_it),
-            watch,
+            ToleranceTest(gatol, settings.grtol, settings.max_it, watch),
             device.passes,
             lambda: xp.empty_like(x),
         )

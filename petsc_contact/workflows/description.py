@@ -68,6 +68,8 @@ class Run:
         steps).
     options
         PETSc options for this run (``("-tao_type", "bncg")``).
+    options_prefix
+        The prefix this run's solvers read their PETSc options with (``"a_"``: ``-a_tao_type``).
     skip_memory_check
         Run even when the estimated memory exceeds what the machine has available.
     """
@@ -105,6 +107,7 @@ class Run:
     stop_after: float | None = None
     skip_memory_check: bool = False
     options: tuple[str, ...] = field(default=(), compare=False)
+    options_prefix: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
         """Check the numbers and the files (``ValueError`` naming the option as the command

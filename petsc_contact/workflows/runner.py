@@ -279,7 +279,7 @@ def run_contact(
     command_line
         What to record as the command line (default: the arguments that describe ``run``).
     """
-    with locked(run.output), _petsc.scoped_options(list(run.options)):
+    with locked(run.output), _petsc.scoped_options(list(run.options), run.options_prefix):
         return prepare(run, command_line).execute(progress, monitor)
 
 

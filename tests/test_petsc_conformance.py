@@ -1,0 +1,202 @@
+"""The default solver as a TAO type like PETSc's own: TAO's tolerances, convergence tests,
+monitors and views hold for it as for ``bncg``; a sweep keeps one TAO; an options prefix
+gives each solver its own options."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+SURFACE = {"hurst": 0.7, "rms_slope": 0.1, "seed": 1}
+BNCG = ["-tao_type", "bncg"]
+
+
+@pytest.fixture(scope="module")
+def heights():
+    from petsc_contact.conventions.grid import Grid
+    from petsc_contact.numerics.fft import make_fft
+    from petsc_contact.physics.surface import self_affine
+
+    grid = Grid(64, 1.0)
+    return self_affine(grid, make_fft(grid), rolloff_ratio=1, cutoff_ratio=16, **SURFACE)
+
+
+def solve(heights, options, pressures=(1e-2,)):
+    """The steps of ``periodic_contact`` with ``options``, and the warnings it gave."""
+    from petsc_contact import periodic_contact
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        steps = periodic_contact(
+            heights, length=1.0, modulus=1.0, pressures=list(pressures), options=options
+        )
+    return steps, [str(w.message) for w in caught]
+
+
+@pytest.fixture(scope="module")
+def full(heights):
+    """The default solver's and bncg's steps at their default tolerances."""
+    return {name: solve(heights, t)[0][0].scalars for name, t in (("cg", []), ("bncg", BNCG))}
+
+
+@pytest.mark.parametrize(
+    "options, reason",
+    [
+        (["-tao_gttol", "1e-2"], "CONVERGED_GTTOL"),
+        (["-tao_max_funcs", "5"], "DIVERGED_MAXFCN"),
+        (["-tao_max_it", "3"], "DIVERGED_MAXITS"),
+        (["-tao_grtol", "0.5"], "CONVERGED_GRTOL"),
+    ],
+    ids=["gttol", "max_funcs", "max_it", "grtol"],
+)
+def test_tao_tolerances_stop_the_default_solver_as_bncg(heights, full, options, reason):
+    """Each TAO tolerance stops the default solver with the reason it stops ``bncg`` with,
+    before the full solve; ``-tao_max_funcs 5`` after at most 6 objective evaluations."""
+    for name, solver in (("cg", []), ("bncg", BNCG)):
+        (step,), _ = solve(heights, solver + options)
+        s = step.scalars
+        assert s["tao_reason"] == reason, name
+        assert s["iterations"] < full[name]["iterations"]
+        assert s["gradient_norm"] > full[name]["gradient_norm"]
+        if "-tao_max_funcs" in options:
+            assert s["objective_gradient_evaluations"] <= 6
+        if "-tao_max_it" in options:
+            assert s["iterations"] == 3
+
+
+def test_fatol_is_not_read_by_tao(heights, full):
+    """PETSc 3.18's TAO has no ``-tao_fatol``: neither solver reads it, both converge as
+    without it and the option is reported unused."""
+    for name, solver in (("cg", []), ("bncg", BNCG)):
+        (step,), messages = solve(heights, [*solver, "-tao_fatol", "1e-1"])
+        assert step.scalars["iterations"] == full[name]["iterations"]
+        assert step.scalars["tao_reason"] == "CONVERGED_GATOL"
+        assert any("never used: -tao_fatol" in m for m in messages)
+
+
+def bound_qp(petsc, tao_type):
+    """``min 1/2 x.Ax - b.x``, ``0 <= x <= 0.3``, on a 1-D Laplacian (n = 200): a TAO of
+    ``tao_type`` (the package's type when ``python``) and the objects to destroy."""
+    n = 200
+    a = petsc.Mat().createAIJ((n, n), nnz=3, comm=petsc.COMM_SELF)
+    for i in range(n):
+        a.setValue(i, i, 2.01)
+        for j in (i - 1, i + 1):
+            if 0 <= j < n:
+                a.setValue(i, j, -1.0)
+    a.assemble()
+    b = petsc.Vec().createWithArray(np.sin(np.linspace(0, 6 * np.pi, n)) * 0.05)
+    lower, upper, x = (petsc.Vec().createSeq(n) for _ in range(3))
+    lower.set(0.0)
+    upper.set(0.3)
+    x.set(0.0)
+
+    def objgrad(tao, xv, gv):
+        a.mult(xv, gv)
+        gv.axpy(-1.0, b)
+        return 0.5 * xv.dot(gv) - 0.5 * xv.dot(b)
+
+    tao = petsc.TAO().create(comm=petsc.COMM_SELF)
+    tao.setType(tao_type)
+    if tao_type == "python":
+        tao.setPythonType("petsc_contact.backend.cg.PreconditionedCG")
+    tao.setObjectiveGradient(objgrad, None)
+    tao.setHessian(lambda *args: None, a, a)
+    tao.setVariableBounds(lower, upper)
+    tao.setTolerances(gatol=1e-10, grtol=0.0, gttol=0.0)
+    return tao, x, [tao, a, b, lower, upper, x]
+
+
+@pytest.mark.parametrize("tao_type", ["python", "bncg"])
+def test_users_convergence_test_is_honoured(petsc, tao_type):
+    """A convergence test given with ``tao.setConvergenceTest`` stops the solve where it says
+    (``True``: ``CONVERGED_USER`` at iteration 4), as it stops ``bncg``; TAO's monitor sees
+    every iteration up to there."""
+    tao, x, objects = bound_qp(petsc, tao_type)
+    seen = []
+    tao.setConvergenceTest(lambda t: True if t.getIterationNumber() >= 4 else None)
+    tao.setMonitor(lambda t: seen.append(t.getIterationNumber()))
+    tao.solve(x)
+    assert tao.getConvergedReason() == petsc.TAO.Reason.CONVERGED_USER
+    assert tao.getIterationNumber() == 4 and set(seen) == {0, 1, 2, 3, 4}
+    for obj in objects:
+        obj.destroy()
+
+
+def test_tao_view_describes_the_solver(heights, capfd):
+    """``-tao_view`` prints the default solver's name, its preconditioner and tolerances;
+    ``-tao_monitor`` a line per iteration, as for TAO's own types."""
+    (step,), _ = solve(heights, ["-tao_view", "-tao_monitor"])
+    out = capfd.readouterr().out
+    assert "PreconditionedCG: the package's active-set conjugate gradient" in out
+    assert "preconditioner: MeanModePreconditioner, restricted to the free set" in out
+    assert "gatol=1e-08, grtol=0, gttol=0, max_it=5000" in out
+    assert out.count("TAO,  Function value:") >= step.scalars["iterations"]
+
+
+def test_prefix_gives_two_solvers_their_options(heights):
+    """Two solvers side by side, prefixes ``a_`` and ``b_``: each reads its own options
+    (``-a_tao_type bncg``, ``-b_tao_max_it 2``), step after step; the unprefixed
+    ``-tao_type blmvm`` is neither's."""
+    from petsc_contact.backend import _petsc
+    from petsc_contact.backend.solve import BoundSolver
+    from petsc_contact.conventions.grid import Grid
+    from petsc_contact.geometries.periodic import PeriodicProblem
+    from petsc_contact.geometries.step import solve_step
+    from petsc_contact.numerics.fft import make_fft
+
+    options = ["-a_tao_type", "bncg", "-b_tao_max_it", "2", "-tao_type", "blmvm"]
+    unused = pytest.warns(UserWarning, match="never used: -tao_type")
+    with unused, _petsc.scoped_options(options):
+        grid = Grid(64, 1.0)
+        problem = PeriodicProblem(grid, make_fft(grid), heights, 1.0)
+        problem.set_pressure(1e-2)
+        problem.start(problem.initial_gap())
+        ops = (grid, problem.hessian, problem.preconditioner)
+        with BoundSolver(*ops, options_prefix="a_") as a, BoundSolver(*ops, "b_") as b:
+            for _ in range(2):
+                first, _ = solve_step(a, problem, problem.start_point)
+                second, _ = solve_step(b, problem, problem.start_point)
+                assert first.scalars["tao_type"] == "bncg" and first.converged
+                assert second.scalars["tao_type"] == "python:PreconditionedCG"
+                assert second.scalars["tao_reason"] == "DIVERGED_MAXITS"
+                assert second.scalars["iterations"] == 2
+
+
+def test_run_and_cli_take_a_prefix(tmp_path):
+    """``Run(options_prefix="a_")`` reads ``-a_tao_type`` and ``-a_stiffness_ksp_rtol``
+    (the package's own options too), not ``-tao_type``; ``--options-prefix`` makes such a
+    run, and a prefix PETSc cannot take is refused."""
+    from petsc_contact import Run, run_contact
+    from petsc_contact.cli.arguments import build_parser
+    from petsc_contact.cli.common import describe
+
+    options = ("-a_tao_type", "bncg", "-a_stiffness_ksp_rtol", "1e-7", "-tao_type", "blmvm")
+    run = Run(grid=32, **SURFACE, pressures=(1e-2,), stiffness=True, options=options)
+    with pytest.warns(UserWarning, match="never used: -tao_type"):
+        (row,) = run_contact(run.with_(options_prefix="a_")).table
+    assert row["tao_type"] == "bncg" and row["stiffness_tolerance"] == 1e-7
+    (plain,) = run_contact(run.with_(options=("-tao_type", "bncg"))).table
+    assert plain["tao_type"] == "bncg" and plain["stiffness_tolerance"] == 1e-6
+    line = ["periodic", "--grid", "32", "--pressures", "1e-2", "--output", str(tmp_path / "o.h5")]
+    args = build_parser().parse_args([*line, "--options-prefix", "a_"])
+    assert describe(args).options_prefix == "a_"
+    with pytest.raises(ValueError, match="options prefix"):
+        run_contact(run.with_(options_prefix="-a"))
+
+
+def test_sweep_keeps_one_tao(heights, monkeypatch):
+    """A 4-step sweep makes its TAO once (a probe counts the TAOs the package creates)."""
+    from petsc4py import PETSc
+
+    made = []
+
+    class CountedTAO(PETSc.TAO):
+        def create(self, *args, **kwargs):
+            made.append(self)
+            return super().create(*args, **kwargs)
+
+    monkeypatch.setattr(PETSc, "TAO", CountedTAO)
+    steps, _ = solve(heights, [], pressures=(1e-3, 3e-3, 1e-2, 3e-2))
+    assert len(steps) == 4 and all(s.converged for s in steps)
+    assert len(made) == 1

@@ -604,7 +604,7 @@ def _study_parser(sub: Any) -> None:
 def _plot_parser(sub: Any) -> None:
     p = _command(sub, "plot")
     p.add_argument(
-        "file", metavar="OUT.h5", help="a periodic or punch output file, or a theory file"
+        "file", metavar="OUT.h5", help="a periodic, punch, ensemble or theory output file"
     )
     p.add_argument(
         "--step",
@@ -628,7 +628,17 @@ def _plot_parser(sub: Any) -> None:
     )
     p.add_argument("--vmin", type=float, metavar="V", help="lower end of the colour scale")
     p.add_argument("--vmax", type=float, metavar="V", help="upper end of the colour scale")
-    p.add_argument("--output", metavar="PNG", help="default: OUT_FIELD_stepK.png")
+    p.add_argument(
+        "--sweep",
+        action="store_true",
+        help="draw the run's load plot again (what --plot drew; a theory or ensemble file "
+        "always gets its plot) instead of a map",
+    )
+    p.add_argument(
+        "--output",
+        metavar="PNG",
+        help="default: OUT_FIELD_stepK.png for a map, OUT_redrawn.png for a load plot",
+    )
 
 
 def _geometry_parsers(sub: Any) -> None:

@@ -1,4 +1,5 @@
-"""``plot`` and ``experiment``: maps of stored fields, and a measured squeeze test."""
+"""``plot`` and ``experiment``: maps of stored fields and load plots drawn again from a
+results file, and a measured squeeze test."""
 
 from __future__ import annotations
 
@@ -14,17 +15,22 @@ from ..io.schema import EXPERIMENT, annotate
 from ..io.store import atomic_h5
 from .common import InputError
 
+FIGURE_FILES = ("theory", "periodic ensemble")  # no maps: ``plot`` draws their figure
+SWEEP_COLUMNS = ("nominal_pressure", "area_fraction", "mean_gap", "converged")
+PUNCH_COLUMNS = ("approach", "force", "nominal_pressure", "interfacial_stiffness", "converged")
+
 
 def run_plot(args: argparse.Namespace) -> int:
-    """``petsc-contact plot``: one field of one step as a map, or a theory file's prediction."""
+    """``petsc-contact plot``: one field of one step as a map or, with ``--sweep`` (a theory
+    or ensemble file always), the file's load plot drawn again as ``OUT_redrawn.png``."""
     import h5py
 
     stem = args.file.removesuffix(".h5")
     with h5py.File(args.file, "r") as f:
-        if f.attrs.get("geometry") == "theory":
-            out = args.output or f"{stem}.png"
+        if args.sweep or f.attrs.get("geometry") in FIGURE_FILES:
+            out = args.output or f"{stem}_redrawn.png"
             _check_plot_output(out, args.file)
-            _plot_theory_file(f, out)
+            _draw_file(f, args.file, out)
             print(f"# wrote {out}")
             return 0
         values, title, label, step = _field(f, args)
@@ -40,6 +46,59 @@ def run_plot(args: argparse.Namespace) -> int:
     )  # fmt: skip
     print(f"# wrote {out}")
     return 0
+
+
+def _draw_file(f: Any, path: str, out: str) -> None:
+    """The figure the command that wrote ``path`` (open as ``f``) draws with ``--plot``, from
+    the file, in the units it records."""
+    from ..io.plot import plot_punch, plot_sweep
+
+    geometry = str(f.attrs.get("geometry", ""))
+    if geometry == "theory":
+        _plot_theory_file(f, out)
+    elif geometry == "periodic ensemble":
+        _plot_ensemble_file(f, path, out)
+    elif geometry == "punch":
+        plot_punch(out, _steps(f, path, PUNCH_COLUMNS), _units(f))
+    elif geometry == "periodic":
+        rms_height = float(f.attrs.get("rms_height", 0.0))
+        plot_sweep(out, _steps(f, path, SWEEP_COLUMNS), float(f.attrs["modulus"]), rms_height)
+    else:
+        raise InputError(f"'{path}' holds no load sweep to draw (geometry '{geometry}')")
+
+
+def _steps(f: Any, path: str, columns: tuple[str, ...]) -> list[dict[str, Any]]:
+    """The run's table, one dictionary per step: ``columns`` and, if computed, ``stiffness``."""
+    missing = [name for name in columns if name not in f]
+    if missing:
+        raise InputError(f"'{path}' holds no load sweep to draw (no {', '.join(missing)})")
+    table = {name: f[name][...] for name in (*columns, "stiffness") if name in f}
+    return [dict(zip(table, row, strict=True)) for row in zip(*table.values(), strict=True)]
+
+
+def _units(f: Any) -> dict[str, str]:
+    """The units a results file records (``length``, ``pressure``, ``force``)."""
+    return {name: str(f.attrs.get(f"{name}_unit", "")) for name in ("length", "pressure", "force")}
+
+
+def _plot_ensemble_file(f: Any, path: str, out: str) -> None:
+    """An ensemble's statistics, the stiffness scaled by its seeds' mean rms height (their
+    files, which the ensemble names, give it and the modulus)."""
+    import h5py
+
+    from ..io.plot import plot_ensemble
+
+    seeds = json.loads(f.attrs["seed_files"])
+    absent = [name for name in seeds if not os.path.exists(name)]
+    if absent:
+        raise InputError(f"'{path}': its seeds' files are needed, and {absent[0]} is missing")
+    rms_heights = []
+    for name in seeds:
+        with h5py.File(name, "r") as seed:
+            rms_heights.append(float(seed.attrs["rms_height"]))
+            modulus = float(seed.attrs["modulus"])  # the same for every seed
+    summary = {name: f[name][...] for name in f}
+    plot_ensemble(out, summary, modulus, float(np.mean(rms_heights)))
 
 
 def _check_plot_output(out: str, source: str) -> None:
@@ -99,7 +158,8 @@ def _missing_map(f: Any, path: str, name: str) -> str:
             f"'{path}' is an unfinished run's file: its maps are in {parts} until the run "
             "ends (--resume finishes it)"
         )
-    return f"'{path}' has no dataset '{name}'" + (" (run with --fields)" if per_step else "")
+    advice = " (run with --fields); --sweep draws its load plot" if per_step else ""
+    return f"'{path}' has no dataset '{name}'{advice}"
 
 
 def _plot_theory_file(f: Any, out: str) -> None:
@@ -118,7 +178,8 @@ def _plot_theory_file(f: Any, out: str) -> None:
         crossover_pressure_paper=float(f.attrs.get("crossover_pressure_paper", 2 * appendix)),
         fit_range=tuple(json.loads(f.attrs["fit_range"])),
     )
-    plot_theory(out, result, float(f.attrs.get("modulus", 1.0)))
+    units = {"length": str(f.attrs.get("length_unit", ""))}
+    plot_theory(out, result, float(f.attrs.get("modulus", 1.0)), units=units)
 
 
 def run_experiment(args: argparse.Namespace) -> int:

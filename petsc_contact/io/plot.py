@@ -31,75 +31,84 @@ def plot_file(path: str, option: str = "--plot") -> str:
     return path
 
 
+P0_LABEL = "nominal pressure $p_0/E^*$"  # the x axis of every load plot and the theory's
+AREA_LABEL = "$A/A_0$"
+GAP_LABEL = r"$\bar u/h_\mathrm{rms}$"
+STIFFNESS_LABEL = r"$K h_\mathrm{rms}/E^*$"
+
+
 def plot_sweep(
     path: str | None, steps: Sequence[dict[str, Any]], modulus: float, h_rms: float
 ) -> Any:
-    """``A/A0`` against ``p0/E*`` (log-log), ``p0/E*`` against ``u_bar/h_rms`` (semi-log) and,
-    when the steps have it, the exact stiffness ``K h_rms/E*`` against ``p0/E*`` (log-log).
+    """Against ``p0/E*`` on a log axis: ``A/A0`` (log), ``u_bar/h_rms`` (linear) and, when the
+    steps have it, the exact stiffness ``K h_rms/E*`` (log), as :func:`plot_theory` draws
+    them.
 
     Steps that did not converge are drawn as red crosses.
     """
     p = np.array([s["nominal_pressure"] for s in steps]) / modulus
-    area = np.array([s["area_fraction"] for s in steps])
     scale = h_rms if h_rms > 0 else 1.0
-    gap = np.array([s["mean_gap"] for s in steps]) / scale
     ok = np.array([bool(s["converged"]) for s in steps])
-    stiffness = all("stiffness" in s for s in steps)
-    fig = _figure(figsize=(13 if stiffness else 9, 3.8), layout="constrained")
-    axes = fig.subplots(1, 3 if stiffness else 2)
-    panels = [(axes[0], area, "loglog"), (axes[1], None, "semilogy")]
-    if stiffness:
-        k = np.array([s["stiffness"] for s in steps]) * scale / modulus
-        panels.append((axes[2], k, "loglog"))
-    for ax, y, kind in panels:
-        xs, ys = (gap, p) if y is None else (p, y)
-        getattr(ax, kind)(xs[ok], ys[ok], "o-", label="converged")
-        if (~ok).any():
-            getattr(ax, kind)(xs[~ok], np.abs(ys[~ok]) + 1e-300, "rx", ms=10, label="NOT converged")
-            ax.legend()
-    axes[0].set(xlabel="$p_0/E^*$", ylabel="$A/A_0$", title="contact area")
-    axes[1].set(xlabel=r"$\bar u/h_\mathrm{rms}$", ylabel="$p_0/E^*$", title="mean gap")
-    if stiffness:
-        axes[2].set(
-            xlabel="$p_0/E^*$", ylabel=r"$K h_\mathrm{rms}/E^*$", title="interfacial stiffness"
-        )
+    panels = [
+        ("contact area", AREA_LABEL, [s["area_fraction"] for s in steps], "log"),
+        ("mean gap", GAP_LABEL, [s["mean_gap"] / scale for s in steps], "linear"),
+    ]
+    if all("stiffness" in s for s in steps):
+        k = [s["stiffness"] * scale / modulus for s in steps]
+        panels.append(("interfacial stiffness", STIFFNESS_LABEL, k, "log"))
+    fig = _figure(figsize=(4.4 * len(panels), 3.8), layout="constrained")
+    axes = fig.subplots(1, len(panels))
+    for ax, (title, label, values, yscale) in zip(axes, panels, strict=True):
+        _draw_steps(ax, p, np.asarray(values, dtype=float), ok)
+        ax.set(xscale="log", yscale=yscale, xlabel=P0_LABEL, ylabel=label, title=title)
     return _finish(fig, axes, path)
+
+
+def _draw_steps(ax: Any, x: np.ndarray, y: np.ndarray, ok: np.ndarray) -> None:
+    """The converged steps as a line of dots, the others as red crosses with a legend."""
+    ax.plot(x[ok], y[ok], "o-")
+    if (~ok).any():
+        ax.plot(x[~ok], y[~ok], "rx", ms=10, label="NOT converged")
+        ax.legend()
 
 
 def plot_punch(
     path: str | None, steps: Sequence[dict[str, Any]], units: dict[str, str] | None = None
 ) -> Any:
-    """Force against approach, and the interfacial stiffness per area against the nominal
-    pressure; ``units`` (``length``, ``pressure``, ``force``) label the axes."""
+    """Force against approach, and the interfacial stiffness per area (paper Eq. 2) against
+    the nominal pressure ``F/L_p^2``, log-log (values that are not positive are left out);
+    ``units`` (``length``, ``pressure``, ``force``) label the axes, forces in newtons and
+    lengths with an SI prefix when the length and pressure units are known."""
     from ..conventions.units import METRES, PASCALS, display_force, display_unit
 
     u = {"length": "", "pressure": "", "force": ""} | (units or {})
     ok = np.array([bool(s["converged"]) for s in steps])
-    d = np.array([s["approach"] for s in steps])
-    f = np.array([s["force"] for s in steps])
-    p = np.array([s["nominal_pressure"] for s in steps])
-    k = np.array([s["interfacial_stiffness"] for s in steps])
+    d, f, p, k = (
+        np.array([s[name] for s in steps], dtype=float)
+        for name in ("approach", "force", "nominal_pressure", "interfacial_stiffness")
+    )
     if u["length"] and u["pressure"]:  # in newtons and lengths with SI prefixes: mN, um
         f, u["force"] = display_force(f * PASCALS[u["pressure"]] * METRES[u["length"]] ** 2)
         scale, u["length"] = display_unit(float(np.max(np.abs(d), initial=0.0)), u["length"])
         d, k = d * scale, k / scale
     fig = _figure(figsize=(9, 3.8), layout="constrained")
     ax1, ax2 = fig.subplots(1, 2)
-    ax1.plot(d[ok], f[ok], "o-")
-    ax2.loglog(p[ok & (p > 0)], k[ok & (p > 0)], "o-")
-    if (~ok).any():
-        ax1.plot(d[~ok], f[~ok], "rx", ms=10, label="NOT converged")
-        ax1.legend()
+    _draw_steps(ax1, d, f, ok)
+    _draw_steps(ax2, p, k, ok)
     per = f"{u['pressure']}/{u['length']}" if u["pressure"] and u["length"] else ""
     ax1.set(
+        xscale="log",
+        yscale="log",
         xlabel=rf"approach $\delta${_in(u['length'], 'length')}",
         ylabel=f"force $F${_in(u['force'], 'E* length^2')}",
-        title="punch",
+        title="force against approach",
     )
     ax2.set(
-        xlabel=f"$F/L_p^2${_in(u['pressure'], 'E*')}",
+        xscale="log",
+        yscale="log",
+        xlabel=f"nominal pressure $p_0 = F/L_p^2${_in(u['pressure'], 'E*')}",
         ylabel=f"$K${_in(per, 'E*/length')}",
-        title="interfacial stiffness, Eq. 2",
+        title="interfacial stiffness (paper Eq. 2)",
     )
     return _finish(fig, (ax1, ax2), path)
 
@@ -122,20 +131,36 @@ def plot_experiment(
     return _finish(fig, (ax,), path)
 
 
-def plot_ensemble(path: str | None, summary: dict[str, np.ndarray], modulus: float) -> Any:
-    """Mean over seeds with its standard error against ``p0/E*``: the area fraction and, when
-    computed, the stiffness per area (log-log)."""
+def plot_ensemble(
+    path: str | None, summary: dict[str, np.ndarray], modulus: float, h_rms: float | None = None
+) -> Any:
+    """The mean over seeds with its standard error (a band and error bars) and every seed
+    (grey) against ``p0/E*``, log-log: the area fraction and, when computed, the stiffness
+    per area, as ``K h_rms/E*`` with ``h_rms`` (the seeds' mean rms height; without it
+    ``K/E*``, per unit of length)."""
     p = np.asarray(summary["nominal_pressure"]) / modulus
-    names = [q for q in ("area_fraction", "stiffness") if f"{q}_mean" in summary]
-    fig = _figure(figsize=(4.5 * len(names), 3.8))
-    axes = fig.subplots(1, len(names), squeeze=False)
-    for ax, q in zip(axes[0], names, strict=True):
-        mean, sem = summary[f"{q}_mean"], summary[f"{q}_sem"]
-        ax.errorbar(p, mean, yerr=sem, fmt="o-", capsize=2)
-        ax.set(xscale="log", yscale="log", xlabel="$p_0/E^*$", ylabel=q.replace("_", " "))
-        ax.set_title(f"mean over {int(np.max(summary[f'{q}_count']))} seeds, +- s.e.m.")
-    fig.set_layout_engine("constrained")
-    return _finish(fig, list(axes[0]), path)
+    panels = [("area_fraction", 1.0, "contact area", AREA_LABEL)]
+    if "stiffness_mean" in summary:
+        label = STIFFNESS_LABEL if h_rms else "$K/E^*$ (1/length)"
+        panels.append(("stiffness", (h_rms or 1.0) / modulus, "interfacial stiffness", label))
+    fig = _figure(figsize=(4.8 * len(panels), 4.0), layout="constrained")
+    axes = fig.subplots(1, len(panels), squeeze=False)[0]
+    for ax, (name, factor, title, label) in zip(axes, panels, strict=True):
+        _draw_ensemble(ax, p, {k: summary[f"{name}{k}"] * factor for k in ("", "_mean", "_sem")})
+        ax.set(xscale="log", yscale="log", xlabel=P0_LABEL, ylabel=label, title=title)
+    axes[0].legend(fontsize=8)
+    seeds = len(np.atleast_1d(summary["seeds"]))
+    fig.suptitle(f"ensemble of {seeds} seeds: mean and its standard error")
+    return _finish(fig, axes, path)
+
+
+def _draw_ensemble(ax: Any, p: np.ndarray, values: dict[str, np.ndarray]) -> None:
+    """Every seed's line (``""``: seeds x steps), and their ``_mean`` with its ``_sem``."""
+    for i, row in enumerate(np.atleast_2d(values[""])):
+        ax.plot(p, row, "-", color="0.6", lw=0.8, label="each seed" if i == 0 else None)
+    mean, sem = values["_mean"], values["_sem"]
+    ax.fill_between(p, mean - sem, mean + sem, color="C0", alpha=0.25, lw=0)
+    ax.errorbar(p, mean, yerr=sem, fmt="o-", color="C0", capsize=4, label="mean, +- s.e.m.")
 
 
 def plot_theory(
@@ -153,42 +178,47 @@ def plot_theory(
     ``nominal_pressure``, ``mean_gap`` and, if computed, ``stiffness`` (a run's file).
     ``units`` (``length``) label the spectrum's axes.
     """
-    length = (units or {}).get("length", "")
     h = result.rms_height if result.rms_height > 0 else 1.0
     fig = _figure(figsize=(13, 3.8), layout="constrained")
     ax1, ax2, ax3 = fig.subplots(1, 3)
-    ax1.loglog(result.wavevector, result.psd, ".", ms=3, label="map")
-    lo, hi = result.fit_range
-    q = np.geomspace(lo, hi, 20)
-    inside = (result.wavevector >= lo) & (result.wavevector <= hi)
-    slope = 2 + 2 * result.hurst_fit
-    anchor = np.exp(np.mean(np.log(result.psd[inside] * result.wavevector[inside] ** slope)))
-    ax1.loglog(q, anchor * q**-slope, "k-", label=f"H = {result.hurst_fit:.2f}")
-    ax1.set(
-        xlabel=f"$q${_in(f'1/{length}' if length else '', '1/length')}",
-        ylabel=f"$C(q)${_in(f'{length}^4' if length else '', 'length^4')}",
-        title="spectrum",
-    )
-    ax1.legend()
+    _draw_spectrum(ax1, result, (units or {}).get("length", ""))
     p = result.nominal_pressure / modulus
-    ax2.semilogx(p, result.mean_gap / h, "-", label="Persson")
-    ax3.loglog(p, result.stiffness * h / modulus, "-", label="Persson")
+    ax2.plot(p, result.mean_gap / h, "-", label="Persson")
+    ax3.plot(p, result.stiffness * h / modulus, "-", label="Persson")
     for label, table in runs:
         sim_p = np.asarray(table["nominal_pressure"]) / modulus
-        ax2.semilogx(sim_p, np.asarray(table["mean_gap"]) / h, "o", mfc="none", label=label)
+        ax2.plot(sim_p, np.asarray(table["mean_gap"]) / h, "o", mfc="none", label=label)
         if "stiffness" in table:
             sim_k = np.asarray(table["stiffness"]) * h / modulus
-            ax3.loglog(sim_p, sim_k, "o", mfc="none", label=label)
+            ax3.plot(sim_p, sim_k, "o", mfc="none", label=label)
     for value, style, name in (
         (result.crossover_pressure, "--", "$p_c$ (Eq. 13 as printed)"),
         (result.crossover_pressure_paper, ":", r"$p_c$ (the paper's recipe)"),
     ):
         ax3.axvline(value / modulus, color="k", ls=style, label=name)
-    ax2.set(xlabel="$p_0/E^*$", ylabel=r"$\bar u/h_\mathrm{rms}$", title="mean gap")
-    ax3.set(xlabel="$p_0/E^*$", ylabel=r"$K h_\mathrm{rms}/E^*$", title="interfacial stiffness")
+    ax2.set(xscale="log", xlabel=P0_LABEL, ylabel=GAP_LABEL, title="mean gap")
+    ax3.set(xscale="log", yscale="log", xlabel=P0_LABEL, ylabel=STIFFNESS_LABEL,
+            title="interfacial stiffness")  # fmt: skip
     ax2.legend(fontsize=8)
     ax3.legend(fontsize=8)
     return _finish(fig, (ax1, ax2, ax3), path)
+
+
+def _draw_spectrum(ax: Any, result: Any, length: str) -> None:
+    """The map's radial spectrum and its fitted power law, in ``length`` (``""``: unit-free)."""
+    ax.loglog(result.wavevector, result.psd, ".", ms=3, label="map")
+    lo, hi = result.fit_range
+    q = np.geomspace(lo, hi, 20)
+    inside = (result.wavevector >= lo) & (result.wavevector <= hi)
+    slope = 2 + 2 * result.hurst_fit
+    anchor = np.exp(np.mean(np.log(result.psd[inside] * result.wavevector[inside] ** slope)))
+    ax.loglog(q, anchor * q**-slope, "k-", label=f"fit, H = {result.hurst_fit:.2f}")
+    ax.set(
+        xlabel=f"wavevector $q${_in(f'1/{length}' if length else '', '1/length')}",
+        ylabel=f"$C(q)${_in(f'{length}^4' if length else '', 'length^4')}",
+        title="spectrum",
+    )
+    ax.legend()
 
 
 MASKS = {  # two-colour maps: what 0 and 1 mean, and their colours
@@ -231,8 +261,7 @@ def plot_map(
     vmin, vmax
         The colour range (default: the values').
     """
-    from matplotlib.colors import ListedColormap, LogNorm, Normalize
-    from matplotlib.patches import Patch
+    from matplotlib.colors import LogNorm
 
     from ..conventions.units import display_unit
 
@@ -243,53 +272,13 @@ def plot_map(
     extent = (0.0, lx * factor, 0.0, ly * factor)
     show = dict(origin="lower", extent=extent, interpolation="nearest", aspect="equal")
     if kind in MASKS:
-        (off, off_colour), (on, on_colour) = MASKS[kind]
-        ax.imshow(values.T.astype(float), cmap=ListedColormap([off_colour, on_colour]),
-                  vmin=0, vmax=1, **show)  # fmt: skip
-        share = float(np.mean(values))
-        handles = [
-            Patch(color=off_colour, label=off),
-            Patch(color=on_colour, label=f"{on}, {100 * share:.3g}%"),
-        ]
-        ax.legend(handles=handles, loc="upper right", framealpha=0.9, fontsize=8)
+        _draw_mask(ax, values, MASKS[kind], show)
     else:
-        data = np.asarray(values, dtype=float)
-        positive = data[data > 0]
-        use_log = scale == "log" or (
-            scale == "auto"
-            and kind == "pressure"
-            and positive.size > 0
-            and positive.max() > LOG_RANGE * positive.min()
-        )
-        if use_log:
-            if positive.size == 0:
-                raise ValueError("a log scale needs positive values; use --scale linear")
-            low = vmin if vmin is not None else float(np.percentile(positive, 1))
-            norm: Any = LogNorm(vmin=low, vmax=vmax if vmax is not None else positive.max())
-            data = np.ma.masked_less_equal(data, 0)
-        elif kind == "heights":  # centred on the mean plane, robust to a few spikes
-            bound = float(np.max(np.abs(np.percentile(data, [0.5, 99.5]))))
-            norm = Normalize(
-                vmin=-bound if vmin is None else vmin, vmax=bound if vmax is None else vmax
-            )
-        else:  # a gap: from zero (contact) to its 99.5th percentile, robust to a few spikes
-            top = float(np.percentile(data, 99.5)) if vmax is None else vmax
-            norm = Normalize(vmin=vmin if vmin is not None else min(0.0, data.min()), vmax=top)
+        data, norm = _colour_range(np.asarray(values, dtype=float), kind, scale, vmin, vmax)
         cmap = _colour_map("RdBu_r" if kind == "heights" else "viridis")
-        cmap.set_bad("#d9d9d9")
         image = ax.imshow(data.T, cmap=cmap, norm=norm, **show)
-        slack = 1e-9 * float(np.ptp(data.compressed() if np.ma.isMA(data) else data))
-        low_cut = norm.vmin is not None and data.min() < norm.vmin - slack
-        high_cut = norm.vmax is not None and data.max() > norm.vmax + slack
-        fig.colorbar(
-            image,
-            ax=ax,
-            label=label + (" (log scale)" if use_log else ""),
-            shrink=0.9,
-            extend={(True, True): "both", (True, False): "min", (False, True): "max"}.get(
-                (low_cut, high_cut), "neither"
-            ),
-        )
+        log = " (log scale)" if isinstance(norm, LogNorm) else ""
+        fig.colorbar(image, ax=ax, label=label + log, shrink=0.9, extend=_beyond(data, norm))
     suffix = f" ({unit})" if unit else " (unit of --length)"
     ax.set(xlabel="x" + suffix, ylabel="y" + suffix, title=title)
     if path is not None:
@@ -297,30 +286,90 @@ def plot_map(
     return fig
 
 
+def _draw_mask(ax: Any, values: np.ndarray, mask: Any, show: dict[str, Any]) -> None:
+    """A two-colour map (one of :data:`MASKS`) with a legend giving the share of ones."""
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    (off, off_colour), (on, on_colour) = mask
+    cmap = ListedColormap([off_colour, on_colour])
+    ax.imshow(values.T.astype(float), cmap=cmap, vmin=0, vmax=1, **show)
+    share = float(np.mean(values))
+    handles = [
+        Patch(color=off_colour, label=off),
+        Patch(color=on_colour, label=f"{on}, {100 * share:.3g}%"),
+    ]
+    ax.legend(handles=handles, loc="upper right", framealpha=0.9, fontsize=8)
+
+
+def _colour_range(
+    data: np.ndarray, kind: str, scale: str, vmin: float | None, vmax: float | None
+) -> tuple[np.ndarray, Any]:
+    """The values to draw and their colour normalisation (:func:`plot_map`); on a log scale
+    the values that are not positive are masked (drawn grey)."""
+    from matplotlib.colors import LogNorm, Normalize
+
+    positive = data[data > 0]
+    use_log = scale == "log" or (
+        scale == "auto"
+        and kind == "pressure"
+        and positive.size > 0
+        and positive.max() > LOG_RANGE * positive.min()
+    )
+    if use_log:
+        if positive.size == 0:
+            raise ValueError("a log scale needs positive values; use --scale linear")
+        low = vmin if vmin is not None else float(np.percentile(positive, 1))
+        norm = LogNorm(vmin=low, vmax=vmax if vmax is not None else positive.max())
+        return np.ma.masked_less_equal(data, 0), norm
+    if kind == "heights":  # centred on the mean plane, robust to a few spikes
+        bound = float(np.max(np.abs(np.percentile(data, [0.5, 99.5]))))
+        low, top = -bound, bound
+    else:  # a gap: from zero (contact) to its 99.5th percentile, robust to a few spikes
+        low, top = min(0.0, data.min()), float(np.percentile(data, 99.5))
+    return data, Normalize(vmin=low if vmin is None else vmin, vmax=top if vmax is None else vmax)
+
+
+def _beyond(data: np.ndarray, norm: Any) -> str:
+    """The colour bar's ``extend``: which ends have values beyond the colour range."""
+    slack = 1e-9 * float(np.ptp(data.compressed() if np.ma.isMA(data) else data))
+    low = norm.vmin is not None and data.min() < norm.vmin - slack
+    high = norm.vmax is not None and data.max() > norm.vmax + slack
+    return {(True, True): "both", (True, False): "min", (False, True): "max"}.get(
+        (low, high), "neither"
+    )
+
+
 def _colour_map(name: str) -> Any:
+    """The colour map ``name``, grey where a value is masked (a log scale's zeros)."""
     import matplotlib
 
-    return matplotlib.colormaps[name].copy()
+    return matplotlib.colormaps[name].with_extremes(bad="#d9d9d9")
+
+
+REFERENCE = "reference solve's\nnatural residual"
 
 
 def plot_compare(path: str | None, trajectories: Sequence[Any], reference: dict[str, Any]) -> Any:
     """Pressure error and natural residual against wall time, log-log, one line per solver
-    (:class:`~petsc_contact.workflows.compare.Trajectory`)."""
-    fig = _figure(figsize=(10, 4), layout="constrained")
+    (:class:`~petsc_contact.workflows.compare.Trajectory`), and in grey the natural residual
+    of the reference they are measured against: how far that solve itself is from exact."""
+    fig = _figure(figsize=(11.5, 4), layout="constrained")
     ax1, ax2 = fig.subplots(1, 2)
     for t in trajectories:
         tm = np.maximum(np.asarray(t.time), 1e-4)
         style = "-" if t.converged else ":"
         ax1.loglog(tm, np.maximum(t.pressure_error, 1e-17), style, label=t.name)
         ax2.loglog(tm, np.maximum(t.natural_residual, 1e-17), style, label=t.name)
-    ax1.axhline(reference["natural_residual"], color="gray", lw=0.8)
+    for ax in (ax1, ax2):
+        ax.axhline(reference["natural_residual"], color="gray", lw=0.8, label=REFERENCE)
     ax1.set(
         xlabel="wall time (s)",
         ylabel=r"$\|p - p_\mathrm{ref}\| / \|p_\mathrm{ref}\|$",
         title="pressure error (dotted: not converged)",
     )
     ax2.set(xlabel="wall time (s)", ylabel=r"rms$(\min(k g, p))/p_0$", title="natural residual")
-    ax2.legend(fontsize=8)
+    fig.legend(*ax2.get_legend_handles_labels(), loc="outside right upper", fontsize=8)
     return _finish(fig, (ax1, ax2), path)
 
 
@@ -332,8 +381,25 @@ def _figure(**options: Any) -> Any:
 
 
 def _finish(fig: Any, axes: Sequence[Any], path: str | None) -> Any:
+    """Grids, readable log ticks (:func:`_few_decades`), and the figure written to ``path``."""
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
+        _few_decades(ax.xaxis, ax.get_xlim())
+        _few_decades(ax.yaxis, ax.get_ylim())
     if path is not None:
         fig.savefig(path, dpi=110)
     return fig
+
+
+def _few_decades(axis: Any, limits: tuple[float, float]) -> None:
+    """A log axis spanning less than two decades ticked at 1, 2 and 5 times the powers of ten
+    as plain numbers (``0.2``, ``50``), where matplotlib labels its minor ticks too and they
+    run into each other."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    low, high = sorted(limits)
+    if axis.get_scale() != "log" or low <= 0 or high > 100 * low:
+        return
+    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+    axis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
+    axis.set_minor_formatter(NullFormatter())

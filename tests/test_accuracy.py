@@ -112,7 +112,12 @@ def test_stiffness_solve_that_did_not_converge_is_not_accurate():
     is ``inf``, and the step is not accurate."""
     with pytest.warns(StiffnessNotConverged):
         (step,) = periodic_contact(
-            rough(32), 1.0, 1.0, [3e-2], stiffness=True, options=["-stiffness_ksp_max_it", "1"]
+            rough(32),
+            length=1.0,
+            modulus=1.0,
+            pressures=[3e-2],
+            stiffness=True,
+            options=["-stiffness_ksp_max_it", "1"],
         )
     s = step.scalars
     assert np.isnan(s["stiffness"]) and s["stiffness_residual"] == np.inf
@@ -203,7 +208,9 @@ def test_default_tolerances_keep_a_margin(solver):
     if solver in ("default", "tron"):
         scenes += [(rough(32, 0.1, 1.0), [1e-6, 1e-2, 0.3]), (rough(32, 0.95, 0.01), [1e-8, 3e-3])]
     for h, loads in scenes:
-        for step in periodic_contact(h, 1.0, 1.0, loads, options=SOLVERS[solver], stiffness=True):
+        for step in periodic_contact(
+            h, length=1.0, modulus=1.0, pressures=loads, options=SOLVERS[solver], stiffness=True
+        ):
             s = step.scalars
             assert step.converged and s["accurate"], s["verification"]
             assert all(s[f] < 2 * s["effective_tolerance"] for f in FIGURES), s
@@ -217,7 +224,7 @@ def test_punch_default_margin_on_a_few_pixels():
     h = self_affine(
         grid, make_fft(grid), hurst=0.7, rolloff_ratio=1, cutoff_ratio=64, seed=1, rms_slope=0.1
     )
-    for step in punch_contact(h, 1.0, 1.0, forces=[1e-6, 1e-3]):
+    for step in punch_contact(h, length=1.0, modulus=1.0, forces=[1e-6, 1e-3]):
         s = step.scalars
         assert step.converged and s["accurate"], s["verification"]
         assert s["force_balance"] < FORCE_ACCURACY / 10

@@ -71,11 +71,15 @@ def test_stops_at_the_rounding_floor(monkeypatch):
         grid, make_fft(grid), hurst=0.7, rolloff_ratio=1, cutoff_ratio=64, seed=1, rms_slope=0.1
     )
     p0 = 1e-9  # the exact residual stops near 70 eps rms(K h)/p0 ~ 1e-6 here
-    (fine,) = periodic_contact(h, 1.0, 1.0, [p0])  # with the floor: converged
+    (fine,) = periodic_contact(
+        h, length=1.0, modulus=1.0, pressures=[p0]
+    )  # with the floor: converged
     assert fine.converged and fine.scalars["tao_reason"] == "CONVERGED_GATOL"
     assert fine.scalars["tolerance"] > 1e-8  # raised to the floor
     monkeypatch.setattr(problem.PeriodicProblem, "tolerance_floor", lambda self: 0.0)
-    (stuck,) = periodic_contact(h, 1.0, 1.0, [p0], options=["-tao_max_it", "2000"])
+    (stuck,) = periodic_contact(
+        h, length=1.0, modulus=1.0, pressures=[p0], options=["-tao_max_it", "2000"]
+    )
     assert stuck.scalars["tao_reason"] == "CONVERGED_STEPTOL"
     assert stuck.scalars["iterations"] < 200
     assert not stuck.converged and "residual" in stuck.scalars["verification"]

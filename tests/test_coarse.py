@@ -149,9 +149,9 @@ def test_two_level_solves_the_same_contact(hurst, p0):
     steps = {
         on: periodic_contact(
             h,
-            1.0,
-            1.0,
-            [p0],
+            length=1.0,
+            modulus=1.0,
+            pressures=[p0],
             options=f"-petsc_contact_two_level {on} -petsc_contact_two_level_max_fraction 0.3",
         )[0]
         for on in (0, 1)
@@ -172,7 +172,7 @@ def test_iterations_at_1024_do_not_grow_with_the_spots():
     h = self_affine(
         grid, make_fft(grid), hurst=0.7, rolloff_ratio=1, cutoff_ratio=n / 2, seed=1, rms_slope=0.1
     )
-    (step,) = periodic_contact(h, 1.0, 1.0, [1e-3])
+    (step,) = periodic_contact(h, length=1.0, modulus=1.0, pressures=[1e-3])
     assert step.scalars["converged"]
     assert step.scalars["iterations"] <= 30
 

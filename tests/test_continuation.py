@@ -118,9 +118,13 @@ def test_sweep_agrees_with_cold_solves(paper_band):
     gaps agree to 1e-7 (the gatol 1e-8 pressure tolerance moves u_bar by ~1e-9 relative
     here), the areas to the pixel, the stiffness to 1e-8 (its CG tolerance gives 2e-10)."""
     pressures = list(np.geomspace(1e-4, 3e-2, 6))
-    warm = periodic_contact(paper_band, 1.0, 1.0, pressures, stiffness=True)
+    warm = periodic_contact(
+        paper_band, length=1.0, modulus=1.0, pressures=pressures, stiffness=True
+    )
     for p0, step in zip(pressures, warm, strict=True):
-        (cold,) = periodic_contact(paper_band, 1.0, 1.0, [p0], stiffness=True)
+        (cold,) = periodic_contact(
+            paper_band, length=1.0, modulus=1.0, pressures=[p0], stiffness=True
+        )
         assert step.converged and cold.converged
         w, c = step.scalars, cold.scalars
         assert w["mean_gap"] == pytest.approx(c["mean_gap"], rel=1e-7)

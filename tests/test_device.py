@@ -44,8 +44,10 @@ def surface(n: int, hurst: float, cutoff: float, seed: int = 1) -> np.ndarray:
 )
 def test_the_stand_in_solves_as_the_petsc_path_does(petsc, n, hurst, cutoff):
     h = surface(n, hurst, cutoff)
-    cpu = periodic_contact(h, 1.0, 1.0, LOADS, stiffness=True)
-    array = periodic_contact(h, 1.0, 1.0, LOADS, stiffness=True, device="cpu-array")
+    cpu = periodic_contact(h, length=1.0, modulus=1.0, pressures=LOADS, stiffness=True)
+    array = periodic_contact(
+        h, length=1.0, modulus=1.0, pressures=LOADS, stiffness=True, device="cpu-array"
+    )
     for a, b in zip(cpu, array, strict=True):
         sa, sb = a.scalars, b.scalars
         assert sb["converged"] and sb["verification"] == "ok"
@@ -62,8 +64,10 @@ def test_the_stand_in_uses_every_form_of_the_preconditioner(petsc):
     h = surface(256, 0.7, 128)
     loads = list(np.logspace(-4.5, -2, 6))
     for options in ([], ["-petsc_contact_two_level", "0"]):
-        cpu = periodic_contact(h, 1.0, 1.0, loads, options=options)
-        array = periodic_contact(h, 1.0, 1.0, loads, options=options, device="cpu-array")
+        cpu = periodic_contact(h, length=1.0, modulus=1.0, pressures=loads, options=options)
+        array = periodic_contact(
+            h, length=1.0, modulus=1.0, pressures=loads, options=options, device="cpu-array"
+        )
         its = [
             (a.scalars["iterations"], b.scalars["iterations"])
             for a, b in zip(cpu, array, strict=True)
@@ -81,8 +85,8 @@ def test_the_array_path_runs_without_petsc4py_pyfftw_or_mpi4py():
         "from petsc_contact.workflows.periodic_sweep import periodic_contact\n"
         "x = np.linspace(0, 2 * np.pi, 64, endpoint=False)\n"
         "h = 0.01 * np.cos(x)[:, None] * np.cos(2 * x)[None, :]\n"
-        "steps = periodic_contact(h, 1.0, 1.0, [1e-4, 1e-3], stiffness=True, "
-        "device='cpu-array')\n"
+        "steps = periodic_contact(h, length=1.0, modulus=1.0, pressures=[1e-4, 1e-3], "
+        "stiffness=True, device='cpu-array')\n"
         "print(all(s.converged for s in steps), steps[-1].scalars['stiffness'] > 0)\n"
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)

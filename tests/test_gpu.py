@@ -44,8 +44,12 @@ def surface(n: int) -> np.ndarray:
 def test_the_gpu_solves_as_its_stand_in_does(gpu, n):
     h = surface(n)
     loads = list(np.logspace(-6, -1, 6))
-    host = periodic_contact(h, 1.0, 1.0, loads, stiffness=True, device="cpu-array")
-    device = periodic_contact(h, 1.0, 1.0, loads, stiffness=True, device="gpu")
+    host = periodic_contact(
+        h, length=1.0, modulus=1.0, pressures=loads, stiffness=True, device="cpu-array"
+    )
+    device = periodic_contact(
+        h, length=1.0, modulus=1.0, pressures=loads, stiffness=True, device="gpu"
+    )
     for a, b in zip(host, device, strict=True):
         sa, sb = a.scalars, b.scalars
         assert sb["converged"], sb["verification"]
@@ -56,7 +60,9 @@ def test_the_gpu_solves_as_its_stand_in_does(gpu, n):
 
 def test_fields_and_state_come_back_to_the_host(gpu):
     h = surface(256)
-    steps = periodic_contact(h, 1.0, 1.0, [1e-3], fields=True, device="gpu")
+    steps = periodic_contact(
+        h, length=1.0, modulus=1.0, pressures=[1e-3], fields=True, device="gpu"
+    )
     step = steps[-1]
     for field in (step.gap, step.pressure, step.state):
         assert isinstance(field, np.ndarray) and field.shape == (256, 256)

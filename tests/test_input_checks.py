@@ -188,8 +188,15 @@ def test_stiffness_solve_not_converged(device: str) -> None:
                     rms_slope=0.1)  # fmt: skip
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        (step,) = periodic_contact(h, 1.0, 1.0, [3e-2], stiffness=True, device=device,
-                                   options=["-stiffness_ksp_max_it", "1"])  # fmt: skip
+        (step,) = periodic_contact(
+            h,
+            length=1.0,
+            modulus=1.0,
+            pressures=[3e-2],
+            stiffness=True,
+            device=device,
+            options=["-stiffness_ksp_max_it", "1"],
+        )
     assert np.isnan(step.scalars["stiffness"])
     assert [w.category for w in caught] == [StiffnessNotConverged]
 

@@ -36,7 +36,7 @@ def test_egg_crate_touches_at_each_summit():
     n = 64
     x = np.arange(n) / n
     h = 1e-3 * (np.cos(4 * np.pi * x)[:, None] + np.cos(4 * np.pi * x)[None, :])
-    low, high = periodic_contact(h, 1.0, 1.0, [1e-5, 5e-3])
+    low, high = periodic_contact(h, length=1.0, modulus=1.0, pressures=[1e-5, 5e-3])
     assert low.converged and high.converged
     assert low.scalars["contact_patches"] == 4
     assert 0 < low.scalars["area_fraction"] < 0.1
@@ -46,7 +46,7 @@ def test_egg_crate_touches_at_each_summit():
 
 def test_punch_counts_without_wrapping():
     """A flat punch in full contact is one patch; its footprint does not wrap."""
-    (step,) = punch_contact(np.zeros((32, 32)), 1.0, 1.0, approaches=[1e-3])
+    (step,) = punch_contact(np.zeros((32, 32)), length=1.0, modulus=1.0, approaches=[1e-3])
     assert step.scalars["area_fraction"] == 1.0
     assert step.scalars["contact_patches"] == 1
 
@@ -86,7 +86,7 @@ def test_patch_sizes_and_distributions_add_up(petsc):
     from petsc_contact.workflows.scenes import surface
 
     h, _ = surface(64, 0.7, 1.0, 32.0, 2)
-    (step,) = periodic_contact(h, 1.0, 1.0, [1e-2], fields=True)
+    (step,) = periodic_contact(h, length=1.0, modulus=1.0, pressures=[1e-2], fields=True)
     s, contact = step.scalars, step.contact
     n = int(contact.sum())
     assert s["pressure_histogram"].sum() == n and s["gap_histogram"].sum() == h.size - n
@@ -108,7 +108,9 @@ from petsc_contact.conventions.grid import Grid
 from petsc_contact.physics.observables import patch_sizes
 from petsc_contact.workflows.scenes import surface
 h, _ = surface(64, 0.7, 1.0, 32.0, {seed})
-(step,) = periodic_contact(h, 1.0, 1.0, [1e-2], fields=True, comm=MPI.COMM_SELF)
+(step,) = periodic_contact(
+    h, length=1.0, modulus=1.0, pressures=[1e-2], fields=True, comm=MPI.COMM_SELF
+)
 grid = Grid(64, 1.0)
 sizes = patch_sizes(grid, step.contact[grid.rows])
 if grid.comm.rank == 0:

@@ -52,9 +52,9 @@ def test_westergaard(solver):
     fracs = [0.05, 0.3, 0.7]
     steps = periodic_contact(
         h,
-        LENGTH,
-        MODULUS,
-        [f * P_STAR for f in fracs],
+        length=LENGTH,
+        modulus=MODULUS,
+        pressures=[f * P_STAR for f in fracs],
         options=[*SOLVERS[solver], *TIGHT],
         fields=True,
     )
@@ -74,7 +74,9 @@ def test_westergaard(solver):
 def test_identities_rough(rough):
     """Force balance, complementarity and the energy identity on a rough surface."""
     p0s = [1e-3, 3e-3]
-    steps = periodic_contact(rough, 1.0, 1.0, p0s, options=TIGHT, fields=True)
+    steps = periodic_contact(
+        rough, length=1.0, modulus=1.0, pressures=p0s, options=TIGHT, fields=True
+    )
     grid = Grid(128, 1.0)
     fft = make_fft(grid)
     k = FourierOperator(grid, fft, periodic_stiffness(wavevector_magnitude(grid, fft), 1.0))
@@ -104,7 +106,7 @@ def test_work_equals_energy(rough):
     """dU = -p0 du_bar: the elastic energy gained equals the work of the load (trapezoid
     rule on a fine sweep; its error is O(dp^2), below 1e-3 here)."""
     p0s = np.linspace(2e-3, 4e-3, 21)
-    steps = periodic_contact(rough, 1.0, 1.0, p0s, options=TIGHT)
+    steps = periodic_contact(rough, length=1.0, modulus=1.0, pressures=p0s, options=TIGHT)
     u = np.array([s.scalars["mean_gap"] for s in steps])
     energy = np.array([s.scalars["elastic_energy"] for s in steps])
     work = -np.trapezoid(p0s, u)
@@ -119,7 +121,12 @@ def test_full_contact_limit(rough):
     kh = k.apply_array(h, np.empty_like(h))
     p_full = -kh.min()
     steps = periodic_contact(
-        rough, 1.0, 1.0, [0.98 * p_full, 1.5 * p_full], options=TIGHT, fields=True
+        rough,
+        length=1.0,
+        modulus=1.0,
+        pressures=[0.98 * p_full, 1.5 * p_full],
+        options=TIGHT,
+        fields=True,
     )
     below, above = steps
     assert below.scalars["area_fraction"] < 1.0
@@ -137,7 +144,7 @@ def test_cross_solver_agreement(rough):
     types = {t: ["-tao_type", t] for t in ("tron", "bqnls", "blmvm", "bncg", "bnls")}
     types["bqnls"] += ["-tao_gatol", "1e-7"]
     for t, opts in {"default": [], "pk": PK, **types}.items():
-        (step,) = periodic_contact(rough, 1.0, 1.0, [2e-3], options=opts)
+        (step,) = periodic_contact(rough, length=1.0, modulus=1.0, pressures=[2e-3], options=opts)
         assert step.converged, (t, step.scalars["verification"])
         results[t] = step.scalars
     ref = results["default"]
@@ -154,7 +161,11 @@ def test_fourier_ksp_preconditioner(rough, tao_type):
     steps = {}
     for name, extra in (("fourier", []), ("none", ["-petsc_contact_no_ksp_pc"])):
         (steps[name],) = periodic_contact(
-            rough, 1.0, 1.0, [2e-3], options=["-tao_type", tao_type, *extra]
+            rough,
+            length=1.0,
+            modulus=1.0,
+            pressures=[2e-3],
+            options=["-tao_type", tao_type, *extra],
         )
         assert steps[name].converged, steps[name].scalars["verification"]
     fourier, none = steps["fourier"].scalars, steps["none"].scalars
@@ -165,7 +176,9 @@ def test_fourier_ksp_preconditioner(rough, tao_type):
 
 @pytest.mark.parametrize("solver", ["default", "tron"])
 def test_single_asperity_and_huge_load(rough, solver):
-    steps = periodic_contact(rough, 1.0, 1.0, [1e-7, 1e-6, 10.0], options=SOLVERS[solver])
+    steps = periodic_contact(
+        rough, length=1.0, modulus=1.0, pressures=[1e-7, 1e-6, 10.0], options=SOLVERS[solver]
+    )
     assert all(s.converged for s in steps), [s.scalars["verification"] for s in steps]
     assert 0 < steps[0].scalars["area_fraction"] < 1e-3
     assert steps[-1].scalars["area_fraction"] == 1.0
@@ -174,15 +187,19 @@ def test_single_asperity_and_huge_load(rough, solver):
 @pytest.mark.parametrize("solver", ["default", "blmvm"])
 def test_not_converged_is_flagged(rough, solver):
     opts = [] if solver == "default" else ["-tao_type", solver]
-    (step,) = periodic_contact(rough, 1.0, 1.0, [1e-2], options=[*opts, "-tao_max_it", "3"])
+    (step,) = periodic_contact(
+        rough, length=1.0, modulus=1.0, pressures=[1e-2], options=[*opts, "-tao_max_it", "3"]
+    )
     assert not step.converged
     assert step.scalars["tao_reason"] == "DIVERGED_MAXITS"
     assert "did not converge" in step.scalars["verification"]
 
 
 def test_options_do_not_leak(rough):
-    periodic_contact(rough, 1.0, 1.0, [1e-2], options=["-tao_type", "bncg"])
-    (step,) = periodic_contact(rough, 1.0, 1.0, [1e-2])
+    periodic_contact(
+        rough, length=1.0, modulus=1.0, pressures=[1e-2], options=["-tao_type", "bncg"]
+    )
+    (step,) = periodic_contact(rough, length=1.0, modulus=1.0, pressures=[1e-2])
     assert step.scalars["tao_type"] == "python:PreconditionedCG"
 
 
@@ -190,7 +207,7 @@ def test_contact_fields_are_projected(rough):
     """Stored fields follow the contact rule exactly: zero pressure off contact, zero gap in
     it, the mask's fraction is the area fraction; force balance survives the projection to
     the step's own tolerance (the projected pressures are the KKT residual's share)."""
-    (step,) = periodic_contact(rough, 1.0, 1.0, [1e-2], fields=True)
+    (step,) = periodic_contact(rough, length=1.0, modulus=1.0, pressures=[1e-2], fields=True)
     contact = step.field("contact")
     assert contact is not None and contact.dtype == bool
     assert np.all(step.pressure[~contact] == 0.0) and np.all(step.gap[contact] == 0.0)
@@ -203,7 +220,7 @@ def test_contact_fields_are_projected(rough):
 def test_list_keeps_the_last_state_only(rough):
     """A returned sweep holds one field per step only when asked (``fields``); the last step
     keeps the gap to go on from, whose mean is its mean gap."""
-    steps = periodic_contact(rough, 1.0, 1.0, [3e-3, 1e-2, 3e-2])
+    steps = periodic_contact(rough, length=1.0, modulus=1.0, pressures=[3e-3, 1e-2, 3e-2])
     assert [s.state is None for s in steps] == [True, True, False]
     assert steps[-1].state.min() >= 0.0
     assert steps[-1].state.mean() == pytest.approx(steps[-1].scalars["mean_gap"], rel=1e-12)
@@ -213,11 +230,15 @@ def test_options_forms_and_unused(rough):
     """A list, a string and a dict select the same solver; a misspelt option is reported;
     anything else is refused with the reason."""
     for options in (["-tao_type", "bnls"], "-tao_type bnls", {"tao_type": "bnls"}):
-        (step,) = periodic_contact(rough, 1.0, 1.0, [1e-3], options=options)
+        (step,) = periodic_contact(
+            rough, length=1.0, modulus=1.0, pressures=[1e-3], options=options
+        )
         assert step.scalars["tao_type"] == "bnls"
     with pytest.warns(UserWarning, match="never used: -tao_typo"):
-        periodic_contact(rough, 1.0, 1.0, [1e-3], options="-tao_typo bncg")
+        periodic_contact(rough, length=1.0, modulus=1.0, pressures=[1e-3], options="-tao_typo bncg")
     with pytest.raises(TypeError, match="options must be"):
-        periodic_contact(rough, 1.0, 1.0, [1e-3], options=3)
+        periodic_contact(rough, length=1.0, modulus=1.0, pressures=[1e-3], options=3)
     with pytest.raises(ValueError, match="start with a dash"):
-        periodic_contact(rough, 1.0, 1.0, [1e-3], options=["tao_type", "bnls"])
+        periodic_contact(
+            rough, length=1.0, modulus=1.0, pressures=[1e-3], options=["tao_type", "bnls"]
+        )

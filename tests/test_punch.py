@@ -54,7 +54,9 @@ def test_hertz():
     r2 = x[:, None] ** 2 + x[None, :] ** 2
     radius, modulus = 1.0, 2.0
     deltas = [0.02, 0.05, 0.09]
-    steps = punch_contact(-r2 / (2 * radius), 1.0, modulus, approaches=deltas, fields=True)
+    steps = punch_contact(
+        -r2 / (2 * radius), length=1.0, modulus=modulus, approaches=deltas, fields=True
+    )
     for d, step in zip(deltas, steps, strict=True):
         s = step.scalars
         assert step.converged, s["verification"]
@@ -71,7 +73,9 @@ def test_hertz():
 def test_flat_square_punch():
     """Stiffness within 1% of 1.012 x 2 E* sqrt(A/pi) (Pharr et al.) on 128^2; pressure grows
     monotonically from the centre to the edge (the edge singularity)."""
-    (step,) = punch_contact(np.zeros((N, N)), 1.0, 1.0, approaches=[1e-3], fields=True)
+    (step,) = punch_contact(
+        np.zeros((N, N)), length=1.0, modulus=1.0, approaches=[1e-3], fields=True
+    )
     s = step.scalars
     assert step.converged and s["area_fraction"] == 1.0
     assert s["force"] / 1e-3 == pytest.approx(flat_punch_stiffness(1.0, 1.0), rel=0.01)
@@ -88,7 +92,13 @@ def test_flat_circular_punch():
     disk = x[:, None] ** 2 + x[None, :] ** 2 < 0.45**2
     modulus = 3.0
     (step,) = punch_contact(
-        np.zeros((N, N)), 1.0, modulus, approaches=[1e-3], fields=True, footprint=disk, beta=1.0
+        np.zeros((N, N)),
+        length=1.0,
+        modulus=modulus,
+        approaches=[1e-3],
+        fields=True,
+        footprint=disk,
+        beta=1.0,
     )
     r = np.sqrt(disk.sum() / N**2 / np.pi)
     assert step.converged
@@ -111,7 +121,7 @@ def test_stiffness_matches_force_difference(rough):
     """Exact dF/dδ (contact set fixed) against a central difference of F(δ) (2%: the contact
     set changes inside the difference step) and springs in series (Eq. 2)."""
     d, eps = 3e-3, 2e-5
-    steps = punch_contact(rough, 1.0, 1.0, approaches=[d - eps, d, d + eps])
+    steps = punch_contact(rough, length=1.0, modulus=1.0, approaches=[d - eps, d, d + eps])
     assert all(s.converged for s in steps)
     lo, mid, hi = (s.scalars for s in steps)
     assert mid["total_stiffness"] == pytest.approx(
@@ -126,12 +136,14 @@ def test_stiffness_matches_force_difference(rough):
 
 def test_load_control_reaches_force(rough):
     forces = [1e-5, 1e-4, 1e-3]
-    steps = punch_contact(rough, 1.0, 1.0, forces=forces)
+    steps = punch_contact(rough, length=1.0, modulus=1.0, forces=forces)
     for f, step in zip(forces, steps, strict=True):
         s = step.scalars
         assert step.converged, s["verification"]
         assert s["force"] == pytest.approx(f, rel=1e-6)
-    (check,) = punch_contact(rough, 1.0, 1.0, approaches=[steps[1].scalars["approach"]])
+    (check,) = punch_contact(
+        rough, length=1.0, modulus=1.0, approaches=[steps[1].scalars["approach"]]
+    )
     assert check.scalars["force"] == pytest.approx(1e-4, rel=1e-6)
 
 
@@ -143,7 +155,7 @@ def test_load_control_on_a_few_pixels():
     h = self_affine(
         grid, make_fft(grid), hurst=0.7, rolloff_ratio=1, cutoff_ratio=128, seed=1, rms_slope=0.1
     )
-    steps = punch_contact(h, 1.0, 1.0, forces=[1e-6, 3e-6])
+    steps = punch_contact(h, length=1.0, modulus=1.0, forces=[1e-6, 3e-6])
     for f, step in zip([1e-6, 3e-6], steps, strict=True):
         s = step.scalars
         assert step.converged, s["verification"]
@@ -154,9 +166,9 @@ def test_load_control_on_a_few_pixels():
 def test_load_control_continues_from_the_last_step(rough):
     """Each force starts Newton from the last step's tangent: a few Newton steps, and the
     same approach as a solver that starts afresh (to the force tolerance over K)."""
-    steps = punch_contact(rough, 1.0, 1.0, forces=[1e-4, 2e-4, 4e-4])
+    steps = punch_contact(rough, length=1.0, modulus=1.0, forces=[1e-4, 2e-4, 4e-4])
     for f, step in zip([2e-4, 4e-4], steps[1:], strict=True):
-        (fresh,) = punch_contact(rough, 1.0, 1.0, forces=[f])
+        (fresh,) = punch_contact(rough, length=1.0, modulus=1.0, forces=[f])
         assert step.scalars["newton_iterations"] <= 4 < fresh.scalars["newton_iterations"]
         assert step.scalars["approach"] == pytest.approx(fresh.scalars["approach"], rel=1e-5)
 
@@ -165,7 +177,9 @@ def test_load_control_continues_from_the_last_step(rough):
 def test_edge_singularity_at_high_load(rough, solver):
     """Pressed 200 h_rms beyond first touch: full contact, the corner carries the peak
     pressure, and the solve converges (default: ~20 iterations, tron: ~10)."""
-    (step,) = punch_contact(rough, 1.0, 1.0, approaches=[0.2], options=solver, fields=True)
+    (step,) = punch_contact(
+        rough, length=1.0, modulus=1.0, approaches=[0.2], options=solver, fields=True
+    )
     s = step.scalars
     assert step.converged, s["verification"]
     assert s["area_fraction"] == 1.0
@@ -180,13 +194,16 @@ def test_mean_gap_over_the_face(rough):
     in full contact, and its ``-dp/du_bar`` the interfacial stiffness of Eq. 2 within 10%
     from 1% to 30% contact area (both measure the interface's compliance alone: Eq. 2 takes
     the flat punch's out of the total, ``u_bar`` never holds it)."""
-    (first,) = punch_contact(rough, 1.0, 1.0, approaches=[0.0])
+    (first,) = punch_contact(rough, length=1.0, modulus=1.0, approaches=[0.0])
     assert first.scalars["mean_gap"] == pytest.approx(np.mean(rough.max() - rough), rel=1e-12)
-    (flat,) = punch_contact(np.zeros((32, 32)), 1.0, 1.0, approaches=[1e-3])
+    (flat,) = punch_contact(np.zeros((32, 32)), length=1.0, modulus=1.0, approaches=[1e-3])
     assert flat.scalars["area_fraction"] == 1.0 and abs(flat.scalars["mean_gap"]) < 1e-9
     eps = 2e-5
     for d in (1e-3, 3e-3, 6e-3):
-        lo, mid, hi = (s.scalars for s in punch_contact(rough, 1.0, 1.0, [d - eps, d, d + eps]))
+        lo, mid, hi = (
+            s.scalars
+            for s in punch_contact(rough, length=1.0, modulus=1.0, approaches=[d - eps, d, d + eps])
+        )
         assert 0.01 < mid["area_fraction"] < 0.31
         dp_du = -(hi["nominal_pressure"] - lo["nominal_pressure"]) / (
             hi["mean_gap"] - lo["mean_gap"]

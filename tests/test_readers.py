@@ -189,19 +189,19 @@ def test_python_takes_surface_topography_objects(petsc):
     topo = STTopography(h, SIDES, unit="um")
     opts = ["-tao_gatol", "1e-10"]
     mine = periodic_contact(topo, modulus=1.0, pressures=[1e-3], options=opts)
-    plain = periodic_contact(h, SIDES, 1.0, [1e-3], options=opts)
+    plain = periodic_contact(h, length=SIDES, modulus=1.0, pressures=[1e-3], options=opts)
     assert mine[0].scalars["mean_gap"] == pytest.approx(plain[0].scalars["mean_gap"], rel=1e-12)
     force = 1e-3 * SIDES[0] * SIDES[1]
     mine = punch_contact(topo, forces=[force], options=opts)
-    plain = punch_contact(h, SIDES, 1.0, forces=[force], options=opts)
+    plain = punch_contact(h, length=SIDES, modulus=1.0, forces=[force], options=opts)
     assert mine[0].scalars["approach"] == pytest.approx(plain[0].scalars["approach"], rel=1e-12)
-    assert predict_map(topo).u0 == pytest.approx(predict_map(h, SIDES).u0, rel=1e-12)
+    assert predict_map(topo).u0 == pytest.approx(predict_map(h, length=SIDES).u0, rel=1e-12)
     holes = STTopography(_holes(h), SIDES, unit="um")
     for call in (lambda: periodic_contact(holes, pressures=[1e-3]), lambda: predict_map(holes)):
         with pytest.raises(ValueError, match="6 undefined points: fill them first"):
             call()
     filled = fill_undefined(np.ma.filled(_holes(h), np.nan), "harmonic")
-    assert periodic_contact(filled, SIDES, pressures=[1e-3], options=opts)[0].converged
+    assert periodic_contact(filled, length=SIDES, pressures=[1e-3], options=opts)[0].converged
     with pytest.raises(ValueError, match="contradicts"):
         periodic_contact(topo, length=(8.0, 6.0), pressures=[1e-3])
 

@@ -37,9 +37,15 @@ def test_westergaard_on_a_rectangle_with_oblong_pixels():
     h = np.repeat(amplitude * np.cos(2 * np.pi * x / length)[:, None], ny, axis=1)
     p_star = westergaard.full_contact_pressure(amplitude, length, modulus)
     loads = [0.1 * p_star, 0.5 * p_star]
-    rect = periodic_contact(h, (length, 0.5), modulus, loads, options=TIGHT, fields=True)
+    rect = periodic_contact(
+        h, length=(length, 0.5), modulus=modulus, pressures=loads, options=TIGHT, fields=True
+    )
     square = periodic_contact(
-        np.repeat(h[:, :1], nx, axis=1), length, modulus, loads, options=TIGHT
+        np.repeat(h[:, :1], nx, axis=1),
+        length=length,
+        modulus=modulus,
+        pressures=loads,
+        options=TIGHT,
     )
     for p0, a, b in zip(loads, rect, square, strict=True):
         assert a.converged and b.converged
@@ -59,8 +65,17 @@ def test_tiled_square_is_the_square():
         grid, make_fft(grid), hurst=0.7, rolloff_ratio=1, cutoff_ratio=8, seed=4, rms_slope=0.1
     )
     loads = [1e-3, 1e-2]
-    one = periodic_contact(h, 1.0, 1.0, loads, options=TIGHT, stiffness=True)
-    two = periodic_contact(np.vstack([h, h]), (2.0, 1.0), 1.0, loads, options=TIGHT, stiffness=True)
+    one = periodic_contact(
+        h, length=1.0, modulus=1.0, pressures=loads, options=TIGHT, stiffness=True
+    )
+    two = periodic_contact(
+        np.vstack([h, h]),
+        length=(2.0, 1.0),
+        modulus=1.0,
+        pressures=loads,
+        options=TIGHT,
+        stiffness=True,
+    )
     for a, b in zip(one, two, strict=True):
         assert a.converged and b.converged
         for key in ("mean_gap", "area_fraction", "stiffness", "elastic_energy"):
@@ -103,9 +118,9 @@ def test_rectangular_flat_punch_two_pixel_shapes():
     (64 x 64, pixels 1/64 x 1/128): the same stiffness within the grid's discretisation
     error (the square punch's grid stiffness changes by 0.5% from 64 to 128 pixels)."""
     stiffness = [
-        punch_contact(np.zeros(shape), (1.0, 0.5), 1.0, approaches=[1e-3])[0].scalars[
-            "total_stiffness"
-        ]
+        punch_contact(np.zeros(shape), length=(1.0, 0.5), modulus=1.0, approaches=[1e-3])[
+            0
+        ].scalars["total_stiffness"]
         for shape in ((64, 32), (64, 64))
     ]
     assert stiffness[1] == pytest.approx(stiffness[0], rel=5e-3)
@@ -119,8 +134,10 @@ from petsc_contact import periodic_contact, punch_contact
 x, y = np.meshgrid(np.arange(48) / 48, np.arange(20) / 20, indexing="ij")
 h = 0.01 * np.cos(2 * np.pi * x) + 0.005 * np.sin(2 * np.pi * (2 * x + y))
 h += 0.003 * np.cos(6 * np.pi * y)
-periodic = periodic_contact(h, (1.2, 0.5), 1.0, [1e-3, 3e-3], stiffness=True)
-punch = punch_contact(h, (1.2, 0.5), 1.0, forces=[1e-4])
+periodic = periodic_contact(
+    h, length=(1.2, 0.5), modulus=1.0, pressures=[1e-3, 3e-3], stiffness=True
+)
+punch = punch_contact(h, length=(1.2, 0.5), modulus=1.0, forces=[1e-4])
 values = [s.scalars["mean_gap"] for s in periodic] + [s.scalars["stiffness"] for s in periodic]
 values.append(punch[0].scalars["approach"])
 if MPI.COMM_WORLD.rank == 0:

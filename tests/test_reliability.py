@@ -323,6 +323,6 @@ def test_an_unresolved_force_is_flagged_not_converged(petsc):
     from petsc_contact.workflows.scenes import surface
 
     h, _ = surface(32, 0.7, 1.0, 16.0, 1)
-    tiny, fine = punch_contact(h, 1.0, 1.0, forces=[1e-30, 1e-3])
+    tiny, fine = punch_contact(h, length=1.0, modulus=1.0, forces=[1e-30, 1e-3])
     assert not tiny.converged and "below what this grid resolves" in tiny.scalars["verification"]
     assert fine.converged and abs(fine.scalars["force"] / 1e-3 - 1) < 1e-4

@@ -28,7 +28,9 @@ def rough(hurst=0.7, slope=0.1, seed=1):
 
 
 def solve(h, p0, length=1.0, modulus=1.0, options=()):
-    (step,) = periodic_contact(h, length, modulus, [p0], options=list(options))
+    (step,) = periodic_contact(
+        h, length=length, modulus=modulus, pressures=[p0], options=list(options)
+    )
     assert step.converged, step.scalars["verification"]
     return step.scalars
 
@@ -64,7 +66,13 @@ def test_flat_surface_is_full_contact():
 def test_extreme_spectra(hurst, slope, solver):
     """H near 0 and 1, slopes 0.01 and 1, from a single-asperity load to half contact."""
     h = rough(hurst, slope)
-    steps = periodic_contact(h, 1.0, 1.0, [slope * 1e-6, slope * 1e-2, slope * 0.3], options=solver)
+    steps = periodic_contact(
+        h,
+        length=1.0,
+        modulus=1.0,
+        pressures=[slope * 1e-6, slope * 1e-2, slope * 0.3],
+        options=solver,
+    )
     assert all(s.converged for s in steps), [s.scalars["verification"] for s in steps]
     area = [s.scalars["area_fraction"] for s in steps]
     assert area[0] < area[1] < area[2]
@@ -85,14 +93,20 @@ def test_first_order_tao_types_with_fourier_h0(tao_type, extra):
     BLMVM also with its options file (a history of two pairs)."""
     h = rough()
     loads = [1e-7, 1e-5, 1e-3, 1e-2, 0.1]
-    default = periodic_contact(h, 1.0, 1.0, loads)
-    steps = periodic_contact(h, 1.0, 1.0, loads, options=["-tao_type", tao_type, *extra])
+    default = periodic_contact(h, length=1.0, modulus=1.0, pressures=loads)
+    steps = periodic_contact(
+        h, length=1.0, modulus=1.0, pressures=loads, options=["-tao_type", tao_type, *extra]
+    )
     assert all(s.converged for s in steps), [s.scalars["verification"] for s in steps]
     for s, ref in zip(steps, default, strict=True):
         assert s.scalars["preconditioner_applications"] > 0  # H0 is applied
         assert s.scalars["iterations"] <= 60  # measured: at most 41
         assert s.scalars["mean_gap"] == pytest.approx(ref.scalars["mean_gap"], rel=1e-6)
     (without,) = periodic_contact(
-        h, 1.0, 1.0, [1e-7], options=["-tao_type", tao_type, "-petsc_contact_no_j0"]
+        h,
+        length=1.0,
+        modulus=1.0,
+        pressures=[1e-7],
+        options=["-tao_type", tao_type, "-petsc_contact_no_j0"],
     )
     assert not without.converged

@@ -24,7 +24,12 @@ def test_westergaard_mean_gap_and_stiffness():
     h = np.repeat(DELTA * np.cos(2 * np.pi * x / LENGTH)[:, None], N, axis=1)
     fracs = np.array([0.05, 0.2, 0.5, 0.8])
     steps = periodic_contact(
-        h, LENGTH, MODULUS, fracs * P_STAR, options=["-tao_gatol", "1e-11"], stiffness=True
+        h,
+        length=LENGTH,
+        modulus=MODULUS,
+        pressures=fracs * P_STAR,
+        options=["-tao_gatol", "1e-11"],
+        stiffness=True,
     )
     for f, step in zip(fracs, steps, strict=True):
         s = step.scalars
@@ -46,7 +51,7 @@ def test_exact_stiffness_matches_sweep_derivative():
         grid, make_fft(grid), hurst=0.7, rolloff_ratio=2, cutoff_ratio=32, seed=5, rms_slope=0.1
     )
     p0 = np.geomspace(3e-3, 3.3e-3, 11)
-    steps = periodic_contact(h, 1.0, 1.0, p0, stiffness=True)
+    steps = periodic_contact(h, length=1.0, modulus=1.0, pressures=p0, stiffness=True)
     assert all(s.converged for s in steps)
     u = np.array([s.scalars["mean_gap"] for s in steps])
     exact = np.array([s.scalars["stiffness"] for s in steps])
@@ -59,7 +64,7 @@ def test_stiffness_limits():
     """Full contact -> inf (no open pixel to soften); too short a sweep is refused."""
     x = np.arange(32) / 32
     h = np.repeat(DELTA * np.cos(2 * np.pi * x)[:, None], 32, axis=1)
-    steps = periodic_contact(h, 1.0, MODULUS, [2 * P_STAR], stiffness=True)
+    steps = periodic_contact(h, length=1.0, modulus=MODULUS, pressures=[2 * P_STAR], stiffness=True)
     assert steps[0].scalars["area_fraction"] == 1.0
     assert steps[0].scalars["stiffness"] == np.inf
     with pytest.raises(ValueError):
@@ -75,7 +80,9 @@ def test_stiffness_solves_release_their_operators():
 
     x = np.arange(32) / 32
     h = np.repeat(DELTA * np.cos(2 * np.pi * x)[:, None], 32, axis=1)
-    steps = periodic_contact(h, 1.0, MODULUS, [0.2 * P_STAR, 0.4 * P_STAR], stiffness=True)
+    steps = periodic_contact(
+        h, length=1.0, modulus=MODULUS, pressures=[0.2 * P_STAR, 0.4 * P_STAR], stiffness=True
+    )
     assert all(s.converged and s.scalars["stiffness"] > 0 for s in steps)
     gc.collect()
     assert not [o for o in gc.get_objects() if isinstance(o, Restricted)]

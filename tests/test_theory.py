@@ -108,7 +108,7 @@ def test_hertz_regime_against_the_punch_solver():
     n = 128
     x = (np.arange(n) + 0.5) / n - 0.5
     heights = -(x[:, None] ** 2 + x[None, :] ** 2) / 2.0
-    (step,) = punch_contact(heights, 1.0, 2.0, forces=[0.02])
+    (step,) = punch_contact(heights, length=1.0, modulus=2.0, forces=[0.02])
     assert step.scalars["total_stiffness"] == pytest.approx(
         float(theory.hertz_stiffness(0.02, 2.0, 1.0, 1.0)), rel=0.01
     )

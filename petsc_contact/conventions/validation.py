@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+import functools
+import warnings
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
@@ -50,3 +53,39 @@ def check_finite(grid: Grid, h: np.ndarray, what: str = "heights") -> None:
     bad = grid.sum(np.count_nonzero(~np.isfinite(h)))[0]
     if bad:
         raise ValueError(f"{what} contain {int(bad)} NaN or infinite values")
+
+
+Function = TypeVar("Function", bound=Callable[..., Any])
+
+
+def keywords_after_first(*former: str) -> Callable[[Function], Function]:
+    """Make a function's parameters after the first keyword-only, while calls that pass them
+    by position go on working for one release (until 0.3.0): ``former`` names the parameters
+    those positions used to fill, in order, and such a call warns (``DeprecationWarning``)
+    with the keywords to write instead."""
+
+    def decorate(function: Function) -> Function:
+        @functools.wraps(function)
+        def wrapper(first: Any, *args: Any, **kwargs: Any) -> Any:
+            if args:
+                if len(args) > len(former):
+                    raise TypeError(
+                        f"{function.__name__}() takes 1 positional argument, then keywords"
+                    )
+                names = former[: len(args)]
+                twice = [n for n in names if n in kwargs]
+                if twice:
+                    raise TypeError(f"{function.__name__}() got two values for '{twice[0]}'")
+                warnings.warn(
+                    f"{function.__name__}(): pass {', '.join(f'{n}=' for n in names)} by "
+                    "keyword; arguments after the first given by position are deprecated and "
+                    "refused from 0.3.0",
+                    DeprecationWarning,
+                    stacklevel=2,
+                )
+                kwargs.update(zip(names, args, strict=True))
+            return function(first, **kwargs)
+
+        return wrapper  # type: ignore[return-value]
+
+    return decorate

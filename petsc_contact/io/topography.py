@@ -199,45 +199,84 @@ def from_surface_topography(topography: SurfaceTopographyMap, reader: str = "") 
     )
 
 
-def map_and_lengths(
-    heights: np.ndarray | SurfaceTopographyMap, length: float | tuple[float, float] | None
-) -> tuple[np.ndarray, float | tuple[float, float]]:
-    """The height array and the sides of what the Python API was given.
+Heights = np.ndarray | Topography | SurfaceTopographyMap | str | os.PathLike[str]
+"""A height map in any form the package takes: an ``nx x ny`` array (a masked array's masked
+points undefined), the package's :class:`Topography` (:func:`read_topography`'s result), a
+SurfaceTopography ``Topography``, or the path of a file :func:`read_topography` reads."""
 
-    Parameters
-    ----------
-    heights
-        An ``nx x ny`` array, or a SurfaceTopography ``Topography`` (its sides are used, and
-        its mask of undefined points is refused: fill them first).
-    length
-        The sides (``L``, ``(Lx, Ly)``); optional for a topography, whose own sides it must
-        then equal.
+
+def as_topography(heights: Heights, channel: Channel = None) -> Topography:
+    """A height map given in any form (:data:`Heights`) as a :class:`Topography`: a path is
+    read (``channel``: which map of the file), a :class:`Topography` is taken as it is, a
+    SurfaceTopography ``Topography`` gives its heights, sides and unit, and an array its
+    heights alone (reader ``array``).
 
     Raises
     ------
     ValueError
-        Undefined points, no sides, or sides that contradict the topography's.
+        A ``channel`` for a form that holds one map; an array that is no map (not 2-D,
+        smaller than 2 x 2, not real numbers); what :func:`read_topography` raises.
     """
-    if not isinstance(heights, SurfaceTopographyMap):
-        if length is None:
-            raise ValueError("give the sides of the map: length=L or length=(Lx, Ly)")
-        return heights, length
-    topo = from_surface_topography(heights)
-    if topo.undefined:
+    if isinstance(heights, (str, os.PathLike)):
+        return read_topography(os.fspath(heights), channel)
+    if channel not in (None, 0, "0"):
+        raise ValueError(f"{_form(heights)} holds one map: it has no channels")
+    if isinstance(heights, Topography):
+        return heights
+    if isinstance(heights, SurfaceTopographyMap):
+        return from_surface_topography(heights)
+    if isinstance(heights, np.ma.MaskedArray):
+        heights = np.ma.filled(heights.astype(float), np.nan)
+    return _checked(Topography(np.asarray(heights), reader="array"), "the array")
+
+
+def _form(heights: Heights) -> str:
+    """What ``heights`` is, in words (an array, a Topography)."""
+    return f"a {type(heights).__name__}" if hasattr(heights, "heights") else "an array"
+
+
+def map_and_lengths(
+    heights: Heights, length: float | tuple[float, float] | None = None
+) -> tuple[np.ndarray, tuple[float, float], str | None]:
+    """The map the Python API was given, in any form (:func:`as_topography`), with its sides.
+
+    Parameters
+    ----------
+    heights
+        An ``nx x ny`` array, a :class:`Topography`, a SurfaceTopography ``Topography`` or a
+        path (its default channel).  A map with sides of its own gives them; undefined
+        points of a topography or file are refused (fill them first); an array's are left
+        to the solvers' check.
+    length
+        The sides (``L`` with square pixels, or ``(Lx, Ly)``); needed when the map has none,
+        else optional, and then equal to the map's own.
+
+    Returns
+    -------
+    heights, lengths, unit
+        The ``nx x ny`` heights, the sides ``(Lx, Ly)``, and the unit of both (``None`` when
+        the map has none).
+
+    Raises
+    ------
+    ValueError
+        Undefined points, no sides, or sides that contradict the map's.
+    """
+    topo = as_topography(heights)
+    if topo.reader != "array" and topo.undefined:
         raise ValueError(
-            f"the topography has {topo.undefined} undefined points: fill them first "
-            "(petsc_contact.physics.preparation.fill_undefined, or its "
+            f"the map has {topo.undefined} undefined points: fill them first "
+            "(petsc_contact.physics.preparation.fill_undefined, or SurfaceTopography's "
             "interpolate_undefined_data())"
         )
+    shape = topo.heights.shape
     if topo.lengths is None:
         if length is None:
-            raise ValueError("the topography has no physical sizes: give length=")
-        return topo.heights, length
-    if length is not None and not np.allclose(
-        sides(topo.heights.shape, length), topo.lengths, rtol=1e-6
-    ):
-        raise ValueError(f"length={length} contradicts the topography's sides {topo.lengths}")
-    return topo.heights, topo.lengths
+            raise ValueError("the map has no sides of its own: give length=L or length=(Lx, Ly)")
+        return topo.heights, sides(shape, length), topo.unit
+    if length is not None and not np.allclose(sides(shape, length), topo.lengths, rtol=1e-6):
+        raise ValueError(f"length={length} contradicts the map's own sides {topo.lengths}")
+    return topo.heights, topo.lengths, topo.unit
 
 
 @dataclass(frozen=True)

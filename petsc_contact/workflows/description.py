@@ -13,6 +13,8 @@ or given as ``heights``: a file of any supported format, a 2-D array, or a Surfa
 
 from __future__ import annotations
 
+import os
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
@@ -22,6 +24,34 @@ import numpy as np
 from ..conventions.units import METRES, NEWTONS, PASCALS, parse_quantity
 
 GEOMETRIES = ("periodic", "punch")
+LOADS = ("pressures", "sweep", "approaches", "forces")
+
+
+def _listed(value: Any) -> Any:
+    """Loads (or a sweep) as a sequence: a number is one item, text with commas its items
+    (``"1e-3,2MPa"``, as the command line reads it), an array its values; a sequence as
+    it is."""
+    if isinstance(value, str):
+        return tuple(item.strip() for item in value.split(","))
+    if isinstance(value, (int, float, np.number)):
+        return (value,)
+    if isinstance(value, np.ndarray):
+        return tuple(value.ravel().tolist())
+    return value
+
+
+def _grid(value: Any) -> int | tuple[int, int]:
+    """``--grid`` as ``N`` or ``(NX, NY)``, from a number, a pair, or text (``"128"``,
+    ``"128,64"``, ``"128x64"``); ``ValueError`` for anything else."""
+    items = re.split(r"[,x]", value) if isinstance(value, str) else np.ravel(value).tolist()
+    try:
+        sizes = [int(v) for v in items]
+        whole = all(float(v) == n for v, n in zip(items, sizes, strict=True))
+    except (TypeError, ValueError):
+        whole = False
+    if not whole or len(sizes) not in (1, 2) or min(sizes) < 2:
+        raise ValueError(f"--grid takes N or (NX, NY), whole numbers of 2 or more: got {value!r}")
+    return sizes[0] if len(sizes) == 1 else (sizes[0], sizes[1])
 
 
 @dataclass(frozen=True)
@@ -34,11 +64,13 @@ class Run:
         ``periodic`` (load controlled, a periodic cell) or ``punch`` (a rigid rough punch on
         a free half-space, by approaches or forces).
     heights, channel, height_unit, override_metadata, fill_undefined, detrend
-        A measured surface: a file path, a 2-D array or a SurfaceTopography ``Topography``;
-        which channel; the heights' unit when the file has none; whether ``length`` and
-        ``height_unit`` replace the file's own; how undefined points are filled (``error``,
-        ``mean``, ``harmonic``); what is removed (``none``, ``height``, ``slope``,
-        ``curvature``).
+        A measured surface in any form
+        (:func:`~petsc_contact.io.topography.as_topography`): a file's path, a 2-D array,
+        :func:`~petsc_contact.io.topography.read_topography`'s result (its sides and unit)
+        or a SurfaceTopography ``Topography``; which channel (of a file); the heights' unit
+        when the file has none; whether ``length`` and ``height_unit`` replace the file's own;
+        how undefined points are filled (``error``, ``mean``, ``harmonic``); what is removed
+        (``none``, ``height``, ``slope``, ``curvature``).
     grid, hurst, rms_slope, rms_height, rolloff_ratio, cutoff_ratio, seed, exact_rms
         A generated surface (paper Eq. 5): ``N`` or ``(NX, NY)``, the Hurst exponent, one
         rms target, ``L/lambda_r``, ``L/lambda_1`` (default: the Nyquist limit), the seed,
@@ -56,7 +88,9 @@ class Run:
     pressures, sweep, approaches, forces
         The loads: nominal pressures (periodic; the punch: over its face), approaches or
         forces (punch), or a sweep ``(N,)`` or ``(N, min, max)`` of log-spaced ones (default
-        range: see the CLI).  A value may carry its unit: ``"2MPa"``, ``"10nm"``, ``"1mN"``.
+        range: see the CLI).  A value may carry its unit: ``"2MPa"``, ``"10nm"``, ``"1mN"``;
+        one load (``pressures=1e-3``) or a sweep's count alone (``sweep=4``) needs no tuple,
+        and text with commas is read as the command line reads it (``"1e-3,2MPa"``).
     footprint, flat_stiffness, stiffness
         The punch's outline (``square``, ``disk``) and its flat-punch reference (``grid``,
         ``analytic``); whether every step adds the exact stiffness.
@@ -67,7 +101,8 @@ class Run:
         with finished steps is refused), and after how many minutes the run pauses (between
         steps).
     options
-        PETSc options for this run (``("-tao_type", "bncg")``).
+        PETSc options for this run (``("-tao_type", "bncg")``, the same as one string or a
+        dict, as :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact` takes them).
     options_prefix
         The prefix this run's solvers read their PETSc options with (``"a_"``: ``-a_tao_type``).
     skip_memory_check
@@ -110,13 +145,20 @@ class Run:
     options_prefix: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
-        """Check the numbers and the files (``ValueError`` naming the option as the command
-        line does): a heights file must be a regular, non-empty file, and the output (with
-        its ``OUT.csv``) a regular file or a new name that is not the heights file."""
+        """Put the fields in one form and check the numbers and the files (``ValueError``
+        naming the option as the command line does).
+
+        A path given as ``heights`` becomes its text; a single load, sweep count or grid size
+        (``pressures=1e-3``, ``sweep=4``, ``grid=64``) or text with commas (``"1e-3,2MPa"``,
+        ``"128,64"``) is taken as the command line takes it, and PETSc options given as one
+        string or a dict become a tuple.  A heights file must be a regular, non-empty file,
+        and the output (with its ``OUT.csv``) a regular file or a new name that is not the
+        heights file."""
         from ..conventions.validation import non_negative, positive
         from ..io.paths import check_input, check_outputs
         from ..io.store import csv_path
 
+        self._normalise()
         if self.heights_file is not None:
             check_input(self.heights_file, "--heights")
         if self.output is not None:
@@ -138,6 +180,24 @@ class Run:
             check = non_negative if name == "approaches" else positive  # an approach may be 0
             for v in values:
                 check(f"--{name}", parse_quantity(v, units, f"--{name}").value)
+
+    def _normalise(self) -> None:
+        """Put the fields given in another natural form in the one the run uses (frozen:
+        through ``object.__setattr__``); ``ValueError`` naming the option for a wrong count."""
+        if isinstance(self.heights, os.PathLike):
+            object.__setattr__(self, "heights", os.fspath(self.heights))
+        for name in LOADS:
+            object.__setattr__(self, name, _listed(getattr(self, name)))
+        if self.sweep is not None and len(self.sweep) not in (1, 3):
+            raise ValueError(f"--sweep takes N or (N, MIN, MAX), got {self.sweep!r}")
+        if self.grid is not None:
+            object.__setattr__(self, "grid", _grid(self.grid))
+        if not isinstance(self.length, str | None) and np.size(self.length) not in (1, 2):
+            raise ValueError(f"--length takes L or (LX, LY), got {self.length!r}")
+        if not isinstance(self.options, tuple):
+            from ..backend._petsc import option_list
+
+            object.__setattr__(self, "options", tuple(option_list(self.options)))
 
     @property
     def modulus_value(self) -> float:
@@ -178,12 +238,14 @@ class Run:
 
     def arguments(self) -> list[str]:
         """The command line that describes this run (``periodic --grid 512 ...``): every
-        field that differs from its default, as the CLI spells it."""
+        field that differs from its default, as the CLI spells it (a map given as an array
+        or a topography has no spelling there: it is left out)."""
         out = [self.geometry]
         defaults = Run()
         for f in fields(self):
             value = getattr(self, f.name)
-            if f.name in ("geometry", "options") or value == getattr(defaults, f.name):
+            skipped = f.name in ("geometry", "options") or isinstance(value, np.ndarray)
+            if skipped or value == getattr(defaults, f.name):
                 continue
             flag = "--" + f.name.replace("_", "-")
             if isinstance(value, bool):

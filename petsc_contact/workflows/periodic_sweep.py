@@ -24,10 +24,10 @@ import numpy as np
 from ..backend import _petsc
 from ..backend.solve import BoundSolver, Monitor
 from ..conventions.grid import grid_for
-from ..conventions.validation import check_finite
+from ..conventions.validation import check_finite, keywords_after_first
 from ..geometries.periodic import PeriodicProblem, verify
 from ..geometries.step import VERIFY_FACTOR, Step, collect, solve_step
-from ..io.topography import SurfaceTopographyMap, map_and_lengths
+from ..io.topography import Heights, map_and_lengths
 from ..numerics.device import get_device
 from ..numerics.fft import make_fft
 from ..physics.continuation import ConvergedStep, Held, LoadPath
@@ -144,45 +144,79 @@ def _resumed_path(held: Held, x: Any, ell: float, device: Any) -> LoadPath:
     )
 
 
+Progress = Callable[[int, int, dict[str, Any]], None]
+"""Called as ``progress(index, total, scalars)`` after each step, ``index`` from 0."""
+
+
+def reported(steps: Iterator[Step], total: int, progress: Progress | None) -> Iterator[Step]:
+    """The steps, each reported to ``progress`` (``index`` from 0) once it is solved."""
+    for i, step in enumerate(steps):
+        if progress is not None:
+            progress(i, total, step.scalars)
+        yield step
+
+
+@keywords_after_first(
+    "length",
+    "modulus",
+    "pressures",
+    "options",
+    "fields",
+    "comm",
+    "stiffness",
+    "monitor",
+    "progress",
+    "device",
+)
 def periodic_contact(
-    heights: np.ndarray | SurfaceTopographyMap,
+    heights: Heights,
+    *,
     length: float | tuple[float, float] | None = None,
     modulus: float = 1.0,
-    pressures: Sequence[float] = (),
+    pressures: float | Sequence[float] = (),
     options: _petsc.OptionsArg = None,
     fields: bool = False,
-    comm: Any = None,
     stiffness: bool = False,
+    progress: Progress | None = None,
     monitor: Monitor | None = None,
-    progress: Callable[[int, int, dict[str, Any]], None] | None = None,
+    comm: Any = None,
     device: str = "cpu",
 ) -> list[Step]:
     """Solve the periodic contact of ``heights`` for each nominal pressure.
 
+    The parameters after ``heights`` are keywords, named as
+    :class:`~petsc_contact.workflows.description.Run`'s fields and the command line's options
+    (given by position they still work until 0.3.0, with a ``DeprecationWarning``).
+
     Parameters
     ----------
     heights
-        The full ``nx x ny`` height map (every rank passes the same array or memory map), or
-        a SurfaceTopography ``Topography`` (its sides and unit; undefined points refused).
+        The full ``nx x ny`` height map in any form
+        (:func:`~petsc_contact.io.topography.as_topography`): an array (every rank passes the
+        same array or memory map), :func:`~petsc_contact.io.topography.read_topography`'s
+        result, a SurfaceTopography ``Topography`` or a file's path.  A map with sides of its
+        own gives them; its undefined points are refused (fill them first).
     length, modulus
         Cell sides ``(Lx, Ly)``, or the side ``Lx`` with square pixels (``L`` for a square
-        map; optional for a topography), and the contact modulus ``E*``.
+        map; optional for a map with sides), and the contact modulus ``E*``.
     pressures
-        Nominal pressures ``p0`` (same unit as ``modulus``), solved in order, warm-started.
+        Nominal pressures ``p0`` (same unit as ``modulus``), solved in order, warm-started;
+        one number is one load.
     options
         PETSc options for this call only: ``["-tao_type", "bncg", "-tao_gatol", "1e-10"]``,
         the same as one string, or ``{"tao_type": "bncg", "tao_gatol": 1e-10}``; options
         nothing read (a misspelt name) are reported in a warning.
     fields
         Keep the local ``gap`` and ``pressure`` slabs of every step.
-    comm
-        mpi4py communicator (default ``COMM_WORLD``).
     stiffness
         Add the exact incremental stiffness ``stiffness`` to every step (see :func:`sweep`).
+    progress
+        Called as ``progress(index, total, scalars)`` after each step; ``index`` counts from
+        0 (the step numbered ``index + 1`` in the table and by ``--step``).
     monitor
         Called as ``monitor(iteration, f, gnorm)`` at every TAO iteration; ``True`` stops.
-    progress
-        Called as ``progress(index, total, scalars)`` after each step (``index`` from 0).
+    comm
+        mpi4py communicator (default ``COMM_WORLD``).
     device
         ``cpu`` (TAO, every solver type), ``gpu`` (the package's solver on CuPy) or
         ``cpu-array`` (the GPU's code on NumPy); :mod:`petsc_contact.numerics.device`.
@@ -194,30 +228,21 @@ def periodic_contact(
     list of Step
         One per load, in order; only the last keeps ``state``, the field to go on from.
     """
-    array, length = map_and_lengths(heights, length)
-    pressures = check_pressures(pressures)
+    array, sides, _ = map_and_lengths(heights, length)
+    loads = check_pressures(np.atleast_1d(pressures).tolist())
     where = get_device(device)
     if where.name != "cpu":
-        grid = grid_for(array.shape, length, comm)
+        grid = grid_for(array.shape, sides, comm)
         local = grid.scatter(array)
         check_finite(grid, local)
         problem = PeriodicProblem(grid, where.fft(grid), local, modulus)
         solver = problem_solver(problem, _petsc.option_list(options))
-        steps = sweep(problem, pressures, fields, monitor, stiffness, solver=solver)
-        return collect(_reported(steps, len(pressures), progress))
+        steps = sweep(problem, loads, fields, monitor, stiffness, solver=solver)
+        return collect(reported(steps, len(loads), progress))
     with _petsc.scoped_options(options):
-        grid = grid_for(array.shape, length, comm)
+        grid = grid_for(array.shape, sides, comm)
         local = grid.scatter(array)
         check_finite(grid, local)
         problem = PeriodicProblem(grid, make_fft(grid), local, modulus)
-        steps = sweep(problem, pressures, fields, monitor, stiffness)
-        return collect(_reported(steps, len(pressures), progress))
-
-
-def _reported(
-    steps: Iterator[Step], total: int, progress: Callable[[int, int, dict[str, Any]], None] | None
-) -> Iterator[Step]:
-    for i, step in enumerate(steps):
-        if progress is not None:
-            progress(i, total, step.scalars)
-        yield step
+        steps = sweep(problem, loads, fields, monitor, stiffness)
+        return collect(reported(steps, len(loads), progress))

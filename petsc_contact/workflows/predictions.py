@@ -16,12 +16,14 @@ weigh the lowest wavevectors most): the realised spectrum, not a prescribed one.
 from __future__ import annotations
 
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..conventions.grid import Grid, grid_for, self_comm
-from ..io.topography import SurfaceTopographyMap, map_and_lengths
+from ..conventions.validation import keywords_after_first
+from ..io.topography import Heights, map_and_lengths
 from ..numerics.fft import FFT, SerialFFT
 from ..physics import theory
 from ..physics.surface import radial_psd, rms_of
@@ -238,33 +240,43 @@ def _persson(
     )
 
 
+@keywords_after_first("length", "modulus", "pressures")
 def predict_map(
-    heights: np.ndarray | SurfaceTopographyMap,
+    heights: Heights,
+    *,
     length: float | tuple[float, float] | None = None,
     modulus: float = 1.0,
-    pressures: np.ndarray | None = None,
+    pressures: float | Sequence[float] | None = None,
 ) -> Prediction:
     """Persson's theory and the finite-size estimates for a whole map, in one process.
+
+    The parameters after ``heights`` are keywords, named as
+    :class:`~petsc_contact.workflows.description.Run`'s fields (given by position they still
+    work until 0.3.0, with a ``DeprecationWarning``).
 
     Parameters
     ----------
     heights
-        An ``nx x ny`` array (prepared: no undefined points), or a SurfaceTopography
-        ``Topography`` (its sides and unit).
+        The ``nx x ny`` map in any form (:func:`~petsc_contact.io.topography.as_topography`):
+        an array (prepared: no undefined points),
+        :func:`~petsc_contact.io.topography.read_topography`'s result, a SurfaceTopography
+        ``Topography`` or a file's path.  A map with sides of its own gives them.
     length
-        The sides (``L`` or ``(Lx, Ly)``); optional for a topography.
+        The sides (``L`` or ``(Lx, Ly)``); optional for a map with sides.
     modulus
         The contact modulus ``E*``; pressures are in its unit.
     pressures
         Nominal pressures for ``u_bar(p)`` and ``K(p)`` (default: 25 from 1e-7 to 1e-1 E*).
     """
-    array, length = map_and_lengths(heights, length)
-    grid = grid_for(array.shape, length)
+    array, sides, _ = map_and_lengths(heights, length)
+    grid = grid_for(array.shape, sides)
     if grid.comm.size > 1:
-        grid = grid_for(array.shape, length, self_comm())
+        grid = grid_for(array.shape, sides, self_comm())
     lo, hi, n = DEFAULT_LOADS
     p = np.geomspace(lo * modulus, hi * modulus, n) if pressures is None else pressures
     values = np.asarray(array, dtype=float)
     if not np.all(np.isfinite(values)):
         raise ValueError("the map has undefined heights: fill them first")
-    return predict(grid, SerialFFT(grid), values, modulus, np.asarray(p, dtype=float))
+    return predict(
+        grid, SerialFFT(grid), values, modulus, np.atleast_1d(np.asarray(p, dtype=float))
+    )

@@ -16,12 +16,13 @@ import numpy as np
 from ..backend import _petsc
 from ..backend.solve import BoundSolver, Monitor
 from ..conventions.grid import grid_for
-from ..conventions.validation import check_finite, positive
+from ..conventions.validation import check_finite, keywords_after_first, positive
 from ..geometries.punch import PHARR_BETA, PunchProblem
 from ..geometries.step import Step, collect, solve_step
-from ..io.topography import SurfaceTopographyMap, map_and_lengths
+from ..io.topography import Heights, map_and_lengths
 from ..physics.continuation import Held
 from ..solver.report import FORCE_ACCURACY
+from .periodic_sweep import Progress, reported
 
 FORCE_RTOL = 1e-6
 FORCE_RESOLVED = FORCE_ACCURACY  # a force further than this from its target is not converged
@@ -181,64 +182,116 @@ def punch_sweep(
             yield solver.at_approach(v, fields, monitor, stiffness)
 
 
+@keywords_after_first(
+    "length",
+    "modulus",
+    "approaches",
+    "forces",
+    "options",
+    "fields",
+    "footprint",
+    "flat_stiffness",
+    "beta",
+    "comm",
+    "monitor",
+)
 def punch_contact(
-    heights: np.ndarray | SurfaceTopographyMap,
+    heights: Heights,
+    *,
     length: float | tuple[float, float] | None = None,
     modulus: float = 1.0,
-    approaches: Sequence[float] | None = None,
-    forces: Sequence[float] | None = None,
+    approaches: float | Sequence[float] | None = None,
+    forces: float | Sequence[float] | None = None,
     options: _petsc.OptionsArg = None,
     fields: bool = False,
+    stiffness: bool = False,
+    progress: Progress | None = None,
+    monitor: Monitor | None = None,
     footprint: np.ndarray | None = None,
-    flat: str = "grid",
+    flat_stiffness: str = "grid",
     beta: float = PHARR_BETA,
     comm: Any = None,
-    monitor: Monitor | None = None,
+    flat: str | None = None,
 ) -> list[Step]:
     """Press a rigid punch with face ``heights`` into a free elastic half-space.
+
+    The parameters after ``heights`` are keywords, named as
+    :class:`~petsc_contact.workflows.description.Run`'s fields and the command line's options
+    (given by position they still work until 0.3.0, with a ``DeprecationWarning``).
 
     Parameters
     ----------
     heights
-        Full ``nx x ny`` height map of the punch face (every rank passes the same array), or
-        a SurfaceTopography ``Topography`` (its sides and unit; undefined points refused).
+        The full ``nx x ny`` height map of the punch face in any form
+        (:func:`~petsc_contact.io.topography.as_topography`): an array (every rank passes the
+        same array), :func:`~petsc_contact.io.topography.read_topography`'s result, a
+        SurfaceTopography ``Topography`` or a file's path.  A map with sides of its own gives
+        them; its undefined points are refused (fill them first).
     length, modulus
         Footprint sides ``(Lx, Ly)``, or the side ``Lx`` with square pixels (``Lp`` for a
-        square patch; optional for a topography), and the contact modulus ``E*``.
+        square patch; optional for a map with sides), and the contact modulus ``E*``.
     approaches, forces
         Exactly one of them: rigid approaches ``δ`` beyond first touch (displacement
-        control), or total forces ``F`` (load control).  Solved in order, warm-started.
+        control), or total forces ``F`` (load control).  Solved in order, warm-started; one
+        number is one load.
     options
         PETSc options for this call (a list, a string or a dict; see
         :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact`).
     fields
         Keep the local ``gap`` and ``pressure`` slabs of every step.
-    footprint
-        Optional full ``n x n`` boolean mask of the punch (e.g. a disk); default square.
-    flat, beta
-        The flat-punch stiffness of paper Eq. 2 (:class:`PunchProblem`).
-    comm
-        mpi4py communicator (default ``COMM_WORLD``).
+    stiffness
+        Add the punch's exact interfacial stiffness to every step, as
+        ``Run(geometry="punch", stiffness=True)`` does.
+    progress
+        Called as ``progress(index, total, scalars)`` after each step; ``index`` counts from
+        0 (the step numbered ``index + 1`` in the table and by ``--step``).
     monitor
         Called as ``monitor(iteration, f, gnorm)`` at every TAO iteration; ``True`` stops.
+    footprint
+        Optional full ``nx x ny`` boolean mask of the punch (e.g. a disk); default square.
+    flat_stiffness, beta
+        The flat-punch stiffness of paper Eq. 2 (``grid`` or ``analytic``) and its shape
+        factor (:class:`PunchProblem`).
+    comm
+        mpi4py communicator (default ``COMM_WORLD``).
+    flat
+        Deprecated name of ``flat_stiffness`` (a ``DeprecationWarning``; removed in 0.3.0).
 
     Returns
     -------
     list of Step
         One per load, in order; only the last keeps ``state``, the field to go on from.
     """
-    values = [float(v) for v in (approaches if approaches is not None else forces or [])]
+    flat_stiffness = _renamed_flat(flat, flat_stiffness)
+    given = approaches if approaches is not None else forces
+    values = [float(v) for v in np.atleast_1d(given if given is not None else [])]
     if (approaches is None) == (forces is None) or not values:
         raise ValueError("give either approaches or forces, at least one of them")
-    array, length = map_and_lengths(heights, length)
+    array, sides, _ = map_and_lengths(heights, length)
     with _petsc.scoped_options(options):
-        grid = grid_for(array.shape, length, comm)
+        grid = grid_for(array.shape, sides, comm)
         local = grid.scatter(array)
         check_finite(grid, local)
         mask = None if footprint is None else grid.scatter(footprint).astype(bool)
-        problem = PunchProblem(grid, local, modulus, mask, flat, beta)
+        problem = PunchProblem(grid, local, modulus, mask, flat_stiffness, beta)
         with PunchSolver(problem) as solver:
-            return collect(punch_sweep(solver, values, forces is not None, fields, monitor))
+            steps = punch_sweep(solver, values, forces is not None, fields, monitor, stiffness)
+            return collect(reported(steps, len(values), progress))
+
+
+def _renamed_flat(flat: str | None, flat_stiffness: str) -> str:
+    """``flat_stiffness``, or the deprecated ``flat=`` of :func:`punch_contact` given in its
+    place (with a ``DeprecationWarning``); both given are refused."""
+    if flat is None:
+        return flat_stiffness
+    if flat_stiffness != "grid":
+        raise TypeError("punch_contact(): give flat_stiffness= alone (flat= is its old name)")
+    warnings.warn(
+        "punch_contact(flat=...) is deprecated; use flat_stiffness=",
+        DeprecationWarning,
+        stacklevel=4,  # the caller of punch_contact, through keywords_after_first
+    )
+    return flat
 
 
 def punch_steps(*args: Any, **kwargs: Any) -> Iterator[Step]:

@@ -273,7 +273,8 @@ def run_contact(
     run
         The run.
     progress
-        Called as ``progress(index, total, scalars)`` after each step.
+        Called as ``progress(index, total, scalars)`` after each step, ``index`` from 0
+        (:data:`Progress`; the table and ``--step`` number that step ``index + 1``).
     monitor
         Called as ``monitor(iteration, f, gnorm)`` at every TAO iteration; ``True`` stops.
     command_line

@@ -18,7 +18,7 @@ import numpy as np
 from ..conventions.grid import Grid, grid_for, world
 from ..conventions.units import Lengths, factor, parse_lengths, unit_name
 from ..conventions.validation import check_finite
-from ..io.topography import SurfaceTopographyMap, Topography, from_surface_topography
+from ..io.topography import Topography, as_topography
 from ..numerics.fft import make_fft
 from .description import Run
 
@@ -184,25 +184,13 @@ def cut_face(run: Run, grid: Grid, cutoff: float) -> tuple[np.ndarray, dict[str,
     return grid.scatter(patch), stats  # type: ignore[arg-type]
 
 
-def _topography(run: Run) -> Topography:
-    from ..io.topography import read_topography
-
-    if isinstance(run.heights, str):
-        return read_topography(run.heights, run.channel)
-    if isinstance(run.heights, SurfaceTopographyMap):
-        return from_surface_topography(run.heights)
-    if run.channel not in (None, 0, "0"):
-        raise ValueError("an array holds one map: it has no channels")
-    return Topography(np.asarray(run.heights), reader="array")
-
-
 def measured(run: Run, given: Lengths | None) -> tuple[np.ndarray, Lengths, dict[str, Any], str]:
     """The prepared map (filled, detrended, in the lengths' unit), its lengths, what the run
     records of it (its reader, channel and metadata, what was overridden), and one line on
     what was read; warns about implausible slopes and, for periodic runs, edge mismatch."""
     from ..physics.preparation import detrend, fill_undefined
 
-    topo = _topography(run)
+    topo = as_topography(run.heights, run.channel)
     lengths, scale, overridden = _units(run, topo, given)
     spacing = grid_for(topo.heights.shape, lengths.pair).spacing
     filled = ~np.isfinite(topo.heights)

@@ -64,7 +64,14 @@ def stiffness_curve(
 
     Steps that did not converge are ``nan`` (and counted in ``converged``).
     """
-    steps = periodic_contact(heights, length, modulus, pressures, options=options, stiffness=True)
+    steps = periodic_contact(
+        heights,
+        length=length,
+        modulus=modulus,
+        pressures=pressures,
+        options=options,
+        stiffness=True,
+    )
     ok = np.array([s.converged for s in steps])
     col = {k: np.array([s.scalars[k] for s in steps], dtype=float) for k in _CURVE_KEYS}
     for k in _CURVE_KEYS[1:]:
@@ -250,7 +257,7 @@ def punch_curve(
     heights: np.ndarray, approaches: Sequence[float], length: float = 1.0, modulus: float = 1.0
 ) -> dict[str, np.ndarray]:
     """Rigid rough punch: force, ``F/Lp^2`` and the interfacial stiffness (Eq. 2) per step."""
-    steps = punch_contact(heights, length, modulus, approaches=approaches)
+    steps = punch_contact(heights, length=length, modulus=modulus, approaches=approaches)
     keys = (
         "approach force nominal_pressure area_fraction total_stiffness interfacial_stiffness"
     ).split()

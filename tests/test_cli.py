@@ -551,7 +551,7 @@ def test_plot_command(tmp_path):
     theory = tmp_path / "t.h5"
     assert cli("theory", *GEN, "--output", str(theory)).returncode == 0
     r = cli("plot", str(theory))
-    assert r.returncode == 0 and (tmp_path / "t.png").stat().st_size > 1000, r.stderr
+    assert r.returncode == 0 and (tmp_path / "t_redrawn.png").stat().st_size > 1000, r.stderr
 
 
 def test_study_runs_in_resumable_pieces(tmp_path):

@@ -15,7 +15,14 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
     from ..backend import _petsc
     from ..conventions.grid import world
     from ..io.store import check_writable
-    from ..workflows.seeds import ensemble_record, seed_runs, seeds_to_run, summarise, write_summary
+    from ..workflows.seeds import (
+        ensemble_record,
+        mean_rms_height,
+        seed_runs,
+        seeds_to_run,
+        summarise,
+        write_summary,
+    )
     from .runs import execute
 
     base = describe(args)
@@ -39,7 +46,7 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
         if args.plot:
             from ..io.plot import plot_ensemble
 
-            plot_ensemble(args.plot, summary, base.modulus_value)
+            plot_ensemble(args.plot, summary, base.modulus_value, mean_rms_height(files))
         if not args.quiet:
             plotted = f" and {args.plot}" if args.plot else ""
             print(f"# wrote {args.output}{plotted} ({len(files)} seeds)")

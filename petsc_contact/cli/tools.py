@@ -87,18 +87,16 @@ def _plot_ensemble_file(f: Any, path: str, out: str) -> None:
     import h5py
 
     from ..io.plot import plot_ensemble
+    from ..workflows.seeds import mean_rms_height
 
     seeds = json.loads(f.attrs["seed_files"])
     absent = [name for name in seeds if not os.path.exists(name)]
     if absent:
         raise InputError(f"'{path}': its seeds' files are needed, and {absent[0]} is missing")
-    rms_heights = []
-    for name in seeds:
-        with h5py.File(name, "r") as seed:
-            rms_heights.append(float(seed.attrs["rms_height"]))
-            modulus = float(seed.attrs["modulus"])  # the same for every seed
+    with h5py.File(seeds[0], "r") as seed:
+        modulus = float(seed.attrs["modulus"])  # the same for every seed
     summary = {name: f[name][...] for name in f}
-    plot_ensemble(out, summary, modulus, float(np.mean(rms_heights)))
+    plot_ensemble(out, summary, modulus, mean_rms_height(seeds))
 
 
 def _check_plot_output(out: str, source: str) -> None:

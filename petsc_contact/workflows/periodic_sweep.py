@@ -145,7 +145,9 @@ def _resumed_path(held: Held, x: Any, ell: float, device: Any) -> LoadPath:
 
 
 Progress = Callable[[int, int, dict[str, Any]], None]
-"""Called as ``progress(index, total, scalars)`` after each step, ``index`` from 0."""
+"""Called as ``progress(index, total, scalars)`` after each step (``index`` from 0; the
+table and ``--step`` number that step ``index + 1``; a resumed run reports only the steps
+it solves, its earlier ones are in the result's table)."""
 
 
 def reported(steps: Iterator[Step], total: int, progress: Progress | None) -> Iterator[Step]:

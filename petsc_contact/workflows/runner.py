@@ -47,16 +47,13 @@ from ..io.store import (
 )
 from ..physics.continuation import Held
 from .description import Run
+from .periodic_sweep import Progress
 from .scene import Scene, prepare_scene
 
 Start = tuple[np.ndarray, Held | None] | None
 """Where a resumed run's sweep goes on from: its last state (a local slab) and what the sweep
 held beside it (``None`` in a state file of an earlier version); ``None``: first touch."""
 
-Progress = Callable[[int, int, dict[str, Any]], None]
-"""Called as ``progress(index, total, scalars)`` when a step is finished and committed
-(``index`` counts from 0 over all the run's steps; a resumed run's earlier ones are in the
-result's table, not reported again)."""
 
 PAUSED, COMPLETE = "paused", "complete"
 

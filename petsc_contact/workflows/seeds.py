@@ -238,6 +238,18 @@ def summarise(seeds: Sequence[int], files: Sequence[str]) -> dict[str, np.ndarra
     return summary
 
 
+def mean_rms_height(files: Sequence[str]) -> float:
+    """The seeds' mean rms height (their files' ``rms_height``): what an ensemble's stiffness
+    is scaled by, ``K h_rms/E*``."""
+    import h5py
+
+    heights = []
+    for path in files:
+        with h5py.File(path, "r") as f:
+            heights.append(float(f.attrs["rms_height"]))
+    return float(np.mean(heights))
+
+
 def write_summary(
     path: str, summary: dict[str, np.ndarray], files: Sequence[str], record: dict[str, Any]
 ) -> None:

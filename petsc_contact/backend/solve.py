@@ -328,7 +328,7 @@ class BoundSolver:
         self.current = current = _Solve(objgrad, monitor)
         gatol = max(self.requested_gatol, gatol_floor)
         tao.setTolerances(gatol=gatol)
-        _, grtol, _ = tao.getTolerances()
+        _, grtol, gttol = tao.getTolerances()
         h0, p0 = self.hessian_op.applications, self._pc_count()
         start = time.perf_counter()
         try:
@@ -336,7 +336,7 @@ class BoundSolver:
         finally:
             self.current = None
         elapsed = self.grid.max(time.perf_counter() - start)
-        its, _, gnorm, _, _, code = tao.getSolutionStatus()
+        its, f, gnorm, _, _, code = tao.getSolutionStatus()
         code = int(code)
         info = SolveInfo(
             tao_type=_type_name(tao, tao.getPythonContext() if self.tao_type == "python" else None),
@@ -351,6 +351,8 @@ class BoundSolver:
             tolerance=float(gatol),
             relative_tolerance=float(grtol),
             initial_gradient_norm=current.norms[0] if current.norms else np.inf,
+            objective=float(f),
+            gradient_ratio_tolerance=float(gttol),
         )
         return self.x.array_r.copy(), info
 

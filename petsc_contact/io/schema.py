@@ -97,8 +97,8 @@ SOLVE_COLUMNS = _entries(
     tolerance=("1", "the absolute gradient tolerance used (raised to the rounding floor)"),
     effective_tolerance=(
         "1",
-        "the gradient tolerance the solve stopped against: tolerance, or -tao_grtol times the "
-        "first gradient norm when larger",
+        "the gradient tolerance the solve stopped against, as TAO's default test reads them: "
+        "the largest of tolerance, -tao_grtol x |f| and -tao_gttol x the first gradient norm",
     ),
     accuracy_limit=(
         "1",

@@ -178,6 +178,7 @@ class ArraySolver:
         gatol = max(settings.gatol, gatol_floor)
         counts = {"objgrad": 0}
         first: list[float] = []
+        last = [np.nan]  # the objective at the last iteration
 
         def gradient(xa: Any, g: Any) -> float:
             counts["objgrad"] += 1
@@ -186,6 +187,7 @@ class ArraySolver:
         def watch(it: int, f: float, rnorm: float) -> bool:
             if not first:
                 first.append(rnorm)
+            last[0] = f
             if settings.monitor:
                 print(f"{it:4d} TAO,  Function value: {f:g},  Residual: {rnorm:g}", flush=True)
             return bool(monitor is not None and monitor(it, f, rnorm))
@@ -224,5 +226,6 @@ class ArraySolver:
             tolerance=float(gatol),
             relative_tolerance=float(settings.grtol),
             initial_gradient_norm=first[0] if first else np.inf,
+            objective=float(last[0]),
         )
         return x, info

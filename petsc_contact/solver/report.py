@@ -118,16 +118,21 @@ class SolveInfo:
     gradient_norm: float
     solve_time: float
     tolerance: float
-    relative_tolerance: float = 0.0  # TAO's grtol
+    relative_tolerance: float = 0.0  # TAO's grtol: gnorm <= grtol |f|
     initial_gradient_norm: float = np.inf  # TAO's gnorm at the start point
+    objective: float = np.nan  # TAO's f at the end
+    gradient_ratio_tolerance: float = 0.0  # TAO's gttol: gnorm <= gttol gnorm0
 
     @property
     def effective_tolerance(self) -> float:
-        """The gradient tolerance the solve stopped against: ``tolerance``, or ``grtol``
-        times the first gradient norm when that is larger."""
-        relative = self.relative_tolerance
-        scaled = relative * self.initial_gradient_norm if relative > 0 else 0.0
-        return max(self.tolerance, scaled)
+        """The gradient tolerance the solve stopped against, as TAO's default test reads its
+        tolerances: the largest of ``gatol``, ``grtol |f|`` and ``gttol gnorm0``."""
+        bounds = [self.tolerance]
+        if self.relative_tolerance > 0 and np.isfinite(self.objective):
+            bounds.append(self.relative_tolerance * abs(self.objective))
+        if self.gradient_ratio_tolerance > 0 and np.isfinite(self.initial_gradient_norm):
+            bounds.append(self.gradient_ratio_tolerance * self.initial_gradient_norm)
+        return max(bounds)
 
     def scalars(self, verdict: str) -> dict[str, Any]:
         """The per-step output columns of this report, with the package's verdict."""

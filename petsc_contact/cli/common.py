@@ -81,8 +81,8 @@ def command_inputs(args: argparse.Namespace) -> list[Named]:
 def command_outputs(args: argparse.Namespace) -> list[Named]:
     """The files the command writes, as ``(option, path)`` pairs, the names derived from
     ``--output`` (``OUT.csv``, ``compare``'s ``OUT.png``) among them."""
+    from ..io.names import csv_path
     from ..io.plot import plot_file
-    from ..io.store import csv_path
 
     output, plot = getattr(args, "output", None), getattr(args, "plot", None)
     if output and args.command == "plot":

@@ -14,7 +14,7 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
     neither: :func:`~petsc_contact.workflows.seeds.seeds_to_run`)."""
     from ..backend import _petsc
     from ..conventions.grid import world
-    from ..io.store import check_writable
+    from ..io.lock import check_writable
     from ..workflows.seeds import (
         ensemble_record,
         mean_rms_height,

@@ -101,8 +101,8 @@ def _plot_ensemble_file(f: Any, path: str, out: str) -> None:
 
 def _check_plot_output(out: str, source: str) -> None:
     """The PNG ``out`` (given, or named after the file) can be written and is not ``source``."""
+    from ..io.lock import check_writable
     from ..io.paths import check_output
-    from ..io.store import check_writable
 
     check_output(out, [("the file to plot", source)])
     check_writable(out)
@@ -146,7 +146,7 @@ def _field(f: Any, args: argparse.Namespace) -> tuple[np.ndarray, str, str, int]
 def _missing_map(f: Any, path: str, name: str) -> str:
     """Why the file ``path`` (open as ``f``) has no map ``name``: an unfinished run keeps its
     maps apart until it ends, and a run without ``--fields`` has none of every step."""
-    from ..io.store import PARTIAL, is_partial, parts_path
+    from ..io.names import PARTIAL, is_partial, parts_path
 
     per_step = name in ("pressure", "gap", "contact")
     had_fields = json.loads(f.attrs.get("parameters", "{}")).get("fields", False)
@@ -182,7 +182,7 @@ def _plot_theory_file(f: Any, out: str) -> None:
 
 def run_experiment(args: argparse.Namespace) -> int:
     """``petsc-contact experiment``: Eq. C3 on a measured ``p(s)`` table."""
-    from ..io.store import check_writable
+    from ..io.lock import check_writable
     from ..io.tables import load_table
     from ..physics.theory import block_corrected_stiffness
 

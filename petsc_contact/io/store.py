@@ -35,32 +35,46 @@ damaged one are computed again.  Disk errors (full, read-only, I/O) raise
 kill is at most the step being computed.  (Power loss is another matter: nothing here calls
 ``fsync``.)
 
-A signal (``SIGTERM``, ``SIGINT``) handled by :func:`interrupt` is remembered as well as
-raised, so that one whose ``KeyboardInterrupt`` Python drops (raised inside a finaliser) still
-ends the run at the next :func:`check_interrupt`.
+The pieces this rests on have a module each: :mod:`~petsc_contact.io.names` (the files'
+names), :mod:`~petsc_contact.io.atomic` (a file written whole or not at all,
+:class:`StorageError`), :mod:`~petsc_contact.io.lock` (the output lock),
+:mod:`~petsc_contact.io.parts` (the parts' checksums) and
+:mod:`~petsc_contact.io.interrupts` (signals that end a run); their names stay importable
+from here.
 """
 
 from __future__ import annotations
 
 import errno
-import hashlib
 import json
 import os
 import re
 import shutil
-import socket
-import time
-from collections.abc import Iterator
-from contextlib import contextmanager, suppress
+from contextlib import suppress
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from ..conventions.grid import Grid
 from ..physics.continuation import Held
-from .provenance import file_digest, source_commit
+from .atomic import StorageError, _reason, atomic_h5, check_room, on_root, replaced, storage
+from .interrupts import check_interrupt, forget_interrupts, interrupt
+from .lock import OutputBusy, OutputLock, _now, check_writable
+from .names import (
+    HEIGHTS_PART,
+    LOCK,
+    PARTIAL,
+    PARTS,
+    STATE,
+    csv_path,
+    is_partial,
+    partial_path,
+    parts_path,
+    state_path,
+    step_part,
+)
+from .parts import PartsCheck, _steps, check_parts, part_problem
+from .provenance import source_commit
 from .schema import (
     COORDINATES,
     GEOMETRIES,
@@ -73,242 +87,49 @@ from .schema import (
     write_attributes,
 )
 
-PARTIAL = ".partial"  # a run's file until it ends: OUT.h5.partial, replaced by OUT.h5 at the end
-STATE = ".state.npz"
-PARTS = ".parts"
-LOCK = ".lock"
+if TYPE_CHECKING:
+    from ..conventions.grid import Grid
+
+__all__ = [  # the names of the modules this one was split into stay importable from it
+    "FIELD_CHUNK",
+    "HEIGHTS_PART",
+    "LOCK",
+    "PARTIAL",
+    "PARTS",
+    "RESUME_FREE",
+    "STATE",
+    "Finished",
+    "OutputBusy",
+    "OutputLock",
+    "PartsCheck",
+    "StepStore",
+    "StorageError",
+    "atomic_h5",
+    "check_interrupt",
+    "check_nothing_lost",
+    "check_parts",
+    "check_room",
+    "check_same_run",
+    "check_writable",
+    "committed_steps",
+    "csv_path",
+    "forget_interrupts",
+    "interrupt",
+    "is_partial",
+    "on_root",
+    "part_problem",
+    "partial_path",
+    "parts_path",
+    "read_resume",
+    "replaced",
+    "state_path",
+    "step_part",
+    "storage",
+    "tidy",
+    "write_csv",
+]
+
 FIELD_CHUNK = 256  # fields are stored in (1, 256, 256) chunks, gzip level 4 with shuffle
-HEIGHTS_PART = "heights.h5"  # the part with the heights (and a measured map's filled mask)
-
-
-def partial_path(path: str) -> str:
-    """The file a run with output ``path`` commits its finished steps to until it ends."""
-    return path + PARTIAL
-
-
-def is_partial(path: str) -> bool:
-    """Whether ``path`` names an unfinished run's file (see :func:`partial_path`)."""
-    return path.endswith(PARTIAL)
-
-
-def state_path(path: str) -> str:
-    """Where an unfinished run keeps the state it resumes from: beside ``path``."""
-    return path + STATE
-
-
-def csv_path(path: str) -> str:
-    """The step table beside a run's results: ``OUT.csv`` for ``OUT.h5``."""
-    return path.removesuffix(".h5") + ".csv"
-
-
-def parts_path(path: str) -> str:
-    """The folder of an unfinished run's bulky arrays (heights, fields)."""
-    return path + PARTS
-
-
-def step_part(step: int) -> str:
-    """The name of the part with step ``step``'s fields (counted from 1): ``step-000001.h5``."""
-    return f"step-{step:06d}.h5"
-
-
-_SIGNALLED: list[int] = []  # the signals :func:`interrupt` received
-
-
-def interrupt(signum: int, frame: Any) -> None:
-    """A handler of ``SIGTERM`` and ``SIGINT``: remember the signal, raise ``KeyboardInterrupt``.
-
-    Python prints and drops an exception raised inside a finaliser (``Exception ignored
-    in ...``); :func:`check_interrupt` raises it again at the next point that matters."""
-    _SIGNALLED.append(signum)
-    raise KeyboardInterrupt
-
-
-def check_interrupt() -> None:
-    """Raise ``KeyboardInterrupt`` when :func:`interrupt` was called, even where its own
-    exception was dropped."""
-    if _SIGNALLED:
-        raise KeyboardInterrupt
-
-
-def forget_interrupts() -> None:
-    """Forget the signals received (a process that runs several commands, between them)."""
-    _SIGNALLED.clear()
-
-
-class StorageError(OSError):
-    """Results could not be written (disk full, read-only, an I/O error)."""
-
-
-class OutputBusy(ValueError):
-    """Another run is writing the same output: ``output``, and ``holder``, the holder's own
-    words (process, host, since when)."""
-
-    def __init__(self, output: str, holder: str) -> None:
-        super().__init__(
-            f"'{output}' is being written by another run ({holder}): wait for it to end, or "
-            "choose another --output"
-        )
-        self.output, self.holder = output, holder
-
-    def __reduce__(self) -> tuple[type[OutputBusy], tuple[str, str]]:  # sent between ranks
-        return OutputBusy, (self.output, self.holder)
-
-
-def _reason(exc: BaseException) -> str:
-    """A write failure in words, with the system's reason when HDF5 buries it in its text."""
-    code = getattr(exc, "errno", None)
-    if not code:
-        found = re.search(r"errno = (\d+)", str(exc))
-        code = int(found.group(1)) if found else None
-    text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-    return os.strerror(code) if code else text
-
-
-@contextmanager
-def storage(what: str) -> Iterator[None]:
-    """Raise any write failure inside the block as :class:`StorageError` naming ``what``."""
-    try:
-        yield
-    except StorageError:
-        raise
-    except (OSError, RuntimeError) as exc:
-        code = getattr(exc, "errno", None) or errno.EIO
-        raise StorageError(code, f"cannot write {what}: {_reason(exc)}") from None
-
-
-@contextmanager
-def replaced(path: str) -> Iterator[str]:
-    """A temporary name to write ``path`` under; renamed over ``path`` when the block ends
-    without an error, removed when it fails."""
-    temporary = f"{path}.{os.getpid()}.tmp"
-    try:
-        yield temporary
-        os.replace(temporary, path)
-    except BaseException:
-        with suppress(OSError):
-            os.remove(temporary)
-        raise
-
-
-@contextmanager
-def atomic_h5(
-    path: str, large: bool = False, digests: dict[str, str] | None = None
-) -> Iterator[Any]:
-    """An HDF5 file written whole under a temporary name and renamed to ``path`` only when
-    complete; a failure to write raises :class:`StorageError` and leaves ``path`` as it was.
-
-    The file is made in memory and its bytes written by Python, so that a full disk fails
-    in Python's ``write``, never inside HDF5 (whose objects, left half-closed by a failed
-    write, crash the process when HDF5 closes them at exit).  A ``large`` file (a run's
-    assembled output) is written by HDF5 itself, after a check that the disk has room for
-    it (:func:`check_room`).  ``digests``, when given, gains the SHA-256 of the bytes written
-    under the file's name (not for a ``large`` file)."""
-    import io
-
-    import h5py
-
-    if large:
-        with storage(path), replaced(path) as temporary, h5py.File(temporary, "w") as f:
-            yield f
-        return
-    image = io.BytesIO()
-    with h5py.File(image, "w") as f:
-        yield f
-    data = image.getbuffer()
-    with storage(path), replaced(path) as temporary, open(temporary, "wb") as out:
-        out.write(data)
-    if digests is not None:
-        digests[os.path.basename(path)] = hashlib.sha256(data).hexdigest()
-
-
-def check_room(folder: str, needed: int, what: str) -> None:
-    """:class:`StorageError` (no space) unless ``folder``'s disk has ``needed`` bytes free,
-    with a margin of a tenth."""
-    stats = os.statvfs(folder)
-    free = stats.f_bavail * stats.f_frsize
-    if free < 1.1 * needed:
-        raise StorageError(
-            errno.ENOSPC,
-            f"cannot write {what}: {os.strerror(errno.ENOSPC)} ({needed / 2**20:.3g} MiB "
-            f"needed, {free / 2**20:.3g} MiB free)",
-        )
-
-
-def check_writable(path: str) -> None:
-    """Raise :class:`StorageError` with a one-line reason unless ``path`` can be created
-    (``ValueError`` for an empty name)."""
-    if not path:
-        raise ValueError("give an output file name (--output is empty)")
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise StorageError(errno.ENOENT, f"output folder '{folder}' does not exist")
-    if not os.access(folder, os.W_OK):
-        raise StorageError(errno.EACCES, f"output folder '{folder}' is not writable")
-    if os.path.isdir(path):
-        raise StorageError(errno.EISDIR, f"output path '{path}' is a folder")
-
-
-class OutputLock:
-    """The exclusive right to write an output, held for a whole run (``path + '.lock'``).
-
-    Taken before anything of the output is touched; :class:`OutputBusy` names the holder when
-    another process has it.  Only rank 0 of a run takes it.
-    """
-
-    def __init__(self, path: str) -> None:
-        self.output = path
-        self.path = path + LOCK
-        self.fd: int | None = None
-
-    def acquire(self) -> None:
-        import fcntl
-
-        while True:
-            with storage(self.path):
-                fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                holder = os.read(fd, 512).decode(errors="replace").strip() or "starting"
-                os.close(fd)
-                raise OutputBusy(self.output, holder) from None
-            try:  # the file we locked may have been removed by the holder we waited for
-                mine = os.fstat(fd).st_ino == os.stat(self.path).st_ino
-            except FileNotFoundError:
-                mine = False
-            if mine:
-                break
-            os.close(fd)
-        try:
-            with storage(self.path):
-                os.ftruncate(fd, 0)
-                os.write(
-                    fd, f"pid {os.getpid()} on {socket.gethostname()}, since {_now()}".encode()
-                )
-        except StorageError:  # a full disk: nothing is left behind
-            with suppress(OSError):
-                os.remove(self.path)
-            os.close(fd)
-            raise
-        self.fd = fd
-
-    def release(self) -> None:
-        if self.fd is not None:
-            with suppress(OSError):
-                os.remove(self.path)
-            os.close(self.fd)
-            self.fd = None
-
-    def __enter__(self) -> OutputLock:
-        self.acquire()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.release()
-
-
-def _now() -> str:
-    return time.strftime("%Y-%m-%dT%H:%M:%S%z")
 
 
 @dataclass
@@ -352,70 +173,6 @@ class Finished:
             {k: v for k, v in self.parts.items() if k in kept},
             check.maps,
         )
-
-
-@dataclass
-class PartsCheck:
-    """What the part files of an interrupted run can give (:func:`check_parts`)."""
-
-    steps: int  # the finished steps whose parts are sound: the steps after are computed again
-    maps: bool  # heights.h5 is missing or damaged: it is written again
-    problem: str = ""  # what is wrong and what is done about it, in words ("" when nothing)
-
-
-def check_parts(path: str, finished: Finished, maps: bool, fields: bool) -> PartsCheck:
-    """Check the parts of an interrupted run on output ``path`` against the checksums their
-    commits recorded: ``heights.h5`` where the run stores ``maps``, each finished step's
-    where it stores ``fields`` (up to the first that is missing or damaged); nothing when no
-    step is finished (the run starts afresh).
-
-    A part of a ``.partial`` of an earlier version, which records no checksums, is accepted
-    when every dataset in it can be read."""
-    folder, digests, steps = parts_path(path), finished.parts, finished.steps
-    if not steps:  # the run starts afresh
-        return PartsCheck(0, False)
-    said = []
-    heights = part_problem(folder, HEIGHTS_PART, digests) if maps else ""
-    if heights:
-        said.append(f"{heights}: it is written again from the run's heights")
-    for k in range(1, finished.steps + 1) if fields else ():
-        wrong = part_problem(folder, step_part(k), digests)
-        if wrong:
-            said.append(f"{wrong}: computing {_steps(k, steps)} again")
-            steps = k - 1
-            break
-    return PartsCheck(steps, bool(heights), "; ".join(said))
-
-
-def _steps(first: int, last: int) -> str:
-    """``step 4`` or ``steps 2 to 4``."""
-    return f"step {first}" if first == last else f"steps {first} to {last}"
-
-
-def part_problem(folder: str, name: str, digests: dict[str, str]) -> str:
-    """What is wrong with part ``name`` of ``folder`` ("" when nothing): missing, unreadable,
-    or its bytes are not those its commit recorded in ``digests`` (damaged, or another
-    step's).  Without a recorded checksum every dataset in it must be readable."""
-    path = os.path.join(folder, name)
-    if not os.path.isfile(path):
-        return f"{path} is missing"
-    try:
-        if name not in digests:
-            _read_whole(path)
-        elif file_digest(path) != digests[name]:
-            return f"{path} does not match the checksum its commit recorded (damaged or replaced)"
-    except Exception as exc:  # a truncated or foreign file: any reader failure
-        return f"{path} cannot be read ({_reason(exc)})"
-    return ""
-
-
-def _read_whole(path: str) -> None:
-    """Read every dataset of an HDF5 file: an error when one cannot be read."""
-    import h5py
-
-    with h5py.File(path, "r") as f:
-        for name in f:
-            np.asarray(f[name])
 
 
 def read_resume(path: str, parameters: dict[str, Any]) -> Finished:
@@ -959,28 +716,3 @@ def _make_folder(folder: str) -> None:
     if os.path.lexists(folder) and not os.path.isdir(folder):
         os.remove(folder)
     os.makedirs(folder, exist_ok=True)
-
-
-def on_root(comm: Any, work: Any) -> None:
-    """Run ``work`` on rank 0 of ``comm``; when it fails, every rank raises (the others a
-    :class:`StorageError`, or a ``RuntimeError`` naming rank 0's failure), so that no rank
-    waits for one that has stopped."""
-    failure: BaseException | None = None
-    if comm.rank == 0:
-        try:
-            work()
-        except Exception as exc:
-            failure = exc
-    if comm.size > 1:
-        said = comm.bcast(None if failure is None else _portable(failure), root=0)
-        if said is not None and failure is None:
-            failure = said
-    if failure is not None:
-        raise failure
-
-
-def _portable(exc: BaseException) -> BaseException:
-    """An exception every rank can raise (pickled through MPI)."""
-    if isinstance(exc, StorageError):
-        return StorageError(exc.errno, exc.strerror or str(exc))
-    return RuntimeError(f"rank 0 failed to write results: {type(exc).__name__}: {exc}")

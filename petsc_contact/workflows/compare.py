@@ -40,10 +40,12 @@ from ..backend import _petsc
 from ..backend.solve import BoundSolver, SolveInfo
 from ..geometries.periodic import PeriodicProblem
 from ..geometries.step import residual_verdict
+from ..io.atomic import atomic_h5, on_root, replaced, storage
+from ..io.names import partial_path
 from ..io.plot import plot_compare
 from ..io.results import group_name, labelled, scale
 from ..io.schema import COMPARE, annotate, write_attributes
-from ..io.store import atomic_h5, check_same_run, partial_path, replaced, storage
+from ..io.store import check_same_run
 from ..physics.observables import natural_residual
 from .periodic_sweep import sweep
 
@@ -325,7 +327,6 @@ def finished_solvers(
     ``overwrite``, none, that file removed (by rank 0); with neither, none, and
     ``ValueError`` where that file holds finished solvers."""
     from ..conventions.grid import world
-    from ..io.store import on_root
 
     partial = partial_path(path)
     if resume and overwrite:

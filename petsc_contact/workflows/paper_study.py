@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 
 from ..conventions.validation import log_range
+from ..io.names import partial_path
 from ..io.results import trusted
-from ..io.store import partial_path
 from ..physics.surface import psd_shape
 from .description import Run
 

@@ -13,9 +13,10 @@ import numpy as np
 
 from ..backend.stiffness import sweep_stiffness
 from ..conventions.grid import Grid, fundamental_wavevector, self_comm
+from ..io.atomic import atomic_h5
+from ..io.names import is_partial
 from ..io.results import trusted
 from ..io.schema import write_attributes
-from ..io.store import atomic_h5, is_partial
 from ..numerics.fft import make_fft
 from ..physics import theory
 from ..physics.surface import psd_shape, rms_of, self_affine

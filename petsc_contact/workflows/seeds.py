@@ -29,9 +29,12 @@ import numpy as np
 
 from ..conventions.grid import world
 from ..conventions.units import pressure_value
+from ..io.atomic import atomic_h5, on_root
+from ..io.lock import OutputLock
+from ..io.names import partial_path
 from ..io.results import labelled, scale, trusted
 from ..io.schema import ENSEMBLE, annotate, ensemble_entry, write_attributes
-from ..io.store import OutputLock, atomic_h5, check_same_run, on_root, partial_path, tidy
+from ..io.store import check_same_run, tidy
 from .description import Run
 from .ensemble import ensemble_statistics
 from .runner import Progress, locked, run_contact, swept

@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 
+from ..io.atomic import atomic_h5
 from ..io.results import labelled, scale
 from ..io.schema import COORDINATES, THEORY, Entry, annotate, write_attributes
-from ..io.store import atomic_h5
 from .predictions import Prediction
 
 

@@ -10,9 +10,6 @@ from typing import Any
 
 import numpy as np
 
-from ..conventions.validation import positive
-from ..io.schema import EXPERIMENT, annotate
-from ..io.store import atomic_h5
 from .common import InputError
 
 FIGURE_FILES = ("theory", "periodic ensemble")  # no maps: ``plot`` draws their figure
@@ -182,34 +179,12 @@ def _plot_theory_file(f: Any, out: str) -> None:
 
 def run_experiment(args: argparse.Namespace) -> int:
     """``petsc-contact experiment``: Eq. C3 on a measured ``p(s)`` table."""
-    from ..io.lock import check_writable
-    from ..io.tables import load_table
-    from ..physics.theory import block_corrected_stiffness
+    from ..workflows.experiment import squeeze_test
 
-    for name in ("modulus", "thickness"):
-        positive(f"--{name}", getattr(args, name))
-    table = load_table(args.table, 2)
-    check_writable(args.output)
-    p, disp = table[:, 0], table[:, 1]
-    k_star, k = block_corrected_stiffness(p, disp, args.modulus, args.thickness)
-
-    with atomic_h5(args.output) as f:
-        f["pressure"], f["displacement"] = p, disp
-        f["measured_stiffness"], f["stiffness"] = k_star, k
-        f.attrs.update(
-            geometry="experiment",
-            block_modulus=args.modulus,
-            thickness=args.thickness,
-            table=os.path.abspath(args.table),
-            formula="K* = dp/ds (2nd-order differences), K = K*/(1 - K* d/E')",
-        )
-        annotate(f, EXPERIMENT.__getitem__)
+    found = squeeze_test(args.table, args.modulus, args.thickness, args.output, args.plot)
     if not args.quiet:
         print(f"{'p':>12} {'s':>12} {'K*':>12} {'K':>12}")
-        for row in zip(p, disp, k_star, k, strict=True):
+        rows = (found.pressure, found.displacement, found.measured_stiffness, found.stiffness)
+        for row in zip(*rows, strict=True):
             print(" ".join(f"{v:>12.5g}" for v in row))
-    if args.plot:
-        from ..io.plot import plot_experiment
-
-        plot_experiment(args.plot, p, k_star, k)
     return 0

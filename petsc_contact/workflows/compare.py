@@ -47,6 +47,7 @@ from ..io.results import group_name, labelled, scale
 from ..io.schema import COMPARE, annotate, write_attributes
 from ..io.store import check_same_run
 from ..physics.observables import natural_residual
+from ..physics.surface import rms_of
 from .periodic_sweep import sweep
 
 REFERENCE_GATOL = 1e-12
@@ -278,6 +279,127 @@ def compare(
         if report is not None:
             report(traj)
     return reference.scalars(), out
+
+
+def check_comparison(
+    solvers: Sequence[str] | None,
+    time_limit: float,
+    stall_iterations: int,
+    extra_options: Sequence[str] = (),
+) -> list[str]:
+    """The solvers a comparison runs (:data:`DEFAULT_SOLVERS` for ``None``), after checking
+    them and its limits before any work (``ValueError`` in one line)."""
+    if not time_limit >= 0 or stall_iterations < 0:
+        raise ValueError("--time-limit and --stall-iterations must not be negative")
+    if "-tao_type" in extra_options:  # it would follow, and replace, every solver's own
+        raise ValueError("compare takes its solvers from --solvers, not -tao_type")
+    chosen = list(DEFAULT_SOLVERS) if solvers is None else list(solvers)
+    check_solvers(chosen)
+    return chosen
+
+
+@dataclass
+class Comparison:
+    """What :func:`compare_into` computed and wrote: the reference's scalars, one
+    :class:`Trajectory` per solver, and the table and plot beside the output (rank 0's;
+    ``""`` on the other ranks)."""
+
+    reference: dict[str, Any]
+    trajectories: list[Trajectory]
+    csv: str = ""
+    png: str = ""
+
+    @property
+    def converged(self) -> bool:
+        """Whether every solver converged (the same on every rank)."""
+        return all(t.converged for t in self.trajectories)
+
+
+def compare_into(
+    output: str,
+    scene: Any,
+    modulus: float,
+    pressure: float,
+    record: Callable[[dict[str, Any]], dict[str, Any]],
+    solvers: Sequence[str],
+    time_limit: float = 120.0,
+    stall_iterations: int = 1000,
+    extra_options: Sequence[str] = (),
+    resume: bool = False,
+    overwrite: bool = False,
+    report: Callable[[Trajectory], None] | None = None,
+) -> Comparison:
+    """:func:`compare` on a prepared ``scene`` at ``pressure``, durable solver by solver in
+    ``output``'s ``.partial`` file (the caller holds the output's lock), then written whole:
+    ``output``, its table and its plot (:func:`write_compare`).
+
+    ``record(realised)`` is the run record of the scene for the realised ``rms_height`` and
+    ``pressure``; the comparison's own parameters are added to it.  An interrupted
+    comparison goes on with ``resume`` or starts afresh with ``overwrite``
+    (:func:`finished_solvers`).  ``report(trajectory)`` is called with each finished
+    solver: first those an interrupted comparison kept, then each as it is committed.
+    """
+    grid, fft, heights = scene.grid, scene.fft, scene.heights
+    problem = PeriodicProblem(grid, fft, heights, modulus)
+    realised = {"rms_height": rms_of(grid, fft, heights), "pressure": pressure}  # collective
+    attrs = record(realised)
+    attrs["parameters"] |= {  # what the comparison is, beyond its scene
+        "command": "compare",
+        "pressure": pressure,
+        "solvers": list(solvers),
+        "time_limit": time_limit,
+        "stall_iterations": stall_iterations,
+    }
+    done = finished_solvers(output, attrs["parameters"], resume, overwrite)
+    if report is not None:
+        for trajectory in done:
+            report(trajectory)
+    committed = _Committer(output, attrs, list(done), grid.comm, report)
+    reference, trajectories = compare(
+        problem,
+        pressure,
+        solvers,
+        time_limit,
+        extra_options,  # after each solver's options file: the command line wins
+        stall_iterations=stall_iterations,
+        report=committed,
+        done=done,
+        reference_ready=committed.reference_ready,
+    )
+    result = Comparison(reference, trajectories)
+    if grid.comm.rank == 0:  # the verdicts come from reduced residuals: the same on every rank
+        result.csv, result.png = write_compare(output, reference, trajectories, attrs)
+    return result
+
+
+class _Committer:
+    """Commits each solver of a comparison to its ``.partial`` file as it finishes (rank 0
+    writes), then reports it."""
+
+    def __init__(
+        self,
+        output: str,
+        attributes: dict[str, Any],
+        finished: list[Trajectory],
+        comm: Any,
+        report: Callable[[Trajectory], None] | None,
+    ) -> None:
+        self.output, self.attributes, self.finished = output, attributes, finished
+        self.comm, self.report = comm, report
+        self.reference: dict[str, Any] = {}
+
+    def reference_ready(self, scalars: dict[str, Any]) -> None:
+        """Keep the reference's scalars, which every commit records."""
+        self.reference = scalars
+
+    def __call__(self, trajectory: Trajectory) -> None:
+        self.finished.append(trajectory)
+        on_root(
+            self.comm,
+            lambda: commit_partial(self.output, self.reference, self.finished, self.attributes),
+        )
+        if self.report is not None:
+            self.report(trajectory)
 
 
 def write_compare(

@@ -9,18 +9,24 @@ from __future__ import annotations
 
 import argparse
 import os
-from collections.abc import Iterator
+import time
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
 from ..conventions.validation import log_range
+from ..io.atomic import storage
+from ..io.lock import OutputBusy
 from ..io.names import partial_path
 from ..io.results import trusted
+from ..io.store import tidy
 from ..physics.surface import psd_shape
 from .description import Run
+
+T = TypeVar("T")
 
 PAPER_GRID = 8192
 RMS_SLOPE = 0.1
@@ -281,6 +287,168 @@ def finished_steps(path: str) -> int | None:
             return int(f["converged"].shape[0]) if "converged" in f else 0
     except (OSError, KeyError):
         return None
+
+
+def study_pieces(data: str, figure: str = "all", shrink: int = 1) -> list[Piece]:
+    """The pieces of ``figure`` (``1``, ``fig1``, ``hertz``, ...; all of them for ``all``),
+    the smaller grids first (``ValueError`` for an empty ``data``, one not a folder, a bad
+    ``shrink``)."""
+    if not data:
+        raise ValueError("give a data folder (--data is empty)")
+    if os.path.exists(data) and not os.path.isdir(data):
+        raise ValueError(f"--data '{data}' is not a folder")
+    name = f"fig{figure}" if figure.isdigit() else figure
+    todo = [p for p in pieces(shrink) if figure == "all" or name in (p.figure, *p.used_by)]
+    return sorted(todo, key=lambda p: p.grid)
+
+
+def study_plan(todo: Sequence[Piece], data: str) -> list[str]:
+    """One line per piece: its state (``done``, ``todo``, or the steps an unfinished piece
+    has kept, ``13/25``), its file and its command line."""
+    lines = []
+    for piece in todo:
+        path = piece.path(data)
+        if complete(path):
+            state = "done"
+        else:
+            kept = finished_steps(path)
+            state = "todo" if kept is None else f"{kept}/{piece.steps}"
+        lines.append(f"{state:>5}  {path}  petsc-contact {' '.join(piece.run.arguments())}")
+    return lines
+
+
+PIECE_ENDS = ("complete", "unconverged", "paused", "interrupted")
+"""How a piece's run ends, and so a study's (:func:`run_pieces`): every step converged, some
+did not, paused by its time limit, interrupted by a signal."""
+
+
+def run_pieces(
+    todo: Sequence[Piece],
+    data: str,
+    minutes: float,
+    run_piece: Callable[[Run], str],
+    say: Callable[[str], None],
+) -> str:
+    """Run the pieces ``todo`` into the folder ``data`` in order within ``minutes``; how the
+    study ends, one of :data:`PIECE_ENDS`.
+
+    ``run_piece(run)`` runs one piece (its output locked already) and says how it ended;
+    ``say(line)`` is given the study's progress on rank 0.  Every decision (a piece
+    complete, the time left) is rank 0's, shared with the other ranks.  A piece is run
+    inside its lock, taken once: a piece another run holds is left to it (the study then
+    ends ``paused``, unless a piece did not converge), one that became complete before the
+    lock was ours is skipped.  A file of the pieces that is not this study's is refused
+    (``ValueError``) before anything is computed."""
+    with storage(data):
+        os.makedirs(data, exist_ok=True)
+    return _Study(todo, data, run_piece, say).run(minutes)
+
+
+class _Study:
+    """One call of a study: its pieces, and those left to other runs or not converged."""
+
+    def __init__(
+        self,
+        todo: Sequence[Piece],
+        data: str,
+        run_piece: Callable[[Run], str],
+        say: Callable[[str], None],
+    ) -> None:
+        from ..conventions.grid import world
+
+        self.todo, self.data, self.run_piece, self.say = todo, data, run_piece, say
+        self.comm = world()
+        self.elsewhere: list[str] = []  # pieces other runs are writing
+        self.unconverged: list[str] = []  # complete, with steps that failed
+
+    def run(self, minutes: float) -> str:
+        """Each piece not complete yet, until the time is up; how the study ends."""
+        foreign = self.agreed(_foreign, self.data, self.todo)
+        if foreign:  # before anything is computed
+            raise ValueError(foreign)
+        began = time.perf_counter()
+        for number, piece in enumerate(self.todo, 1):
+            path = piece.path(self.data)
+            if self.agreed(complete, path):
+                tidy(path)  # what a writer killed after its last rename left
+                if not self.agreed(converged, path):
+                    self.unconverged.append(path)
+                continue
+            left = self.agreed(lambda: minutes - (time.perf_counter() - began) / 60)
+            if left <= 0:
+                done = f"{number - 1} of {len(self.todo)} pieces"
+                self.tell(f"# study: time is up after {done}; run it again to go on")
+                return "paused"
+            end = self.piece(piece, f"# study {number}/{len(self.todo)}: {path}", left)
+            if end in ("paused", "interrupted"):
+                return end
+            if end == "unconverged":
+                self.unconverged.append(path)
+        return self.conclude()
+
+    def piece(self, piece: Piece, heading: str, minutes: float) -> str:
+        """Run ``piece`` within ``minutes`` under its lock: how it ended, or ``"elsewhere"``
+        when another run holds it."""
+        from .runner import locked
+
+        path = piece.path(self.data)
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        run = piece.to_run(self.data, round(minutes, 3))
+        try:
+            with locked(path):
+                if self.agreed(complete, path):  # finished by another run meanwhile
+                    return "complete"
+                self.tell(heading)
+                return self.run_piece(run)
+        except OutputBusy as busy:
+            self.tell(f"{heading} is being written by another run ({busy.holder}); left to it")
+            self.elsewhere.append(path)
+            return "elsewhere"
+
+    def conclude(self) -> str:
+        """The study's last lines, and how it ends."""
+        count = len(self.todo)
+        if self.elsewhere:
+            self.tell(
+                f"# study: {len(self.elsewhere)} of {count} pieces are being written by other "
+                "runs; run the study again once they end to check that every piece is complete"
+            )
+        if self.unconverged:
+            self.tell(
+                f"# study: {len(self.unconverged)} of {count} pieces have steps that did not "
+                f"converge (flagged converged = False): {', '.join(self.unconverged)}"
+            )
+            return "unconverged"
+        if self.elsewhere:
+            return "paused"
+        self.tell(f"# study: all {count} pieces complete in {self.data}")
+        return "complete"
+
+    def agreed(self, decide: Callable[..., T], *args: Any) -> T:
+        """Rank 0's ``decide(*args)``, the same on every rank."""
+        if self.comm.size == 1:
+            return decide(*args)
+        agreed: T = self.comm.bcast(decide(*args) if self.comm.rank == 0 else None, root=0)
+        return agreed
+
+    def tell(self, line: str) -> None:
+        """A line of the study's progress, from rank 0 only."""
+        if self.comm.rank == 0:
+            self.say(line)
+
+
+def _foreign(data: str, todo: Sequence[Piece]) -> str:
+    """Why a file of the pieces ``todo`` in ``data`` (complete, or a ``.partial``) is not the
+    study's (:func:`check_piece`), or ``""``."""
+    for piece in todo:
+        path = piece.path(data)
+        for kept in (path, partial_path(path)):
+            try:
+                if os.path.exists(kept):
+                    check_piece(kept, piece.to_run(data))
+            except ValueError as exc:
+                return str(exc)
+    return ""
 
 
 def add_redraw_options(parser: argparse.ArgumentParser, figure: int, output: str) -> None:

@@ -360,7 +360,15 @@ def annotate(
 
 def schema_markdown() -> str:
     """``docs/output-schema.md``, generated from the tables above (a test keeps it current)."""
-    lines = [
+    lines = _introduction()
+    _frames(lines)
+    _dataset_tables(lines)
+    return "\n".join(lines).rstrip() + "\n"
+
+
+def _introduction() -> list[str]:
+    """The page's title and what every file records, while a run is under way and after."""
+    return [
         "# Output schema",
         "",
         "Generated from `petsc_contact/io/schema.py` by",
@@ -392,38 +400,47 @@ def schema_markdown() -> str:
         "",
     ]
 
-    def table(title: str, intro: str, entries: dict[str, Entry]) -> None:
-        lines.extend([f"## {title}", "", intro, "", "| dataset | units | description |"])
-        lines.append("| --- | --- | --- |")
-        lines.extend(f"| `{k}` | {e.units} | {e.description} |" for k, e in entries.items())
-        lines.append("")
 
-    _frames(lines)
-    table(
+def _table(lines: list[str], title: str, intro: str, entries: dict[str, Entry]) -> None:
+    """One section of the page: its ``title``, ``intro`` and a table of ``entries``."""
+    lines.extend([f"## {title}", "", intro, "", "| dataset | units | description |"])
+    lines.append("| --- | --- | --- |")
+    lines.extend(f"| `{k}` | {e.units} | {e.description} |" for k, e in entries.items())
+    lines.append("")
+
+
+def _dataset_tables(lines: list[str]) -> None:
+    """The datasets of each kind of file, one table each."""
+    _table(
+        lines,
         "coordinates",
         "Dimension scales of a run's file: `step` for every per-step dataset, `x` and `y` for "
         "the maps (`heights`, and the fields as `step x x x y`); of an ensemble's, `seed` and "
         "`step` (its tables `seed x step`); of a theory's, `step` and `wavevector`.",
         COORDINATES,
     )
-    table(
+    _table(
+        lines,
         "periodic and demo",
         "One entry per load step; fields with `--fields`; `stiffness` with `--stiffness`.",
         {k: e for k, e in GEOMETRIES["periodic"].items() if k not in COORDINATES},
     )
-    table(
+    _table(
+        lines,
         "punch",
         "One entry per approach or force.",
         {k: e for k, e in GEOMETRIES["punch"].items() if k not in COORDINATES},
     )
-    table(
+    _table(
+        lines,
         "ensemble summary",
         "Each quantity also has `_mean`, `_std`, `_sem` and `_count` over seeds. Attributes: "
         "`geometry`, `command_line`, `parameters` (the pressures resolved), `petsc_options`, "
         "`versions`, `mpi_size`, `seed_files`, `complete`.",
         ENSEMBLE,
     )
-    table(
+    _table(
+        lines,
         "compare",
         "One group per solver, one entry per TAO iteration (`iteration`, each group's "
         "dimension scale); root attribute `solvers` lists "
@@ -434,8 +451,14 @@ def schema_markdown() -> str:
         "`reference_natural_residual`, `reference_tolerance`, `reference_iterations`.",
         COMPARE,
     )
-    table("experiment", "Attributes: `block_modulus`, `thickness`, `table`, `formula`.", EXPERIMENT)
-    table(
+    _table(
+        lines,
+        "experiment",
+        "Attributes: `block_modulus`, `thickness`, `table`, `formula`.",
+        EXPERIMENT,
+    )
+    _table(
+        lines,
         "theory",
         "Persson's theory from a map's spectrum. Attributes: the run record (as above) and "
         "`u0`, `beta` (p = beta E* exp(-u_bar/u0)), `hurst_fit`, `fit_range`, "
@@ -444,7 +467,6 @@ def schema_markdown() -> str:
         "`crossover_pressure_paper`).",
         THEORY,
     )
-    return "\n".join(lines).rstrip() + "\n"
 
 
 def _names(keys: tuple[str, ...]) -> str:

@@ -99,6 +99,24 @@ def distributions(
         the force) on filled pixels.
     """
     inside = np.ones(contact.shape, bool) if inside is None else inside
+    pixels = int(grid.sum(np.count_nonzero(inside))[0])
+    s_edges = 2.0 ** np.arange(int(np.ceil(np.log2(max(grid.size, 2)))) + 2)
+    out: dict[str, Any] = {
+        **_histograms(grid, gap, pressure, contact, inside),
+        "patch_size_histogram": np.histogram(sizes, s_edges)[0].astype(np.int64),
+        "largest_patch": int(sizes.max(initial=0)),
+        "largest_patch_fraction": float(sizes.max(initial=0)) / pixels,
+    }
+    if filled is not None:
+        out |= _on_filled(grid, pressure, contact, filled)
+    return out
+
+
+def _histograms(
+    grid: Grid, gap: np.ndarray, pressure: np.ndarray, contact: np.ndarray, inside: np.ndarray
+) -> dict[str, Any]:
+    """The contact pixels' pressures and the open pixels' gaps (of those ``inside``), in
+    equal bins from zero to the largest (same on every rank)."""
     open_ = inside & ~contact
     p_top = grid.max(float(np.where(contact, pressure, 0.0).max(initial=0.0)))
     g_top = grid.max(float(np.where(open_, gap, 0.0).max(initial=0.0)))
@@ -108,27 +126,28 @@ def distributions(
     p_hist, p_edges = np.histogram(pressure[contact], PRESSURE_BINS, p_range)
     g_hist, g_edges = np.histogram(gap[open_], GAP_BINS, g_range)
     counts = grid.sum(*p_hist, *g_hist).astype(np.int64)
-    pixels = int(grid.sum(np.count_nonzero(inside))[0])
-    s_edges = 2.0 ** np.arange(int(np.ceil(np.log2(max(grid.size, 2)))) + 2)
-    out: dict[str, Any] = {
+    return {
         "pressure_histogram": counts[:PRESSURE_BINS],
         "pressure_bins": p_edges,
         "gap_histogram": counts[PRESSURE_BINS:],
         "gap_bins": g_edges,
-        "patch_size_histogram": np.histogram(sizes, s_edges)[0].astype(np.int64),
-        "largest_patch": int(sizes.max(initial=0)),
-        "largest_patch_fraction": float(sizes.max(initial=0)) / pixels,
     }
-    if filled is not None:
-        n_contact, on_filled, load, load_filled = grid.sum(
-            np.count_nonzero(contact),
-            np.count_nonzero(contact & filled),
-            np.where(contact, pressure, 0.0).sum(),
-            np.where(contact & filled, pressure, 0.0).sum(),
-        )
-        out["filled_contact_fraction"] = on_filled / n_contact if n_contact else 0.0
-        out["filled_load_fraction"] = load_filled / load if load > 0 else 0.0
-    return out
+
+
+def _on_filled(
+    grid: Grid, pressure: np.ndarray, contact: np.ndarray, filled: np.ndarray
+) -> dict[str, float]:
+    """The fractions of the contact pixels and of the force on ``filled`` pixels."""
+    n_contact, on_filled, load, load_filled = grid.sum(
+        np.count_nonzero(contact),
+        np.count_nonzero(contact & filled),
+        np.where(contact, pressure, 0.0).sum(),
+        np.where(contact & filled, pressure, 0.0).sum(),
+    )
+    return {
+        "filled_contact_fraction": on_filled / n_contact if n_contact else 0.0,
+        "filled_load_fraction": load_filled / load if load > 0 else 0.0,
+    }
 
 
 def _joined_sizes(touching: list[tuple[np.ndarray, np.ndarray]], sizes: np.ndarray) -> np.ndarray:

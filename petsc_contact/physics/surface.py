@@ -114,14 +114,7 @@ def self_affine(
         Heights, mean zero, shape ``grid.local_shape``.
     """
     check_spectrum_parameters(nyquist_ratio(grid), hurst, rolloff_ratio, cutoff_ratio)
-    if rms_height is not None and rms_slope is None:
-        target, slope = non_negative("rms target", rms_height), False
-    elif rms_slope is not None and rms_height is None:
-        target, slope = non_negative("rms target", rms_slope), True
-    else:
-        raise ValueError("give exactly one of rms_height and rms_slope")
-    if target > LARGEST_TARGET:  # its square, the spectrum's scale, would overflow
-        raise ValueError(f"rms target {target:g} is too large (at most {LARGEST_TARGET:g})")
+    target, slope = _rms_target(rms_height, rms_slope)
     q0 = grid.q0
     shape = psd_shape(
         wavevector_magnitude(grid, fft), q0, q0 * rolloff_ratio, q0 * cutoff_ratio, hurst
@@ -140,6 +133,20 @@ def self_affine(
         realised = rms_of(grid, fft, h, slope=slope)
         h *= target / realised
     return h
+
+
+def _rms_target(rms_height: float | None, rms_slope: float | None) -> tuple[float, bool]:
+    """The one rms target given, and whether it is the slope's (``ValueError`` unless exactly
+    one is given, not negative and not too large)."""
+    if rms_height is not None and rms_slope is None:
+        target, slope = non_negative("rms target", rms_height), False
+    elif rms_slope is not None and rms_height is None:
+        target, slope = non_negative("rms target", rms_slope), True
+    else:
+        raise ValueError("give exactly one of rms_height and rms_slope")
+    if target > LARGEST_TARGET:  # its square, the spectrum's scale, would overflow
+        raise ValueError(f"rms target {target:g} is too large (at most {LARGEST_TARGET:g})")
+    return target, slope
 
 
 def fourier_power(grid: Grid, fft: FFT, h: np.ndarray) -> np.ndarray:

@@ -173,59 +173,86 @@ class ArraySolver:
         The arguments mean what they mean for
         :meth:`~petsc_contact.backend.solve.BoundSolver.solve`.
         """
-        device, settings, xp = self.device, self.settings, self.device.xp
+        device, settings = self.device, self.settings
         x = device.asarray(x0, dtype=float).reshape(-1).copy()
         gatol = max(settings.gatol, gatol_floor)
-        counts = {"objgrad": 0}
-        first: list[float] = []
-        last = [np.nan]  # the objective at the last iteration
-
-        def gradient(xa: Any, g: Any) -> float:
-            counts["objgrad"] += 1
-            return objgrad(xa, g)
-
-        def watch(it: int, f: float, rnorm: float) -> bool:
-            if not first:
-                first.append(rnorm)
-            last[0] = f
-            if settings.monitor:
-                print(f"{it:4d} TAO,  Function value: {f:g},  Residual: {rnorm:g}", flush=True)
-            return bool(monitor is not None and monitor(it, f, rnorm))
-
+        watch = _Watch(objgrad, monitor, settings.monitor)
         pre = self.preconditioner
-        h0, p0 = self.hessian.applications, pre.applications
+        before = (self.hessian.applications, pre.applications)
         device.synchronize()
         start = time.perf_counter()
         cg = ConstrainedCG(
             x,
             lower,
             np.inf if upper is None else device.asarray(upper).reshape(-1),
-            gradient,
+            watch.gradient,
             self.hessian,
             pre.apply_array,
             pre if isinstance(pre, ContactPreconditioner) else None,
             ToleranceTest(gatol, settings.grtol, settings.max_it, watch),
             device.passes,
-            lambda: xp.empty_like(x),
+            lambda: device.xp.empty_like(x),
         )
         outcome = cg.run()
         device.synchronize()
         elapsed = time.perf_counter() - start
+        return x, self._report(cg, outcome, watch, elapsed, gatol, before)
+
+    def _report(
+        self,
+        cg: ConstrainedCG,
+        outcome: Any,
+        watch: _Watch,
+        elapsed: float,
+        gatol: float,
+        before: tuple[int, int],
+    ) -> SolveInfo:
+        """What a solve reports, as ``BoundSolver`` reports it: ``before`` are the Hessian's
+        and the preconditioner's applications at its start."""
         reason = USER if outcome.reason == MONITOR else outcome.reason
-        rnorm = float(np.sqrt(cg.allsum(float(xp.dot(cg.r, cg.r)))[0]))
-        info = SolveInfo(
+        rnorm = float(np.sqrt(cg.allsum(float(self.device.xp.dot(cg.r, cg.r)))[0]))
+        return SolveInfo(
             tao_type=TYPE_NAME,
             reason=reason,
             reason_code=REASON_CODES[reason],
             iterations=outcome.iterations,
-            objective_gradient_evaluations=counts["objgrad"],
-            hessian_applications=self.hessian.applications - h0,
-            preconditioner_applications=pre.applications - p0,
+            objective_gradient_evaluations=watch.evaluations,
+            hessian_applications=self.hessian.applications - before[0],
+            preconditioner_applications=self.preconditioner.applications - before[1],
             gradient_norm=rnorm,
             solve_time=elapsed,
             tolerance=float(gatol),
-            relative_tolerance=float(settings.grtol),
-            initial_gradient_norm=first[0] if first else np.inf,
-            objective=float(last[0]),
+            relative_tolerance=float(self.settings.grtol),
+            initial_gradient_norm=np.inf if watch.first is None else watch.first,
+            objective=float(watch.last),
         )
-        return x, info
+
+
+class _Watch:
+    """What a solve counts as it goes: the objective-gradient evaluations, the first
+    iteration's residual norm and the last objective; each iteration goes on to the caller's
+    ``monitor`` (and is printed when ``show``, as ``-tao_monitor`` prints TAO's)."""
+
+    def __init__(
+        self,
+        objgrad: Callable[[Any, Any], float],
+        monitor: Callable[[int, float, float], object] | None,
+        show: bool,
+    ) -> None:
+        self.objgrad, self.monitor, self.show = objgrad, monitor, show
+        self.evaluations = 0
+        self.first: float | None = None
+        self.last = np.nan
+
+    def gradient(self, x: Any, g: Any) -> float:
+        """The objective at ``x``, its gradient into ``g``, counted."""
+        self.evaluations += 1
+        return self.objgrad(x, g)
+
+    def __call__(self, it: int, f: float, rnorm: float) -> bool:
+        if self.first is None:
+            self.first = rnorm
+        self.last = f
+        if self.show:
+            print(f"{it:4d} TAO,  Function value: {f:g},  Residual: {rnorm:g}", flush=True)
+        return bool(self.monitor is not None and self.monitor(it, f, rnorm))

@@ -252,7 +252,6 @@ def compare(
     reference = reference_solve(problem, pressure)
     if reference_ready is not None:
         reference_ready(reference.scalars())
-    x0 = problem.initial_gap().reshape(-1) / problem.scale_length
     kept = {t.name: t for t in done}
     out = []
     for name in solvers:
@@ -260,25 +259,39 @@ def compare(
             out.append(kept[name])
             continue
         opts = solver_options(name) + list(extra_options)
-        traj = Trajectory(name, opts)
-        with _petsc.scoped_options(opts):
-            problem.set_pressure(pressure)
-            problem.start(x0)
-            with BoundSolver(problem.grid, problem.hessian, problem.preconditioner) as s:
-                recorder = _Recorder(
-                    problem, reference, pressure, traj, s, time_limit, stall_iterations
-                )
-                _, info = s.solve(
-                    problem.objective_gradient,
-                    x0,
-                    monitor=recorder,
-                    gatol_floor=problem.rounding_floor(pressure),
-                )
-        _conclude(traj, info, recorder)
+        traj = _trajectory(problem, reference, pressure, Trajectory(name, opts), time_limit,
+                           stall_iterations)  # fmt: skip
         out.append(traj)
         if report is not None:
             report(traj)
     return reference.scalars(), out
+
+
+def _trajectory(
+    problem: PeriodicProblem,
+    reference: Reference,
+    pressure: float,
+    traj: Trajectory,
+    time_limit: float,
+    stall_iterations: int,
+) -> Trajectory:
+    """Run one solver (its options in ``traj``) from first touch, recording ``traj``."""
+    x0 = problem.initial_gap().reshape(-1) / problem.scale_length
+    with _petsc.scoped_options(traj.options):
+        problem.set_pressure(pressure)
+        problem.start(x0)
+        with BoundSolver(problem.grid, problem.hessian, problem.preconditioner) as s:
+            recorder = _Recorder(
+                problem, reference, pressure, traj, s, time_limit, stall_iterations
+            )
+            _, info = s.solve(
+                problem.objective_gradient,
+                x0,
+                monitor=recorder,
+                gatol_floor=problem.rounding_floor(pressure),
+            )
+    _conclude(traj, info, recorder)
+    return traj
 
 
 def check_comparison(

@@ -28,8 +28,7 @@ from ..conventions.validation import check_finite, keywords_after_first
 from ..geometries.periodic import PeriodicProblem, verify
 from ..geometries.step import VERIFY_FACTOR, Step, collect, solve_step
 from ..io.topography import Heights, map_and_lengths
-from ..numerics.device import get_device
-from ..numerics.fft import make_fft
+from ..numerics.device import Device, get_device
 from ..physics.continuation import ConvergedStep, Held, LoadPath
 from ..solver.driver import ArraySettings, ArraySolver
 
@@ -186,44 +185,35 @@ def periodic_contact(
 ) -> list[Step]:
     """Solve the periodic contact of ``heights`` for each nominal pressure.
 
-    The parameters after ``heights`` are keywords, named as
-    :class:`~petsc_contact.workflows.description.Run`'s fields and the command line's options
-    (given by position they still work until 0.3.0, with a ``DeprecationWarning``).
+    The parameters after ``heights`` are keywords, named as ``Run``'s fields and the command
+    line's options (by position they work until 0.3.0, with a ``DeprecationWarning``).
 
     Parameters
     ----------
     heights
-        The full ``nx x ny`` height map in any form
-        (:func:`~petsc_contact.io.topography.as_topography`): an array (every rank passes the
-        same array or memory map), :func:`~petsc_contact.io.topography.read_topography`'s
-        result, a SurfaceTopography ``Topography`` or a file's path.  A map with sides of its
-        own gives them; its undefined points are refused (fill them first).
+        The full ``nx x ny`` height map in any form (``io.topography.as_topography``): an
+        array (the same on every rank, or a memory map), ``read_topography``'s result, a
+        SurfaceTopography ``Topography`` or a path; its sides are used, undefined points refused.
     length, modulus
         Cell sides ``(Lx, Ly)``, or the side ``Lx`` with square pixels (``L`` for a square
         map; optional for a map with sides), and the contact modulus ``E*``.
     pressures
-        Nominal pressures ``p0`` (same unit as ``modulus``), solved in order, warm-started;
-        one number is one load.
+        Nominal pressures ``p0`` (in ``modulus``'s unit), solved in order, warm-started; one
+        number is one load.
     options
-        PETSc options for this call only: ``["-tao_type", "bncg", "-tao_gatol", "1e-10"]``,
-        the same as one string, or ``{"tao_type": "bncg", "tao_gatol": 1e-10}``; options
-        nothing read (a misspelt name) are reported in a warning.
-    fields
-        Keep the local ``gap`` and ``pressure`` slabs of every step.
-    stiffness
-        Add the exact incremental stiffness ``stiffness`` to every step (see :func:`sweep`).
-    progress
-        Called as ``progress(index, total, scalars)`` after each step; ``index`` counts from
-        0 (the step numbered ``index + 1`` in the table and by ``--step``).
-    monitor
-        Called as ``monitor(iteration, f, gnorm)`` at every TAO iteration; ``True`` stops.
-    comm
-        mpi4py communicator (default ``COMM_WORLD``).
+        PETSc options for this call only: ``["-tao_type", "bncg"]``, ``"-tao_type bncg"`` or
+        ``{"tao_type": "bncg"}``; options nothing read (a misspelt name) are warned of.
+    fields, stiffness
+        Keep the local ``gap`` and ``pressure`` slabs of every step; add the exact
+        incremental ``stiffness`` to every step (see :func:`sweep`).
+    progress, monitor, comm
+        Called as ``progress(index, total, scalars)`` after each step (``index`` from 0: the
+        step numbered ``index + 1`` in the table and by ``--step``), as
+        ``monitor(iteration, f, gnorm)`` at every TAO iteration (``True`` stops); the mpi4py
+        communicator (default ``COMM_WORLD``).
     device
-        ``cpu`` (TAO, every solver type), ``gpu`` (the package's solver on CuPy) or
-        ``cpu-array`` (the GPU's code on NumPy); :mod:`petsc_contact.numerics.device`.
-        The array devices run on one rank without petsc4py, and read the options they
-        understand (:class:`~petsc_contact.solver.driver.ArraySettings`).
+        ``cpu`` (TAO), ``gpu`` (the package's solver on CuPy) or ``cpu-array`` (its code on
+        NumPy), on one rank without petsc4py, reading the options ``ArraySettings`` reads.
 
     Returns
     -------
@@ -233,18 +223,20 @@ def periodic_contact(
     array, sides, _ = map_and_lengths(heights, length)
     loads = check_pressures(np.atleast_1d(pressures).tolist())
     where = get_device(device)
-    if where.name != "cpu":
-        grid = grid_for(array.shape, sides, comm)
-        local = grid.scatter(array)
-        check_finite(grid, local)
-        problem = PeriodicProblem(grid, where.fft(grid), local, modulus)
-        solver = problem_solver(problem, _petsc.option_list(options))
+    on_host = where.name == "cpu"  # TAO, with this call's options in PETSc's database
+    with _petsc.scoped_options(options) if on_host else nullcontext():
+        problem = _periodic_problem(array, sides, modulus, comm, where)
+        solver = None if on_host else problem_solver(problem, _petsc.option_list(options))
         steps = sweep(problem, loads, fields, monitor, stiffness, solver=solver)
         return collect(reported(steps, len(loads), progress))
-    with _petsc.scoped_options(options):
-        grid = grid_for(array.shape, sides, comm)
-        local = grid.scatter(array)
-        check_finite(grid, local)
-        problem = PeriodicProblem(grid, make_fft(grid), local, modulus)
-        steps = sweep(problem, loads, fields, monitor, stiffness)
-        return collect(reported(steps, len(loads), progress))
+
+
+def _periodic_problem(
+    array: np.ndarray, sides: tuple[float, float], modulus: float, comm: Any, device: Device
+) -> PeriodicProblem:
+    """:func:`periodic_contact`'s problem: the map scattered on its grid, with the FFT of
+    ``device``."""
+    grid = grid_for(array.shape, sides, comm)
+    local = grid.scatter(array)
+    check_finite(grid, local)
+    return PeriodicProblem(grid, device.fft(grid), local, modulus)

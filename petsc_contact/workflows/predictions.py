@@ -178,22 +178,7 @@ def _persson(
     """Persson's integrals on the spectrum ``(q, c)``, with the fit's warnings, and the
     loads where the theory underflows (its mean gap below ``SMALLEST_GAP h_rms``) left out."""
     hurst, window, r2 = fit
-    if not HURST_RANGE[0] < hurst < HURST_RANGE[1]:
-        warnings.warn(
-            f"the fitted Hurst exponent H = {hurst:.3g} lies outside {HURST_RANGE[0]:g}..."
-            f"{HURST_RANGE[1]:g}: the spectrum is no power law of a self-affine surface between "
-            f"q = {window[0]:.3g} and {window[1]:.3g}; p_c, which needs H, is not meaningful",
-            TheoryWarning,
-            stacklevel=3,
-        )
-    elif r2 < GOOD_FIT:
-        warnings.warn(
-            f"the power law explains only R^2 = {r2:.2f} of log C(q) between q = "
-            f"{window[0]:.3g} and {window[1]:.3g} (a good fit: above {GOOD_FIT}): H = "
-            f"{hurst:.3g} and p_c are doubtful",
-            TheoryWarning,
-            stacklevel=3,
-        )
+    _check_fit(hurst, window, r2)
     beta, u0 = theory.persson_exponential(q, c)
     p_c = {  # every reading, the deprecated one too (files keep its name)
         name: theory.crossover_pressure(
@@ -202,24 +187,7 @@ def _persson(
         for name, reading in theory.READINGS.items()
     }
     p = np.asarray(pressures, dtype=float)
-    with np.errstate(all="ignore"):
-        gap = np.atleast_1d(theory.persson_mean_gap(p, q, c, modulus))
-        stiffness = np.atleast_1d(theory.persson_stiffness(p, q, c, modulus))
-    valid = np.isfinite(gap) & np.isfinite(stiffness) & (gap > SMALLEST_GAP * h_rms)
-    if not valid.any():
-        raise ValueError(
-            f"Persson's theory underflows at every load given (its mean gap below "
-            f"{SMALLEST_GAP:g} h_rms: contact all but complete): give smaller loads"
-        )
-    if not valid.all():
-        first = p[~valid][0]
-        warnings.warn(
-            f"Persson's mean gap falls below {SMALLEST_GAP:g} h_rms (contact all but complete) "
-            f"from p0 = {first:.3g}: the {np.count_nonzero(~valid)} loads from there are left "
-            "out, their values would be rounding",
-            TheoryWarning,
-            stacklevel=3,
-        )
+    gap, stiffness, valid = _resolved_loads(p, q, c, modulus, h_rms)
     return Prediction(
         wavevector=q,
         psd=c,
@@ -238,6 +206,56 @@ def _persson(
         spectrum=spectrum,
         crossover_pressure_paper=p_c["paper"],
     )
+
+
+def _check_fit(hurst: float, window: tuple[float, float], r2: float) -> None:
+    """A :class:`TheoryWarning` when the power law fitted to the spectrum (exponent ``hurst``
+    between the wavevectors ``window``, explaining ``r2`` of it) is no self-affine surface's
+    or explains the spectrum poorly."""
+    if not HURST_RANGE[0] < hurst < HURST_RANGE[1]:
+        warnings.warn(
+            f"the fitted Hurst exponent H = {hurst:.3g} lies outside {HURST_RANGE[0]:g}..."
+            f"{HURST_RANGE[1]:g}: the spectrum is no power law of a self-affine surface between "
+            f"q = {window[0]:.3g} and {window[1]:.3g}; p_c, which needs H, is not meaningful",
+            TheoryWarning,
+            stacklevel=4,
+        )
+    elif r2 < GOOD_FIT:
+        warnings.warn(
+            f"the power law explains only R^2 = {r2:.2f} of log C(q) between q = "
+            f"{window[0]:.3g} and {window[1]:.3g} (a good fit: above {GOOD_FIT}): H = "
+            f"{hurst:.3g} and p_c are doubtful",
+            TheoryWarning,
+            stacklevel=4,
+        )
+
+
+def _resolved_loads(
+    p: np.ndarray, q: np.ndarray, c: np.ndarray, modulus: float, h_rms: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Persson's mean gap and stiffness at the loads ``p`` on the spectrum ``(q, c)``, and
+    the loads where the theory does not underflow (its mean gap above ``SMALLEST_GAP
+    h_rms``): ``ValueError`` when there are none, a :class:`TheoryWarning` when some are
+    left out."""
+    with np.errstate(all="ignore"):
+        gap = np.atleast_1d(theory.persson_mean_gap(p, q, c, modulus))
+        stiffness = np.atleast_1d(theory.persson_stiffness(p, q, c, modulus))
+    valid = np.isfinite(gap) & np.isfinite(stiffness) & (gap > SMALLEST_GAP * h_rms)
+    if not valid.any():
+        raise ValueError(
+            f"Persson's theory underflows at every load given (its mean gap below "
+            f"{SMALLEST_GAP:g} h_rms: contact all but complete): give smaller loads"
+        )
+    if not valid.all():
+        first = p[~valid][0]
+        warnings.warn(
+            f"Persson's mean gap falls below {SMALLEST_GAP:g} h_rms (contact all but complete) "
+            f"from p0 = {first:.3g}: the {np.count_nonzero(~valid)} loads from there are left "
+            "out, their values would be rounding",
+            TheoryWarning,
+            stacklevel=4,
+        )
+    return gap, stiffness, valid
 
 
 @keywords_after_first("length", "modulus", "pressures")

@@ -110,12 +110,25 @@ class PunchSolver:
         its approach is lost in the tolerance, force 0) is not converged, and says why.
         """
         positive("force", force)
-        lo, hi = 0.0, np.inf
-        delta = force / self.k_flat_analytic
-        if self.last is not None:
-            d0, f0, k0 = self.last
-            lo, hi = (d0, hi) if f0 < force else (lo, d0)
-            delta = d0 + (force - f0) / k0 if k0 > 0 else delta
+        step, newton, iterations, solve_time = self._newton(force, fields, rtol, monitor, stiffness)
+        s = step.scalars
+        _check_reached(s, force)
+        s.update(
+            target_force=force,
+            force_balance=abs(s["force"] - force) / force,
+            newton_iterations=newton,
+            iterations=iterations,
+            solve_time=solve_time,
+        )
+        self.problem.accuracy().assess(s)
+        return step
+
+    def _newton(
+        self, force: float, fields: bool, rtol: float, monitor: Monitor | None, stiffness: bool
+    ) -> tuple[Step, int, int, float]:
+        """Newton's steps on the approach toward ``force`` (:meth:`at_force`): the last step,
+        the Newton steps taken, and the TAO iterations and solve time of them all."""
+        lo, hi, delta = self._newton_start(force)
         total_its, total_time = 0, 0.0
         for newton in range(1, MAX_NEWTON + 1):
             step = self.at_approach(delta, fields, monitor, stiffness)
@@ -131,30 +144,43 @@ class PunchSolver:
                 lo = delta
             else:
                 hi = delta
-            guess = delta + (force - f) / k if k > 0 else np.inf
-            if not lo < guess < hi:
-                guess = (
-                    2 * lo + self.problem.scale_length if not np.isfinite(hi) else 0.5 * (lo + hi)
-                )
-            delta = guess
+            delta = self._next_approach(delta, force - f, k, lo, hi)
         else:
             s["converged"] = False
             s["verification"] = f"force not reached in {MAX_NEWTON} Newton steps"
-        if s["converged"] and abs(s["force"] - force) > FORCE_RESOLVED * force:
-            s["converged"] = False
-            s["verification"] = (
-                f"force {s['force']:.6g} reached, not {force:.6g}: the approach is lost in the "
-                "tolerance on the gap (a load below what this grid resolves, or a loose tolerance)"
-            )
-        s.update(
-            target_force=force,
-            force_balance=abs(s["force"] - force) / force,
-            newton_iterations=newton,
-            iterations=total_its,
-            solve_time=total_time,
+        return step, newton, total_its, total_time
+
+    def _newton_start(self, force: float) -> tuple[float, float, float]:
+        """The bracket ``(lo, hi)`` of the approach that reaches ``force``, and the first
+        approach tried: the last converged step's tangent, else ``force / K_flat``."""
+        lo, hi = 0.0, np.inf
+        delta = force / self.k_flat_analytic
+        if self.last is not None:
+            d0, f0, k0 = self.last
+            lo, hi = (d0, hi) if f0 < force else (lo, d0)
+            delta = d0 + (force - f0) / k0 if k0 > 0 else delta
+        return lo, hi, delta
+
+    def _next_approach(self, delta: float, short: float, k: float, lo: float, hi: float) -> float:
+        """Newton's next approach from ``delta``, where the force is ``short`` of its target
+        and its derivative is ``k``; bisected in ``(lo, hi)`` (or past ``lo``, while no
+        approach above the root is known) when Newton leaves the bracket."""
+        guess = delta + short / k if k > 0 else np.inf
+        if lo < guess < hi:
+            return guess
+        return 2 * lo + self.problem.scale_length if not np.isfinite(hi) else 0.5 * (lo + hi)
+
+
+def _check_reached(scalars: dict[str, Any], force: float) -> None:
+    """A converged step whose force is further than :data:`FORCE_RESOLVED` from its target
+    ``force`` made not converged, saying why."""
+    if scalars["converged"] and abs(scalars["force"] - force) > FORCE_RESOLVED * force:
+        scalars["converged"] = False
+        scalars["verification"] = (
+            f"force {scalars['force']:.6g} reached, not {force:.6g}: the approach is lost in "
+            "the tolerance on the gap (a load below what this grid resolves, or a loose "
+            "tolerance)"
         )
-        self.problem.accuracy().assess(s)
-        return step
 
 
 def punch_sweep(
@@ -215,47 +241,30 @@ def punch_contact(
 ) -> list[Step]:
     """Press a rigid punch with face ``heights`` into a free elastic half-space.
 
-    The parameters after ``heights`` are keywords, named as
-    :class:`~petsc_contact.workflows.description.Run`'s fields and the command line's options
-    (given by position they still work until 0.3.0, with a ``DeprecationWarning``).
+    The parameters after ``heights`` are keywords, named as ``Run``'s fields and the command
+    line's options (by position they work until 0.3.0, with a ``DeprecationWarning``).
 
     Parameters
     ----------
-    heights
-        The full ``nx x ny`` height map of the punch face in any form
-        (:func:`~petsc_contact.io.topography.as_topography`): an array (every rank passes the
-        same array), :func:`~petsc_contact.io.topography.read_topography`'s result, a
-        SurfaceTopography ``Topography`` or a file's path.  A map with sides of its own gives
-        them; its undefined points are refused (fill them first).
-    length, modulus
-        Footprint sides ``(Lx, Ly)``, or the side ``Lx`` with square pixels (``Lp`` for a
-        square patch; optional for a map with sides), and the contact modulus ``E*``.
+    heights, length, modulus
+        The punch face's full ``nx x ny`` height map in any form, the footprint's sides
+        (``Lp`` for a square patch) and the contact modulus ``E*``, as for
+        :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact`.
     approaches, forces
         Exactly one of them: rigid approaches ``δ`` beyond first touch (displacement
         control), or total forces ``F`` (load control).  Solved in order, warm-started; one
         number is one load.
-    options
-        PETSc options for this call (a list, a string or a dict; see
-        :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact`).
-    fields
-        Keep the local ``gap`` and ``pressure`` slabs of every step.
+    options, fields, progress, monitor, comm
+        As for :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact`.
     stiffness
         Add the punch's exact interfacial stiffness to every step, as
         ``Run(geometry="punch", stiffness=True)`` does.
-    progress
-        Called as ``progress(index, total, scalars)`` after each step; ``index`` counts from
-        0 (the step numbered ``index + 1`` in the table and by ``--step``).
-    monitor
-        Called as ``monitor(iteration, f, gnorm)`` at every TAO iteration; ``True`` stops.
     footprint
         Optional full ``nx x ny`` boolean mask of the punch (e.g. a disk); default square.
     flat_stiffness, beta
         The flat-punch stiffness of paper Eq. 2 (``grid`` or ``analytic``) and its shape
-        factor (:class:`PunchProblem`).
-    comm
-        mpi4py communicator (default ``COMM_WORLD``).
-    flat
-        Deprecated name of ``flat_stiffness`` (a ``DeprecationWarning``; removed in 0.3.0).
+        factor (:class:`PunchProblem`); ``flat`` is the deprecated name of
+        ``flat_stiffness`` (a ``DeprecationWarning``; removed in 0.3.0).
 
     Returns
     -------
@@ -263,20 +272,42 @@ def punch_contact(
         One per load, in order; only the last keeps ``state``, the field to go on from.
     """
     flat_stiffness = _renamed_flat(flat, flat_stiffness)
+    values = _punch_loads(approaches, forces)
+    array, sides, _ = map_and_lengths(heights, length)
+    with _petsc.scoped_options(options):
+        problem = _punch_problem(array, sides, modulus, footprint, flat_stiffness, beta, comm)
+        with PunchSolver(problem) as solver:
+            steps = punch_sweep(solver, values, forces is not None, fields, monitor, stiffness)
+            return collect(reported(steps, len(values), progress))
+
+
+def _punch_loads(
+    approaches: float | Sequence[float] | None, forces: float | Sequence[float] | None
+) -> list[float]:
+    """The loads of :func:`punch_contact`: its approaches or its forces, exactly one of them
+    given, at least one load (``ValueError`` otherwise)."""
     given = approaches if approaches is not None else forces
     values = [float(v) for v in np.atleast_1d(given if given is not None else [])]
     if (approaches is None) == (forces is None) or not values:
         raise ValueError("give either approaches or forces, at least one of them")
-    array, sides, _ = map_and_lengths(heights, length)
-    with _petsc.scoped_options(options):
-        grid = grid_for(array.shape, sides, comm)
-        local = grid.scatter(array)
-        check_finite(grid, local)
-        mask = None if footprint is None else grid.scatter(footprint).astype(bool)
-        problem = PunchProblem(grid, local, modulus, mask, flat_stiffness, beta)
-        with PunchSolver(problem) as solver:
-            steps = punch_sweep(solver, values, forces is not None, fields, monitor, stiffness)
-            return collect(reported(steps, len(values), progress))
+    return values
+
+
+def _punch_problem(
+    array: np.ndarray,
+    sides: tuple[float, float],
+    modulus: float,
+    footprint: np.ndarray | None,
+    flat_stiffness: str,
+    beta: float,
+    comm: Any,
+) -> PunchProblem:
+    """:func:`punch_contact`'s problem: the map and the footprint scattered on its grid."""
+    grid = grid_for(array.shape, sides, comm)
+    local = grid.scatter(array)
+    check_finite(grid, local)
+    mask = None if footprint is None else grid.scatter(footprint).astype(bool)
+    return PunchProblem(grid, local, modulus, mask, flat_stiffness, beta)
 
 
 def _renamed_flat(flat: str | None, flat_stiffness: str) -> str:

@@ -91,9 +91,19 @@ def _reason_names(petsc: Any) -> dict[int, str]:
     return {getattr(reasons, k): k for k in dir(reasons) if k.isupper()}
 
 
+PACKAGE_SOLVERS = {DEFAULT_PYTHON_TYPE: "cg", "petsc_contact.backend.cg.PolonskyKeer": "pk"}
+"""The package's Python TAO types by their names: those ``compare`` and ``options/NAME.opts``
+give them, and runs record as ``tao_type``."""
+
+
 def _type_name(tao: Any, context: Any) -> str:
-    """TAO's type, with the class of a Python type (``python:PreconditionedCG``)."""
-    return f"python:{type(context).__name__}" if context is not None else tao.getType()
+    """What a step records as its ``tao_type``: TAO's type (``bncg``), the name of one of the
+    package's solvers (:data:`PACKAGE_SOLVERS`: ``cg``, ``pk``), or the class of another Python
+    type (``python:MyCG``)."""
+    if context is None:
+        return tao.getType()
+    kind = type(context)
+    return PACKAGE_SOLVERS.get(f"{kind.__module__}.{kind.__qualname__}", f"python:{kind.__name__}")
 
 
 def _libpetsc() -> ctypes.CDLL:

@@ -3,28 +3,65 @@
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from collections.abc import Sequence
 from contextlib import nullcontext
 from typing import Any
 
+from ..conventions.units import format_quantity
 from .common import EXIT_INTERRUPTED, EXIT_NOT_CONVERGED, EXIT_PAUSED, describe, say
 
 FILLED_LOAD = 0.1  # a share of the load on filled heights above this warns
 
-PERIODIC_COLUMNS = (("p0", "nominal_pressure", "{:>11.4e}"), ("mean_gap", "mean_gap", "{:>12.6e}"))
+PERIODIC_COLUMNS = (("p0", "nominal_pressure"), ("mean_gap", "mean_gap"))
 PUNCH_COLUMNS = (
-    ("approach", "approach", "{:>11.4e}"),
-    ("force", "force", "{:>12.6e}"),
-    ("K_tot", "total_stiffness", "{:>10.4e}"),
-    ("p0", "nominal_pressure", "{:>10.3e}"),
+    ("approach", "approach"),
+    ("force", "force"),
+    ("K_tot", "total_stiffness"),
+    ("p0", "nominal_pressure"),
 )
+"""The load columns of each geometry's table: (header, dataset), shown with an SI prefix."""
+STEP_COLUMNS = (
+    ("area", "area_fraction", "{:>9.5f}"),
+    ("its", "iterations", "{:>6d}"),
+    ("time_s", "solve_time", "{:>8.3f}"),
+    ("kkt", "kkt_residual", "{:>9.1e}"),
+)
+"""The columns after the load columns: (header, dataset, format)."""
+WIDTH = 11  # of a load column
+Columns = tuple[tuple[str, str, str], ...]  # (header, dataset, its unit in the run)
 
 
-def _header(columns: tuple[tuple[str, str, str], ...]) -> str:
-    widths = [len(fmt.format(0.0)) for _, _, fmt in columns]
-    head = " ".join(f"{title:>{w}}" for (title, _, _), w in zip(columns, widths, strict=True))
-    return f"{'step':>7} {head} {'area':>9} {'its':>6} {'time_s':>8} {'kkt':>9}  tao_reason"
+def _unit(key: str, record: dict[str, Any]) -> str:
+    """The unit of the dataset ``key`` in the run's output (``GPa``, ``um``, ``GPa*um^2``,
+    ``s``); ``""`` for a number, a count, and a unit the run does not have."""
+    from ..io.schema import ENTRIES, in_unit
+
+    entry = in_unit(ENTRIES[key], record["length_unit"], record["pressure_unit"])
+    symbolic = re.search(r"\b(length|pressure)\b", entry.units)
+    return "" if entry.units in ("1", "count") or symbolic else entry.units
+
+
+def _columns(geometry: str, record: dict[str, Any]) -> Columns:
+    """The load columns of ``geometry``'s table, with their units in the run ``record``."""
+    names = PUNCH_COLUMNS if geometry == "punch" else PERIODIC_COLUMNS
+    return tuple((title, key, _unit(key, record)) for title, key in names)
+
+
+def _legend(columns: Columns, record: dict[str, Any]) -> str:
+    """The line above the table: each column's dataset in the output, with its unit there."""
+    parts = []
+    for title, key, _ in (*columns, *STEP_COLUMNS):
+        unit = _unit(key, record)
+        parts.append(("" if title == key else f"{title} = ") + key + (f" [{unit}]" if unit else ""))
+    return "# the output's datasets [in its units]: " + ", ".join(parts)
+
+
+def _header(columns: Columns) -> str:
+    load = " ".join(f"{title:>{WIDTH}}" for title, _, _ in columns)
+    step = " ".join(f"{title:>{len(fmt.format(0))}}" for title, _, fmt in STEP_COLUMNS)
+    return f"{'step':>7} {load} {step}  tao_reason"
 
 
 def _flag(s: dict[str, Any]) -> str:
@@ -37,13 +74,10 @@ def _flag(s: dict[str, Any]) -> str:
     return ""
 
 
-def _row(i: int, total: int, s: dict[str, Any], columns: tuple[tuple[str, str, str], ...]) -> str:
-    flag = _flag(s)
-    values = " ".join(fmt.format(s[key]) for _, key, fmt in columns)
-    return (
-        f"{f'{i + 1}/{total}':>7} {values} {s['area_fraction']:>9.5f} {s['iterations']:>6d} "
-        f"{s['solve_time']:>8.3f} {s['kkt_residual']:>9.1e}  {s['tao_reason']}{flag}"
-    )
+def _row(i: int, total: int, s: dict[str, Any], columns: Columns) -> str:
+    load = " ".join(f"{format_quantity(s[key], unit):>{WIDTH}}" for _, key, unit in columns)
+    step = " ".join(fmt.format(s[key]) for _, key, fmt in STEP_COLUMNS)
+    return f"{f'{i + 1}/{total}':>7} {load} {step}  {s['tao_reason']}{_flag(s)}"
 
 
 def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
@@ -67,7 +101,7 @@ def execute(
         prepared = prepare(description, " ".join(["petsc-contact", *argv]))
         root = prepared.scene.grid.comm.rank == 0
         show = root and not args.quiet
-        columns = PUNCH_COLUMNS if description.geometry == "punch" else PERIODIC_COLUMNS
+        columns = _columns(description.geometry, prepared.record)
         if show:
             _introduce(args.command, description, prepared)
             print(_header(columns), flush=True)
@@ -98,30 +132,36 @@ def execute(
 
 
 def _introduce(command: str, description: Any, prepared: Any) -> None:
-    """The lines before the table: the map read, the problem, a resume."""
+    """The lines before the table: the map read, the problem, a resume, the columns."""
     from ..io.store import partial_path
 
-    scene, unit = prepared.scene, prepared.scene.resolved["length_unit"]
-    unit_p = f" {description.pressure_unit}" if description.pressure_unit else ""
-    if scene.reading:
-        print(f"# {scene.reading}", flush=True)
-    record = prepared.record
-    inside = record.get("rms_slope_inside", float("nan"))
-    slope = f"h'_rms = {record['rms_slope']:.4g}"
-    what = "face" if "parent_rms_slope" in record else "map"
-    if abs(inside - record["rms_slope"]) > 0.2 * record["rms_slope"]:  # NaN: never
-        slope += f" (the {what} taken as periodic; {inside:.4g} inside it)"
-    print(
-        f"# {command} {scene.grid.describe()}{' ' + unit if unit else ''}, "
-        f"E* = {description.modulus_value:g}{unit_p}, h_rms = {record['rms_height']:.4g}, "
-        f"{slope}{prepared.intro}",
-        flush=True,
-    )
+    if prepared.scene.reading:
+        print(f"# {prepared.scene.reading}", flush=True)
+    print(f"# {command} {_problem(description, prepared)}", flush=True)
     finished = prepared.resumable
     if finished.steps:
         total = len(prepared.loads)
         where = partial_path(description.output)
         print(f"# resuming {where} after {finished.steps} of {total} steps", flush=True)
+    columns = _columns(description.geometry, prepared.record)
+    print(_legend(columns, prepared.record), flush=True)
+
+
+def _problem(description: Any, prepared: Any) -> str:
+    """The grid, its sides, the modulus and the surface's rms height and slope, in words."""
+    grid, record, unit = prepared.scene.grid, prepared.record, prepared.record["length_unit"]
+    (nx, ny), (lx, ly) = grid.shape, grid.lengths
+    inside = record.get("rms_slope_inside", float("nan"))
+    slope = f"h'_rms = {record['rms_slope']:.4g}"
+    what = "face" if "parent_rms_slope" in record else "map"
+    if abs(inside - record["rms_slope"]) > 0.2 * record["rms_slope"]:  # NaN: never
+        slope += f" (the {what} taken as periodic; {inside:.4g} inside it)"
+    modulus = format_quantity(description.modulus_value, description.pressure_unit)
+    return (
+        f"{nx}x{ny} on {format_quantity(lx, unit)} x {format_quantity(ly, unit)}, "
+        f"E* = {modulus}, h_rms = {format_quantity(record['rms_height'], unit)}, "
+        f"{slope}{prepared.intro}"
+    )
 
 
 def _conclude(

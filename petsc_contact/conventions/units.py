@@ -183,7 +183,58 @@ def force_unit(pressure_unit: str | None, length_unit: str | None) -> str:
     return f"{pressure_unit}*{length_unit}^2"
 
 
-DISPLAY = ("km", "m", "mm", "um", "nm", "pm")
+PREFIXES = (("E", 1e18), ("P", 1e15), ("T", 1e12), ("G", 1e9), ("M", 1e6), ("k", 1e3),
+            ("", 1.0), ("m", 1e-3), ("u", 1e-6), ("n", 1e-9), ("p", 1e-12))  # fmt: skip
+"""The SI prefixes values are shown with (``u`` for micro, as the package spells ``um``)."""
+_COMPOUND = re.compile(r"^([^*/^\s]+)([*/])([^*/^\s]+)(\^2)?$")
+
+
+def _prefix(magnitude: float) -> tuple[float, str]:
+    """The factor and SI prefix that put ``magnitude`` (in an SI unit) at 1 to 999; none for
+    zero or a non-finite one."""
+    if magnitude == 0 or not np.isfinite(magnitude):
+        return 1.0, ""
+    for name, size in PREFIXES:
+        if magnitude >= size:
+            return size, name
+    return PREFIXES[-1][1], PREFIXES[-1][0]
+
+
+def si_unit(unit: str) -> tuple[float, str]:
+    """One ``unit`` in SI units and their name: ``um`` is ``(1e-6, "m")``, ``GPa`` is
+    ``(1e9, "Pa")``, ``mN`` is ``(1e-3, "N")``, and a run's compound units (:func:`force_unit`)
+    ``GPa*um^2`` (a force) is ``(1e-3, "N")``, ``GPa*um`` ``(1e3, "N/m")`` and ``GPa/um``
+    ``(1e15, "Pa/m")``.  ``ValueError`` for another unit."""
+    for table, name in ((METRES, "m"), (PASCALS, "Pa"), (NEWTONS, "N")):
+        if unit in table:
+            return table[unit], name
+    m = _COMPOUND.match(unit)
+    if m is None or m[1] not in PASCALS or m[3] not in METRES or (m[4] and m[2] == "/"):
+        raise ValueError(f"no SI form known for the unit '{unit}'")
+    pressure, length = PASCALS[m[1]], METRES[m[3]] ** (2 if m[4] else 1)
+    if m[2] == "/":
+        return pressure / length, "Pa/m"
+    return pressure * length, "N" if m[4] else "N/m"
+
+
+def format_quantity(value: float, unit: str | None, digits: int = 4) -> str:
+    """``value``, given in ``unit``, as people read it: in the SI unit with the prefix that
+    puts 1 to 999 in front, to ``digits`` significant digits.
+
+    ``format_quantity(1e-3, "GPa")`` is ``"1 MPa"``, ``format_quantity(5.623e-4, "m")``
+    ``"562.3 um"`` and ``format_quantity(2.5, "GPa*um^2")`` ``"2.5 mN"``.  A unit-free
+    value (``unit`` ``None`` or ``""``) is the number alone (``"0.0001"``); zero and
+    non-finite values keep the unprefixed SI unit.  ``ValueError`` for a unit
+    :func:`si_unit` does not know.
+    """
+    if not unit:
+        return f"{value:.{digits}g}"
+    scale, name = si_unit(unit)
+    si = value * scale
+    size, prefix = _prefix(abs(si))
+    if abs(float(f"{si / size:.{digits}g}")) >= 1e3 and prefix != PREFIXES[0][0]:
+        size, prefix = _prefix(1e3 * size)  # 999.96 rounds up to the next prefix
+    return f"{si / size:.{digits}g} {prefix}{name}"
 
 
 def display_unit(extent: float, unit: str | None) -> tuple[float, str]:
@@ -191,17 +242,11 @@ def display_unit(extent: float, unit: str | None) -> tuple[float, str]:
     front: ``2e-5`` m is shown as ``20 um`` (factor 1e6).  Unit-free lengths stay as they are."""
     if unit is None or not extent > 0:
         return 1.0, unit or ""
-    metres = extent * METRES[unit]
-    for name in DISPLAY:
-        if metres >= METRES[name] or name == DISPLAY[-1]:
-            return METRES[unit] / METRES[name], name
-    return 1.0, unit
+    size, prefix = _prefix(extent * METRES[unit])
+    return METRES[unit] / size, prefix + "m"
 
 
 def display_force(newtons: np.ndarray) -> tuple[np.ndarray, str]:
     """Forces in newtons shown with 1 to 999 in front: ``2e-3`` N as ``2 mN``."""
-    top = float(np.max(np.abs(newtons), initial=0.0))
-    for name in ("kN", "N", "mN", "uN", "nN"):
-        if top >= NEWTONS[name] or name == "nN":
-            return newtons / NEWTONS[name], name
-    return newtons, "N"
+    size, prefix = _prefix(float(np.max(np.abs(newtons), initial=0.0)))
+    return newtons / size, prefix + "N"

@@ -27,7 +27,7 @@ from .report import DEFAULT_GATOL, REASON_CODES, SolveInfo
 
 DEFAULT_MAX_IT = 5000
 STIFFNESS_RTOL = 1e-6  # as the PETSc path's -stiffness_ksp_rtol default
-TYPE_NAME = "python:PreconditionedCG"  # the algorithm, as the PETSc path names it
+TYPE_NAME = "cg"  # the algorithm, as the PETSc path records it (backend.solve.PACKAGE_SOLVERS)
 
 
 def _flag(value: str | None) -> bool:

@@ -5,14 +5,22 @@ from __future__ import annotations
 
 import argparse
 import re
+from dataclasses import fields
 
 from conftest import ROOT
 
 import petsc_contact
-from petsc_contact.cli.arguments import build_parser
+from petsc_contact.cli.arguments import DEMO, build_parser
+from petsc_contact.workflows.description import Run
+from petsc_contact.workflows.options import OPTIONS, SECTIONS, options_of, with_tables
 
 PACKAGE = ROOT / "petsc_contact"
 UNLISTED = {"__init__", "__main__"}  # modules of a folder the layout need not name
+OWN = {  # options of a command with a name the table describes for other commands
+    "plot": ("output", "sweep"),
+    "study": ("quiet",),
+    "experiment": ("modulus", "output", "plot"),
+}
 
 
 def _layout() -> tuple[dict[str, str], list[str]]:
@@ -99,3 +107,76 @@ def test_cli_docs_list_every_option_of_every_command():
             missing[name] = absent
         assert re.search(rf"^petsc-contact {name}\b", doc, flags=re.M), f"no usage of {name}"
     assert not missing, f"options not in docs/cli.md: {missing}"
+
+
+def test_cli_docs_option_tables_are_the_option_descriptions():
+    """docs/cli.md's option tables are those :data:`OPTIONS` renders (``python -m
+    petsc_contact.workflows.options docs/cli.md`` writes them), one per section."""
+    doc = (ROOT / "docs" / "cli.md").read_text()
+    for section in SECTIONS:
+        assert f"<!-- options: {section} -->" in doc, f"docs/cli.md has no {section} table"
+    assert with_tables(doc) == doc, (
+        "docs/cli.md's option tables differ from OPTIONS: run "
+        "python -m petsc_contact.workflows.options docs/cli.md"
+    )
+
+
+def test_every_run_field_is_an_option_with_its_default():
+    """Every field of ``Run`` is described in :data:`OPTIONS` (but the command and PETSc's
+    options) and every described field is Run's, spelt as Run.arguments() spells it, with
+    Run's default wherever a run command has it."""
+    described = {o.name for o in OPTIONS if o.field}
+    assert described == {f.name for f in fields(Run)} - {"geometry", "options"}
+    defaults = Run()
+    runs = {"periodic", "punch", "ensemble", "demo"}
+    for option in OPTIONS:
+        if option.field:
+            assert option.flags[0] == "--" + option.name.replace("_", "-"), option
+        if option.field and runs & set(option.commands):
+            assert option.default == getattr(defaults, option.name), option.name
+
+
+def test_each_command_has_the_options_described_for_it():
+    """Each command's parser has every option :data:`OPTIONS` gives it, with its flags, its
+    default (``demo``: the default scene's) and its help, and no other of the table's
+    names."""
+    commands = _commands()
+    for name, parser in commands.items():
+        actions = {a.dest: a for a in parser._actions}
+        for option in options_of(name):
+            action = actions[option.name]
+            assert tuple(action.option_strings) == option.flags, option
+            default = DEMO.get(option.name, option.default) if name == "demo" else option.default
+            assert action.default == default, (name, option.name)
+            help_ = option.help.replace("%", "%%").removesuffix(")")  # the default inside
+            assert (action.help or "").startswith(help_), (name, option.name)
+        others = {o.name for o in OPTIONS} - {o.name for o in options_of(name)}
+        assert not others & {a.dest for a in parser._actions if a.option_strings}.difference(
+            OWN.get(name, ())
+        ), name
+
+
+def test_the_punch_has_its_own_stiffness_and_alone_cuts_faces():
+    """``punch --stiffness`` is the interfacial stiffness of Eq. 2, not the periodic one, and
+    ``--cut-from`` is the punch's alone."""
+    commands = _commands()
+    stiffness = {name: next(a.help for a in commands[name]._actions if a.dest == "stiffness")
+                 for name in ("periodic", "punch")}  # fmt: skip
+    assert "Eq. 2" in stiffness["punch"] and "-dp0/du_bar" in stiffness["periodic"]
+    with_cut = [n for n, p in commands.items() if any(a.dest == "cut_from" for a in p._actions)]
+    assert with_cut == ["punch"]
+
+
+def test_compare_reads_pressures_and_the_former_pressure_with_a_warning(capsys):
+    """``compare --pressures P`` is the pressure; ``--pressure P`` still is, with a warning;
+    ``--solvers`` names its default solvers."""
+    from petsc_contact.workflows.compare import DEFAULT_SOLVERS
+
+    parser = build_parser()
+    line = ["compare", "--grid", "8", "--output", "c.h5"]
+    assert parser.parse_args([*line, "--pressures", "1e-3"]).pressure == 1e-3
+    assert capsys.readouterr().err == ""
+    assert parser.parse_args([*line, "--pressure", "2e-3"]).pressure == 2e-3
+    assert "--pressure is deprecated: use --pressures" in capsys.readouterr().err
+    solvers = next(o for o in OPTIONS if o.name == "solvers")
+    assert ",".join(DEFAULT_SOLVERS) in (solvers.shown_default or "")

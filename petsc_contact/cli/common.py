@@ -96,13 +96,13 @@ def command_outputs(args: argparse.Namespace) -> list[Named]:
 
 
 def describe(args: argparse.Namespace) -> Any:
-    """The :class:`~petsc_contact.workflows.description.Run` the command line describes (its
-    PETSc options are in the database already: the CLI gives them to PETSc at start)."""
-    from dataclasses import fields
-
+    """The :class:`~petsc_contact.workflows.description.Run` the command line describes: the
+    command's options that are Run's fields (:func:`~petsc_contact.workflows.options.run_fields`;
+    its PETSc options are in the database already: the CLI gives them to PETSc at start)."""
     from ..workflows.description import Run
+    from ..workflows.options import run_fields
 
-    given = {f.name: getattr(args, f.name) for f in fields(Run) if hasattr(args, f.name)}
+    given = {name: getattr(args, name) for name in run_fields(args.command)}
     return Run(**given, geometry="punch" if args.command == "punch" else "periodic")
 
 

@@ -4,7 +4,10 @@
 typed value; :func:`~petsc_contact.workflows.runner.run_contact` runs it, resume and pause
 included, and the ensemble and the paper's study are lists of runs.  Its field names are the
 command line's options (``rms_slope`` is ``--rms-slope``), so a file's ``parameters`` record
-is the description, and :meth:`Run.arguments` gives the command line back.
+is the description, and :meth:`Run.arguments` gives the command line back.  Each field is
+described once as an option, with its help, unit and this default, in
+:data:`~petsc_contact.workflows.options.OPTIONS`, from which the command line and
+docs/cli.md are made.
 
 A surface is generated (``grid``, ``hurst`` and ``rms_slope`` or ``rms_height``: paper Eq. 5)
 or given as ``heights``: a file of any supported format, a 2-D array, or a SurfaceTopography

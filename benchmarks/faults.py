@@ -92,7 +92,7 @@ SCENARIOS: list[Scenario] = [
      lambda a, b: same_result(a, b, True)),
     ("ensemble", f"ensemble {GEN.replace('--seed 3', '')} --seeds 0-2 --pressures 1e-3,1e-2",
      _same_ensemble),
-    ("compare", f"compare {GEN} --pressure 1e-3 --solvers cg,pk,bnls", _same_compare),
+    ("compare", f"compare {GEN} --pressures 1e-3 --solvers cg,pk,bnls", _same_compare),
     ("study", "study --figure 1 --shrink 128 --minutes 30", _same_study),
 ]  # fmt: skip
 
@@ -259,7 +259,7 @@ def slips(folder: Path) -> tuple[int, int, list[str]]:
 
     def compare_at_another_pressure() -> None:
         out = folder / "cmp.h5"
-        args = ["compare", *g, "--pressure", "1e-3", "--solvers", "cg,pk,bnls", "--quiet"]
+        args = ["compare", *g, "--pressures", "1e-3", "--solvers", "cg,pk,bnls", "--quiet"]
         cli(*args, "--output", str(out), killer="after:commit:2")
         before = Path(f"{out}.partial").read_bytes()
         r = cli(*[v if v != "1e-3" else "2e-3" for v in args], "--output", str(out), "--resume")
@@ -339,7 +339,7 @@ def bad_inputs(folder: Path) -> list[tuple[str, list[str], int]]:
         ("--output the heights file", ["periodic", *heights, "--pressures", "1e-3",
                                        "--output", str(folder / "flat.npy")], 2),
         ("--plot the --output", [*run, *out, "--plot", str(folder / "out.h5")], 2),
-        ("compare --solvers cg,cg", ["compare", *g, "--pressure", "1e-3", "--solvers", "cg,cg",
+        ("compare --solvers cg,cg", ["compare", *g, "--pressures", "1e-3", "--solvers", "cg,cg",
                                      *out], 2),
         ("theory --compare without --plot", ["theory", *heights, "--compare",
                                              str(folder / "cut.h5.partial"), *out], 2),
@@ -365,7 +365,7 @@ def bad_inputs(folder: Path) -> list[tuple[str, list[str], int]]:
         ("a seed of 2^70", ["periodic", *g[:-2], "--seed", str(2**70), "--pressures", "1e-3",
                             *out], 2),
         ("theory on a flat map", ["theory", "--heights", str(folder / "flat.npy"), *out], 2),
-        ("compare --solvers ''", ["compare", *g, "--pressure", "1e-3", "--solvers", ",", *out], 2),
+        ("compare --solvers ''", ["compare", *g, "--pressures", "1e-3", "--solvers", ",", *out], 2),
         ("a missing options file", [*run, *out, "-options_file", "/no/such.opts"], 2),
         ("heights x 1e300", ["periodic", "--heights", str(folder / "huge.npy"), "--pressures",
                              "1e-3", *out], 2),

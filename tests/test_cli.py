@@ -415,7 +415,7 @@ def test_every_dataset_is_described(tmp_path):
     runs = {
         "p.h5": ["periodic", *surface, "--pressures", "1e-3", "--stiffness", "--fields"],
         "u.h5": ["punch", *surface, "--forces", "1e-4", "--stiffness", "--fields"],
-        "c.h5": ["compare", *surface, "--pressure", "1e-3", "--solvers", "cg,tron"],
+        "c.h5": ["compare", *surface, "--pressures", "1e-3", "--solvers", "cg,tron"],
         "e.h5": ["ensemble", *surface, "--seeds", "1-2", "--sweep", "3,1e-4,1e-2", "--stiffness"],
     }
     for name, command in runs.items():

@@ -19,7 +19,7 @@ def test_compare_command(tmp_path):
         *SCENE,
         "--seed",
         "2",
-        *"--pressure 3e-3".split(),
+        *"--pressures 3e-3".split(),
         "--solvers",
         f"cg,pk,tron,{ROOT / 'options' / 'bnls.opts'}",
         "--output",
@@ -57,7 +57,7 @@ def test_each_solver_runs_with_its_options_file(tmp_path, monkeypatch):
     are recorded.  The repository's options/ is the package's."""
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "cmp.h5"
-    scene = "--grid 128 --hurst 0.7 --rms-slope 0.1 --seed 1 --pressure 1e-3".split()
+    scene = "--grid 128 --hurst 0.7 --rms-slope 0.1 --seed 1 --pressures 1e-3".split()
     r = cli("compare", *scene, "--solvers", "cg,tron,bqnls", "--output", str(out))
     assert r.returncode == 0, r.stdout + r.stderr
     with h5py.File(out) as f:
@@ -76,7 +76,7 @@ def test_the_command_line_wins_over_a_solvers_options_file(tmp_path):
     larger (the reference keeps its own 1e-12).  ``-tao_type`` is refused: the solvers are
     those of --solvers."""
     out = tmp_path / "cmp.h5"
-    args = (*SCENE, "--pressure", "3e-3", "--solvers", "bqnls", "--output", str(out))
+    args = (*SCENE, "--pressures", "3e-3", "--solvers", "bqnls", "--output", str(out))
     r = cli(*args, "-tao_gatol", "1e-4")
     assert r.returncode == 0, r.stdout + r.stderr
     with h5py.File(out) as f:
@@ -104,13 +104,13 @@ def test_solver_options(tmp_path, monkeypatch):
 def test_compare_time_limit_and_bad_solver(tmp_path):
     out = tmp_path / "cmp.h5"
     r = cli(
-        *SCENE, "--pressure", "3e-3", "--solvers", "bncg", "--time-limit", "0", "--output", str(out)
+        *SCENE, "--pressures", "3e-3", "--solvers", "bncg", "--time-limit", "0", "--output", str(out)
     )
     assert r.returncode == 1, r.stderr
     assert "time limit" in r.stdout
     with h5py.File(out) as f:
         assert not f["bncg"].attrs["converged"]
-    r = cli(*SCENE, "--pressure", "3e-3", "--solvers", "no/such.opts", "--output", str(out))
+    r = cli(*SCENE, "--pressures", "3e-3", "--solvers", "no/such.opts", "--output", str(out))
     assert r.returncode == 2 and "does not exist" in r.stderr
 
 
@@ -121,7 +121,7 @@ def test_compare_stall_limit(tmp_path):
     out = tmp_path / "cmp.h5"
     r = cli(
         *SCENE,
-        *"--pressure 3e-3".split(),
+        *"--pressures 3e-3".split(),
         "--solvers",
         "bncg",
         "--stall-iterations",
@@ -135,7 +135,7 @@ def test_compare_stall_limit(tmp_path):
         assert not bncg.attrs["converged"] and "stalled" in bncg.attrs["reason"]
         assert bncg.attrs["iterations"] < 50
         assert bncg["natural_residual"][-1] > 1e-6  # stopped far from its tolerance
-    r = cli(*SCENE, "--pressure", "3e-3", "--stall-iterations", "-1", "--output", str(out))
+    r = cli(*SCENE, "--pressures", "3e-3", "--stall-iterations", "-1", "--output", str(out))
     assert r.returncode == 2 and "must not be negative" in r.stderr
 
 
@@ -144,7 +144,7 @@ def test_compare_under_mpi_matches_serial(tmp_path):
     gap as in serial.  Both references are converged to 1e-12 p0 rms, which bounds their
     mean gaps' difference near 1e-12 relative (measured: 2e-16); 1e-10 leaves room for FFT
     rounding that differs between the serial and the distributed transform."""
-    args = (*SCENE, "--seed", "3", "--pressure", "3e-3", "--solvers", "cg")
+    args = (*SCENE, "--seed", "3", "--pressures", "3e-3", "--solvers", "cg")
     serial = cli(*args, "--output", str(tmp_path / "serial.h5"))
     parallel = cli(*args, "--output", str(tmp_path / "mpi.h5"), mpi=2, timeout=120)
     assert serial.returncode == 0 and parallel.returncode == 0, parallel.stderr

@@ -46,7 +46,7 @@ def one_line(stderr: str, *expected: str) -> None:
     [
         ["periodic", *SURFACE, "--sweep", "3,1e-4,1e-2", "--stiffness"],
         ["punch", *SURFACE, "--forces", "1e-4"],
-        ["compare", *SURFACE, "--pressure", "1e-3", "--solvers", "cg,tron"],
+        ["compare", *SURFACE, "--pressures", "1e-3", "--solvers", "cg,tron"],
         ["ensemble", *SURFACE, "--seeds", "1-2", "--sweep", "2,1e-4,1e-2"],
         ["theory", *SURFACE],
     ],

@@ -36,7 +36,7 @@ def files(tmp_path_factory, petsc):
     run_ensemble(run.with_(fields=False, output=out["periodic ensemble"]), [0, 1])
     for kind, extra in (
         ("theory", ()),
-        ("compare", ("--pressure", "1e-3", "--solvers", "cg,tron")),
+        ("compare", ("--pressures", "1e-3", "--solvers", "cg,tron")),
     ):
         r = cli(kind, *CLI_SURFACE, *extra, "--quiet", "--output", out[kind])
         assert r.returncode == 0, r.stderr

@@ -120,7 +120,7 @@ def test_lists_and_solvers(tmp_path: Path) -> None:
                 says="an empty item")  # fmt: skip
     refused(tmp_path, "ensemble", *SURFACE, "--pressures", "1e-3", "--seeds", "1,,2",
             "--output", out, says="an empty item")  # fmt: skip
-    compare = ("compare", *SURFACE, "--pressure", "1e-3", "--output", out)
+    compare = ("compare", *SURFACE, "--pressures", "1e-3", "--output", out)
     refused(tmp_path, *compare, "--solvers", "cg,cg", says="a solver named twice: cg")
     refused(tmp_path, *compare, "--solvers", "cg,,pk", says="an empty item")
 

@@ -94,7 +94,7 @@ def _env() -> dict[str, str]:
 def test_compare_keeps_its_finished_solvers(tmp_path):
     """A comparison killed after its second solver resumes with the first two kept (their
     trajectories as recorded) and runs only the third."""
-    command = "compare --grid 48 --hurst 0.7 --rms-slope 0.1 --pressure 1e-3 --solvers cg,pk,bnls"
+    command = "compare --grid 48 --hurst 0.7 --rms-slope 0.1 --pressures 1e-3 --solvers cg,pk,bnls"
     out = tmp_path / "cmp.h5"
     r = _killed("after:commit:2", command, out)
     assert r.returncode == -signal.SIGKILL, r.stderr
@@ -293,7 +293,7 @@ def test_bad_inputs_get_one_line_and_leave_nothing(tmp_path):
         "GiB available": ["periodic", "--grid", "200000", "--hurst", "0.7", "--rms-slope", "1"],
         "a seed is from 0": ["periodic", *gen, "--seed", str(2**70), "--pressures", "1e-3"],
         "flat": ["theory", "--heights", str(tmp_path / "flat.npy")],
-        "names no solver": ["compare", *gen, "--pressure", "1e-3", "--solvers", ","],
+        "names no solver": ["compare", *gen, "--pressures", "1e-3", "--solvers", ","],
         "does not exist (-options_file)": ["periodic", *gen, "-options_file", "/no/such.opts"],
         "heights up to": ["periodic", "--heights", str(tmp_path / "huge.npy")],
         "more than 1e+06 E*": ["periodic", *gen, "--pressures", "1e300"],

@@ -16,7 +16,7 @@ import pytest
 from conftest import ROOT, cli, python
 
 ENSEMBLE = "ensemble --grid 32 --rms-slope 0.1 --pressures 1e-3,1e-2 --seeds 1-3 --quiet"
-COMPARE = "compare --grid 32 --hurst 0.7 --rms-slope 0.1 --pressure 1e-3 --solvers cg,pk,bnls"
+COMPARE = "compare --grid 32 --hurst 0.7 --rms-slope 0.1 --pressures 1e-3 --solvers cg,pk,bnls"
 STUDY = "study --figure 1 --quiet"
 
 
@@ -85,7 +85,7 @@ def test_compare_resumes_only_its_own_solvers(tmp_path, petsc):
     assert _killed("after:commit:2", COMPARE, *at).returncode == -signal.SIGKILL  # cg, pk kept
     kept = partial.read_bytes()
     _refused(cli(*COMPARE.split(), *at), "cmp.h5.partial", "--resume", "--overwrite")
-    other = COMPARE.replace("--pressure 1e-3", "--pressure 2e-3")
+    other = COMPARE.replace("--pressures 1e-3", "--pressures 2e-3")
     _refused(cli(*other.split(), *at, "--resume"), "pressure")
     assert partial.read_bytes() == kept
     r = cli(*COMPARE.split(), *at, "--overwrite")

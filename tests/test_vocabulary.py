@@ -117,7 +117,7 @@ def test_a_run_records_its_solver_by_compares_name(heights, options, name):
 
 def test_compare_and_the_file_name_the_solver_alike(tmp_path):
     out = tmp_path / "cmp.h5"
-    r = cli("compare", *SCENE, "--pressure", "1e-2", "--solvers", "cg", "--output", str(out))
+    r = cli("compare", *SCENE, "--pressures", "1e-2", "--solvers", "cg", "--output", str(out))
     assert r.returncode == 0, r.stdout + r.stderr
     assert re.search(r"^\s*cg\s", r.stdout, re.MULTILINE)
     with open(tmp_path / "cmp.csv") as table:

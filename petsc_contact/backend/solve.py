@@ -233,6 +233,12 @@ def requested_type(petsc: Any, prefix: str | None = None) -> str:
 def check_tao_type(petsc: Any, prefix: str | None = None) -> str:
     """Raise ``ValueError`` unless ``-tao_type`` names a bound-constrained TAO type."""
     t = requested_type(petsc, prefix)
+    if t in PACKAGE_SOLVERS.values():
+        raise ValueError(
+            f"-tao_type {t} does not choose the package's {t} solver (TAO's own cg ignores the "
+            f"bounds): give -options_file options/{t}.opts (cg is also the default, with no "
+            "-tao_type)"
+        )
     if t not in BOUND_TYPES:
         raise ValueError(
             f"unknown or unbounded TAO type '{t}'; choose one of: " + ", ".join(BOUND_TYPES)

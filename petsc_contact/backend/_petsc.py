@@ -19,6 +19,8 @@ from contextvars import ContextVar
 from types import ModuleType
 from typing import Any, TypeAlias
 
+from ..conventions.warnings import UnusedOptions
+
 INSTALL_HINT = (
     "on Debian 12 run ./setup.sh (it compiles petsc4py against Debian's PETSc); elsewhere "
     "install petsc4py from conda-forge (README, 'Installing elsewhere')"
@@ -210,7 +212,9 @@ def scoped_options(args: OptionsArg, prefix: str = "") -> Iterator[ModuleType]:
         mine = [k for k, v in opts.getAll().items() if before.get(k) != v]
         unused = unused_options(mine)
         if unused:
-            warnings.warn(f"PETSc options never used: {' '.join(unused)}", stacklevel=3)
+            warnings.warn(
+                f"PETSc options never used: {' '.join(unused)}", UnusedOptions, stacklevel=3
+            )
         for name, value in opts.getAll().items():
             if name not in before:
                 opts.delValue(name)

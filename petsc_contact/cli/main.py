@@ -10,6 +10,7 @@ import warnings
 from collections.abc import Sequence
 from typing import Any
 
+from ..conventions.warnings import PetscContactWarning
 from ..io.schema import schema_markdown
 from ..io.store import StorageError, check_interrupt, forget_interrupts, interrupt
 from .arguments import build_parser, is_petsc_option, split_arguments
@@ -25,8 +26,9 @@ from .common import (
 
 
 def _show_warning(message: Warning | str, category: type[Warning], *args: Any, **kw: Any) -> None:
-    """The package's warnings (a doubtful map, unused PETSc options) as one line each."""
-    if category.__module__.startswith("petsc_contact") or category is UserWarning:
+    """The package's warnings (a doubtful map, load on filled heights, unused PETSc options:
+    :class:`~petsc_contact.conventions.warnings.PetscContactWarning`) as one line each."""
+    if issubclass(category, PetscContactWarning):
         say(str(message), "warning")
     else:
         print(warnings.formatwarning(message, category, *args[:2]), end="", file=sys.stderr)

@@ -12,8 +12,6 @@ from typing import Any
 from ..conventions.units import format_quantity
 from .common import EXIT_INTERRUPTED, EXIT_NOT_CONVERGED, EXIT_PAUSED, describe, say
 
-FILLED_LOAD = 0.1  # a share of the load on filled heights above this warns
-
 PERIODIC_COLUMNS = (("p0", "nominal_pressure"), ("mean_gap", "mean_gap"))
 PUNCH_COLUMNS = (
     ("approach", "approach"),
@@ -185,15 +183,6 @@ def _conclude(
             plot_punch(plot, table, units)
         else:
             plot_sweep(plot, table, description.modulus_value, result.record["rms_height"])
-    on_filled = [(s.get("filled_load_fraction", 0.0), i) for i, s in enumerate(table, 1)]
-    share, step = max(on_filled, default=(0.0, 0))
-    if share > FILLED_LOAD and root:
-        say(
-            f"{share:.0%} of the load rests on filled heights at step {step} "
-            f"(--fill-undefined {description.fill_undefined}): the answer depends on how they "
-            "were filled (the output's 'filled' map and filled_load_fraction)",
-            "warning",
-        )
     failed = [s for s in table if not s["converged"]]
     inaccurate = [s for s in table if s["converged"] and not s.get("accurate", True)]
     for steps, what, flag in (

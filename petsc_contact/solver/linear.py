@@ -13,10 +13,11 @@ import warnings
 from typing import Any
 
 from ..conventions.grid import Grid
+from ..conventions.warnings import PetscContactWarning
 from ..numerics.device import Device
 
 
-class StiffnessNotConverged(UserWarning):
+class StiffnessNotConverged(PetscContactWarning):
     """The held-set solve of an exact stiffness stopped short of its tolerance."""
 
 

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..conventions.grid import Grid, grid_for, self_comm
 from ..conventions.validation import keywords_after_first
+from ..conventions.warnings import PetscContactWarning
 from ..io.topography import Heights, map_and_lengths
 from ..numerics.fft import FFT, SerialFFT
 from ..physics import theory
@@ -37,7 +38,7 @@ SPECTRUM_2D = "2D map, radially averaged"
 SPECTRUM_1D = "1D profile, taken as isotropic (C_2D = C_1D Gamma(1+H)/(sqrt(pi) Gamma(1/2+H) q))"
 
 
-class TheoryWarning(UserWarning):
+class TheoryWarning(PetscContactWarning):
     """A prediction the theory can make only with reservations (a poor fit, underflow)."""
 
 

@@ -10,20 +10,28 @@ the paper's study do for each of their runs::
                              pressures=[1e5, 1e6], output="scan.h5"))
     result.to_dataframe()             # one row per step, the scalars of the output file
 
-:func:`prepare` makes the scene and the plan (the grid, the solver, the loads; every input
+:func:`prepare` makes the scene and the driver (the grid, the solver, the loads; every input
 checked before the output is touched); :meth:`Prepared.execute` solves the steps, commits
 each to the output (:mod:`petsc_contact.io.store`), and stops cleanly after ``stop_after``
-minutes.  Both geometries have one driver shape: a generator of steps from a list of loads.
+minutes.  Both geometries have one driver (:class:`~petsc_contact.workflows.drivers.Driver`):
+a generator of steps from a list of loads.
+
+The run's warnings (:class:`~petsc_contact.conventions.warnings.PetscContactWarning`: a
+doubtful map, much of the load on filled heights, a stiffness that did not converge) are
+given as Python warnings, and their texts kept in the result (:attr:`RunResult.warnings`) and
+the file (its ``warnings`` attribute, a JSON list).
 """
 
 from __future__ import annotations
 
+import json
 import os
 import time
 import warnings
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -31,6 +39,7 @@ import numpy as np
 from ..backend import _petsc
 from ..backend.solve import Monitor
 from ..conventions.grid import world
+from ..conventions.warnings import FilledLoad, ResumeWarning, recorded
 from ..geometries.step import FIELD_NAMES, Step
 from ..io.schema import FILE_RECORD
 from ..io.store import (
@@ -47,15 +56,13 @@ from ..io.store import (
 )
 from ..physics.continuation import Held
 from .description import Run
+from .drivers import Driver, Start, driver_for
+from .drivers import swept as swept  # where scripts and the CLI import it from
 from .periodic_sweep import Progress
 from .scene import Scene, prepare_scene
 
-Start = tuple[np.ndarray, Held | None] | None
-"""Where a resumed run's sweep goes on from: its last state (a local slab) and what the sweep
-held beside it (``None`` in a state file of an earlier version); ``None``: first touch."""
-
-
 PAUSED, COMPLETE = "paused", "complete"
+FILLED_LOAD = 0.1  # a share of the load on filled heights above this warns
 
 
 class RunInterrupted(KeyboardInterrupt):
@@ -79,6 +86,9 @@ class RunResult:
         The run record (the output file's root attributes).
     output
         The results file, when the run wrote one.
+    warnings
+        The texts of the run's warnings, once each (a resumed run's earlier ones included;
+        the file's ``warnings`` attribute; those of the map on rank 0 only).
     """
 
     status: str
@@ -86,6 +96,7 @@ class RunResult:
     steps: list[Step]
     record: dict[str, Any]
     output: str | None = None
+    warnings: list[str] = field(default_factory=list)
 
     @property
     def converged(self) -> bool:
@@ -107,16 +118,26 @@ class RunResult:
 
 @dataclass
 class Prepared:
-    """A run ready to solve: its scene, its loads and its solver (see :func:`prepare`)."""
+    """A run ready to solve: its scene, its driver (loads and solver) and its record, with
+    what an interrupted run left to go on from and the warnings given so far (see
+    :func:`prepare`)."""
 
     run: Run
     scene: Scene
-    loads: list[float]
+    driver: Driver
     record: dict[str, Any]
-    intro: str  # one line on the problem: full contact pressure, or K_flat
-    solve: Callable[[list[float], Start, Monitor | None], Iterator[Step]]
-    close: Callable[[], None] = lambda: None
     resumable: Finished = field(default_factory=lambda: Finished(0))
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def loads(self) -> list[float]:
+        """Every load of the run, in order."""
+        return self.driver.loads
+
+    @property
+    def intro(self) -> str:
+        """One line on the problem: the full contact pressure, or ``K_flat``."""
+        return self.driver.intro
 
     def execute(
         self, progress: Progress | None = None, monitor: Monitor | None = None
@@ -125,7 +146,16 @@ class Prepared:
 
         A signal (see :func:`~petsc_contact.io.store.interrupt`) is checked after each
         step's commit and before and after the output is assembled: wherever it came, the
-        run ends with :class:`RunInterrupted` saying what was kept."""
+        run ends with :class:`RunInterrupted` saying what was kept.  The run's warnings are
+        given as they come, and kept in the result and the file."""
+        with recorded(self.warnings):
+            status, table, steps = self._run(progress, monitor)
+        return RunResult(status, table, steps, self.record, self.run.output, list(self.warnings))
+
+    def _run(
+        self, progress: Progress | None, monitor: Monitor | None
+    ) -> tuple[str, list[dict[str, Any]], list[Step]]:
+        """:meth:`execute`'s work: the status, every step's scalars, this call's steps."""
         store, start = self._store()
         table = self.resumable.rows()
         steps: list[Step] = []
@@ -133,11 +163,14 @@ class Prepared:
             try:
                 status = self._solve(store, start, table, steps, progress, monitor)
             finally:
-                self.close()
-            if store is not None and status == COMPLETE:
-                check_interrupt()
-                store.finish()
-                check_interrupt()
+                self.driver.close()
+            if status == COMPLETE:
+                self._check_filled_load(table)
+                if store is not None:
+                    check_interrupt()
+                    self._note(store)
+                    store.finish()
+                    check_interrupt()
         except StorageError as exc:
             kept = store.abandon(exc.strerror or str(exc)) if store is not None else str(exc)
             raise StorageError(exc.errno, kept) from None
@@ -148,7 +181,7 @@ class Prepared:
             if store is not None and store.steps == 0:  # nothing finished: nothing is left
                 store.discard()
             raise
-        return RunResult(status, table, steps, self.record, self.run.output)
+        return status, table, steps
 
     def _solve(
         self,
@@ -165,11 +198,13 @@ class Prepared:
         began = time.perf_counter()
         limit = np.inf if run.stop_after is None else 60.0 * run.stop_after
         todo = self.loads[len(table) :]
-        for i, step in enumerate(self.solve(todo, start, monitor) if todo else (), len(table)):
+        steps_of = self.driver.solve(todo, start, monitor) if todo else iter(())
+        for i, step in enumerate(steps_of, len(table)):
             if store is not None:
                 fields: dict[str, Any] | None = (
                     {n: step.field(n) for n in FIELD_NAMES} if run.fields else None
                 )
+                self._note(store)
                 store.append(step.scalars, fields, state=step.state, held=step.held)
             check_interrupt()
             if steps:
@@ -182,6 +217,24 @@ class Prepared:
             if i + 1 < len(self.loads) and elapsed > limit:
                 return PAUSED
         return COMPLETE
+
+    def _check_filled_load(self, table: list[dict[str, Any]]) -> None:
+        """Warn (:class:`FilledLoad`, rank 0) when more than :data:`FILLED_LOAD` of the load
+        rests on filled heights at some step: the answer depends on how they were filled."""
+        on_filled = [(s.get("filled_load_fraction", 0.0), i) for i, s in enumerate(table, 1)]
+        share, step = max(on_filled, default=(0.0, 0))
+        if share > FILLED_LOAD and self.scene.grid.comm.rank == 0:
+            warnings.warn(
+                f"{share:.0%} of the load rests on filled heights at step {step} "
+                f"(--fill-undefined {self.run.fill_undefined}): the answer depends on how "
+                "they were filled (the output's 'filled' map and filled_load_fraction)",
+                FilledLoad,
+                stacklevel=2,
+            )
+
+    def _note(self, store: StepStore) -> None:
+        """The run's warnings so far in the record ``store`` writes next."""
+        store.attributes["warnings"] = list(self.warnings)
 
     def _store(self) -> tuple[StepStore | None, Start]:
         run, grid = self.run, self.scene.grid
@@ -200,6 +253,8 @@ class Prepared:
                 held = Held(held.scalars, tuple(grid.scatter(f) for f in held.fields))
             start = (grid.scatter(finished.state), held)
         store = StepStore.resume(run.output, grid, finished, self.record, fields, heights, filled)
+        earlier = json.loads(str(store.attributes.get("warnings", "")) or "[]")  # rank 0's
+        self.warnings[:0] = [w for w in earlier if w not in self.warnings]
         return store, start
 
 
@@ -209,15 +264,39 @@ def _maps(run: Run, scene: Scene) -> tuple[np.ndarray | None, np.ndarray | None]
     return (None if run.scalars_only else scene.heights), scene.filled
 
 
-def prepare(run: Run, command_line: str | None = None) -> Prepared:
-    """The scene and plan of ``run``, every input checked; the output is not touched yet.
+def prepare(run: Run, command_line: str | None = None, petsc: ModuleType | None = None) -> Prepared:
+    """The scene and driver of ``run``, every input checked; the output is not touched yet.
 
-    ``command_line`` is recorded (default: the arguments that describe ``run``)."""
+    Parameters
+    ----------
+    run
+        The run.
+    command_line
+        What to record as the command line (default: the arguments that describe ``run``).
+    petsc
+        ``petsc4py.PETSc``, initialised by the caller (default: initialised here).
+    """
     from ..backend.solve import DEFAULT_TYPE, requested_type
-    from ..physics.surface import rms_of
 
-    petsc = _petsc.init()
-    scene = prepare_scene(run, default_solver=requested_type(petsc) == DEFAULT_TYPE)
+    petsc = petsc or _petsc.init()
+    texts: list[str] = []
+    with recorded(texts):  # the map's warnings, what a resume computes again
+        scene = prepare_scene(run, default_solver=requested_type(petsc) == DEFAULT_TYPE)
+        driver = driver_for(run, scene)
+        try:
+            record = _record(run, command_line, petsc, scene, driver) | {"warnings": texts}
+            finished = _finished(run, scene, record)
+        except BaseException:
+            driver.close()
+            raise
+    return Prepared(run, scene, driver, record, finished, texts)
+
+
+def _record(
+    run: Run, command_line: str | None, petsc: ModuleType, scene: Scene, driver: Driver
+) -> dict[str, Any]:
+    """The run record of ``run`` (:func:`run_record`) on its scene, with its driver's loads."""
+    from ..physics.surface import rms_of
 
     grid, fft, heights = scene.grid, scene.fft, scene.heights
     realised = {
@@ -225,21 +304,19 @@ def prepare(run: Run, command_line: str | None = None) -> Prepared:
         "rms_slope": rms_of(grid, fft, heights, slope=True),
         **scene.realised,
     }
-    plan = _punch_plan(run, scene) if run.geometry == "punch" else _periodic_plan(run, scene)
-    loads, resolved, intro, solve, close, backend = plan
     line = command_line or " ".join(["petsc-contact", *run.arguments()])
-    record = run_record(run, line, petsc, realised, {**scene.resolved, **scene.record, **resolved})
-    record["fft_backend"] = backend
-    finished = Finished(0)
-    try:
-        if run.resume and run.output is not None:
-            finished = _resumable(run.output, run, scene, record["parameters"])
-        elif run.output is not None and not run.overwrite:
-            check_nothing_lost(run.output)
-    except BaseException:
-        close()
-        raise
-    return Prepared(run, scene, loads, record, intro, solve, close, finished)
+    resolved = {**scene.resolved, **scene.record, **driver.resolved}
+    return run_record(run, line, petsc, realised, resolved) | {"fft_backend": driver.backend}
+
+
+def _finished(run: Run, scene: Scene, record: dict[str, Any]) -> Finished:
+    """What an interrupted ``run`` left to go on from (none unless it resumes); without
+    ``resume`` or ``overwrite``, ``ValueError`` when its output holds finished steps."""
+    if run.resume and run.output is not None:
+        return _resumable(run.output, run, scene, record["parameters"])
+    if run.output is not None and not run.overwrite:
+        check_nothing_lost(run.output)
+    return Finished(0)
 
 
 def _resumable(output: str, run: Run, scene: Scene, parameters: dict[str, Any]) -> Finished:
@@ -252,7 +329,7 @@ def _resumable(output: str, run: Run, scene: Scene, parameters: dict[str, Any]) 
     mine = check_parts(output, finished, maps, run.fields) if comm.rank == 0 else None
     check: PartsCheck = comm.bcast(mine, root=0)
     if check.problem:
-        warnings.warn(check.problem, UserWarning, stacklevel=3)
+        warnings.warn(check.problem, ResumeWarning, stacklevel=4)
     return finished.redo(check, output)
 
 
@@ -277,8 +354,8 @@ def run_contact(
     command_line
         What to record as the command line (default: the arguments that describe ``run``).
     """
-    with locked(run.output), _petsc.scoped_options(list(run.options), run.options_prefix):
-        return prepare(run, command_line).execute(progress, monitor)
+    with locked(run.output), _petsc.scoped_options(list(run.options), run.options_prefix) as petsc:
+        return prepare(run, command_line, petsc).execute(progress, monitor)
 
 
 @contextmanager
@@ -303,133 +380,6 @@ def locked(path: str | None) -> Iterator[None]:
     finally:
         if lock is not None:
             lock.release()
-
-
-Plan = tuple[
-    list[float],
-    dict[str, Any],
-    str,
-    Callable[[list[float], Start, Monitor | None], Iterator[Step]],
-    Callable[[], None],
-    str,
-]
-
-
-def swept(
-    spec: Sequence[float | str],
-    low: float,
-    high: float,
-    value: Callable[[float | str], float] = float,
-) -> list[float]:
-    """The loads of a sweep ``(N,)`` or ``(N, MIN, MAX)``: ``N`` log-spaced, by default from
-    ``low`` to ``high``; ``value`` turns a bound given with a unit (``"1kPa"``) into the run's
-    units."""
-    from ..conventions.validation import log_range
-
-    if len(spec) == 3:
-        n, lo, hi = float(spec[0]), value(spec[1]), value(spec[2])
-        log_range("the sweep", n, (lo, hi))
-    else:
-        n, lo, hi = float(spec[0]), low, high
-    return [float(v) for v in np.geomspace(lo, hi, int(n))]
-
-
-def _periodic_plan(run: Run, scene: Scene) -> Plan:
-    from ..conventions.units import pressure_value
-    from ..geometries.periodic import PeriodicProblem
-    from .periodic_sweep import check_pressures, problem_solver, sweep
-
-    problem = PeriodicProblem(scene.grid, scene.fft, scene.heights, run.modulus_value)
-    problem.filled = scene.filled
-    p_full = problem.full_contact_pressure()
-    resolved: dict[str, Any] = {}
-    if run.sweep is not None:
-        unit = run.pressure_unit
-        pressures = swept(
-            run.sweep, 1e-4 * p_full, 0.9 * p_full, lambda v: pressure_value(v, unit, "--sweep")
-        )
-        resolved = {"pressures": pressures, "sweep": None}  # the file records the loads
-    elif run.pressures is not None:
-        unit = run.pressure_unit
-        pressures = check_pressures([pressure_value(p, unit, "--pressures") for p in run.pressures])
-        if any(isinstance(p, str) for p in run.pressures):
-            resolved = {"pressures_resolved": pressures}  # in the run's pressure unit
-    else:
-        raise ValueError("give the nominal pressures (--pressures) or a --sweep")
-    if run.approaches is not None or run.forces is not None:
-        raise ValueError("a periodic run takes --pressures or --sweep, not approaches or forces")
-    for p0 in pressures:
-        problem.check_pressure(p0)  # before the output is touched
-    solver = problem_solver(problem)
-
-    def solve(loads: list[float], start: Start, monitor: Monitor | None) -> Any:
-        state, held = start or (None, None)
-        return sweep(problem, loads, run.fields, monitor, run.stiffness, state, solver, held)
-
-    intro = f", full contact at p0 = {p_full:.4g}"
-    return pressures, resolved, intro, solve, solver.close, type(scene.fft).__name__
-
-
-def _disk(n: int) -> np.ndarray:
-    """The disk inscribed in an ``n x n`` footprint (pixel centres within radius n/2)."""
-    x = np.arange(n) + 0.5 - n / 2
-    return x[:, None] ** 2 + x[None, :] ** 2 < (n / 2) ** 2
-
-
-def _punch_plan(run: Run, scene: Scene) -> Plan:
-    from ..conventions.units import force_value, length_value, pressure_value
-    from ..conventions.validation import non_negative, positive
-    from ..geometries.punch import PHARR_BETA, PunchProblem
-    from .punch_sweep import PunchSolver, punch_sweep
-
-    grid = scene.grid
-    if run.footprint == "disk" and not grid.square:
-        raise ValueError("--footprint disk needs a square grid")
-    mask = grid.scatter(_disk(grid.shape[0])) > 0 if run.footprint == "disk" else None
-    beta = 1.0 if run.footprint == "disk" else PHARR_BETA
-    problem = PunchProblem(grid, scene.heights, run.modulus_value, mask, run.flat_stiffness, beta)
-    given = [run.forces, run.approaches, run.pressures, run.sweep]
-    if sum(v is not None for v in given) != 1:
-        raise ValueError("give one of --approaches, --forces, --pressures and --sweep")
-    by_force = run.forces is not None or run.pressures is not None
-    resolved: dict[str, Any] = {}
-    length_unit = scene.resolved["length_unit"] or None
-    if run.sweep is not None:
-        low, high = 0.01 * problem.scale_length, 3 * problem.scale_length
-        loads = swept(run.sweep, low, high, lambda v: length_value(v, length_unit, "--sweep"))
-        resolved = {"approaches": loads, "sweep": None}  # the file records the loads
-    elif run.forces is not None:
-        units = run.pressure_unit, length_unit
-        loads = [positive("--forces", force_value(f, *units, "--forces")) for f in run.forces]
-        resolved = {"forces_resolved": loads}  # in the run's force unit
-    elif run.pressures is not None:  # nominal pressure over the punch's face
-        face = float(
-            grid.sum(np.count_nonzero(mask) if mask is not None else grid.size / grid.comm.size)[0]
-        )
-        area = face * grid.pixel_area
-        unit = run.pressure_unit
-        loads = [
-            positive("--pressures", pressure_value(p, unit, "--pressures")) * area
-            for p in run.pressures
-        ]
-        resolved = {"forces_resolved": loads}  # the forces of those pressures
-    else:
-        loads = [
-            non_negative("--approaches", length_value(v, length_unit, "--approaches"))
-            for v in run.approaches  # type: ignore[union-attr]
-        ]
-    solver = PunchSolver(problem)
-
-    def solve(todo: list[float], start: Start, monitor: Monitor | None) -> Any:
-        state, held = start or (None, None)
-        return punch_sweep(solver, todo, by_force, run.fields, monitor, run.stiffness, state, held)
-
-    intro = (
-        f", K_flat = {solver.k_flat:.6g} ({run.flat_stiffness}; analytic "
-        f"{solver.k_flat_analytic:.6g})"
-    )
-    backend = type(problem.compliance.fft).__name__
-    return loads, resolved, intro, solve, solver.close, backend
 
 
 def run_record(

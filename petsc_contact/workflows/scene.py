@@ -3,8 +3,10 @@ put in one length unit), its grid, its FFT and this rank's slab of the heights.
 
 :func:`prepare_scene` checks a :class:`~petsc_contact.workflows.description.Run`'s surface
 and sizes before anything large is allocated (the memory estimate, the height scale), and
-says what it read.  Doubtful maps warn with :class:`MapWarning` (an implausible rms slope;
-opposite edges that do not match in a periodic run); the command line prints them.
+says what it read.  Doubtful maps warn with
+:class:`~petsc_contact.conventions.warnings.DoubtfulMap` (many heights filled, an implausible
+rms slope, opposite edges that do not match in a periodic run: :func:`check_map`); the run
+keeps their texts and the command line prints them.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import numpy as np
 from ..conventions.grid import Grid, grid_for, world
 from ..conventions.units import Lengths, factor, parse_lengths, unit_name
 from ..conventions.validation import check_finite
+from ..conventions.warnings import DoubtfulMap
 from ..io.topography import Topography, as_topography
 from ..numerics.fft import make_fft
 from .description import Run
@@ -26,10 +29,7 @@ SLOPE_LIMIT = 1e6  # heights this many times the cell's side are no contact surf
 FILLED_WARNING = 0.05  # a filled share above this warns: contact may sit on filled points
 FILE_ONLY = ("height_unit", "detrend", "fill_undefined", "channel", "override_metadata")
 GENERATION = ("grid", "hurst", "rms_slope", "rms_height")
-
-
-class MapWarning(UserWarning):
-    """A measured map that may not be what its user thinks (units, edges)."""
+MapWarning = DoubtfulMap  # its name before the package's warnings had one vocabulary
 
 
 @dataclass
@@ -201,7 +201,7 @@ def measured(run: Run, given: Lengths | None) -> tuple[np.ndarray, Lengths, dict
             f"{share:.1%} of the map's heights were undefined and are filled "
             f"({run.fill_undefined}): the contact may sit on filled points; the output's "
             "'filled' map and filled_contact_fraction say where and how much",
-            MapWarning,
+            DoubtfulMap,
             stacklevel=2,
         )
     full = detrend(full, spacing, run.detrend)
@@ -218,7 +218,7 @@ def measured(run: Run, given: Lengths | None) -> tuple[np.ndarray, Lengths, dict
         "filled_fraction": share,
         "filled": filled,  # the mask itself: the scene keeps it, the record does not
     }
-    inside = _warn(run, full, spacing)
+    inside = check_map(full, spacing, run.geometry == "periodic", run.detrend)
     record["rms_slope_inside"] = inside  # finite differences inside the map (rank 0)
     name = run.heights if isinstance(run.heights, str) else record["heights_reader"]
     how = f", filled ({run.fill_undefined})" if share > 0 else ""
@@ -278,9 +278,25 @@ def check_height_scale(heights: np.ndarray, length: Any) -> None:
         )
 
 
-def _warn(run: Run, full: np.ndarray, spacing: tuple[float, float]) -> float:
-    """Warn about implausible slopes and mismatched edges; the rms slope from finite
-    differences inside the map (rank 0; NaN on the others, which skip the passes)."""
+def check_map(
+    full: np.ndarray, spacing: tuple[float, float], periodic: bool, detrended: str = "none"
+) -> float:
+    """Warn (:class:`~petsc_contact.conventions.warnings.DoubtfulMap`) about an implausible
+    rms slope and, for a ``periodic`` contact, opposite edges that do not match; the rms slope
+    from finite differences inside the map (rank 0; NaN on the others, which skip the passes).
+
+    Parameters
+    ----------
+    full
+        The whole map (as prepared: filled, detrended, in the lengths' unit).
+    spacing
+        The pixel's sides.
+    periodic
+        Whether the contact takes the map as periodic (the edges then matter).
+    detrended
+        What was removed from the map (``none``, ``center``, ``slope``, ``curvature``): the
+        remedy named for mismatched edges.
+    """
     from ..physics.preparation import EDGE_MISMATCH_LIMIT, SLOPE_RANGE, edge_mismatch, rms_slope
 
     if world().rank != 0:  # only rank 0 speaks: the others skip the passes over the map
@@ -291,12 +307,12 @@ def _warn(run: Run, full: np.ndarray, spacing: tuple[float, float]) -> float:
             f"the map's rms slope (finite differences inside the map) is {slope:.3g}, outside "
             f"{SLOPE_RANGE[0]:g}..{SLOPE_RANGE[1]:g}: are the units right (--length, "
             "--height-unit)?",
-            MapWarning,
+            DoubtfulMap,
             stacklevel=3,
         )
     mismatch = edge_mismatch(full)
-    if run.geometry == "periodic" and mismatch > EDGE_MISMATCH_LIMIT:
-        done = run.detrend in ("slope", "curvature")
+    if periodic and mismatch > EDGE_MISMATCH_LIMIT:
+        done = detrended in ("slope", "curvature")
         remedy = (
             "the free-boundary geometry (petsc-contact punch) needs no periodicity"
             if done
@@ -305,9 +321,9 @@ def _warn(run: Run, full: np.ndarray, spacing: tuple[float, float]) -> float:
         )
         warnings.warn(
             f"the map's opposite edges differ by {mismatch:.3g} times its typical neighbour "
-            f"step{f' after --detrend {run.detrend}' if done else ''}, so treated as periodic it "
+            f"step{f' after --detrend {detrended}' if done else ''}, so treated as periodic it "
             f"has a step at its edges; {remedy}",
-            MapWarning,
+            DoubtfulMap,
             stacklevel=3,
         )
     return slope

@@ -1,0 +1,211 @@
+"""What :mod:`~petsc_contact.workflows.runner` runs for each geometry: a :class:`Driver`.
+
+A driver holds a run's loads (checked, in the run's units), what the run resolved of them
+for its record, one line on its problem, and a solver kept open for the whole sweep; it
+solves a list of loads as a generator of steps, from first touch or a resumed state::
+
+    driver = driver_for(run, scene)       # PeriodicDriver or PunchDriver
+    try:
+        for step in driver.solve(driver.loads, None, None):
+            ...
+    finally:
+        driver.close()
+
+:class:`PeriodicDriver` sweeps nominal pressures with continuation
+(:func:`~petsc_contact.workflows.periodic_sweep.sweep`), :class:`PunchDriver` presses the punch
+along approaches or forces (:func:`~petsc_contact.workflows.punch_sweep.punch_sweep`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any, Protocol
+
+import numpy as np
+
+from ..backend.solve import BoundSolver, Monitor
+from ..conventions.units import force_value, length_value, pressure_value
+from ..conventions.validation import log_range
+from ..geometries.periodic import PeriodicProblem
+from ..geometries.punch import PHARR_BETA, PunchProblem
+from ..geometries.step import Step
+from ..physics.continuation import Held
+from ..solver.driver import ArraySolver
+from .description import Run
+from .periodic_sweep import problem_solver, sweep
+from .punch_sweep import PunchSolver, punch_sweep
+from .scene import Scene
+
+Start = tuple[np.ndarray, Held | None] | None
+"""Where a resumed run's sweep goes on from: its last state (a local slab) and what the sweep
+held beside it (``None`` in a state file of an earlier version); ``None``: first touch."""
+
+
+class Driver(Protocol):
+    """A geometry's part of a run: its loads, its records, its solver.
+
+    Attributes
+    ----------
+    loads
+        Every load of the run, in order, in the run's units (checked).
+    resolved
+        What the run's record adds to its parameters (a sweep's loads, loads given with units).
+    intro
+        One line on the problem (``", full contact at p0 = ..."``), after the grid's.
+    backend
+        The FFT backend's name, for the record.
+    """
+
+    loads: list[float]
+    resolved: dict[str, Any]
+    intro: str
+    backend: str
+
+    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
+        """The steps of ``loads`` in order, from ``start`` (``None``: first touch); ``monitor``
+        sees every TAO iteration."""
+        ...
+
+    def close(self) -> None:
+        """Release the solver (its TAO, KSP and work Vecs)."""
+        ...
+
+
+def driver_for(run: Run, scene: Scene) -> Driver:
+    """The driver of ``run``'s geometry on ``scene``, its loads checked (``ValueError``)."""
+    return PunchDriver(run, scene) if run.geometry == "punch" else PeriodicDriver(run, scene)
+
+
+def swept(
+    spec: Sequence[float | str],
+    low: float,
+    high: float,
+    value: Callable[[float | str], float] = float,
+) -> list[float]:
+    """The loads of a sweep ``(N,)`` or ``(N, MIN, MAX)``: ``N`` log-spaced, by default from
+    ``low`` to ``high``; ``value`` turns a bound given with a unit (``"1kPa"``) into the run's
+    units."""
+    if len(spec) == 3:
+        n, lo, hi = float(spec[0]), value(spec[1]), value(spec[2])
+        log_range("the sweep", n, (lo, hi))
+    else:
+        n, lo, hi = float(spec[0]), low, high
+    return [float(v) for v in np.geomspace(lo, hi, int(n))]
+
+
+class PeriodicDriver:
+    """The periodic geometry's driver: nominal pressures swept with continuation.
+
+    The pressures (``run.pressures`` or a ``run.sweep`` up to ``0.9`` of full contact) are
+    checked against what the surface resolves (:meth:`PeriodicProblem.check_pressure`)."""
+
+    def __init__(self, run: Run, scene: Scene) -> None:
+        problem = PeriodicProblem(scene.grid, scene.fft, scene.heights, run.modulus_value)
+        problem.filled = scene.filled
+        p_full = problem.full_contact_pressure()
+        self.loads, self.resolved = _pressures(run, p_full)
+        if run.approaches is not None or run.forces is not None:
+            raise ValueError(
+                "a periodic run takes --pressures or --sweep, not approaches or forces"
+            )
+        for p0 in self.loads:
+            problem.check_pressure(p0)  # before the output is touched
+        self.run, self.problem = run, problem
+        self.solver: BoundSolver | ArraySolver = problem_solver(problem)
+        self.intro = f", full contact at p0 = {p_full:.4g}"
+        self.backend = type(scene.fft).__name__
+
+    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
+        """The sweep of ``loads`` (:func:`~petsc_contact.workflows.periodic_sweep.sweep`)."""
+        state, held = start or (None, None)
+        run = self.run
+        return sweep(
+            self.problem, loads, run.fields, monitor, run.stiffness, state, self.solver, held
+        )
+
+    def close(self) -> None:
+        """Release the solver."""
+        self.solver.close()
+
+
+def _pressures(run: Run, p_full: float) -> tuple[list[float], dict[str, Any]]:
+    """The nominal pressures of a periodic ``run`` (full contact at ``p_full``), in its
+    pressure unit, and what its record adds: a sweep's pressures, or those given with units."""
+    unit = run.pressure_unit
+    if run.sweep is not None:
+        low, high = 1e-4 * p_full, 0.9 * p_full
+        pressures = swept(run.sweep, low, high, lambda v: pressure_value(v, unit, "--sweep"))
+        return pressures, {"pressures": pressures, "sweep": None}  # the file records the loads
+    if run.pressures is None:
+        raise ValueError("give the nominal pressures (--pressures) or a --sweep")
+    pressures = [pressure_value(p, unit, "--pressures") for p in run.pressures]  # Run checked
+    if any(isinstance(p, str) for p in run.pressures):
+        return pressures, {"pressures_resolved": pressures}  # in the run's pressure unit
+    return pressures, {}
+
+
+def _disk(n: int) -> np.ndarray:
+    """The disk inscribed in an ``n x n`` footprint (pixel centres within radius n/2)."""
+    x = np.arange(n) + 0.5 - n / 2
+    return x[:, None] ** 2 + x[None, :] ** 2 < (n / 2) ** 2
+
+
+class PunchDriver:
+    """The punch's driver: approaches, or forces (``forces`` or nominal pressures over the
+    face) reached by Newton steps on the approach."""
+
+    def __init__(self, run: Run, scene: Scene) -> None:
+        grid = scene.grid
+        if run.footprint == "disk" and not grid.square:
+            raise ValueError("--footprint disk needs a square grid")
+        mask = grid.scatter(_disk(grid.shape[0])) > 0 if run.footprint == "disk" else None
+        beta = 1.0 if run.footprint == "disk" else PHARR_BETA
+        problem = PunchProblem(
+            grid, scene.heights, run.modulus_value, mask, run.flat_stiffness, beta
+        )
+        given = [run.forces, run.approaches, run.pressures, run.sweep]
+        if sum(v is not None for v in given) != 1:
+            raise ValueError("give one of --approaches, --forces, --pressures and --sweep")
+        self.by_force = run.forces is not None or run.pressures is not None
+        self.loads, self.resolved = _punch_loads(run, problem, scene.resolved["length_unit"])
+        self.run, self.solver = run, PunchSolver(problem)
+        self.intro = (
+            f", K_flat = {self.solver.k_flat:.6g} ({run.flat_stiffness}; analytic "
+            f"{self.solver.k_flat_analytic:.6g})"
+        )
+        self.backend = type(problem.compliance.fft).__name__
+
+    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
+        """The punch along ``loads`` (:func:`~petsc_contact.workflows.punch_sweep.punch_sweep`)."""
+        state, held = start or (None, None)
+        run = self.run
+        return punch_sweep(
+            self.solver, loads, self.by_force, run.fields, monitor, run.stiffness, state, held
+        )
+
+    def close(self) -> None:
+        """Release the solver."""
+        self.solver.close()
+
+
+def _punch_loads(
+    run: Run, problem: PunchProblem, length_unit: str
+) -> tuple[list[float], dict[str, Any]]:
+    """The punch's approaches or forces in the run's units (their signs checked by
+    :class:`Run`), and what its record adds: a sweep's approaches, or the forces of loads given
+    with units or as nominal pressures over the face."""
+    unit = length_unit or None
+    if run.sweep is not None:
+        low, high = 0.01 * problem.scale_length, 3 * problem.scale_length
+        loads = swept(run.sweep, low, high, lambda v: length_value(v, unit, "--sweep"))
+        return loads, {"approaches": loads, "sweep": None}  # the file records the loads
+    if run.forces is not None:
+        units = run.pressure_unit, unit
+        forces = [force_value(f, *units, "--forces") for f in run.forces]
+        return forces, {"forces_resolved": forces}  # in the run's force unit
+    if run.pressures is not None:  # nominal pressure over the punch's face
+        area = problem.footprint_pixels * problem.grid.pixel_area
+        forces = [pressure_value(p, run.pressure_unit, "--pressures") * area for p in run.pressures]
+        return forces, {"forces_resolved": forces}  # the forces of those pressures
+    approaches = [length_value(v, unit, "--approaches") for v in run.approaches or []]
+    return approaches, {}

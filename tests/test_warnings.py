@@ -1,0 +1,94 @@
+"""The library warns, the command line prints: a map with filled heights and a tilted map
+give the same warnings through ``run_contact`` and ``petsc-contact``, each a
+``PetscContactWarning``, kept in the result and in the file's ``warnings`` attribute."""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import h5py
+import numpy as np
+import pytest
+from conftest import cli
+from test_measured import _map
+
+from petsc_contact import Run, run_contact
+from petsc_contact.conventions.warnings import DoubtfulMap, FilledLoad, PetscContactWarning
+
+PREFIX = "petsc-contact: warning: "
+
+
+def _filled(tmp_path):
+    """30% of the heights undefined, scattered: filled, they carry their share of the load."""
+    h = _map()
+    h[np.random.default_rng(1).random(h.shape) < 0.3] = np.nan
+    np.save(tmp_path / "holes.npy", h)
+    return tmp_path / "holes.npy", {"fill_undefined": "harmonic", "pressures": [3e-3, 1e-2]}
+
+
+def _tilted(tmp_path):
+    """A map on a slope: its opposite edges differ, a step at the seam of a periodic run."""
+    h = _map()
+    np.save(tmp_path / "tilted.npy", h + 5e-2 * np.arange(h.shape[0])[:, None] / h.shape[0])
+    return tmp_path / "tilted.npy", {"pressures": [1e-3]}
+
+
+def _arguments(options):
+    """The command line's spelling of ``Run`` keywords."""
+    out = []
+    for name, value in options.items():
+        given = ",".join(f"{v:g}" for v in value) if isinstance(value, list) else value
+        out += [f"--{name.replace('_', '-')}", given]
+    return out
+
+
+def _recorded(path):
+    with h5py.File(path) as f:
+        return json.loads(f.attrs["warnings"])
+
+
+@pytest.mark.parametrize(
+    ("make", "kinds", "words"),
+    [
+        (_filled, [DoubtfulMap, FilledLoad], ["heights were undefined", "rests on filled"]),
+        (_tilted, [DoubtfulMap], ["opposite edges differ"]),
+    ],
+)
+def test_both_doors_give_the_same_warnings(tmp_path, make, kinds, words):
+    path, options = make(tmp_path)
+    with pytest.warns(PetscContactWarning) as caught:
+        result = run_contact(Run(heights=str(path), output=str(tmp_path / "lib.h5"), **options))
+    assert [w.category for w in caught] == kinds
+    assert result.warnings == [str(w.message) for w in caught]
+    assert all(word in text for word, text in zip(words, result.warnings, strict=True))
+    assert result.record["warnings"] == result.warnings == _recorded(tmp_path / "lib.h5")
+
+    out = ["--output", str(tmp_path / "cli.h5"), "--quiet"]
+    r = cli("periodic", "--heights", str(path), *_arguments(options), *out)
+    assert r.returncode == 0, r.stderr
+    said = [line.removeprefix(PREFIX) for line in r.stderr.splitlines()]
+    assert said == result.warnings, r.stderr  # one line each, nothing else
+    assert _recorded(tmp_path / "cli.h5") == result.warnings
+
+
+def test_a_map_given_as_an_array_warns_the_same(tmp_path):
+    """The tilted map as an array with its sides: the same warning as from its file, which
+    the result keeps whatever the filters say of showing it."""
+    path, options = _tilted(tmp_path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        from_file = run_contact(Run(heights=str(path), **options))
+    with pytest.warns(DoubtfulMap):
+        given = run_contact(Run(heights=np.load(path), length=1.0, **options))
+    assert given.warnings == from_file.warnings and len(given.warnings) == 1
+
+
+def test_package_warnings_can_be_errors(tmp_path):
+    """One class for all: ``simplefilter("error", PetscContactWarning)`` stops the run before
+    its output is touched."""
+    path, options = _tilted(tmp_path)
+    with warnings.catch_warnings(), pytest.raises(DoubtfulMap, match="opposite edges"):
+        warnings.simplefilter("error", PetscContactWarning)
+        run_contact(Run(heights=str(path), output=str(tmp_path / "o.h5"), **options))
+    assert not list(tmp_path.glob("o.h5*"))

@@ -25,6 +25,13 @@ from .common import (
 )
 
 
+def _unraisable(info: Any) -> None:
+    """Python's report of an exception it had to drop (in a finaliser), less the interrupts:
+    those are remembered and end the run with its one note (:func:`check_interrupt`)."""
+    if not issubclass(info.exc_type, KeyboardInterrupt):
+        sys.__unraisablehook__(info)
+
+
 def _show_warning(message: Warning | str, category: type[Warning], *args: Any, **kw: Any) -> None:
     """The package's warnings (a doubtful map, load on filled heights, unused PETSc options:
     :class:`~petsc_contact.conventions.warnings.PetscContactWarning`) as one line each."""
@@ -79,6 +86,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     for signum in (signal.SIGTERM, signal.SIGINT):  # remembered: never lost in a finaliser
         signal.signal(signum, interrupt)
     sys.stdout = QuietPipe(sys.stdout)
+    sys.unraisablehook = _unraisable
     warnings.showwarning = _show_warning
     try:
         status = _dispatch(args, argv, petsc_args)

@@ -103,10 +103,6 @@ def execute(
         if show:
             _introduce(args.command, description, prepared)
             print(_header(columns), flush=True)
-        finished = prepared.resumable
-        if finished.steps and finished.state is None and finished.steps < len(prepared.loads):
-            step = finished.steps + 1  # the same result, at more cost
-            say(f"{finished.state_problem}: step {step} starts from first touch", "warning")
 
         def progress(i: int, total: int, scalars: dict[str, Any]) -> None:
             if show:

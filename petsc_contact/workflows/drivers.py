@@ -24,7 +24,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from ..backend.solve import BoundSolver, Monitor
-from ..conventions.units import force_value, length_value, pressure_value
+from ..conventions.units import force_value, format_quantity, length_value, pressure_value
 from ..conventions.validation import log_range
 from ..geometries.periodic import PeriodicProblem
 from ..geometries.punch import PHARR_BETA, PunchProblem
@@ -112,7 +112,7 @@ class PeriodicDriver:
             problem.check_pressure(p0)  # before the output is touched
         self.run, self.problem = run, problem
         self.solver: BoundSolver | ArraySolver = problem_solver(problem)
-        self.intro = f", full contact at p0 = {p_full:.4g}"
+        self.intro = f", full contact at p0 = {format_quantity(p_full, run.pressure_unit)}"
         self.backend = type(scene.fft).__name__
 
     def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
@@ -169,9 +169,11 @@ class PunchDriver:
         self.by_force = run.forces is not None or run.pressures is not None
         self.loads, self.resolved = _punch_loads(run, problem, scene.resolved["length_unit"])
         self.run, self.solver = run, PunchSolver(problem)
+        length_unit = scene.resolved["length_unit"]
+        unit = f"{run.pressure_unit}*{length_unit}" if run.pressure_unit and length_unit else ""
         self.intro = (
-            f", K_flat = {self.solver.k_flat:.6g} ({run.flat_stiffness}; analytic "
-            f"{self.solver.k_flat_analytic:.6g})"
+            f", K_flat = {format_quantity(self.solver.k_flat, unit, 6)} ({run.flat_stiffness};"
+            f" analytic {format_quantity(self.solver.k_flat_analytic, unit, 6)})"
         )
         self.backend = type(problem.compliance.fft).__name__
 

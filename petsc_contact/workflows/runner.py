@@ -285,7 +285,7 @@ def prepare(run: Run, command_line: str | None = None, petsc: ModuleType | None 
         driver = driver_for(run, scene)
         try:
             record = _record(run, command_line, petsc, scene, driver) | {"warnings": texts}
-            finished = _finished(run, scene, record)
+            finished = _finished(run, scene, record, len(driver.loads))
         except BaseException:
             driver.close()
             raise
@@ -309,11 +309,20 @@ def _record(
     return run_record(run, line, petsc, realised, resolved) | {"fft_backend": driver.backend}
 
 
-def _finished(run: Run, scene: Scene, record: dict[str, Any]) -> Finished:
-    """What an interrupted ``run`` left to go on from (none unless it resumes); without
+def _finished(run: Run, scene: Scene, record: dict[str, Any], total: int) -> Finished:
+    """What an interrupted ``run`` of ``total`` steps left to go on from (none unless it
+    resumes; a :class:`ResumeWarning` when its next step starts from first touch); without
     ``resume`` or ``overwrite``, ``ValueError`` when its output holds finished steps."""
     if run.resume and run.output is not None:
-        return _resumable(run.output, run, scene, record["parameters"])
+        finished = _resumable(run.output, run, scene, record["parameters"])
+        if finished.steps and finished.state is None and finished.steps < total:
+            step = finished.steps + 1  # the same result, at more cost
+            warnings.warn(
+                f"{finished.state_problem}: step {step} starts from first touch",
+                ResumeWarning,
+                stacklevel=4,
+            )
+        return finished
     if run.output is not None and not run.overwrite:
         check_nothing_lost(run.output)
     return Finished(0)

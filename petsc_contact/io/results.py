@@ -21,13 +21,18 @@ import numpy as np
 from .schema import FRAMES
 
 
-def table_frame(rows: Iterable[Mapping[str, Any]]) -> Any:
+def table_frame(rows: Iterable[Mapping[str, Any]], kind: str | None = None) -> Any:
     """A ``DataFrame`` of the scalars, one row per step (index ``step`` from 1); the per-step
-    arrays (histograms) stay in the rows and the file."""
+    arrays (histograms) stay in the rows and the file.  With the file ``kind`` (``periodic``,
+    ``punch``), the columns :func:`read_frame` gives come first, in its order."""
     import pandas as pd
 
     rows = [{k: v for k, v in r.items() if np.ndim(v) == 0} for r in rows]
-    return pd.DataFrame(rows, index=pd.RangeIndex(1, len(rows) + 1, name="step"))
+    frame = pd.DataFrame(rows, index=pd.RangeIndex(1, len(rows) + 1, name="step"))
+    if kind in FRAMES:
+        documented = [c for c in FRAMES[kind].columns if c in frame.columns]
+        frame = frame[documented + [c for c in frame.columns if c not in documented]]
+    return frame
 
 
 def trusted(f: Any) -> np.ndarray:

@@ -110,10 +110,11 @@ class RunResult:
         return all(bool(s.get("accurate", True)) for s in self.table)
 
     def to_dataframe(self) -> Any:
-        """The step table as a pandas ``DataFrame`` (one row per step, from 1)."""
+        """The step table as a pandas ``DataFrame`` (one row per step, from 1), its columns in
+        :func:`~petsc_contact.io.results.read_frame`'s order."""
         from ..io.results import table_frame
 
-        return table_frame(self.table)
+        return table_frame(self.table, str(self.record.get("geometry", "")))
 
 
 @dataclass

@@ -4,22 +4,19 @@ import numpy as np
 import pytest
 
 
-@pytest.mark.parametrize("python_type", ["PolonskyKeer", "PreconditionedCG"])
-def test_bound_qp_with_aij_hessian(petsc, python_type):
-    """``min 1/2 x.Ax - b.x`` with ``0 <= x <= 0.3`` on a 1-D Laplacian (n = 200): the KKT
-    conditions hold to the tolerance, and the active set is that of a dense projected-gradient
-    reference (the problem is strictly convex, so the solution is unique)."""
+def bound_qp(petsc, tao_type, python_type="PreconditionedCG"):
+    """``min 1/2 x.Ax - b.x``, ``0 <= x <= 0.3``, on a 1-D Laplacian (n = 200): a TAO of
+    ``tao_type`` (the package's ``python_type`` when ``python``) and the objects to
+    destroy."""
     n = 200
     a = petsc.Mat().createAIJ((n, n), nnz=3, comm=petsc.COMM_SELF)
     for i in range(n):
-        a.setValue(i, i, 2.0 + 0.01)
-        if i:
-            a.setValue(i, i - 1, -1.0)
-        if i < n - 1:
-            a.setValue(i, i + 1, -1.0)
+        a.setValue(i, i, 2.01)
+        for j in (i - 1, i + 1):
+            if 0 <= j < n:
+                a.setValue(i, j, -1.0)
     a.assemble()
-    b = np.sin(np.linspace(0, 6 * np.pi, n)) * 0.05
-    bvec = petsc.Vec().createWithArray(b, comm=petsc.COMM_SELF)
+    b = petsc.Vec().createWithArray(np.sin(np.linspace(0, 6 * np.pi, n)) * 0.05)
     lower, upper, x = (petsc.Vec().createSeq(n) for _ in range(3))
     lower.set(0.0)
     upper.set(0.3)
@@ -27,16 +24,28 @@ def test_bound_qp_with_aij_hessian(petsc, python_type):
 
     def objgrad(tao, xv, gv):
         a.mult(xv, gv)
-        gv.axpy(-1.0, bvec)
-        return 0.5 * xv.dot(gv) - 0.5 * xv.dot(bvec)
+        gv.axpy(-1.0, b)
+        return 0.5 * xv.dot(gv) - 0.5 * xv.dot(b)
 
     tao = petsc.TAO().create(comm=petsc.COMM_SELF)
-    tao.setType("python")
-    tao.setPythonType(f"petsc_contact.backend.cg.{python_type}")
+    tao.setType(tao_type)
+    if tao_type == "python":
+        tao.setPythonType(f"petsc_contact.backend.cg.{python_type}")
     tao.setObjectiveGradient(objgrad, None)
     tao.setHessian(lambda *args: None, a, a)
     tao.setVariableBounds(lower, upper)
     tao.setTolerances(gatol=1e-10, grtol=0.0, gttol=0.0)
+    return tao, x, [tao, a, b, lower, upper, x]
+
+
+@pytest.mark.parametrize("python_type", ["PolonskyKeer", "PreconditionedCG"])
+def test_bound_qp_with_aij_hessian(petsc, python_type):
+    """``min 1/2 x.Ax - b.x`` with ``0 <= x <= 0.3`` on a 1-D Laplacian (n = 200): the KKT
+    conditions hold to the tolerance, and the active set is that of a dense projected-gradient
+    reference (the problem is strictly convex, so the solution is unique)."""
+    n = 200
+    tao, x, objects = bound_qp(petsc, "python", python_type)
+    b = objects[2].array.copy()
     tao.setMaximumIterations(2000)
     tao.solve(x)
     assert tao.getConvergedReason() > 0
@@ -51,9 +60,8 @@ def test_bound_qp_with_aij_hessian(petsc, python_type):
         ref = np.clip(ref - (dense @ ref - b) / 4.01, 0.0, 0.3)
     assert np.abs(xs - ref).max() < 1e-7
     assert np.count_nonzero(xs >= 0.3 - 1e-12) > 0 and np.count_nonzero(xs <= 1e-12) > 0
-    tao.destroy()
-    for v in (a, bvec, lower, upper, x):
-        v.destroy()
+    for obj in objects:
+        obj.destroy()
 
 
 def test_stops_at_the_rounding_floor(monkeypatch):

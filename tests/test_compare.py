@@ -104,7 +104,15 @@ def test_solver_options(tmp_path, monkeypatch):
 def test_compare_time_limit_and_bad_solver(tmp_path):
     out = tmp_path / "cmp.h5"
     r = cli(
-        *SCENE, "--pressures", "3e-3", "--solvers", "bncg", "--time-limit", "0", "--output", str(out)
+        *SCENE,
+        "--pressures",
+        "3e-3",
+        "--solvers",
+        "bncg",
+        "--time-limit",
+        "0",
+        "--output",
+        str(out),
     )
     assert r.returncode == 1, r.stderr
     assert "time limit" in r.stdout

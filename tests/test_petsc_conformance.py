@@ -4,8 +4,8 @@ gives each solver its own options."""
 
 import warnings
 
-import numpy as np
 import pytest
+from test_cg import bound_qp
 
 SURFACE = {"hurst": 0.7, "rms_slope": 0.1, "seed": 1}
 BNCG = ["-tao_type", "bncg"]
@@ -72,39 +72,6 @@ def test_fatol_is_not_read_by_tao(heights, full):
         assert step.scalars["iterations"] == full[name]["iterations"]
         assert step.scalars["tao_reason"] == "CONVERGED_GATOL"
         assert any("never used: -tao_fatol" in m for m in messages)
-
-
-def bound_qp(petsc, tao_type):
-    """``min 1/2 x.Ax - b.x``, ``0 <= x <= 0.3``, on a 1-D Laplacian (n = 200): a TAO of
-    ``tao_type`` (the package's type when ``python``) and the objects to destroy."""
-    n = 200
-    a = petsc.Mat().createAIJ((n, n), nnz=3, comm=petsc.COMM_SELF)
-    for i in range(n):
-        a.setValue(i, i, 2.01)
-        for j in (i - 1, i + 1):
-            if 0 <= j < n:
-                a.setValue(i, j, -1.0)
-    a.assemble()
-    b = petsc.Vec().createWithArray(np.sin(np.linspace(0, 6 * np.pi, n)) * 0.05)
-    lower, upper, x = (petsc.Vec().createSeq(n) for _ in range(3))
-    lower.set(0.0)
-    upper.set(0.3)
-    x.set(0.0)
-
-    def objgrad(tao, xv, gv):
-        a.mult(xv, gv)
-        gv.axpy(-1.0, b)
-        return 0.5 * xv.dot(gv) - 0.5 * xv.dot(b)
-
-    tao = petsc.TAO().create(comm=petsc.COMM_SELF)
-    tao.setType(tao_type)
-    if tao_type == "python":
-        tao.setPythonType("petsc_contact.backend.cg.PreconditionedCG")
-    tao.setObjectiveGradient(objgrad, None)
-    tao.setHessian(lambda *args: None, a, a)
-    tao.setVariableBounds(lower, upper)
-    tao.setTolerances(gatol=1e-10, grtol=0.0, gttol=0.0)
-    return tao, x, [tao, a, b, lower, upper, x]
 
 
 @pytest.mark.parametrize("tao_type", ["python", "bncg"])

@@ -13,7 +13,7 @@ import pytest
 from conftest import cli
 from test_measured import _map
 
-from petsc_contact import Run, run_contact
+from petsc_contact import Run, periodic_contact, run_contact
 from petsc_contact.conventions.warnings import DoubtfulMap, FilledLoad, PetscContactWarning
 
 PREFIX = "petsc-contact: warning: "
@@ -82,6 +82,9 @@ def test_a_map_given_as_an_array_warns_the_same(tmp_path):
     with pytest.warns(DoubtfulMap):
         given = run_contact(Run(heights=np.load(path), length=1.0, **options))
     assert given.warnings == from_file.warnings and len(given.warnings) == 1
+    with pytest.warns(DoubtfulMap) as said:  # the sweep functions warn as the runner does
+        periodic_contact(np.load(path), length=1.0, pressures=options["pressures"])
+    assert [str(w.message) for w in said if w.category is DoubtfulMap] == from_file.warnings
 
 
 def test_package_warnings_can_be_errors(tmp_path):

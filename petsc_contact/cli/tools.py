@@ -108,7 +108,7 @@ def _check_plot_output(out: str, source: str) -> None:
 def _field(f: Any, args: argparse.Namespace) -> tuple[np.ndarray, str, str, int]:
     """The map ``--field`` of step ``--step`` (counted from 1 as the table counts; negative
     from the end), its title, its colour bar's label and the step (0 for the heights)."""
-    from ..conventions.units import METRES, display_unit
+    from ..conventions.units import METRES, display_unit, format_quantity
     from ..io.schema import ENTRIES, in_unit
 
     name = args.field
@@ -136,7 +136,7 @@ def _field(f: Any, args: argparse.Namespace) -> tuple[np.ndarray, str, str, int]
     modulus = float(f.attrs.get("modulus", 1.0))
     p0 = float(f["nominal_pressure"][step - 1]) if "nominal_pressure" in f else np.nan
     unit = str(f.attrs.get("pressure_unit", ""))
-    load = f"p0 = {p0 / modulus:.3g} E*" + (f" = {p0:.3g} {unit}" if unit else "")
+    load = f"p0 = {p0 / modulus:.3g} E*" + (f" = {format_quantity(p0, unit)}" if unit else "")
     return data[step - 1] * scale, f"{name}, step {step} of {steps}, {load}", label, step
 
 

@@ -84,7 +84,11 @@ SOLVE_COLUMNS = _entries(
         "'ok'; or why the step's answer cannot be used (converged false); or which measured "
         "figures are beyond the package's accuracy (accurate false)",
     ),
-    tao_type=("text", "TAO type; python:PreconditionedCG for the default"),
+    tao_type=(
+        "text",
+        "TAO type (bncg); cg and pk for the package's solvers (compare's names), python:CLASS "
+        "for another Python type",
+    ),
     tao_reason=("text", "TAO's converged reason"),
     tao_reason_code=("count", "TAO's converged reason as a number (positive: converged)"),
     objective_gradient_evaluations=("count", "objective and gradient evaluations"),
@@ -536,6 +540,7 @@ RUN_ATTRIBUTES = (
     "heights_file",
     "heights_sha256",
     *FILE_RECORD,
+    "warnings",  # the package's warnings of the run, a JSON list (conventions.warnings)
     "created",
     "complete",
 )

@@ -66,12 +66,17 @@ def _float_list(text: str) -> list[float]:
         ) from None
 
 
-def seed(text: str) -> int:
-    """A seed: a whole number from 0 to 2^63 - 1."""
+def whole(text: str) -> int:
+    """A whole number (``ArgumentTypeError`` naming ``text`` otherwise)."""
     try:
-        value = int(text)
+        return int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'") from None
+
+
+def seed(text: str) -> int:
+    """A seed: a whole number from 0 to 2^63 - 1."""
+    value = whole(text)
     if not 0 <= value < SEED_LIMIT:
         raise argparse.ArgumentTypeError(f"a seed is from 0 to 2^63 - 1, got {text}")
     return value
@@ -79,10 +84,7 @@ def seed(text: str) -> int:
 
 def cut_from(text: str) -> int:
     """``--cut-from M``: a whole number, 1 or more."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'") from None
+    value = whole(text)
     if value < 1:
         raise argparse.ArgumentTypeError(f"M is 1 or more, got {text}")
     return value

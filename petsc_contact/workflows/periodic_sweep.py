@@ -31,6 +31,7 @@ from ..io.topography import Heights, map_and_lengths
 from ..numerics.device import Device, get_device
 from ..physics.continuation import ConvergedStep, Held, LoadPath
 from ..solver.driver import ArraySettings, ArraySolver
+from .scene import check_map
 
 __all__ = [
     "VERIFY_FACTOR",  # re-exported with Step and verify: scripts import them from here
@@ -226,6 +227,7 @@ def periodic_contact(
     on_host = where.name == "cpu"  # TAO, with this call's options in PETSc's database
     with _petsc.scoped_options(options) if on_host else nullcontext():
         problem = _periodic_problem(array, sides, modulus, comm, where)
+        check_map(array, problem.grid.spacing, periodic=True)  # as a run's scene does
         solver = None if on_host else problem_solver(problem, _petsc.option_list(options))
         steps = sweep(problem, loads, fields, monitor, stiffness, solver=solver)
         return collect(reported(steps, len(loads), progress))

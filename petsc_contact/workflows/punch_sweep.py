@@ -23,6 +23,7 @@ from ..io.topography import Heights, map_and_lengths
 from ..physics.continuation import Held
 from ..solver.report import FORCE_ACCURACY
 from .periodic_sweep import Progress, reported
+from .scene import check_map
 
 FORCE_RTOL = 1e-6
 FORCE_RESOLVED = FORCE_ACCURACY  # a force further than this from its target is not converged
@@ -276,6 +277,7 @@ def punch_contact(
     array, sides, _ = map_and_lengths(heights, length)
     with _petsc.scoped_options(options):
         problem = _punch_problem(array, sides, modulus, footprint, flat_stiffness, beta, comm)
+        check_map(array, problem.grid.spacing, periodic=False)  # as a run's scene does
         with PunchSolver(problem) as solver:
             steps = punch_sweep(solver, values, forces is not None, fields, monitor, stiffness)
             return collect(reported(steps, len(values), progress))

@@ -154,7 +154,8 @@ def test_ensemble_and_study_come_back_whole(tmp_path):
 
 def test_a_second_writer_is_refused_before_it_touches_anything(tmp_path):
     """While one run writes an output, a second on the same output exits 2 at once with one
-    line naming it, and the first run ends whole."""
+    line naming it, and the first run ends whole.  The first is held still (SIGSTOP) while
+    the second tries, so that however slow the machine, it is under way then."""
     out = tmp_path / "busy.h5"
     slow = f"{SWEEP} --fields".replace("--grid 64", "--grid 384").replace("4,", "6,").split()
     args = [sys.executable, "-m", "petsc_contact.cli", *slow, "--quiet", "--output", str(out)]
@@ -163,7 +164,11 @@ def test_a_second_writer_is_refused_before_it_touches_anything(tmp_path):
     deadline = time.time() + 60
     while not (lock.exists() and lock.read_text()) and time.time() < deadline:
         time.sleep(0.02)
-    second = cli(*slow, "--quiet", "--output", str(out))
+    first.send_signal(signal.SIGSTOP)
+    try:
+        second = cli(*slow, "--quiet", "--output", str(out))
+    finally:
+        first.send_signal(signal.SIGCONT)
     assert first.wait(timeout=300) == 0, first.stderr.read() if first.stderr else ""
     assert second.returncode == 2, second.stderr
     lines = second.stderr.strip().splitlines()

@@ -202,12 +202,13 @@ def test_a_signal_during_the_assembly_or_after_a_commit_says_what_was_kept(tmp_p
 
 def test_a_signal_dropped_in_a_finaliser_still_ends_the_run(tmp_path, whole):
     """SIGTERM while Python runs a finaliser, which drops the handler's KeyboardInterrupt:
-    the run still ends at the next point that matters, exit 130 with the note."""
+    the run still ends at the next point that matters, exit 130 with the note, its one line
+    (Python's report of the dropped exception is left out)."""
     out = tmp_path / "dropped.h5"
     r = _killed("after:commit:2:FINALIZER", out)
-    assert "Exception ignored" in r.stderr  # the exception was dropped indeed
     assert r.returncode == 130, r.stderr
-    assert "note: interrupted; 1 finished step(s) kept" in r.stderr.splitlines()[-1]
+    (line,) = r.stderr.strip().splitlines()
+    assert "note: interrupted; 1 finished step(s) kept" in line
     assert _run(out, "--resume").returncode == 0
     same_result(whole, out, fields=True)
 

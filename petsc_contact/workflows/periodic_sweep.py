@@ -227,7 +227,6 @@ def periodic_contact(
     on_host = where.name == "cpu"  # TAO, with this call's options in PETSc's database
     with _petsc.scoped_options(options) if on_host else nullcontext():
         problem = _periodic_problem(array, sides, modulus, comm, where)
-        check_map(array, problem.grid.spacing, periodic=True)  # as a run's scene does
         solver = None if on_host else problem_solver(problem, _petsc.option_list(options))
         steps = sweep(problem, loads, fields, monitor, stiffness, solver=solver)
         return collect(reported(steps, len(loads), progress))
@@ -237,8 +236,9 @@ def _periodic_problem(
     array: np.ndarray, sides: tuple[float, float], modulus: float, comm: Any, device: Device
 ) -> PeriodicProblem:
     """:func:`periodic_contact`'s problem: the map scattered on its grid, with the FFT of
-    ``device``."""
+    ``device``; the map checked as a run's scene checks it (:func:`check_map`)."""
     grid = grid_for(array.shape, sides, comm)
     local = grid.scatter(array)
     check_finite(grid, local)
+    check_map(array, grid.spacing, periodic=True)
     return PeriodicProblem(grid, device.fft(grid), local, modulus)

@@ -516,9 +516,11 @@ _RUN = (
         "kept, not recomputed",
         RUNS,
         default=False,
-        more="The next step starts from the last state, kept beside it in "
-        "`OUT.h5.state.npz` until the run ends (missing or damaged: from first touch, with "
-        "a warning). `ensemble --resume` also skips finished seeds",
+        more="The next step starts from the last state and what the sweep held, kept beside "
+        "it in `OUT.h5.state.npz` until the run ends, and equals the uninterrupted run's "
+        "(missing or damaged: from first touch, with a warning). `ensemble --resume` keeps "
+        "the seeds finished with this ensemble's parameters and continues an interrupted "
+        "one; a seed file of other parameters is refused (`--overwrite`)",
     ),
     _option(
         "overwrite",
@@ -526,7 +528,9 @@ _RUN = (
         "(they are deleted)",
         RUNS,
         default=False,
-        more="Without it (or `--resume`) such an output is refused",
+        more="Without it (or `--resume`) such an output is refused. `ensemble --overwrite` "
+        "first deletes the summary and every `OUT_seedK` file; an ensemble whose output or "
+        "seed files exist needs `--resume` or `--overwrite`",
     ),
     _option(
         "stop_after",
@@ -628,7 +632,8 @@ _COMPARE = (
         ("compare",),
         default=False,
         section="compare",
-        more="The rest are run, the reference solved again",
+        more="The rest are run, the reference solved again (same scene, `--pressures`, "
+        "`--solvers`, `--time-limit`, `--stall-iterations`; otherwise refused)",
     ),
     _option(
         "overwrite",
@@ -636,6 +641,7 @@ _COMPARE = (
         ("compare",),
         default=False,
         section="compare",
+        more="Without it (or `--resume`) such an output is refused",
     ),
 )
 

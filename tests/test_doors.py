@@ -175,3 +175,22 @@ def test_run_reads_the_natural_forms(petsc):
             Run(**given)
     with pytest.raises(ValueError, match="--grid"):
         Run(grid=(16, 8, 4))
+
+
+def test_punch_takes_run_s_footprints(petsc):
+    """``footprint="disk"`` (Run's word) gives Run's disk punch, with its shape factor 1;
+    a mask of the same disk gives the same answer given that factor."""
+    from petsc_contact.geometries.punch import disk_footprint
+
+    face = 1e-3 * np.random.default_rng(4).standard_normal((32, 32))
+    run = Run(geometry="punch", heights=face, length=1.0, approaches=(1e-3,), footprint="disk")
+    (row,) = run_contact(run).table
+    (step,) = punch_contact(face, length=1.0, approaches=1e-3, footprint="disk")
+    (masked,) = punch_contact(
+        face, length=1.0, approaches=1e-3, footprint=disk_footprint(32), beta=1.0
+    )
+    for name in ("force", "interfacial_stiffness"):
+        assert step.scalars[name] == pytest.approx(row[name], rel=1e-12), name
+        assert masked.scalars[name] == pytest.approx(row[name], rel=1e-12), name
+    with pytest.raises(ValueError, match="square, disk or a mask"):
+        punch_contact(face, length=1.0, approaches=1e-3, footprint="round")

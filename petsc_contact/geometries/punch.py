@@ -45,6 +45,28 @@ from ..solver.report import FORCE_ACCURACY, Accuracy, accuracy_limit
 from .step import MeasuredSolve, Step, contact_fields, requested_stiffness_rtol, residual_verdict
 
 PHARR_BETA = flat_punch.SQUARE_BETA
+FOOTPRINTS = ("square", "disk")
+
+
+def disk_footprint(n: int) -> np.ndarray:
+    """The disk inscribed in an ``n x n`` footprint (pixel centres within radius n/2)."""
+    x = np.arange(n) + 0.5 - n / 2
+    return x[:, None] ** 2 + x[None, :] ** 2 < (n / 2) ** 2
+
+
+def footprint_mask(grid: Grid, footprint: str | np.ndarray | None) -> tuple[Any, float]:
+    """A punch's local footprint mask (``None``: the whole grid) and the shape factor of its
+    flat-punch stiffness (paper Eq. 2): ``square`` or ``None`` (Pharr's), ``disk`` (the
+    inscribed disk of a square grid; 1), or a full ``nx x ny`` boolean mask (Pharr's)."""
+    if footprint is None or (isinstance(footprint, str) and footprint == "square"):
+        return None, PHARR_BETA
+    if isinstance(footprint, str):
+        if footprint != "disk":
+            raise ValueError(f"the footprint is one of {', '.join(FOOTPRINTS)} or a mask")
+        if not grid.square:
+            raise ValueError("--footprint disk needs a square grid")
+        return grid.scatter(disk_footprint(grid.shape[0]).astype(float)) > 0, 1.0
+    return grid.scatter(np.asarray(footprint, dtype=float)) > 0, PHARR_BETA
 
 
 def flat_punch_stiffness(modulus: float, area: float, beta: float = PHARR_BETA) -> float:

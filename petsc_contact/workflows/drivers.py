@@ -27,7 +27,7 @@ from ..backend.solve import BoundSolver, Monitor
 from ..conventions.units import force_value, format_quantity, length_value, pressure_value
 from ..conventions.validation import log_range
 from ..geometries.periodic import PeriodicProblem
-from ..geometries.punch import PHARR_BETA, PunchProblem
+from ..geometries.punch import PunchProblem, footprint_mask
 from ..geometries.step import Step
 from ..physics.continuation import Held
 from ..solver.driver import ArraySolver
@@ -144,22 +144,13 @@ def _pressures(run: Run, p_full: float) -> tuple[list[float], dict[str, Any]]:
     return pressures, {}
 
 
-def _disk(n: int) -> np.ndarray:
-    """The disk inscribed in an ``n x n`` footprint (pixel centres within radius n/2)."""
-    x = np.arange(n) + 0.5 - n / 2
-    return x[:, None] ** 2 + x[None, :] ** 2 < (n / 2) ** 2
-
-
 class PunchDriver:
     """The punch's driver: approaches, or forces (``forces`` or nominal pressures over the
     face) reached by Newton steps on the approach."""
 
     def __init__(self, run: Run, scene: Scene) -> None:
         grid = scene.grid
-        if run.footprint == "disk" and not grid.square:
-            raise ValueError("--footprint disk needs a square grid")
-        mask = grid.scatter(_disk(grid.shape[0])) > 0 if run.footprint == "disk" else None
-        beta = 1.0 if run.footprint == "disk" else PHARR_BETA
+        mask, beta = footprint_mask(grid, run.footprint)
         problem = PunchProblem(
             grid, scene.heights, run.modulus_value, mask, run.flat_stiffness, beta
         )

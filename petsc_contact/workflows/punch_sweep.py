@@ -17,7 +17,7 @@ from ..backend import _petsc
 from ..backend.solve import BoundSolver, Monitor
 from ..conventions.grid import grid_for
 from ..conventions.validation import check_finite, keywords_after_first, positive
-from ..geometries.punch import PHARR_BETA, PunchProblem
+from ..geometries.punch import PunchProblem, footprint_mask
 from ..geometries.step import Step, collect, solve_step
 from ..io.topography import Heights, map_and_lengths
 from ..physics.continuation import Held
@@ -234,9 +234,9 @@ def punch_contact(
     stiffness: bool = False,
     progress: Progress | None = None,
     monitor: Monitor | None = None,
-    footprint: np.ndarray | None = None,
+    footprint: str | np.ndarray | None = None,
     flat_stiffness: str = "grid",
-    beta: float = PHARR_BETA,
+    beta: float | None = None,
     comm: Any = None,
     flat: str | None = None,
 ) -> list[Step]:
@@ -261,11 +261,11 @@ def punch_contact(
         Add the punch's exact interfacial stiffness to every step, as
         ``Run(geometry="punch", stiffness=True)`` does.
     footprint
-        Optional full ``nx x ny`` boolean mask of the punch (e.g. a disk); default square.
+        ``square`` (default) or ``disk``, as ``Run``'s, or a full ``nx x ny`` boolean mask.
     flat_stiffness, beta
         The flat-punch stiffness of paper Eq. 2 (``grid`` or ``analytic``) and its shape
-        factor (:class:`PunchProblem`); ``flat`` is the deprecated name of
-        ``flat_stiffness`` (a ``DeprecationWarning``; removed in 0.3.0).
+        factor (default: the footprint's, :func:`footprint_mask`); ``flat`` is the deprecated
+        name of ``flat_stiffness`` (a ``DeprecationWarning``; removed in 0.3.0).
 
     Returns
     -------
@@ -299,17 +299,17 @@ def _punch_problem(
     array: np.ndarray,
     sides: tuple[float, float],
     modulus: float,
-    footprint: np.ndarray | None,
+    footprint: str | np.ndarray | None,
     flat_stiffness: str,
-    beta: float,
+    beta: float | None,
     comm: Any,
 ) -> PunchProblem:
     """:func:`punch_contact`'s problem: the map and the footprint scattered on its grid."""
     grid = grid_for(array.shape, sides, comm)
     local = grid.scatter(array)
     check_finite(grid, local)
-    mask = None if footprint is None else grid.scatter(footprint).astype(bool)
-    return PunchProblem(grid, local, modulus, mask, flat_stiffness, beta)
+    mask, shape = footprint_mask(grid, footprint)
+    return PunchProblem(grid, local, modulus, mask, flat_stiffness, shape if beta is None else beta)
 
 
 def _renamed_flat(flat: str | None, flat_stiffness: str) -> str:

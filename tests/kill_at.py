@@ -47,7 +47,7 @@ POINTS = [  # every point of the write path a kill is tried at
     "after:final:1",
 ]
 RTOL = 1e-6  # a step resumed from first touch starts elsewhere: within the solver's tolerance
-# (1e-8 p0 rms; measured 3e-10 in mean gap and 4e-9 of the largest pressure at 64^2)
+# (1e-8 p0 rms; 1.8e-10 in mean gap and 3.7e-9 of the largest pressure at 64^2: docs/reliability.md)
 EXACT = 1e-10  # resumed from the saved state and what the sweep held: the same steps, apart
 # from rounding (1e-16) amplified by the operator's condition number (about 1e4 here), x 100
 SCALARS = ("mean_gap", "area_fraction", "stiffness", "force", "approach", "nominal_pressure")

@@ -46,7 +46,7 @@ import numpy as np
 
 from ..conventions.grid import Grid
 from ..numerics import kernels
-from ..solver.report import DEFAULT_GATOL, SolveInfo
+from ..solver.report import DEFAULT_GATOL, DEFAULT_MAX_IT, SolveInfo
 from . import _petsc
 from .cg import ContactPreconditioner, compact_bound
 from .operator import SpectralOperator, shell_matrix
@@ -73,7 +73,6 @@ KSP_TYPES = ("tron", "gpcg", "bnls", "bntr", "bntl", "bqpip")
 KSP_PC_TYPES = ("tron", "bnls", "bntr", "bntl")  # preconditioned through the Hessian's Pmat
 DEFAULT_TYPE = "python"
 DEFAULT_PYTHON_TYPE = "petsc_contact.backend.cg.PreconditionedCG"
-DEFAULT_MAX_IT = 5000
 
 ObjGrad = Callable[[np.ndarray, np.ndarray], float]
 Monitor = Callable[[int, float, float], object]  # (iteration, f, gnorm); truthy stops the solve

@@ -22,10 +22,9 @@ import numpy as np
 from ..conventions.grid import Grid
 from ..numerics.device import CPU
 from ..solver.linear import Restricted, unconverged
+from ..solver.report import STIFFNESS_RTOL
 from . import _petsc
 from .operator import ShellInterface, shell_matrix
-
-STIFFNESS_RTOL = 1e-6  # K to 2e-8 relative of a 1e-8 solve (docs/performance.md)
 
 
 class _Shell(Restricted, ShellInterface):

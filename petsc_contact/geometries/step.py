@@ -17,12 +17,11 @@ import numpy as np
 from ..backend import _petsc
 from ..backend.operator import SpectralOperator
 from ..backend.solve import BoundSolver, Monitor, SolveInfo
-from ..backend.stiffness import STIFFNESS_RTOL
 from ..conventions.grid import Grid
 from ..numerics.device import CPU, Device
 from ..physics.continuation import Held
 from ..solver.driver import ArraySolver
-from ..solver.report import Accuracy
+from ..solver.report import STIFFNESS_RTOL, Accuracy
 
 FIELD_NAMES = ("gap", "pressure", "contact")
 VERIFY_FACTOR = 10.0  # a step's natural residual may exceed the tolerance asked for by this

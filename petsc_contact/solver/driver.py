@@ -23,10 +23,8 @@ import numpy as np
 
 from ..numerics.device import Device
 from .cg import MONITOR, USER, ConstrainedCG, ContactPreconditioner, ToleranceTest
-from .report import DEFAULT_GATOL, REASON_CODES, SolveInfo
+from .report import DEFAULT_GATOL, DEFAULT_MAX_IT, REASON_CODES, STIFFNESS_RTOL, SolveInfo
 
-DEFAULT_MAX_IT = 5000
-STIFFNESS_RTOL = 1e-6  # as the PETSc path's -stiffness_ksp_rtol default
 TYPE_NAME = "cg"  # the algorithm, as the PETSc path records it (backend.solve.PACKAGE_SOLVERS)
 
 

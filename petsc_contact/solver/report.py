@@ -47,6 +47,8 @@ REASON_CODES = {
 }
 
 DEFAULT_GATOL = 1e-8  # the default gradient tolerance of both paths (module docstring)
+DEFAULT_MAX_IT = 5000  # the default iteration limit of both paths
+STIFFNESS_RTOL = 1e-6  # the stiffness solve's default: K to 2e-8 of a 1e-8 solve (performance.md)
 ACCURACY_FACTOR = 100.0  # the accuracy: this many times the default tolerance of each solve
 FORCE_ACCURACY = 1e-4  # 100 times the load control's force tolerance, 1e-6
 STIFFNESS_ACCURACY = 1e-4  # 100 times the default -stiffness_ksp_rtol, 1e-6

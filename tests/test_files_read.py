@@ -22,6 +22,7 @@ DIMENSIONS = {  # the dimensions each kind's file names, at least
     "periodic ensemble": {"seed", "step"},
     "theory": {"step", "wavevector"},
     "compare": {"iteration"},
+    "experiment": {"row"},
 }
 
 
@@ -40,6 +41,13 @@ def files(tmp_path_factory, petsc):
     ):
         r = cli(kind, *CLI_SURFACE, *extra, "--quiet", "--output", out[kind])
         assert r.returncode == 0, r.stderr
+    table = folder / "squeeze.csv"  # p = exp(s / 1e-4): K = p / 1e-4 before the block's share
+    np.savetxt(
+        table, np.column_stack([np.geomspace(1e3, 1e5, 9), 1e-4 * np.log(np.geomspace(1, 1e2, 9))])
+    )
+    squeeze = ("--table", str(table), "--modulus", "4e6", "--thickness", "1e-2")
+    r = cli("experiment", *squeeze, "--quiet", "--output", out["experiment"])
+    assert r.returncode == 0, r.stderr
     return out
 
 
@@ -76,6 +84,10 @@ def test_the_other_kinds_frames_hold_their_values(files):
     assert np.allclose(ensemble["nominal_pressure"], [1e-3, 1e-2])
     theory = read_frame(files["theory"])
     assert (np.diff(theory["mean_gap"]) < 0).all()  # the gap closes as the load grows
+    experiment = read_frame(files["experiment"])
+    assert list(experiment.index) == list(range(1, 10)) and experiment.index.name == "row"
+    defined = experiment.dropna()  # K = K*/(1 - K* d/E') is larger than K* where defined
+    assert len(defined) > 3 and (defined["stiffness"] > defined["measured_stiffness"]).all()
     compare = read_frame(files["compare"])
     assert list(compare.index.get_level_values("solver").unique()) == ["cg", "tron"]
     assert compare.loc["cg"].index.name == "iteration"

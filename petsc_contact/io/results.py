@@ -2,12 +2,13 @@
 
 :func:`table_frame` takes rows (a run's table, or the ``scalars`` of the steps that
 :func:`~petsc_contact.periodic_contact` returns); :func:`read_frame` reads a results file of
-any kind (a run, an ensemble, a theory, a comparison), finished or ``.partial``, its columns
-in the schema's order (:data:`~petsc_contact.io.schema.FRAMES`).  Rows of a run, an ensemble
-or a theory are indexed by ``step``, counted from 1 as the printed table counts.  The writers
+any kind (a run, an ensemble, a theory, a comparison, a squeeze test), finished or
+``.partial``, its columns in the schema's order (:data:`~petsc_contact.io.schema.FRAMES`).
+Rows of a run, an ensemble or a theory are indexed by ``step``, a squeeze test's by ``row``,
+counted from 1 as the printed tables count.  The writers
 label every dataset with HDF5 dimension scales (:func:`scale`, :func:`labelled`), so that
 ``xarray.open_dataset(path, engine="h5netcdf")`` gives arrays on named dimensions (``step``,
-``x``, ``y``, ``seed``, ``wavevector``, ``iteration``).
+``x``, ``y``, ``seed``, ``wavevector``, ``iteration``, ``row``).
 """
 
 from __future__ import annotations
@@ -77,8 +78,9 @@ def file_kind(attributes: Mapping[str, Any]) -> str:
 
 def read_frame(path: str) -> Any:
     """The table of a results file as a ``DataFrame``: a run's steps, an ensemble's per-step
-    statistics, a theory's predictions, or a comparison's iterations (index ``solver`` and
-    ``iteration``); the columns the schema documents for its kind, in that order.
+    statistics, a theory's predictions, a squeeze test's rows, or a comparison's iterations
+    (index ``solver`` and ``iteration``); the columns the schema documents for its kind, in
+    that order.
 
     Raises
     ------
@@ -96,7 +98,7 @@ def read_frame(path: str) -> Any:
             )
         if kind == "compare":
             return _compare_frame(f)
-        return _step_frame(f, FRAMES[kind].columns)
+        return _step_frame(f, FRAMES[kind].columns, FRAMES[kind].index[0])
 
 
 def _column(dataset: Any) -> np.ndarray:
@@ -106,13 +108,14 @@ def _column(dataset: Any) -> np.ndarray:
     return dataset.asstr()[...] if h5py.check_string_dtype(dataset.dtype) else dataset[...]
 
 
-def _step_frame(group: Any, documented: Sequence[str]) -> Any:
-    """The ``documented`` columns that ``group`` holds, one row per step (index from 1)."""
+def _step_frame(group: Any, documented: Sequence[str], index: str = "step") -> Any:
+    """The ``documented`` columns that ``group`` holds, one row per step (or per ``index``,
+    counted from 1)."""
     import pandas as pd
 
     columns = {name: _column(group[name]) for name in documented if name in group}
     steps = len(next(iter(columns.values()), ()))
-    return pd.DataFrame(columns, index=pd.RangeIndex(1, steps + 1, name="step"))
+    return pd.DataFrame(columns, index=pd.RangeIndex(1, steps + 1, name=index))
 
 
 def _compare_frame(f: Any) -> Any:

@@ -247,6 +247,7 @@ COMPARE = _entries(
     complementarity=("1", "sum(p+ g) / (sum(p+) h_rms)"),
 )
 EXPERIMENT = _entries(
+    row=("count", "row of the measured table, counted from 1"),
     pressure=("pressure", "measured pressure p"),
     displacement=("length", "measured displacement s"),
     measured_stiffness=("pressure/length", "K* = dp/ds (second-order differences)"),
@@ -311,6 +312,7 @@ FRAMES = {  # by the file's kind: its geometry, or compare (a file with solver g
         ("step",),
         tuple(k for k in THEORY if k not in ("wavevector", "psd")),
     ),
+    "experiment": Frame("one per row of the measured table", ("row",), tuple(EXPERIMENT)[1:]),
     "compare": Frame(
         "one per solver and TAO iteration, the solvers in the order of the root attribute "
         "`solvers`",

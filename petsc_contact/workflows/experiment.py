@@ -11,7 +11,8 @@ import numpy as np
 from ..conventions.validation import positive
 from ..io.atomic import atomic_h5
 from ..io.lock import check_writable
-from ..io.schema import EXPERIMENT, annotate
+from ..io.results import labelled, scale
+from ..io.schema import EXPERIMENT, FRAMES, annotate
 from ..io.tables import load_table
 from ..physics.theory import block_corrected_stiffness
 
@@ -50,8 +51,9 @@ def squeeze_test(
     p, disp = rows[:, 0], rows[:, 1]
     found = Experiment(p, disp, *block_corrected_stiffness(p, disp, modulus, thickness))
     with atomic_h5(output) as f:
-        f["pressure"], f["displacement"] = p, disp
-        f["measured_stiffness"], f["stiffness"] = found.measured_stiffness, found.stiffness
+        row = scale(f, "row", np.arange(1, len(p) + 1))
+        for name in FRAMES["experiment"].columns:
+            labelled(f, name, getattr(found, name), [row])
         f.attrs.update(
             geometry="experiment",
             block_modulus=modulus,

@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 
 from petsc_contact.cli.arguments import build_parser
-from petsc_contact.cli.common import InputError
 from petsc_contact.cli.tools import run_plot
 from petsc_contact.io import plot
 
@@ -183,7 +182,7 @@ def test_plot_redraws_a_run_without_fields(tmp_path: Path, drawn: list[Any]) -> 
     assert plot_command(str(punch), "--sweep", "--output", str(tmp_path / "f.png")) == 0
     assert_picture(tmp_path / "f.png")
     assert "(um)" in drawn[-1].axes[0].get_xlabel()
-    with pytest.raises(InputError, match=r"\(run with --fields\); --sweep draws"):
+    with pytest.raises(ValueError, match=r"\(run with --fields\); --sweep draws"):
         plot_command(str(sweep))
 
 
@@ -228,7 +227,7 @@ def test_plot_of_an_ensemble_file(tmp_path: Path, drawn: list[Any]) -> None:
     assert stiffness.get_ylabel() == plot.STIFFNESS_LABEL
     np.testing.assert_allclose(stiffness.containers[0].lines[0].get_ydata(), 2 * P)
     Path(seeds[1]).unlink()
-    with pytest.raises(InputError, match="e_seed1.h5 is missing"):
+    with pytest.raises(ValueError, match="e_seed1.h5 is missing"):
         plot_command(str(ensemble))
 
 

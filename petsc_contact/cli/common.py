@@ -40,9 +40,9 @@ def refusal(args: argparse.Namespace, petsc_args: Sequence[str]) -> str | None:
                 check_input(given, option)
         check_outputs(command_outputs(args), inputs)
         if args.command == "theory":
-            from .theory import check_compared
+            from ..workflows.theory_run import check_compared
 
-            check_compared(args)
+            check_compared(args.compare, args.plot)
     except (ValueError, FileNotFoundError) as exc:
         return str(exc)
     return None
@@ -95,15 +95,23 @@ def command_outputs(args: argparse.Namespace) -> list[Named]:
     return outputs
 
 
-def describe(args: argparse.Namespace) -> Any:
+def describe(args: argparse.Namespace, petsc_args: Sequence[str] = ()) -> Any:
     """The :class:`~petsc_contact.workflows.description.Run` the command line describes: the
-    command's options that are Run's fields (:func:`~petsc_contact.workflows.options.run_fields`;
-    its PETSc options are in the database already: the CLI gives them to PETSc at start)."""
+    command's options that are Run's fields (:func:`~petsc_contact.workflows.options.run_fields`).
+    On the ``cpu`` device its PETSc options are in the database already (the CLI gives them to
+    PETSc at start); an array device's run, which has no PETSc, carries ``petsc_args``."""
     from ..workflows.description import Run
     from ..workflows.options import run_fields
 
     given = {name: getattr(args, name) for name in run_fields(args.command)}
-    return Run(**given, geometry="punch" if args.command == "punch" else "periodic")
+    run = Run(**given, geometry="punch" if args.command == "punch" else "periodic")
+    return run if run.device == "cpu" else run.with_(options=tuple(petsc_args))
+
+
+def on_array_device(args: argparse.Namespace) -> bool:
+    """Whether the command line asks for an array device (``--device gpu`` or ``cpu-array``:
+    no PETSc is loaded)."""
+    return getattr(args, "device", "cpu") != "cpu"
 
 
 def scene_for(args: argparse.Namespace, petsc_args: list[str]) -> tuple[Any, Any, Any]:

@@ -1,0 +1,120 @@
+"""What the ``theory`` command reads besides a map: a line scan (its heights and length), its
+record, and the periodic runs drawn beside the prediction (``--compare``)."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from ..io.results import trusted
+
+
+def line_scan(heights: str | None, channel: Any = None) -> Any:
+    """The line scan the file ``heights`` holds (read and checked), or ``None`` for a map
+    (or no file).
+
+    Raises
+    ------
+    ValueError
+        When the scan has undefined heights.
+    """
+    from ..io.topography import NotAMap, read_profile, read_topography
+
+    if heights is None:
+        return None
+    try:
+        read_topography(heights, channel)
+        return None
+    except NotAMap as exc:
+        if "line scan" not in str(exc):
+            raise
+    profile = read_profile(heights, channel)
+    undefined = int(np.count_nonzero(~np.isfinite(profile.heights)))
+    if undefined:
+        raise ValueError(f"the line scan has {undefined} undefined heights")
+    return profile
+
+
+def profile_length(length: str | None, profile: Any) -> float:
+    """The scan's length: the file's, else ``length`` (``--length``; its unit must agree)."""
+    from ..conventions.units import factor, parse_lengths
+
+    if length is None:
+        if profile.length is None:
+            raise ValueError("the line scan has no length: give --length")
+        return float(profile.length)
+    given = parse_lengths(length)
+    if given.unit and profile.unit:
+        return given.values[0] * factor(given.unit, profile.unit)
+    return given.values[0]
+
+
+def profile_record(run: Any, command_line: str, profile: Any) -> dict[str, Any]:
+    """What reproduces a prediction for a line scan (the file attributes of ``theory``)."""
+    from ..io.provenance import file_digest, versions
+
+    unit = profile.unit or ""
+    return {
+        "command_line": command_line,
+        "parameters": run.parameters(),
+        "versions": versions(),
+        "heights_file": os.path.abspath(run.heights),
+        "heights_sha256": file_digest(run.heights),
+        "heights_reader": profile.reader + profile.note,
+        "length": profile.length or 0.0,
+        "length_unit": unit,
+        "modulus": run.modulus_value,
+        "pressure_unit": run.pressure_unit or "",
+        "units": f"lengths and heights in {unit or 'the unit of --length'}",
+    }
+
+
+def check_compared(paths: Sequence[str] | None, plot: str | None) -> None:
+    """``ValueError`` unless the runs to compare (``--compare``) come with a plot to draw
+    them in (``--plot``) and are periodic runs' files (a punch's mean gap is over its
+    footprint, not a cell's)."""
+    if not paths:
+        return
+    if not plot:
+        raise ValueError("--compare draws runs beside the theory's plot: give --plot PNG")
+    for path in paths:
+        geometry = _geometry(path)
+        if geometry != "periodic":
+            what = f"geometry '{geometry}'" if geometry else "no geometry: not a run's file"
+            raise ValueError(f"--compare takes periodic runs; '{path}' is not one ({what})")
+
+
+def compared_runs(paths: Sequence[str] | None) -> list[tuple[str, dict[str, np.ndarray]]]:
+    """Each run to draw beside the theory: its file's name and its trusted steps' loads,
+    mean gaps and stiffnesses."""
+    return [(os.path.basename(path), _run_table(path)) for path in paths or ()]
+
+
+def _geometry(path: str) -> str:
+    """The ``geometry`` attribute of a results file ('' when it has none)."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as f:
+            return str(f.attrs.get("geometry", ""))
+    except OSError:
+        raise ValueError(f"--compare: '{path}' is not an HDF5 results file") from None
+
+
+def _run_table(path: str) -> dict[str, np.ndarray]:
+    """A simulation's loads, mean gaps and stiffnesses, to draw beside the theory."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as f:
+            table = {k: f[k][...] for k in ("nominal_pressure", "mean_gap", "stiffness") if k in f}
+            if "converged" in f:
+                table = {k: v[trusted(f)] for k, v in table.items()}
+    except OSError as exc:
+        raise OSError(f"--compare: cannot read '{path}' ({exc})") from None
+    if "mean_gap" not in table:
+        raise ValueError(f"--compare: '{path}' is not a periodic run's file (no mean_gap)")
+    return table

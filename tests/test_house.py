@@ -48,12 +48,25 @@ def _writes(tree: ast.Module) -> list[str]:
 
 def test_the_command_line_writes_no_file_itself():
     """``cli/`` parses, calls the library and prints: the modules under it import none of the
-    library's writers and open no file for writing (reading a file to check or draw it is
-    theirs), so that every file a command writes is written by the library."""
+    library's writers and open no file for writing, so that every file a command writes is
+    written by the library."""
     trees = _trees("cli")
     assert len(trees) >= 8
     writing = {path: found for path, tree in trees.items() if (found := _writes(tree))}
     assert not writing, f"cli modules that write files: {writing}"
+
+
+def test_the_command_line_reads_no_results_file():
+    """Results files are read by the library too (``workflows.redraw``, ``theory_run``):
+    no module under ``cli/`` imports h5py."""
+    importing = [
+        path
+        for path, tree in _trees("cli").items()
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Import | ast.ImportFrom)
+        and "h5py" in {a.name for a in node.names} | {getattr(node, "module", None)}
+    ]
+    assert not importing, f"cli modules that read HDF5 files: {importing}"
 
 
 def test_the_writes_are_found():

@@ -11,18 +11,21 @@ field and reads back the first block: the free-boundary convolution of the punch
 from __future__ import annotations
 
 import copy
+from types import ModuleType
 from typing import Any
 
 import numpy as np
 
 from ..conventions.grid import Grid, block_rows
-from ..numerics.fft import FFT, half_spectrum_weights, make_fft, single_entries
+from ..numerics.device import CPU, Device
+from ..numerics.fft import FFT, half_spectrum_weights, single_entries
 from . import _petsc
 
 
-def twice(values: np.ndarray) -> np.ndarray:
-    """A real spectral multiplier with each entry twice, laid out as a spectrum's float view."""
-    return np.repeat(np.ascontiguousarray(np.real(values), dtype=float), 2, axis=-1)
+def twice(values: Any, xp: ModuleType = np) -> Any:
+    """A real spectral multiplier with each entry twice, laid out as a spectrum's float view
+    (an array of ``xp``, the array module ``values`` belong to)."""
+    return xp.repeat(xp.ascontiguousarray(xp.real(values), dtype=float), 2, axis=-1)
 
 
 class ShellInterface:
@@ -190,6 +193,11 @@ class PaddedOperator(SpectralOperator):
         It must be even in both offsets, so that its spectrum is real.
     fft
         FFT backend of the padded ``2nx x 2ny`` grid; pass one to share it between operators.
+    device
+        Where the fields live when no ``fft`` is given: the padded grid's FFT is
+        ``device.fft`` (FFTW on the ``cpu`` device, the array module's on the others).  The
+        operator's fields, multiplier included, are arrays of the FFT's ``device``; the
+        kernel is evaluated on the host and transformed there.
 
     Notes
     -----
@@ -197,23 +205,31 @@ class PaddedOperator(SpectralOperator):
     rows move with one ``Alltoallv`` each way (:class:`RowExchange`).
     """
 
-    def __init__(self, grid: Grid, kernel_rows: Any, fft: FFT | None = None) -> None:
+    def __init__(
+        self, grid: Grid, kernel_rows: Any, fft: FFT | None = None, device: Device = CPU
+    ) -> None:
         self.grid = grid
         self.padded = grid.padded()
-        self.fft = fft if fft is not None else make_fft(self.padded)
-        self.fft.real[...] = kernel_rows(self.padded.rows)
+        self.fft = fft if fft is not None else device.fft(self.padded)
+        where = self.fft.device
+        self.fft.real[...] = where.asarray(kernel_rows(self.padded.rows))
         self.fft.forward()
         self.transform_size = self.padded.size
-        self.multiplier = twice(self.normalised(self.fft.spectrum.real))
-        self._single = single_entries(self.padded, self.fft)
+        self.multiplier = twice(self.normalised(self.fft.spectrum.real), where.xp)
+        self._single = where.asarray(single_entries(self.padded, self.fft))
         self._centre = float(kernel_rows(slice(0, 1))[0, 0])
         self.exchange = RowExchange(grid.comm, grid.shape, self.padded.shape[0])
         self.applications = 0
         self.fft.real[...] = 0.0  # the padding stays zero: applications write only the block
 
-    def with_spectrum(self, spectrum: np.ndarray) -> PaddedOperator:
+    @property
+    def device(self) -> Device:
+        """Where the operator's fields live (its FFT's device)."""
+        return self.fft.device
+
+    def with_spectrum(self, spectrum: Any) -> PaddedOperator:
         """Another operator on the same padded FFT with the given (normalised) spectrum."""
-        other = self._with(twice(spectrum))
+        other = self._with(twice(spectrum, self.fft.device.xp))
         other._centre = other._weighted_sum(self.padded)
         return other
 

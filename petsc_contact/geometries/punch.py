@@ -37,10 +37,13 @@ from ..backend.solve import SolveInfo
 from ..backend.stiffness import punch_stiffness_exact, restricted_solve
 from ..conventions.grid import Grid
 from ..conventions.validation import non_negative, positive
+from ..numerics.device import CPU, Device
 from ..numerics.kernels import compile_kernels
 from ..physics.greens import hockney_kernel
 from ..physics.observables import distributions, patch_sizes
 from ..reference import flat_punch
+from ..solver.driver import ArraySettings
+from ..solver.linear import held_set_solve
 from ..solver.report import FORCE_ACCURACY, Accuracy, accuracy_limit
 from .step import MeasuredSolve, Step, contact_fields, requested_stiffness_rtol, residual_verdict
 
@@ -103,6 +106,16 @@ class PunchProblem:
         The flat-punch stiffness of paper Eq. 2: ``'grid'``, the flat punch of the same
         footprint on the same grid (discretisation errors cancel), or ``'analytic'``,
         ``beta 2 E* sqrt(A/pi)``.
+    device
+        Where the solver's fields live (:class:`~petsc_contact.numerics.device.Device`): the
+        ``cpu`` device's are TAO's (NumPy, FFTW); ``gpu`` and ``cpu-array`` run the package's
+        own CG on their arrays (one rank, no PETSc).  Heights, footprint and the fields a
+        step measures stay on the host.
+    settings
+        The array path's options (:class:`~petsc_contact.solver.driver.ArraySettings`); the
+        held-set solves of the exact stiffness read ``stiffness_rtol`` and
+        ``stiffness_max_it`` from them (the flat punch's among them, solved here).  Not read
+        on the ``cpu`` device, whose solves read PETSc's options database.
     """
 
     def __init__(
@@ -113,6 +126,9 @@ class PunchProblem:
         footprint: np.ndarray | None = None,
         flat: str = "grid",
         beta: float = PHARR_BETA,
+        *,
+        device: Device = CPU,
+        settings: ArraySettings | None = None,
     ) -> None:
         positive("modulus", modulus)
         compile_kernels(announce=grid.comm.rank == 0)  # before any step's timer
@@ -120,6 +136,8 @@ class PunchProblem:
             raise ValueError(f"flat-punch stiffness must be 'grid' or 'analytic', got {flat}")
         self.flat = flat
         self.grid = grid
+        self.device = device
+        self.settings = ArraySettings() if settings is None else settings
         self.modulus = float(modulus)
         self.filled: np.ndarray | None = None  # this rank's filled pixels (a measured map)
         self.footprint = (
@@ -130,27 +148,19 @@ class PunchProblem:
         self.footprint_pixels = int(grid.sum(np.count_nonzero(self.footprint))[0])
         if self.footprint_pixels == 0:
             raise ValueError("the punch footprint is empty")
-        h = np.asarray(heights, dtype=float).reshape(grid.local_shape)
-        top = grid.max(float(np.where(self.footprint, h, -np.inf).max(initial=-np.inf)))
-        self.recess = np.where(self.footprint, top - h, 0.0)
-        mean = grid.sum(self.recess.sum())[0] / self.footprint_pixels
-        dev = np.where(self.footprint, self.recess - mean, 0.0)
-        rms = float(np.sqrt(grid.sum(np.vdot(dev, dev))[0] / self.footprint_pixels))
-        self.scale_length = rms if rms > 0 else min(grid.spacing)
-        a = np.sqrt(grid.pixel_area)  # the pixel's size for the scaling (its side if square)
-        self.compliance = PaddedOperator(
-            grid, lambda rows: hockney_kernel(grid.shape, grid.spacing, self.modulus, rows)
-        )
-        self.inverse = self.compliance.with_spectrum(self.compliance.inverse_spectrum())
-        self.pixel_stiffness = 1.0 / self.compliance.diagonal()
-        self._scale = a * np.sqrt(grid.size) / self.modulus  # H = G / _scale
-        self.hessian = self.compliance.with_spectrum(self.compliance.spectrum / self._scale)
-        self.preconditioner = self.inverse.with_spectrum(self.inverse.spectrum * self._scale)
-        self.pressure_scale = self.modulus * self.scale_length / a
+        self.recess, self.scale_length = self._recess(heights)
+        self._operators()
         self.approach = np.nan
-        self._u = np.empty(grid.local_shape)  # objective buffer, reused every evaluation
-        self._recess_flat = self.recess.reshape(-1)
-        self._footprint_flat = self.footprint.reshape(-1).astype(float)
+        # the solver's copies (the host arrays themselves on the cpu device)
+        self._u = device.xp.empty(grid.local_shape)  # objective buffer, reused every evaluation
+        self._recess_flat = device.asarray(self.recess.reshape(-1))
+        self._footprint_flat = device.asarray(self.footprint.reshape(-1).astype(float))
+        self._footprint = device.asarray(self.footprint)
+        self._upper = device.asarray(np.where(self.footprint, np.inf, 0.0).reshape(-1))
+        # the held-set solve of the exact stiffness: PETSc's KSPCG on the cpu device
+        self.held_set_solve: Any = restricted_solve
+        if device.name != "cpu":
+            self.held_set_solve = self._array_held_set_solve
         self.k_flat_analytic = flat_punch_stiffness(
             self.modulus, self.footprint_pixels * grid.pixel_area, beta
         )
@@ -158,46 +168,89 @@ class PunchProblem:
         self.k_flat_grid = self.flat_stiffness_on_grid() if flat == "grid" else np.nan
         self.k_flat = self.k_flat_grid if flat == "grid" else self.k_flat_analytic
 
+    def _recess(self, heights: np.ndarray) -> tuple[np.ndarray, float]:
+        """The recess ``s = max(h) - h`` on the footprint (0 off it) of this rank's heights,
+        and the scale length ``l``: its rms about its mean, or the shorter pixel side for a
+        flat punch."""
+        grid = self.grid
+        h = np.asarray(heights, dtype=float).reshape(grid.local_shape)
+        top = grid.max(float(np.where(self.footprint, h, -np.inf).max(initial=-np.inf)))
+        recess = np.where(self.footprint, top - h, 0.0)
+        mean = grid.sum(recess.sum())[0] / self.footprint_pixels
+        dev = np.where(self.footprint, recess - mean, 0.0)
+        rms = float(np.sqrt(grid.sum(np.vdot(dev, dev))[0] / self.footprint_pixels))
+        return recess, rms if rms > 0 else min(grid.spacing)
+
+    def _operators(self) -> None:
+        """The compliance ``G`` on the padded FFT of the device, its inverse, and the scaled
+        Hessian ``H = G / (a sqrt(N) / E*)`` with its preconditioner ``H^-1``."""
+        grid = self.grid
+        a = np.sqrt(grid.pixel_area)  # the pixel's size for the scaling (its side if square)
+        self.compliance = PaddedOperator(
+            grid,
+            lambda rows: hockney_kernel(grid.shape, grid.spacing, self.modulus, rows),
+            device=self.device,
+        )
+        self.inverse = self.compliance.with_spectrum(self.compliance.inverse_spectrum())
+        self.pixel_stiffness = 1.0 / self.compliance.diagonal()
+        self._scale = a * np.sqrt(grid.size) / self.modulus  # H = G / _scale
+        self.hessian = self.compliance.with_spectrum(self.compliance.spectrum / self._scale)
+        self.preconditioner = self.inverse.with_spectrum(self.inverse.spectrum * self._scale)
+        self.pressure_scale = self.modulus * self.scale_length / a
+
+    def _array_held_set_solve(
+        self, grid: Grid, op: Any, pc: Any, mask: np.ndarray
+    ) -> tuple[Any, int]:
+        """The array path's held-set solve (:func:`~petsc_contact.solver.linear.held_set_solve`)
+        with :attr:`settings`' tolerance and iteration limit."""
+        s = self.settings
+        return held_set_solve(grid, op, pc, mask, s.stiffness_rtol, self.device, s.stiffness_max_it)
+
     @property
-    def upper_bound(self) -> np.ndarray:
-        """Upper bound of the scaled pressure: ``inf`` on the footprint, 0 elsewhere."""
-        return np.where(self.footprint, np.inf, 0.0).reshape(-1)
+    def upper_bound(self) -> Any:
+        """Upper bound of the scaled pressure: ``inf`` on the footprint, 0 elsewhere (an
+        array of the device; the same array every time)."""
+        return self._upper
 
     def set_approach(self, delta: float) -> None:
         """Prescribe the rigid approach ``δ`` (beyond first touch; ``δ >= 0``)."""
         non_negative("approach", delta)
         self.approach = float(delta)
 
-    def gap(self, pressure: np.ndarray) -> np.ndarray:
-        """``g = G p + s - δ`` on the footprint (local slab; zero off the footprint)."""
-        u = self.compliance.apply_array(pressure, np.empty(self.grid.local_shape))
-        return np.where(self.footprint, u + self.recess - self.approach, 0.0)
+    def gap(self, pressure: Any) -> Any:
+        """``g = G p + s - δ`` on the footprint (local slab of the device's arrays; zero off
+        the footprint)."""
+        xp = self.device.xp
+        u = self.compliance.apply_array(pressure, xp.empty(self.grid.local_shape))
+        return xp.where(
+            self._footprint, u + self._recess_flat.reshape(u.shape) - self.approach, 0.0
+        )
 
-    def objective_gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
+    def objective_gradient(self, x: Any, grad: Any) -> float:
         """Scaled ``W``; ``grad <- g / (l sqrt(n^2))`` (``g`` zeroed off the footprint)."""
-        grid = self.grid
+        grid, xp = self.grid, self.device.xp
         c = 1.0 / (self.scale_length * np.sqrt(grid.size))
         u = self._u
-        np.multiply(x.reshape(grid.local_shape), self.pressure_scale, out=u)  # p
+        xp.multiply(x.reshape(grid.local_shape), self.pressure_scale, out=u)  # p
         self.compliance.apply_array(u, u)  # u = G p (the FFT works on its own buffers)
-        u += self.recess
-        u -= self.approach  # u + s - δ: the gap on the footprint
+        flat = u.reshape(-1)
+        flat += self._recess_flat
+        flat -= self.approach  # u + s - δ: the gap on the footprint
         # W/a^2 = x.(u_el/2 + s - δ) = (x.g + x.s - δ sum x) / 2 with g = u_el + s - δ
         (w,) = grid.sum(
-            0.5
-            * (np.vdot(x, u.reshape(-1)) + np.vdot(x, self._recess_flat) - self.approach * x.sum())
+            0.5 * (xp.vdot(x, flat) + xp.vdot(x, self._recess_flat) - self.approach * x.sum())
         )
-        np.multiply(u.reshape(-1), self._footprint_flat, out=grad)
+        xp.multiply(flat, self._footprint_flat, out=grad)
         grad *= c
         return c * float(w)
 
     def flat_stiffness_on_grid(self, petsc: Any = None) -> float:
-        """``dF/dδ`` of the flat punch of the same footprint, on the same grid; the
-        residual of its solve becomes :attr:`flat_residual`.
+        """``dF/dδ`` of the flat punch of the same footprint, on the same grid, on the
+        problem's device; the residual of its solve becomes :attr:`flat_residual`.
 
         ``petsc`` is accepted for compatibility and not used.
         """
-        solve = MeasuredSolve(restricted_solve)
+        solve = MeasuredSolve(self.held_set_solve, self.device)
         k, _ = punch_stiffness_exact(
             self.grid, self.compliance, self.inverse, self.footprint, solve
         )
@@ -214,46 +267,62 @@ class PunchProblem:
         return Accuracy(accuracy_limit(self.tolerance_floor()), FORCE_ACCURACY)
 
     def measure(
-        self, x: np.ndarray, info: SolveInfo, stiffness: bool = False, fields: bool = False
+        self, x: Any, info: SolveInfo, stiffness: bool = False, fields: bool = False
     ) -> Step:
         """The step of a solution ``x`` (TAO's scaled pressure) at the current approach:
         observables, TAO's report, the verdict, the measured accuracy (:meth:`accuracy`) and
         the exact total and interfacial stiffness (always: load control needs ``dF/dδ``;
         ``stiffness`` adds the dataset ``stiffness``)."""
-        pressure = x.reshape(self.grid.local_shape) * self.pressure_scale
-        gap = self.gap(pressure)
+        device = self.device
+        on_device = x.reshape(self.grid.local_shape) * self.pressure_scale
+        gap = device.to_host(self.gap(on_device))
+        pressure = device.to_host(on_device)
         obs = punch_observables(self, pressure, gap)
         contact = obs.pop("contact")
         verdict = verify_punch(info, obs)
-        solve = MeasuredSolve(restricted_solve)
-        start = time.perf_counter()
-        k_tot, k_its = (
-            punch_stiffness_exact(self.grid, self.compliance, self.inverse, contact, solve)
-            if verdict == "ok"
-            else (np.nan, 0)
-        )
-        k_time = self.grid.max(time.perf_counter() - start)
-        k_int = interfacial_stiffness(k_tot, self.k_flat) / self.grid.area
         scalars = {
             **obs,
             "force_balance": np.nan,  # under load control: PunchSolver.at_force
-            "total_stiffness": k_tot,
-            "interfacial_stiffness": k_int,
-            "flat_punch_stiffness": self.k_flat,
-            "stiffness_iterations": k_its,
-            "stiffness_time": k_time,
-            "stiffness_residual": (
-                max(solve.residual(), self.flat_residual) if verdict == "ok" else np.nan
-            ),
-            "stiffness_tolerance": requested_stiffness_rtol(),
+            **self.held_set_stiffness(contact, verdict == "ok"),
             **info.scalars(verdict),
         }
         if stiffness:
-            scalars["stiffness"] = k_int
+            scalars["stiffness"] = scalars["interfacial_stiffness"]
         self.accuracy().assess(scalars)
         if not fields:
             return Step(scalars)
         return Step(scalars, *contact_fields(gap, pressure, contact), contact=contact)
+
+    def held_set_stiffness(self, contact: np.ndarray, converged: bool) -> dict[str, Any]:
+        """The exact total stiffness ``dF/dδ`` with ``contact`` (this rank's host mask) held
+        fixed and the interfacial stiffness per area from it (paper Eq. 2), NaN unless
+        ``converged``; the held-set solve's iterations, time, recomputed residual (the
+        larger of its and the flat punch's) and the tolerance asked."""
+        grid = self.grid
+        solve = MeasuredSolve(self.held_set_solve, self.device)
+        start = time.perf_counter()
+        k_tot, k_its = (
+            punch_stiffness_exact(grid, self.compliance, self.inverse, contact, solve)
+            if converged
+            else (np.nan, 0)
+        )
+        self.device.synchronize()
+        k_time = grid.max(time.perf_counter() - start)
+        return {
+            "total_stiffness": k_tot,
+            "interfacial_stiffness": interfacial_stiffness(k_tot, self.k_flat) / grid.area,
+            "flat_punch_stiffness": self.k_flat,
+            "stiffness_iterations": k_its,
+            "stiffness_time": k_time,
+            "stiffness_residual": (
+                max(solve.residual(), self.flat_residual) if converged else np.nan
+            ),
+            "stiffness_tolerance": (
+                requested_stiffness_rtol()
+                if self.device.name == "cpu"
+                else self.settings.stiffness_rtol
+            ),
+        }
 
 
 def punch_observables(

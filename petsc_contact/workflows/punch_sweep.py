@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Iterator, Sequence
+from contextlib import nullcontext
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -20,7 +22,9 @@ from ..conventions.validation import check_finite, keywords_after_first, positiv
 from ..geometries.punch import PunchProblem, footprint_mask
 from ..geometries.step import Step, collect, solve_step
 from ..io.topography import Heights, map_and_lengths
+from ..numerics.device import Device, get_device
 from ..physics.continuation import Held
+from ..solver.driver import ArraySettings, ArraySolver
 from ..solver.report import FORCE_ACCURACY
 from .periodic_sweep import Progress, reported
 from .scene import check_map
@@ -30,13 +34,28 @@ FORCE_RESOLVED = FORCE_ACCURACY  # a force further than this from its target is 
 MAX_NEWTON = 60
 
 
+def punch_solver(problem: PunchProblem) -> BoundSolver | ArraySolver:
+    """The solver of the displacement-controlled ``problem``: TAO on the ``cpu`` device, the
+    package's constrained CG on the arrays of the others, with the problem's
+    :attr:`~PunchProblem.settings`."""
+    if problem.device.name == "cpu":
+        return BoundSolver(problem.grid, problem.hessian, problem.preconditioner)
+    device = problem.device
+    return ArraySolver(problem.hessian, problem.preconditioner, device, problem.settings)
+
+
 class PunchSolver:
-    """Displacement- and load-controlled solves of one :class:`PunchProblem` (warm-started)."""
+    """Displacement- and load-controlled solves of one :class:`PunchProblem` (warm-started).
+
+    The load control (:meth:`at_force`) is written once around the displacement-controlled
+    solves of :func:`punch_solver`: TAO on the ``cpu`` device, the array path's CG on the
+    problem's ``gpu`` or ``cpu-array`` device.
+    """
 
     def __init__(self, problem: PunchProblem) -> None:
         self.problem = problem
-        self.x = np.zeros(int(np.prod(problem.grid.local_shape)))
-        self.solver = BoundSolver(problem.grid, problem.hessian, problem.preconditioner)
+        self.x = problem.device.xp.zeros(int(np.prod(problem.grid.local_shape)))
+        self.solver = punch_solver(problem)
         self.last: tuple[float, float, float] | None = None  # (δ, F, dF/dδ) of the last step
 
     @property
@@ -72,7 +91,7 @@ class PunchSolver:
             self.x = x_new
             s = step.scalars
             self.last = (float(delta), s["force"], s["total_stiffness"])
-        step.state = self.x.reshape(pb.grid.local_shape) * pb.pressure_scale
+        step.state = pb.device.to_host(self.x).reshape(pb.grid.local_shape) * pb.pressure_scale
         step.held = Held(np.array([self.last] if self.last is not None else []).reshape(-1, 3))
         return step
 
@@ -80,7 +99,8 @@ class PunchSolver:
         """Start the next solve from this local pressure slab (a resumed run's state); with
         what the interrupted sweep ``held`` (its last step's ``held``: the approach, force and
         ``dF/dδ`` Newton starts from), go on exactly as it would have."""
-        self.x = (np.asarray(pressure, dtype=float) / self.problem.pressure_scale).reshape(-1)
+        pb = self.problem
+        self.x = (pb.device.asarray(pressure, dtype=float) / pb.pressure_scale).reshape(-1)
         last = held.scalars[-1] if held is not None and len(held.scalars) else None
         self.last = None if last is None else (float(last[0]), float(last[1]), float(last[2]))
 
@@ -239,6 +259,7 @@ def punch_contact(
     beta: float | None = None,
     comm: Any = None,
     flat: str | None = None,
+    device: str = "cpu",
 ) -> list[Step]:
     """Press a rigid punch with face ``heights`` into a free elastic half-space.
 
@@ -255,11 +276,12 @@ def punch_contact(
         Exactly one of them: rigid approaches ``δ`` beyond first touch (displacement
         control), or total forces ``F`` (load control).  Solved in order, warm-started; one
         number is one load.
-    options, fields, progress, monitor, comm
-        As for :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact`.
+    options, fields, progress, monitor, comm, device
+        As for :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact`; ``device``
+        is ``cpu`` (TAO), ``gpu`` or ``cpu-array`` (the package's CG on CuPy or NumPy, on one
+        rank without petsc4py, reading the options ``ArraySettings`` reads).
     stiffness
-        Add the punch's exact interfacial stiffness to every step, as
-        ``Run(geometry="punch", stiffness=True)`` does.
+        Add the exact interfacial stiffness to every step, as ``Run``'s ``stiffness`` does.
     footprint
         ``square`` (default) or ``disk``, as ``Run``'s, or a full ``nx x ny`` boolean mask.
     flat_stiffness, beta
@@ -272,12 +294,11 @@ def punch_contact(
     list of Step
         One per load, in order; only the last keeps ``state``, the field to go on from.
     """
-    flat_stiffness = _renamed_flat(flat, flat_stiffness)
+    face = _PunchFace(footprint, _renamed_flat(flat, flat_stiffness), beta, *_on(device, options))
     values = _punch_loads(approaches, forces)
     array, sides, _ = map_and_lengths(heights, length)
-    with _petsc.scoped_options(options):
-        problem = _punch_problem(array, sides, modulus, footprint, flat_stiffness, beta, comm)
-        check_map(array, problem.grid.spacing, periodic=False)  # as a run's scene does
+    with _petsc.scoped_options(options) if face.settings is None else nullcontext():
+        problem = _punch_problem(array, sides, modulus, face, comm)
         with PunchSolver(problem) as solver:
             steps = punch_sweep(solver, values, forces is not None, fields, monitor, stiffness)
             return collect(reported(steps, len(values), progress))
@@ -295,21 +316,49 @@ def _punch_loads(
     return values
 
 
+def _on(device: str, options: _petsc.OptionsArg) -> tuple[Device, ArraySettings | None]:
+    """The device called ``device`` and, on the array path, the options it reads (``None``
+    on the ``cpu`` device, whose solvers read PETSc's options database)."""
+    where = get_device(device)
+    if where.name == "cpu":
+        return where, None
+    return where, ArraySettings.from_options(_petsc.option_list(options), where.name)
+
+
+@dataclass(frozen=True)
+class _PunchFace:
+    """What :func:`punch_contact` says of its punch besides the map: the footprint, the
+    flat-punch reference and its shape factor, the device and the array path's options."""
+
+    footprint: str | np.ndarray | None
+    flat_stiffness: str
+    beta: float | None
+    device: Device
+    settings: ArraySettings | None
+
+
 def _punch_problem(
-    array: np.ndarray,
-    sides: tuple[float, float],
-    modulus: float,
-    footprint: str | np.ndarray | None,
-    flat_stiffness: str,
-    beta: float | None,
-    comm: Any,
+    array: np.ndarray, sides: tuple[float, float], modulus: float, face: _PunchFace, comm: Any
 ) -> PunchProblem:
-    """:func:`punch_contact`'s problem: the map and the footprint scattered on its grid."""
+    """:func:`punch_contact`'s problem: the map and the footprint scattered on its grid; the
+    map checked as a run's scene checks it (:func:`check_map`)."""
     grid = grid_for(array.shape, sides, comm)
     local = grid.scatter(array)
     check_finite(grid, local)
-    mask, shape = footprint_mask(grid, footprint)
-    return PunchProblem(grid, local, modulus, mask, flat_stiffness, shape if beta is None else beta)
+    mask, shape = footprint_mask(grid, face.footprint)
+    beta = shape if face.beta is None else face.beta
+    problem = PunchProblem(
+        grid,
+        local,
+        modulus,
+        mask,
+        face.flat_stiffness,
+        beta,
+        device=face.device,
+        settings=face.settings,
+    )
+    check_map(array, grid.spacing, periodic=False)
+    return problem
 
 
 def _renamed_flat(flat: str | None, flat_stiffness: str) -> str:

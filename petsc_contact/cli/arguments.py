@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from typing import Any, NoReturn
 
 from .._version import __version__
-from ..workflows.options import Option, default_text, minutes, options_of
+from ..workflows.options import OPTIONS, Option, default_text, minutes, options_of
 
 DEMO: dict[str, Any] = {
     "grid": 512,
@@ -106,6 +106,45 @@ class _Deprecated(argparse.Action):
         setattr(namespace, self.dest, values)
 
 
+_IGNORED = "ignored_options"  # the parsed arguments' note of the retired options given
+
+
+class _Ignored(argparse.Action):
+    """An option the command no longer has (:attr:`Option.ignored_by`): its default value is
+    noted, for the parser to say it is ignored once the command line is read; any other
+    value is refused as the unknown argument it is."""
+
+    def __init__(self, *args: Any, accepted: Any, owners: tuple[str, ...], **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.accepted, self.owners = accepted, owners
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        try:
+            accepted = type(self.accepted)(values) == self.accepted
+        except ValueError:
+            accepted = False
+        if not accepted:
+            parser.error(f"unrecognized arguments: {option_string} {values}")
+        owners = " and ".join(self.owners)
+        setattr(namespace, _IGNORED, [*getattr(namespace, _IGNORED, []), (option_string, owners)])
+
+
+def _ignored(target: Any, option: Option) -> None:
+    """Add ``option`` to a command that no longer has it: read, said to be ignored, hidden
+    from ``--help``."""
+    kwargs: dict[str, Any] = {"dest": f"ignored_{option.name}", "default": argparse.SUPPRESS}
+    kwargs.update(help=argparse.SUPPRESS, metavar=option.metavar)
+    target.add_argument(
+        *option.flags, action=_Ignored, accepted=option.default, owners=option.commands, **kwargs
+    )
+
+
 def _help(option: Option, default: Any) -> str:
     """The option's ``--help`` line: its help and the default the command gives it, inside
     the help's closing parenthesis when it has one (``(0 to 2^63 - 1; default 0)``)."""
@@ -153,6 +192,9 @@ def _options(
             groups[option.exclusive] = p.add_mutually_exclusive_group(required=required)
         target = groups.get(option.exclusive or option.section, p)
         _argument(target, option, d)
+    for option in OPTIONS:
+        if command in option.ignored_by:
+            _ignored(p, option)
 
 
 COMMANDS = {  # name: (one-line help, description)
@@ -236,11 +278,13 @@ class _Parser(argparse.ArgumentParser):
     def parse_args(self, args: Any = None, namespace: Any = None) -> Any:
         """The parsed arguments; a deprecated spelling among them is a warning on standard
         error."""
+        from .common import say
+
         parsed = super().parse_args(args, namespace)
         for old, new in vars(parsed).pop(_SPELT, ()):
-            from .common import say
-
             say(f"{old} is deprecated: use {new}", "warning")
+        for flag, owners in vars(parsed).pop(_IGNORED, ()):
+            say(f"{flag} is for {owners} runs; ignored", "warning")
         return parsed
 
 
@@ -292,6 +336,8 @@ def _study_parser(sub: Any) -> None:
         help="print every piece: done, todo or steps kept (13/25), and stop",
     )
     p.add_argument("--quiet", action="store_true", help="no tables")
+    for option in options_of("study"):
+        _argument(p, option, {})
 
 
 def _plot_parser(sub: Any) -> None:

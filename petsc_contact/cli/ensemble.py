@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Sequence
 
-from .common import EXIT_INTERRUPTED, EXIT_PAUSED, describe
+from .common import EXIT_INTERRUPTED, EXIT_PAUSED, describe, on_array_device
 
 
 def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
@@ -25,10 +25,11 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
     )
     from .runs import execute
 
-    base = describe(args)
+    base = describe(args, petsc_args)
     if args.plot:
         check_writable(args.plot)
-    _petsc.init(petsc_args)
+    if not on_array_device(args):
+        _petsc.init(petsc_args)
     runs = seed_runs(base, args.seeds)
     status = 0
     for run in seeds_to_run(base, runs):  # a seed finished earlier is not recomputed

@@ -13,6 +13,7 @@ from typing import Any
 from ..conventions.warnings import PetscContactWarning
 from ..io.schema import schema_markdown
 from ..io.store import StorageError, check_interrupt, forget_interrupts, interrupt
+from ..numerics.device import DeviceUnavailable
 from .arguments import build_parser, is_petsc_option, split_arguments
 from .common import (
     EXIT_BAD_INPUT,
@@ -20,6 +21,8 @@ from .common import (
     EXIT_STORAGE,
     EXIT_UNAVAILABLE,
     InputError,
+    describe,
+    on_array_device,
     refusal,
     say,
 )
@@ -94,7 +97,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if status != EXIT_INTERRUPTED:  # said so already
             check_interrupt()  # a signal whose exception a finaliser dropped
         return status
-    except ImportError as exc:  # before OSError: the installation, not the input
+    except (ImportError, DeviceUnavailable) as exc:  # the installation, not the input
         say(str(exc))
         return EXIT_UNAVAILABLE
     except StorageError as exc:
@@ -147,7 +150,7 @@ def _dispatch(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[st
     from ..workflows.runner import locked
     from .comparison import run_compare
     from .ensemble import run_ensemble
-    from .runs import run
+    from .runs import execute, run
     from .study import run_study, study_plan
     from .theory import run_theory
     from .tools import run_experiment, run_plot
@@ -162,6 +165,8 @@ def _dispatch(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[st
         return 0
     if args.command == "study":
         return run_study(args, petsc_args)  # each piece locked: studies may share a folder
+    if args.command not in LOCKED and on_array_device(args):  # no PETSc is loaded
+        return execute(describe(args, petsc_args), args, argv)
     if args.command not in LOCKED:
         return run(args, argv, petsc_args)
     with locked(args.output):

@@ -29,11 +29,17 @@ PIECE_END = {code: end for end, code in STATUS.items()}  # how a piece's run end
 def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
     """Run the pieces of the chosen figures in order within ``--minutes``."""
     from ..backend import _petsc
+    from ..workflows.drivers import on_device
     from ..workflows.paper_study import run_pieces, study_pieces
 
     todo = study_pieces(args.data, args.figure, args.shrink)
-    _petsc.init(petsc_args)
-    end = run_pieces(todo, args.data, args.minutes, lambda run: _piece(run, args.quiet), _say)
+    if any(on_device(p.run, args.device).device == "cpu" for p in todo):
+        _petsc.init(petsc_args)  # an array device's pieces carry the options instead
+
+    def piece(run: Any) -> str:
+        return _piece(on_device(run, args.device, petsc_args), args.quiet)
+
+    end = run_pieces(todo, args.data, args.minutes, piece, _say)
     return STATUS[end]
 
 

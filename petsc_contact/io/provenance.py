@@ -6,6 +6,7 @@ from __future__ import annotations
 import hashlib
 import os
 import platform
+import sys
 from importlib import metadata
 from typing import Any
 
@@ -21,14 +22,30 @@ def file_digest(path: str) -> str:
     return sha.hexdigest()
 
 
+MODULES = ("numpy", "scipy", "h5py", "mpi4py", "pyfftw", "mpi4py_fft", "numba", "petsc4py")
+"""The modules whose versions every record gives (``cupy`` too, when a run loaded it)."""
+
+
+def module_version(name: str) -> str:
+    """The version of the module ``name``: its own where it is loaded, else its installed
+    distribution's (nothing is imported: an array device's run loads no petsc4py), else
+    ``not available``."""
+    loaded = sys.modules.get(name)
+    if loaded is not None:
+        return str(getattr(loaded, "__version__", "unknown"))
+    try:
+        return metadata.version(name)
+    except (metadata.PackageNotFoundError, ValueError):
+        return "not available"
+
+
 def versions(petsc: Any | None = None) -> dict[str, str]:
     """Versions of everything that shapes a result."""
     out = {"python": platform.python_version(), "platform": platform.platform()}
-    for mod in ("numpy", "scipy", "h5py", "mpi4py", "pyfftw", "mpi4py_fft", "numba", "petsc4py"):
-        try:
-            out[mod] = str(__import__(mod).__version__)
-        except Exception:
-            out[mod] = "not available"
+    for mod in MODULES:
+        out[mod] = module_version(mod)
+    if sys.modules.get("cupy") is not None:  # a GPU run's (its distribution's name varies)
+        out["cupy"] = module_version("cupy")
     try:  # the instrument reader, when installed (its own __version__ is not its release)
         out["SurfaceTopography"] = metadata.version("SurfaceTopography")
     except metadata.PackageNotFoundError:

@@ -181,7 +181,7 @@ def read_resume(path: str, parameters: dict[str, Any]) -> Finished:
 
     Returns ``Finished(0)`` when there is nothing to resume.  Raises ``ValueError`` when the
     partial file belongs to a different run (its ``parameters`` differ, apart from
-    ``resume``, ``quiet`` and ``stop_after``), so a resume never mixes two runs, or when it
+    :data:`RESUME_FREE`), so a resume never mixes two runs, or when it
     cannot be read (damaged by something else than a run: the run itself replaces it whole).
     """
     import h5py
@@ -242,7 +242,9 @@ def check_nothing_lost(path: str) -> None:
         )
 
 
-RESUME_FREE = ("resume", "overwrite", "quiet", "stop_after")  # options a resume may change
+RESUME_FREE = ("resume", "overwrite", "quiet", "stop_after", "device")
+"""The options a resume may change: none changes the result (a device, its rounding only:
+a run paused on a GPU goes on on the CPU; the ``resumed`` list records each part's)."""
 
 
 def check_same_run(partial: str, theirs: dict[str, Any], mine: dict[str, Any]) -> None:
@@ -395,6 +397,7 @@ class StepStore:
             "time": _now(),
             "petsc_contact_commit": source_commit(),
             "from_saved_state": finished.state is not None,  # False: began at first touch
+            "device": record.get("device", "cpu"),
             "command_line": record.get("command_line", ""),
             "petsc_options": record.get("petsc_options", ""),
         }

@@ -77,11 +77,13 @@ class ArraySettings:
     }
 
     @classmethod
-    def from_options(cls, options: Sequence[str], device: str) -> ArraySettings:
+    def from_options(cls, options: Sequence[str], device: str, prefix: str = "") -> ArraySettings:
         """Parse ``["-tao_gatol", "1e-10", "-tao_monitor", ...]``; ``ValueError`` in one line
-        for an option the array path does not read (``-tao_type`` among them)."""
+        for an option the array path does not read (``-tao_type`` among them).  With a
+        ``prefix`` (``a_``) only the options that carry it are read (``-a_tao_gatol``), as
+        PETSc's solvers with that prefix read theirs; the others are not the run's."""
         values: dict[str, Any] = {}
-        items = list(options)
+        items = _prefixed(list(options), prefix) if prefix else list(options)
         i = 0
         while i < len(items):
             name = items[i]
@@ -112,6 +114,21 @@ class ArraySettings:
             block = settings.block
             raise ValueError(f"-petsc_contact_two_level_block must be positive, not {block}")
         return settings
+
+
+def _prefixed(items: list[str], prefix: str) -> list[str]:
+    """The options of ``items`` that carry ``prefix`` (with their values), the prefix taken
+    off: ``-a_tao_gatol 1e-9`` is ``-tao_gatol 1e-9`` for the prefix ``a_``."""
+    out: list[str] = []
+    mine = False
+    for item in items:
+        if _is_option(item):
+            mine = item.lstrip("-").startswith(prefix)
+            if mine:
+                out.append("-" + item.lstrip("-").removeprefix(prefix))
+        elif mine:
+            out.append(item)
+    return out
 
 
 def _is_option(text: str) -> bool:

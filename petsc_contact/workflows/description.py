@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from ..conventions.units import METRES, NEWTONS, PASCALS, parse_quantity
+from ..numerics.device import DEVICES
 
 GEOMETRIES = ("periodic", "punch")
 LOADS = ("pressures", "sweep", "approaches", "forces")
@@ -110,6 +111,11 @@ class Run:
         The prefix this run's solvers read their PETSc options with (``"a_"``: ``-a_tao_type``).
     skip_memory_check
         Run even when the estimated memory exceeds what the machine has available.
+    device
+        Where the solves run (:mod:`~petsc_contact.numerics.device`): ``cpu`` (PETSc/TAO),
+        ``gpu`` (the package's CG on CuPy) or ``cpu-array`` (the GPU's code on NumPy); the
+        array devices read ``options`` as :class:`~petsc_contact.solver.driver.ArraySettings`
+        does and run periodic sweeps on one rank.
     """
 
     geometry: str = "periodic"
@@ -144,6 +150,7 @@ class Run:
     overwrite: bool = False
     stop_after: float | None = None
     skip_memory_check: bool = False
+    device: str = "cpu"
     options: tuple[str, ...] = field(default=(), compare=False)
     options_prefix: str = field(default="", compare=False)
 
@@ -170,6 +177,8 @@ class Run:
         if self.geometry not in GEOMETRIES:
             raise ValueError(f"geometry must be one of {', '.join(GEOMETRIES)}: {self.geometry}")
         positive("--modulus", self.modulus_value)
+        if self.device not in DEVICES:
+            raise ValueError(f"unknown device '{self.device}': choose one of {', '.join(DEVICES)}")
         if self.cut_from < 1:
             raise ValueError(f"--cut-from must be a whole number >= 1, got {self.cut_from}")
         if self.stop_after is not None:

@@ -71,6 +71,27 @@ class Driver(Protocol):
         ...
 
 
+ARRAY_GEOMETRIES = ("periodic",)
+"""The geometries the array devices (``gpu``, ``cpu-array``) run; the others run on ``cpu``."""
+
+
+def check_device(run: Run) -> None:
+    """``ValueError`` (one line) when ``run``'s geometry does not run on its device."""
+    if run.device != "cpu" and run.geometry not in ARRAY_GEOMETRIES:
+        raise ValueError(
+            f"--device {run.device} runs periodic sweeps: a {run.geometry} run takes "
+            "--device cpu for now"
+        )
+
+
+def on_device(run: Run, device: str, options: Sequence[str] = ()) -> Run:
+    """``run`` on ``device``, reading ``options`` there, where its geometry runs on it; on
+    ``cpu`` as it is otherwise (a study's punch pieces beside its periodic ones)."""
+    if device == "cpu" or run.geometry not in ARRAY_GEOMETRIES:
+        return run
+    return run.with_(device=device, options=(*run.options, *options))
+
+
 def driver_for(run: Run, scene: Scene) -> Driver:
     """The driver of ``run``'s geometry on ``scene``, its loads checked (``ValueError``)."""
     return PunchDriver(run, scene) if run.geometry == "punch" else PeriodicDriver(run, scene)
@@ -111,7 +132,9 @@ class PeriodicDriver:
         for p0 in self.loads:
             problem.check_pressure(p0)  # before the output is touched
         self.run, self.problem = run, problem
-        self.solver: BoundSolver | ArraySolver = problem_solver(problem)
+        self.solver: BoundSolver | ArraySolver = problem_solver(
+            problem, run.options, run.options_prefix
+        )
         self.intro = f", full contact at p0 = {format_quantity(p_full, run.pressure_unit)}"
         self.backend = type(scene.fft).__name__
 

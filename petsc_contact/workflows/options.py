@@ -27,6 +27,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ..conventions.validation import log_range
+from ..numerics.device import DEVICES
 
 SEED_LIMIT = 2**63  # seeds are stored as 64-bit integers
 
@@ -217,6 +218,10 @@ class Option:
         What docs/cli.md says beyond ``help`` (Markdown).
     deprecated
         Spellings still read, with a warning.
+    ignored_by
+        Commands that no longer have the option but still read its default value (an old
+        script's ``periodic --cut-from 1``), saying in a warning that it is ignored; another
+        value is refused as an unknown argument.
     """
 
     name: str
@@ -236,6 +241,7 @@ class Option:
     shown_default: str | None = None
     more: str = ""
     deprecated: tuple[str, ...] = ()
+    ignored_by: tuple[str, ...] = ()
 
     @property
     def switch(self) -> bool:
@@ -337,7 +343,8 @@ _SURFACE = (
         more="The parent's `L/lambda_r` and `L/lambda_1` are `M` times the run's. The file "
         "records `cut_from` and the parent's realised `parent_rms_height`, "
         "`parent_rms_slope` (the face's own spectral `rms_slope` includes the jump at its "
-        "edges)",
+        "edges). `periodic --cut-from 1` is still read, with a warning, and ignored",
+        ignored_by=("periodic",),
     ),
     _surface(
         "skip_memory_check",
@@ -474,6 +481,19 @@ _RUN = (
         PUNCH,
         default=False,
         more=_UNCONVERGED_STIFFNESS,
+    ),
+    _option(
+        "device",
+        "where the solves run: cpu (PETSc/TAO), gpu (the package's CG on CuPy) or cpu-array "
+        "(the GPU's code on NumPy)",
+        (*RUNS, "study"),
+        default="cpu",
+        choices=DEVICES,
+        more="`gpu` and `cpu-array` run periodic sweeps (`--stiffness`, `--fields`, "
+        "`--resume`, ensembles, the study's periodic pieces) on one rank without petsc4py, "
+        "reading the PETSc options they understand; the punch runs on `cpu` for now. The file "
+        "records `device` (a GPU's `device_name` and `device_memory`) and each step's "
+        "`solve_time`. No CuPy or no GPU: exit status 69 ([gpu.md](gpu.md))",
     ),
     _option(
         "output",

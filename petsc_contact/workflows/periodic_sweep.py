@@ -55,14 +55,14 @@ def check_pressures(pressures: Sequence[float]) -> list[float]:
 
 
 def problem_solver(
-    problem: PeriodicProblem, options: Sequence[str] = ()
+    problem: PeriodicProblem, options: Sequence[str] = (), prefix: str = ""
 ) -> BoundSolver | ArraySolver:
     """The solver of ``problem``: TAO on the ``cpu`` device (its type validated from the
     options database), the array path's CG on the others (``options`` are PETSc's names for
-    what it reads, :class:`~petsc_contact.solver.driver.ArraySettings`)."""
+    what it reads, read with ``prefix``: :class:`~petsc_contact.solver.driver.ArraySettings`)."""
     if problem.device.name == "cpu":
         return BoundSolver(problem.grid, problem.hessian, problem.preconditioner)
-    settings = ArraySettings.from_options(options, problem.device.name)
+    settings = ArraySettings.from_options(options, problem.device.name, prefix)
     problem.configure(settings)
     return ArraySolver(problem.hessian, problem.preconditioner, problem.device, settings)
 

@@ -29,7 +29,7 @@ import os
 import time
 import warnings
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager, nullcontext
 from dataclasses import dataclass, field
 from types import ModuleType
 from typing import Any
@@ -54,9 +54,10 @@ from ..io.store import (
     check_writable,
     read_resume,
 )
+from ..numerics.device import get_device
 from ..physics.continuation import Held
 from .description import Run
-from .drivers import Driver, Start, driver_for
+from .drivers import Driver, Start, check_device, driver_for
 from .drivers import swept as swept  # where scripts and the CLI import it from
 from .periodic_sweep import Progress
 from .scene import Scene, prepare_scene
@@ -275,14 +276,24 @@ def prepare(run: Run, command_line: str | None = None, petsc: ModuleType | None 
     command_line
         What to record as the command line (default: the arguments that describe ``run``).
     petsc
-        ``petsc4py.PETSc``, initialised by the caller (default: initialised here).
-    """
-    from ..backend.solve import DEFAULT_TYPE, requested_type
+        ``petsc4py.PETSc``, initialised by the caller (default: initialised here); an array
+        device's run (``run.device``) uses no PETSc.
 
-    petsc = petsc or _petsc.init()
+    Raises
+    ------
+    DeviceUnavailable
+        For ``device="gpu"`` where CuPy or a GPU is missing, before anything is computed.
+    """
+    check_device(run)
+    default_solver = True  # the array devices run the package's CG
+    if get_device(run.device).name == "cpu":
+        from ..backend.solve import DEFAULT_TYPE, requested_type
+
+        petsc = petsc or _petsc.init()
+        default_solver = requested_type(petsc) == DEFAULT_TYPE
     texts: list[str] = []
     with recorded(texts):  # the map's warnings, what a resume computes again
-        scene = prepare_scene(run, default_solver=requested_type(petsc) == DEFAULT_TYPE)
+        scene = prepare_scene(run, default_solver=default_solver)
         driver = driver_for(run, scene)
         try:
             record = _record(run, command_line, petsc, scene, driver) | {"warnings": texts}
@@ -294,12 +305,15 @@ def prepare(run: Run, command_line: str | None = None, petsc: ModuleType | None 
 
 
 def _record(
-    run: Run, command_line: str | None, petsc: ModuleType, scene: Scene, driver: Driver
+    run: Run, command_line: str | None, petsc: ModuleType | None, scene: Scene, driver: Driver
 ) -> dict[str, Any]:
-    """The run record of ``run`` (:func:`run_record`) on its scene, with its driver's loads."""
+    """The run record of ``run`` (:func:`run_record`) on its scene, with its driver's loads
+    (the surface's rms measured on the host)."""
     from ..physics.surface import rms_of
 
     grid, fft, heights = scene.grid, scene.fft, scene.heights
+    if not fft.device.on_host:
+        fft = get_device("cpu-array").fft(grid)
     realised = {
         "rms_height": rms_of(grid, fft, heights),
         "rms_slope": rms_of(grid, fft, heights, slope=True),
@@ -364,8 +378,16 @@ def run_contact(
     command_line
         What to record as the command line (default: the arguments that describe ``run``).
     """
-    with locked(run.output), _petsc.scoped_options(list(run.options), run.options_prefix) as petsc:
+    with locked(run.output), _scoped(run) as petsc:
         return prepare(run, command_line, petsc).execute(progress, monitor)
+
+
+def _scoped(run: Run) -> AbstractContextManager[ModuleType | None]:
+    """PETSc with ``run``'s options for the ``cpu`` device; nothing for an array device (its
+    solver reads ``run.options`` itself)."""
+    if run.device == "cpu":
+        return _petsc.scoped_options(list(run.options), run.options_prefix)
+    return nullcontext(None)
 
 
 @contextmanager
@@ -392,12 +414,34 @@ def locked(path: str | None) -> Iterator[None]:
             lock.release()
 
 
+def provenance(run: Run, petsc: Any | None = None) -> dict[str, Any]:
+    """What a record says of how ``run`` was computed: its PETSc options (an array device's
+    run, which loads no PETSc: the options it was given), the versions, the MPI ranks and
+    the device (:meth:`~petsc_contact.numerics.device.Device.describe`).  ``petsc``: PETSc,
+    initialised here for a ``cpu`` run where not given."""
+    from ..io.provenance import petsc_options, versions
+
+    if petsc is None and run.device == "cpu":
+        petsc = _petsc.init()
+    return {
+        "petsc_options": petsc_options(petsc) if petsc is not None else " ".join(run.options),
+        "versions": versions(petsc),
+        "mpi_size": petsc.COMM_WORLD.getSize() if petsc is not None else world().size,
+        **get_device(run.device).describe(),
+    }
+
+
 def run_record(
-    run: Run, command_line: str, petsc: Any, realised: dict[str, float], resolved: dict[str, Any]
+    run: Run,
+    command_line: str,
+    petsc: Any | None,
+    realised: dict[str, float],
+    resolved: dict[str, Any],
 ) -> dict[str, Any]:
-    """What reproduces the run: its description (defaults resolved), versions, PETSc options."""
+    """What reproduces the run: its description (defaults resolved), versions, PETSc options
+    (an array device's run, with ``petsc`` None: the options it was given), its device."""
     from ..conventions.units import force_unit
-    from ..io.provenance import file_digest, petsc_options, versions
+    from ..io.provenance import file_digest
 
     params = run.parameters() | {k: v for k, v in resolved.items() if k not in FILE_RECORD}
     lengths, unit = resolved["length"], resolved["length_unit"]
@@ -405,9 +449,7 @@ def run_record(
         "geometry": run.geometry,
         "command_line": command_line,
         "parameters": params,
-        "petsc_options": petsc_options(petsc),
-        "versions": versions(petsc),
-        "mpi_size": petsc.COMM_WORLD.getSize(),
+        **provenance(run, petsc),
         "length": lengths[0],
         "lengths": np.array(lengths),
         "length_unit": unit,

@@ -22,6 +22,7 @@ from ..conventions.units import Lengths, factor, parse_lengths, unit_name
 from ..conventions.validation import check_finite
 from ..conventions.warnings import DoubtfulMap
 from ..io.topography import Topography, as_topography
+from ..numerics.device import get_device
 from ..numerics.fft import make_fft
 from .description import Run
 
@@ -94,7 +95,8 @@ def shape_of(run: Run, full: np.ndarray | None) -> tuple[int, int]:
 
 def prepare_scene(run: Run, comm: Any = None, default_solver: bool = True) -> Scene:
     """The checked scene of ``run``: its map read and prepared (or its surface generated),
-    the memory it will need checked, its grid and FFT made (collective).
+    the memory it will need checked, its grid and FFT made (collective; the FFT of the run's
+    device, :class:`~petsc_contact.numerics.device.DeviceUnavailable` where it cannot be used).
 
     ``default_solver`` says whether the run uses the package's solver (the memory estimate
     is larger for TAO's own types)."""
@@ -111,7 +113,7 @@ def prepare_scene(run: Run, comm: Any = None, default_solver: bool = True) -> Sc
 
         check_memory(shape[0] * shape[1], run.geometry, default_solver, run.fields)
     grid = grid_for(shape, lengths.pair, comm)
-    fft = make_fft(grid)
+    fft = get_device(run.device).fft(grid)  # the device's: the surface transformed there
     resolved: dict[str, Any] = {"length": list(grid.lengths), "length_unit": lengths.unit or ""}
     if full is None:
         from ..physics.surface import nyquist_ratio

@@ -272,18 +272,15 @@ def write_summary(
 def ensemble_record(
     base: Run, seeds: Sequence[int], pressures: list[float], command_line: str
 ) -> dict[str, Any]:
-    """What reproduces an ensemble: its command, description, versions and PETSc options."""
-    from ..backend import _petsc
-    from ..io.provenance import petsc_options, versions
+    """What reproduces an ensemble: its command, description, versions, PETSc options and
+    device (:func:`~petsc_contact.workflows.runner.provenance`)."""
+    from .runner import provenance
 
-    petsc = _petsc.init()
     return {
         "command_line": command_line,
         "parameters": base.parameters()
         | {"command": "ensemble", "seeds": list(seeds), "pressures": pressures, "sweep": None},
-        "petsc_options": petsc_options(petsc),
-        "versions": versions(petsc),
-        "mpi_size": petsc.COMM_WORLD.getSize(),
+        **provenance(base),
     }
 
 

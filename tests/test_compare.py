@@ -160,3 +160,20 @@ def test_compare_under_mpi_matches_serial(tmp_path):
     with h5py.File(tmp_path / "serial.h5") as s, h5py.File(tmp_path / "mpi.h5") as m:
         assert m.attrs["mpi_size"] == 2
         assert abs(m.attrs["reference_mean_gap"] / s.attrs["reference_mean_gap"] - 1) < 1e-10
+
+
+def test_each_solver_reads_its_own_prefixed_options(tmp_path):
+    """``-NAME_tao_max_it`` limits solver NAME alone; unprefixed options reach every solver,
+    and the file records what each ran with (prefixes taken off)."""
+    out = tmp_path / "cmp.h5"
+    limits = ("-tron_tao_max_it", "2", "-cg_tao_max_it", "3", "-tao_gatol", "1e-7")
+    r = cli(*SCENE, "--pressures", "3e-3", "--solvers", "cg,tron,bncg", *limits,
+            "--output", str(out))  # fmt: skip
+    assert r.returncode == 1, r.stdout + r.stderr  # two solvers stopped at their limits
+    assert "unused" not in r.stderr.lower()  # no solver was handed another's option
+    with h5py.File(out) as f:
+        its = {name: int(f[name].attrs["iterations"]) for name in ("cg", "tron", "bncg")}
+        options = {name: f[name].attrs["petsc_options"].split() for name in ("cg", "tron", "bncg")}
+    assert its["tron"] <= 2 and its["cg"] <= 3 and its["bncg"] > 3
+    assert options["tron"][-4:] == ["-tao_max_it", "2", "-tao_gatol", "1e-7"]
+    assert "-tao_max_it" not in options["bncg"] and options["bncg"][-2:] == ["-tao_gatol", "1e-7"]

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import time
 from collections.abc import Callable, Sequence
 from contextlib import suppress
@@ -50,6 +51,7 @@ from ..physics.observables import natural_residual
 from ..physics.surface import rms_of
 from .periodic_sweep import sweep
 
+_OPTION_NAME = re.compile(r"^-[A-Za-z_]")  # an option's name, not a value such as -1e-3
 REFERENCE_GATOL = 1e-12
 STALL_GAIN = 0.9  # a new low of the natural residual must be 10% below the best so far
 DEFAULT_SOLVERS = ("cg", "pk", "tron", "bnls", "bntr", "bqnls", "blmvm", "bncg", "gpcg")
@@ -74,6 +76,24 @@ def solver_options(name: str) -> list[str]:
             f"the options file of solver '{name}' is missing: {path} (reinstall the package)"
         )
     return ["-options_file", str(path)]
+
+
+def own_options(options: Sequence[str], name: str, solvers: Sequence[str]) -> list[str]:
+    """The command line's PETSc ``options`` that solver ``name`` of a comparison of
+    ``solvers`` runs with: those that name no solver, and those with its own prefix, without
+    it (``-bncg_tao_max_it 50`` is ``-tao_max_it 50`` for ``bncg`` alone).  A solver's prefix
+    is its name (its group in the file) and an underscore."""
+    prefixes = {f"-{group_name(other)}_": other for other in solvers}
+    own, keep = [], True
+    for token in options:
+        if _OPTION_NAME.match(token):
+            prefix = next((p for p in prefixes if token.startswith(p)), None)
+            keep = prefix is None or prefixes[prefix] == name
+            if keep:
+                own.append(token if prefix is None else "-" + token.removeprefix(prefix))
+        elif keep:
+            own.append(token)
+    return own
 
 
 def check_solvers(solvers: Sequence[str]) -> None:
@@ -228,8 +248,9 @@ def compare(
 ) -> tuple[dict[str, Any], list[Trajectory]]:
     """Run each solver from first touch and record its error against time.
 
-    Each solver runs with :func:`solver_options` then ``extra_options``, which therefore win
-    over its options file; both are recorded (:attr:`Trajectory.options`).
+    Each solver runs with :func:`solver_options` then its share of ``extra_options``
+    (:func:`own_options`: those of every solver and those with its prefix, ``-bncg_...``),
+    which therefore win over its options file; both are recorded (:attr:`Trajectory.options`).
 
     The solvers of ``done`` (an interrupted comparison's, :func:`read_partial`) are kept as
     they are and not run again; the reference is solved again (the same solve, so the same
@@ -258,7 +279,7 @@ def compare(
         if name in kept:
             out.append(kept[name])
             continue
-        opts = solver_options(name) + list(extra_options)
+        opts = solver_options(name) + own_options(extra_options, name, solvers)
         traj = _trajectory(problem, reference, pressure, Trajectory(name, opts), time_limit,
                            stall_iterations)  # fmt: skip
         out.append(traj)

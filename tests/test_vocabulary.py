@@ -12,7 +12,7 @@ import pytest
 from conftest import cli
 
 from petsc_contact import periodic_contact
-from petsc_contact.cli.runs import PERIODIC_COLUMNS, PUNCH_COLUMNS, STEP_COLUMNS
+from petsc_contact.cli.runs import LOAD_COLUMNS, STEP_COLUMNS
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.conventions.units import format_quantity
 from petsc_contact.io.schema import GEOMETRIES
@@ -52,7 +52,7 @@ def test_format_quantity(value, unit, shown):
 
 
 def test_columns_are_datasets_of_the_output():
-    for geometry, load in (("periodic", PERIODIC_COLUMNS), ("punch", PUNCH_COLUMNS)):
+    for geometry, load in LOAD_COLUMNS.items():
         for _, key, *_ in (*load, *STEP_COLUMNS):
             assert key in GEOMETRIES[geometry], (geometry, key)
 

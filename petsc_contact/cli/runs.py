@@ -12,13 +12,15 @@ from typing import Any
 from ..conventions.units import format_quantity
 from .common import EXIT_INTERRUPTED, EXIT_NOT_CONVERGED, EXIT_PAUSED, describe, say
 
-PERIODIC_COLUMNS = (("p0", "nominal_pressure"), ("mean_gap", "mean_gap"))
-PUNCH_COLUMNS = (
-    ("approach", "approach"),
-    ("force", "force"),
-    ("K_tot", "total_stiffness"),
-    ("p0", "nominal_pressure"),
-)
+LOAD_COLUMNS = {
+    "periodic": (("p0", "nominal_pressure"), ("mean_gap", "mean_gap")),
+    "punch": (
+        ("approach", "approach"),
+        ("force", "force"),
+        ("K_tot", "total_stiffness"),
+        ("p0", "nominal_pressure"),
+    ),
+}
 """The load columns of each geometry's table: (header, dataset), shown with an SI prefix."""
 STEP_COLUMNS = (
     ("area", "area_fraction", "{:>9.5f}"),
@@ -43,8 +45,7 @@ def _unit(key: str, record: dict[str, Any]) -> str:
 
 def _columns(geometry: str, record: dict[str, Any]) -> Columns:
     """The load columns of ``geometry``'s table, with their units in the run ``record``."""
-    names = PUNCH_COLUMNS if geometry == "punch" else PERIODIC_COLUMNS
-    return tuple((title, key, _unit(key, record)) for title, key in names)
+    return tuple((title, key, _unit(key, record)) for title, key in LOAD_COLUMNS[geometry])
 
 
 def _legend(columns: Columns, record: dict[str, Any]) -> str:

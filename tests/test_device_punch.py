@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.device import get_device
+from petsc_contact.numerics.device import DeviceUnavailable, get_device
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.workflows.punch_sweep import punch_contact
 
@@ -33,9 +33,14 @@ def face(n: int, seed: int = 3) -> np.ndarray:
 
 def both(heights: np.ndarray, **kwargs: object) -> list[tuple[dict, dict]]:
     """Each step's scalars on the PETSc path and on the stand-in, side by side."""
-    cpu = punch_contact(heights, length=1.0, modulus=1.0, **kwargs)
-    array = punch_contact(heights, length=1.0, modulus=1.0, device="cpu-array", **kwargs)
-    return [(a.scalars, b.scalars) for a, b in zip(cpu, array, strict=True)]
+    return [(a.scalars, b.scalars) for a, b in pairs(heights, "cpu", "cpu-array", **kwargs)]
+
+
+def pairs(heights: np.ndarray, first: str, second: str, **kwargs: object) -> list[tuple]:
+    """Each step on the devices ``first`` and ``second``, side by side."""
+    one = punch_contact(heights, length=1.0, modulus=1.0, device=first, **kwargs)
+    two = punch_contact(heights, length=1.0, modulus=1.0, device=second, **kwargs)
+    return list(zip(one, two, strict=True))
 
 
 def agree(sa: dict, sb: dict, pixels: int, iterations: int = 3) -> None:
@@ -113,3 +118,22 @@ def test_the_array_punch_refuses_options_it_does_not_read():
             device="cpu-array",
             options=["-tao_type", "bncg"],
         )
+
+
+@pytest.mark.gpu
+@pytest.mark.parametrize("n", [128, 256])
+def test_the_gpu_presses_the_punch_as_its_stand_in_does(n):
+    """``pytest -m gpu``: the GPU's punch against the stand-in (only rounding differs)."""
+    try:
+        get_device("gpu")
+    except DeviceUnavailable as why:
+        pytest.skip(str(why))
+    steps = pairs(
+        face(n), "cpu-array", "gpu", forces=[1e-4, 1e-3, 1e-2], stiffness=True, fields=True
+    )
+    for a, b in steps:
+        agree(a.scalars, b.scalars, n * n)
+        assert b.scalars["newton_iterations"] == a.scalars["newton_iterations"]
+        assert isinstance(b.pressure, np.ndarray)
+        assert b.scalars["force"] == pytest.approx(a.scalars["force"], rel=1e-8)
+    assert isinstance(steps[-1][1].state, np.ndarray)

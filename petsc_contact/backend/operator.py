@@ -6,6 +6,11 @@ a :class:`~petsc_contact.conventions.grid.Grid` (the periodic geometry).
 field and reads back the first block: the free-boundary convolution of the punch (Hockney
 1970).  Either object serves as the context of a Python ``Mat`` (``mult``) and of a Python
 ``PC`` (``apply``), so one class gives TAO both the exact Hessian and the Fourier preconditioner.
+
+The operators hold their multipliers and apply themselves on the arrays of their FFT's
+:class:`~petsc_contact.numerics.device.Device`: FFTW and NumPy on the ``cpu`` device, the
+array module's FFT on ``gpu`` (CuPy) and ``cpu-array``, where no PETSc object is ever made
+of them (the package's own solver calls ``apply_array`` and the two halves directly).
 """
 
 from __future__ import annotations

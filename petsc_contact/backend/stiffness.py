@@ -10,7 +10,10 @@ gradient solve restricted to a set of pixels, with no finite-difference noise.
   and ``dF/dδ = a^2 sum(y)`` with ``G_CC y = 1_C`` (``G`` the padded compliance).
 
 The restricted operator ``P A P + (I - P)`` and preconditioner ``P M P + (I - P)`` are
-Python ``Mat``/``PC`` objects solved by PETSc's ``KSPCG``.
+Python ``Mat``/``PC`` objects solved by PETSc's ``KSPCG`` (:func:`restricted_solve`).  On the
+array devices (``gpu``, ``cpu-array``) the geometries hand :func:`periodic_stiffness_exact`
+and :func:`punch_stiffness_exact` the array path's held-set CG instead
+(:func:`~petsc_contact.solver.linear.held_set_solve`): the same operators, start and test.
 """
 
 from __future__ import annotations
@@ -113,7 +116,8 @@ def punch_stiffness_exact(
     solve: Any = restricted_solve,
 ) -> tuple[float, int]:
     """Total stiffness ``dF/dδ`` of a punch with the contact set held fixed (0 if none);
-    ``solve`` as for :func:`periodic_stiffness_exact`."""
+    ``solve`` as for :func:`periodic_stiffness_exact`.  ``contact`` is this rank's host
+    mask; ``y`` may be an array of any device (its sum comes to the host)."""
     if grid.sum(np.count_nonzero(contact))[0] == 0:
         return 0.0, 0
     y, its = solve(grid, compliance, inverse, contact)

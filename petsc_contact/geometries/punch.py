@@ -23,6 +23,12 @@ Eq. 2's flat-punch reference), area fraction
 series (paper Eq. 2), ``1/K_int = 1/K_tot - 1/K_flat``, ``K = K_int / (Lx Ly)``.  ``K_flat`` is
 the flat punch of the same footprint computed on the same grid (default: discretisation
 errors cancel) or Pharr, Oliver & Brotzen's ``β 2 E* sqrt(A/π)``, ``β = 1.012`` (square).
+
+The problem is written once on the arrays of a :class:`~petsc_contact.numerics.device.Device`:
+on ``cpu`` TAO minimises it on PETSc Vecs and ``KSPCG`` solves the held sets of the exact
+stiffness; on ``gpu`` and ``cpu-array`` the package's constrained CG and held-set CG do
+(:mod:`petsc_contact.solver`), with the padded compliance on the device's FFT and no PETSc.
+The observables are measured on the host.
 """
 
 from __future__ import annotations

@@ -221,13 +221,20 @@ def linear_stiffness(pressure: Values, h_rms: float, gamma: float = GAMMA) -> np
     return np.asarray(pressure, dtype=float) / (gamma * h_rms)
 
 
-def hertz_stiffness(pressure: Values, modulus: float, radius: float, area: float) -> np.ndarray:
+def hertz_stiffness(
+    pressure: Values, modulus: float, radius: float, area: float, cell: float | None = None
+) -> np.ndarray:
     """Single-asperity (Hertz) regime, ``K ~ p^(1/3)``, per apparent area ``A0``.
 
-    ``F = p A0`` on one sphere (:mod:`~petsc_contact.reference.hertz`): ``K = 2 E* a / A0``.
+    ``F = p A0`` on one sphere (:mod:`~petsc_contact.reference.hertz`): ``K = 2 E* a / A0``
+    on a half-space; with ``cell`` the side ``L`` of a square periodic cell (``A0 = L^2``),
+    ``1/(K A0) = 1/(2 E* a) - c/(E* L)`` (:func:`~petsc_contact.reference.hertz.
+    periodic_stiffness`, ``c = 1.2415``): the periodic simulation's Hertz limit.
     """
     a = hertz.radius_at_force(np.asarray(pressure, dtype=float) * area, radius, modulus)
-    return np.asarray(2 * modulus * a / area)
+    if cell is None:
+        return np.asarray(2 * modulus * a / area)
+    return np.asarray(hertz.periodic_stiffness(a, modulus, cell) / area)
 
 
 # -- Persson theory ---------------------------------------------------------------------------

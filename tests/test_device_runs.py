@@ -112,6 +112,22 @@ def test_a_paused_stand_in_sweep_resumes_as_if_never_stopped(tmp_path):
         assert segment["device"] == b.attrs["device"] == "cpu-array"
 
 
+def test_a_sweep_paused_on_one_device_goes_on_on_another(tmp_path):
+    """A run paused on the stand-in resumes on the cpu (the device is how, not what): the
+    uninterrupted sweep's steps to the devices' agreement; each part's device recorded."""
+    whole, parted = tmp_path / "whole.h5", tmp_path / "parted.h5"
+    assert _sweep(whole, "--stiffness", "--quiet").returncode == 0
+    paused = _sweep(parted, "--stiffness", "--quiet", "--device", "cpu-array", "--stop-after", "0")
+    assert paused.returncode == 75, paused.stderr
+    resumed = _sweep(parted, "--stiffness", "--quiet", "--device", "cpu", "--resume")
+    assert resumed.returncode == 0, resumed.stderr
+    with h5py.File(whole) as a, h5py.File(parted) as b:
+        np.testing.assert_allclose(b["mean_gap"][:], a["mean_gap"][:], rtol=1e-10)
+        np.testing.assert_allclose(b["stiffness"][:], a["stiffness"][:], rtol=1e-8)
+        assert b.attrs["device"] == "cpu-array"
+        assert [s["device"] for s in json.loads(b.attrs["resumed"])] == ["cpu"]
+
+
 def test_run_takes_the_device_through_run_contact(tmp_path, petsc):
     """``Run(device="cpu-array")`` through ``run_contact`` gives the cpu run's steps, records
     its device, and reads the array path's options (``-tao_type`` refused in one line)."""

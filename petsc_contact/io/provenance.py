@@ -29,10 +29,10 @@ MODULES = ("numpy", "scipy", "h5py", "mpi4py", "pyfftw", "mpi4py_fft", "numba", 
 def module_version(name: str) -> str:
     """The version of the module ``name``: its own where it is loaded, else its installed
     distribution's (nothing is imported: an array device's run loads no petsc4py), else
-    ``not available``."""
-    loaded = sys.modules.get(name)
-    if loaded is not None:
-        return str(getattr(loaded, "__version__", "unknown"))
+    ``not available`` (not installed, or known not to import: ``None`` in ``sys.modules``)."""
+    if name in sys.modules:
+        loaded = sys.modules[name]
+        return "not available" if loaded is None else str(getattr(loaded, "__version__", "?"))
     try:
         return metadata.version(name)
     except (metadata.PackageNotFoundError, ValueError):

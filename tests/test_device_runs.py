@@ -173,6 +173,22 @@ def test_the_stand_in_runs_the_cli_without_petsc4py_pyfftw_or_surfacetopography(
         assert f.attrs["device"] == "cpu-array" and f["converged"][:].all()
 
 
+def test_the_stand_in_reads_a_map_without_them(tmp_path):
+    """A map given as ``.npy`` (read by numpy; the package only asks whether SurfaceTopography
+    is installed), with the modules absent as where they are not installed."""
+    x = np.linspace(0, 2 * np.pi, 64, endpoint=False)
+    np.save(tmp_path / "h.npy", 0.01 * np.cos(x)[:, None] * np.cos(2 * x)[None, :])
+    absent = "".join(f"sys.modules[{name!r}] = None; " for name in HIDDEN)
+    code = f"import sys; {absent}from petsc_contact.cli import main; sys.exit(main(sys.argv[1:]))"
+    line = ["periodic", "--heights", str(tmp_path / "h.npy"), "--length", "1"]
+    line += ["--pressures", "1e-4,1e-3", "--stiffness", "--fields", "--device", "cpu-array"]
+    done = python("-c", code, *line, "--output", str(tmp_path / "m.h5"), "--quiet")
+    assert done.returncode == 0, done.stderr
+    with h5py.File(tmp_path / "m.h5") as f:
+        assert f["converged"][:].all() and f.attrs["device"] == "cpu-array"
+        assert f["gap"].shape == (2, 64, 64)
+
+
 def test_a_gpu_without_cupy_is_exit_status_69_in_one_line(tmp_path):
     """``--device gpu`` where CuPy cannot be imported: one line, exit status 69, no output."""
     out = tmp_path / "g.h5"

@@ -290,12 +290,15 @@ class CoarseSpace:
         return a[self.labels], c
 
 
-def add_correction(apply: Any, correction: Any, x: np.ndarray, out: np.ndarray, work: Any) -> None:
+def add_correction(
+    apply: Any, correction: Any, x: np.ndarray, out: np.ndarray, work: Any
+) -> np.ndarray:
     """``out <- out + G (reactions) + c`` for ``out = G x``: the Schur or two-level form.
 
     ``apply(x, out)`` applies ``G``; ``correction`` is a :class:`CoarseSpace` or a
     :class:`~petsc_contact.numerics.schur.ContactSchur` (``solve`` and ``local``);
-    ``work`` is two flat field-sized arrays, the first zero (it is left zero).
+    ``work`` is two flat field-sized arrays, the first zero (it is left zero).  Returns the
+    reactions on this rank's pixels of ``correction.local``.
     """
     reactions, shift = correction.solve(out, float(correction.grid.sum(x.sum())[0]))
     spread, response = work
@@ -303,6 +306,7 @@ def add_correction(apply: Any, correction: Any, x: np.ndarray, out: np.ndarray, 
     out += apply(spread, response).reshape(out.shape)
     out += shift
     spread[correction.local] = 0.0
+    return reactions
 
 
 class CoarseCorrected(ShellInterface):

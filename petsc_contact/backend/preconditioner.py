@@ -71,6 +71,7 @@ class MeanModePreconditioner(FourierOperator):
         self._built_free: np.ndarray | None = None  # the free set the coarse space was built on
         self._quarter: np.ndarray | None = None  # G's quarter, made when the Schur form starts
         self._spread: np.ndarray | None = None  # work fields of the set-dependent forms
+        self._reactions: np.ndarray | None = None  # the Schur form's, of the last application
 
     @property
     def schur(self) -> ContactSchur | None:
@@ -101,15 +102,20 @@ class MeanModePreconditioner(FourierOperator):
         Computed in place, with no copy of the kernel kept: with ``N = n^2`` the normalised
         multipliers are ``c K/N`` for the Hessian, ``s = c K_i/N`` for the support and
         ``N^-2/(c K/N + s)`` for the inverse, whose ``q = 0`` entry is ``1/(N c K_i)``.
+        Between loads the Hessian changes only by its scale ``c`` (the periodic problem
+        rescales it in place), so a column of ``1/K`` already computed is rescaled by the
+        ratio of the diagonals instead of computed again (one FFT round trip saved per load).
         """
         self.support = support
         self.expected_bound_count = int(expected_bound_count)
         self._fill(support)
         self.base_mean_mode = mean_mode
         self._set_mean_mode(self.base_mean_mode)
+        if self._quarter is not None:  # the Hessian was rescaled: so is its inverse's column
+            self._quarter *= self.hessian_diagonal / hessian_diagonal
         self.hessian_diagonal = hessian_diagonal
         self.options = self.given_options or TwoLevelOptions.from_database()
-        self.correction = self._quarter = self._built_free = None
+        self.correction = self._built_free = None
         self._last_count = self.builds = 0
 
     def _fill(self, support: float) -> None:
@@ -194,9 +200,35 @@ class MeanModePreconditioner(FourierOperator):
     def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
         """``out <- M x``; in the Schur form ``x`` must vanish on the bound set."""
         super().apply_array(x, out)
+        self._reactions = None
         if self.correction is not None:
-            add_correction(super().apply_array, self.correction, x, out, self.work_fields())
+            reactions = add_correction(
+                super().apply_array, self.correction, x, out, self.work_fields()
+            )
+            if self.schur is not None:
+                self._reactions = reactions
         return out
+
+    def hessian_image(self, r: np.ndarray, out: np.ndarray, beta: float) -> bool:
+        """``out <- beta out + H z`` without a transform, for ``z`` the last application to
+        ``r``, when the form gives ``H z`` exactly; ``False`` (``out`` untouched) otherwise.
+
+        In the exact Schur form ``z = G (r + lambda) + c`` vanishes on the bound set and
+        ``r + lambda`` sums to zero, so ``H z = r + lambda``: the restricted residual plus
+        the reactions on the bound pixels (to rounding).  The other forms are restricted to
+        the free set after they are applied, and their image needs the Hessian.
+        """
+        schur = self.schur
+        if self._reactions is None or schur is None:
+            return False
+        if beta == 0.0:
+            out[...] = r.reshape(out.shape)
+        else:
+            out *= beta
+            out += r.reshape(out.shape)
+        flat = out.reshape(-1)
+        flat[schur.local] += self._reactions
+        return True
 
 
 def set_mean_mode(op: FourierOperator, value: float) -> None:

@@ -32,7 +32,10 @@ gradient in the spirit of Polonsky & Keer (Wear 231, 206 (1999)).
   re-evaluated through the callback after a projection, periodically, and before
   convergence is declared, so the reported residual is never an accumulated one.  A
   :class:`SplitHessian` (the package's FFT operators) is applied in two halves, and the
-  second only when ``H d`` is used: a projected step needs ``d.Hd`` but not ``H d``.
+  second only when ``H d`` is used: a projected step needs ``d.Hd`` but not ``H d``.  A
+  preconditioner that knows the Hessian's image of its output (:class:`ExactImage`: the
+  exact Schur form, ``H z = r + lambda``) gives ``H d = H z + beta H d_old`` without any
+  transform.
 - The element-wise work runs in the device's fused passes (:mod:`petsc_contact.numerics.
   kernels` on the CPU).
 
@@ -108,6 +111,17 @@ class ContactPreconditioner(Protocol):
 
     def adapt(self, bound_count: int, free: Array) -> bool:
         """Follow a new free set; ``True`` when the operator now depends on it (restart)."""
+        ...
+
+
+@runtime_checkable
+class ExactImage(Protocol):
+    """A preconditioner that knows the Hessian's image of its output in some forms (the
+    package's exact Schur form: ``H z = r + lambda``), so that the step needs no transform."""
+
+    def hessian_image(self, r: Array, out: Array, beta: float) -> bool:
+        """``out <- beta out + H z`` for ``z`` its last application to ``r``, when known
+        exactly; ``False`` (``out`` untouched) otherwise."""
         ...
 
 
@@ -271,6 +285,8 @@ class ConstrainedCG:
         else:
             self.mult = hessian
         self.preconditioner, self.contact = preconditioner, contact
+        self.image = contact if isinstance(contact, ExactImage) else None
+        self.beta, self.image_valid = 0.0, False  # d = z + beta d_old; whether w = H d
         self.g, self.d, self.w, self.r, self.z = (vector() for _ in range(5))
         expected = contact.expected_bound_count if contact is not None else 0
         self.min_limit = max(MIN_GROWTH, EXPECTED_GROWTH * expected)
@@ -366,29 +382,35 @@ class ConstrainedCG:
             self.pending_changed = self.pending_joined = float(self.global_size)  # restart
             self.rz_old = 0.0
             return _RETEST
-        rd = rz  # r.d: r is orthogonal to the previous direction while F is unchanged
+        rd, beta = rz, 0.0  # r.d: r is orthogonal to the previous direction while F is unchanged
         if not restart:
             beta = rz / self.rz_old
             if changed:  # z's buffer holds the new direction, with d restricted to F
                 (rd,) = self.allsum(passes.extend_direction(self.z, self.d, free, beta, r))
+                self.image_valid = False  # H of the restricted old direction is not known
                 if not rd > 0:  # no longer a descent direction: restart
                     passes.extend_direction(self.z, self.d, free, -beta, r)
-                    rd = rz
+                    rd, beta = rz, 0.0
             else:
                 passes.axpy(beta, self.d, self.z)
-        self.rz_old, self.rd = rz, rd
+        self.rz_old, self.rd, self.beta = rz, rd, beta
         self.d, self.z = self.z, self.d
         return _GO
 
     def _step(self, bound_count: int) -> int:
         """The exact step along ``-d``, shortened by the growth limit, then projected."""
         xa, d, lower, upper, passes = self.xa, self.d, self.lower, self.upper, self.passes
-        if self.split is not None:  # d.Hd now, Hd only if no variable is clipped
+        pending = False  # the split Hessian's second half is owed
+        if self._image():  # w = H d without a transform
+            (dw,) = self.allsum(float(np.dot(d, self.w)))
+        elif self.split is not None:  # d.Hd now, Hd only if no variable is clipped
             (dw,) = self.allsum(self.split.begin_mult(d))
+            pending, self.image_valid = True, False
         else:
             assert self.mult is not None
             self.mult(d, self.w)
             (dw,) = self.allsum(float(np.dot(d, self.w)))
+            self.image_valid = True
         alpha = -self.rd / dw if dw > 0 else -np.inf  # the exact step along -d
         if not np.isfinite(alpha):
             alpha = -distance_to_bound(xa, -d, lower, upper, self.reduce)
@@ -407,8 +429,18 @@ class ConstrainedCG:
             self._refresh()
         else:
             self.f += alpha * self.rd + 0.5 * alpha * alpha * dw
-            if self.split is not None:
+            if pending:
+                assert self.split is not None
                 self.split.end_mult(self.w)
+                self.image_valid = True
             passes.axpy(alpha, self.w, self.g)
             self.since_refresh += 1
         return _GO
+
+    def _image(self) -> bool:
+        """``w <- H d = H z + beta H d_old`` from the preconditioner's exact image of ``z``
+        (:class:`ExactImage`), when it has one and ``w`` holds ``H d_old``."""
+        if self.image is None or not (self.beta == 0.0 or self.image_valid):
+            return False
+        self.image_valid = self.image.hessian_image(self.r, self.w, self.beta)
+        return self.image_valid

@@ -5,7 +5,7 @@
 the PETSc path gives (mean gaps to 1e-10 relative, stiffnesses to 1e-8, iterations within 2),
 its files must read as a cpu run's do and record the device, and it must run without
 petsc4py, pyFFTW and SurfaceTopography.  A GPU asked for where there is none is exit status 69,
-a TAO type or a punch on an array device one line with exit status 2.
+a TAO type on an array device one line with exit status 2.
 """
 
 from __future__ import annotations
@@ -199,18 +199,43 @@ def test_a_gpu_without_cupy_is_exit_status_69_in_one_line(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == []
 
 
-def test_what_the_array_path_cannot_run_is_refused_in_one_line(tmp_path):
-    """A TAO type on an array device, and a punch there (for now): exit status 2, one line,
-    before anything is written."""
+def test_a_tao_type_on_the_array_path_is_refused_in_one_line(tmp_path):
+    """A TAO type on an array device: exit status 2, one line, before anything is written."""
     out = tmp_path / "r.h5"
     tao = _sweep(out, "--device", "cpu-array", "-tao_type", "bncg")
     assert tao.returncode == 2
     assert "-tao_type needs --device cpu" in _one_error(tao)
-    punch = cli("punch", *SCENE.split(), "--approaches", "1e-3", "--output", str(out),
-                "--device", "cpu-array")  # fmt: skip
-    assert punch.returncode == 2
-    assert "a punch run takes --device cpu" in _one_error(punch)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_cli_punch_on_the_stand_in_is_the_petsc_path_s(tmp_path):
+    """``punch --device cpu-array --forces ... --stiffness --fields`` against ``--device cpu``:
+    the same forces, approaches, stiffnesses and fields; a paused run resumes there."""
+    runs = {}
+    for device in ("cpu", "cpu-array"):
+        runs[device] = tmp_path / f"{device}.h5"
+        loads = ("--forces", "1e-4,5e-4,2e-3", "--stiffness", "--fields", "--quiet")
+        done = cli("punch", *SCENE.split(), *loads, "--device", device,
+                   "--output", str(runs[device]))  # fmt: skip
+        assert done.returncode == 0, done.stderr
+    with h5py.File(runs["cpu"]) as a, h5py.File(runs["cpu-array"]) as b:
+        assert b["converged"][:].all() and b.attrs["device"] == "cpu-array"
+        for name in ("force", "approach", "mean_gap"):
+            np.testing.assert_allclose(b[name][:], a[name][:], rtol=1e-8)
+        for name in ("total_stiffness", "interfacial_stiffness"):
+            np.testing.assert_allclose(b[name][:], a[name][:], rtol=1e-8)
+        scale = np.abs(a["pressure"][:]).max()
+        np.testing.assert_allclose(b["pressure"][:], a["pressure"][:], rtol=0, atol=1e-7 * scale)
+        assert set(a) == set(b)
+    parted = tmp_path / "parted.h5"
+    loads = ("--forces", "1e-4,5e-4,2e-3", "--stiffness", "--quiet", "--device", "cpu-array")
+    paused = cli("punch", *SCENE.split(), *loads, "--output", str(parted), "--stop-after", "0")
+    assert paused.returncode == 75, paused.stderr
+    resumed = cli("punch", *SCENE.split(), *loads, "--output", str(parted), "--resume")
+    assert resumed.returncode == 0, resumed.stderr
+    with h5py.File(runs["cpu-array"]) as a, h5py.File(parted) as b:
+        np.testing.assert_allclose(b["approach"][:], a["approach"][:], rtol=1e-10)
+        np.testing.assert_allclose(b["total_stiffness"][:], a["total_stiffness"][:], rtol=1e-8)
 
 
 def test_the_array_path_reads_the_run_s_prefixed_options():
@@ -223,14 +248,14 @@ def test_the_array_path_reads_the_run_s_prefixed_options():
         ArraySettings.from_options(["-a_tao_type", "bncg"], "gpu", "a_")
 
 
-def test_a_study_runs_its_periodic_pieces_on_the_device():
-    """``study --device``: the periodic pieces on the device with the command line's PETSc
-    options; the punch's on the cpu (for now)."""
+def test_a_study_runs_its_pieces_on_the_device():
+    """``study --device``: the periodic and punch pieces on the device with the command
+    line's PETSc options."""
     periodic = Run(grid=64, hurst=0.7, rms_slope=0.1, pressures=[1e-3])
     punch = periodic.with_(geometry="punch", pressures=None, approaches=[1e-3])
     moved = on_device(periodic, "gpu", ["-tao_gatol", "1e-9"])
     assert (moved.device, moved.options) == ("gpu", ("-tao_gatol", "1e-9"))
-    assert on_device(punch, "gpu", ["-tao_gatol", "1e-9"]) is punch
+    assert on_device(punch, "gpu", ["-tao_gatol", "1e-9"]).device == "gpu"
     assert on_device(periodic, "cpu") is periodic
     assert build_parser().parse_args(["study", "--device", "cpu-array"]).device == "cpu-array"
 

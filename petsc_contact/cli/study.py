@@ -33,7 +33,7 @@ def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
     from ..workflows.paper_study import run_pieces, study_pieces
 
     todo = study_pieces(args.data, args.figure, args.shrink)
-    if any(on_device(p.run, args.device).device == "cpu" for p in todo):
+    if args.device == "cpu":
         _petsc.init(petsc_args)  # an array device's pieces carry the options instead
 
     def piece(run: Any) -> str:

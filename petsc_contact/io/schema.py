@@ -402,7 +402,8 @@ def _introduction() -> list[str]:
         "theory's with `step` and `wavevector`, each solver group of a comparison's with",
         "`iteration`. Every file reads as a table with `read_frame` ([tables](#tables)).",
         "A resumed file adds `resumed`: a JSON list with, for each resume, `after_step`, `time`,",
-        "its `command_line` and `petsc_options`, the `petsc_contact_commit` that computed the",
+        "its `command_line`, `petsc_options` and `device` (a run paused on one device may",
+        "finish on another), the `petsc_contact_commit` that computed the",
         "steps from there on and `from_saved_state` (false when the state file was missing or",
         "damaged and the next step started from first touch: the",
         "same result to the solver's tolerance, at a different cost).",
@@ -537,6 +538,9 @@ RUN_ATTRIBUTES = (
     "parent_rms_height",  # a punch face cut from a larger surface (--cut-from): the parent's
     "parent_rms_slope",
     "fft_backend",
+    "device",  # cpu, gpu or cpu-array (--device); a GPU's model and memory in bytes:
+    "device_name",
+    "device_memory",
     "seed",
     "hurst",
     "rolloff_ratio",

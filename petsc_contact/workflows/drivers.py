@@ -29,8 +29,9 @@ from ..conventions.validation import log_range
 from ..geometries.periodic import PeriodicProblem
 from ..geometries.punch import PunchProblem, footprint_mask
 from ..geometries.step import Step
+from ..numerics.device import get_device
 from ..physics.continuation import Held
-from ..solver.driver import ArraySolver
+from ..solver.driver import ArraySettings, ArraySolver
 from .description import Run
 from .periodic_sweep import problem_solver, sweep
 from .punch_sweep import PunchSolver, punch_sweep
@@ -71,23 +72,10 @@ class Driver(Protocol):
         ...
 
 
-ARRAY_GEOMETRIES = ("periodic",)
-"""The geometries the array devices (``gpu``, ``cpu-array``) run; the others run on ``cpu``."""
-
-
-def check_device(run: Run) -> None:
-    """``ValueError`` (one line) when ``run``'s geometry does not run on its device."""
-    if run.device != "cpu" and run.geometry not in ARRAY_GEOMETRIES:
-        raise ValueError(
-            f"--device {run.device} runs periodic sweeps: a {run.geometry} run takes "
-            "--device cpu for now"
-        )
-
-
 def on_device(run: Run, device: str, options: Sequence[str] = ()) -> Run:
-    """``run`` on ``device``, reading ``options`` there, where its geometry runs on it; on
-    ``cpu`` as it is otherwise (a study's punch pieces beside its periodic ones)."""
-    if device == "cpu" or run.geometry not in ARRAY_GEOMETRIES:
+    """``run`` on the array ``device`` (``gpu``, ``cpu-array``), reading ``options`` there
+    (the command line's PETSc options, which PETSc reads on ``cpu``); as it is on ``cpu``."""
+    if device == "cpu":
         return run
     return run.with_(device=device, options=(*run.options, *options))
 
@@ -172,11 +160,18 @@ class PunchDriver:
     face) reached by Newton steps on the approach."""
 
     def __init__(self, run: Run, scene: Scene) -> None:
-        grid = scene.grid
+        grid, device = scene.grid, get_device(run.device)
         mask, beta = footprint_mask(grid, run.footprint)
-        problem = PunchProblem(
-            grid, scene.heights, run.modulus_value, mask, run.flat_stiffness, beta
+        settings = (
+            None
+            if device.name == "cpu"
+            else ArraySettings.from_options(run.options, device.name, run.options_prefix)
         )
+        problem = PunchProblem(
+            grid, scene.heights, run.modulus_value, mask, run.flat_stiffness, beta,
+            device=device, settings=settings,
+        )  # fmt: skip
+        problem.filled = scene.filled
         given = [run.forces, run.approaches, run.pressures, run.sweep]
         if sum(v is not None for v in given) != 1:
             raise ValueError("give one of --approaches, --forces, --pressures and --sweep")

@@ -489,9 +489,9 @@ _RUN = (
         (*RUNS, "study"),
         default="cpu",
         choices=DEVICES,
-        more="`gpu` and `cpu-array` run periodic sweeps (`--stiffness`, `--fields`, "
-        "`--resume`, ensembles, the study's periodic pieces) on one rank without petsc4py, "
-        "reading the PETSc options they understand; the punch runs on `cpu` for now. The file "
+        more="`gpu` and `cpu-array` run periodic sweeps and the punch (`--stiffness`, "
+        "`--fields`, `--resume`, ensembles, the study's pieces) on one rank without petsc4py, "
+        "reading the PETSc options they understand. The file "
         "records `device` (a GPU's `device_name` and `device_memory`) and each step's "
         "`solve_time`. No CuPy or no GPU: exit status 69 ([gpu.md](gpu.md))",
     ),

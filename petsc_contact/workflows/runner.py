@@ -58,7 +58,7 @@ from ..numerics.device import get_device
 from ..physics.continuation import Held
 from ..solver.driver import ArraySettings
 from .description import Run
-from .drivers import Driver, Start, check_device, driver_for
+from .drivers import Driver, Start, driver_for
 from .drivers import swept as swept  # where scripts and the CLI import it from
 from .periodic_sweep import Progress
 from .scene import Scene, prepare_scene
@@ -285,7 +285,6 @@ def prepare(run: Run, command_line: str | None = None, petsc: ModuleType | None 
     DeviceUnavailable
         For ``device="gpu"`` where CuPy or a GPU is missing, before anything is computed.
     """
-    check_device(run)
     if run.device != "cpu":  # its options refused before the device is looked for
         ArraySettings.from_options(run.options, run.device, run.options_prefix)
     default_solver = True  # the array devices run the package's CG

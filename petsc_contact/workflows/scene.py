@@ -23,7 +23,6 @@ from ..conventions.validation import check_finite
 from ..conventions.warnings import DoubtfulMap
 from ..io.topography import Topography, as_topography
 from ..numerics.device import get_device
-from ..numerics.fft import make_fft
 from .description import Run
 
 SLOPE_LIMIT = 1e6  # heights this many times the cell's side are no contact surface
@@ -169,7 +168,7 @@ def cut_face(run: Run, grid: Grid, cutoff: float) -> tuple[np.ndarray, dict[str,
         (m * grid.lengths[0], m * grid.lengths[1]),
         grid.comm,
     )
-    parent_fft = make_fft(parent)
+    parent_fft = get_device(run.device).fft(parent)  # the run's, as its own surface's
     heights = generated(run, parent, parent_fft, m, cutoff)
     stats = {
         "parent_rms_height": rms_of(parent, parent_fft, heights),

@@ -219,9 +219,13 @@ def test_a_numpy_mismatch_is_named(monkeypatch):
             raise ImportError("libpetsc.so.3.18: cannot open shared object file")
 
 
-def test_filled_points_are_recorded_and_warned_about(tmp_path):
+@pytest.mark.parametrize(
+    "geometry, loads", [("periodic", ("--pressures", "1e-3,1e-2")), ("punch", ("--sweep", "2"))]
+)
+def test_filled_points_are_recorded_and_warned_about(tmp_path, geometry, loads):
     """Filled heights: the 'filled' map in the output, the share in the header and the
-    attributes, a warning above 5%, and the contact on filled pixels reported apart."""
+    attributes, a warning above 5%, and the contact on filled pixels reported apart, on
+    both geometries."""
     h = _map()
     mask = np.zeros(h.shape, bool)
     mask[5:15, 5:20] = True  # 12.5% of the map, on a hill and a valley alike
@@ -229,8 +233,7 @@ def test_filled_points_are_recorded_and_warned_about(tmp_path):
         str(tmp_path / "holes.x3p")
     )
     args = ["--heights", str(tmp_path / "holes.x3p"), "--fill-undefined", "harmonic"]
-    r = cli("periodic", *args, "--pressures", "1e-3,1e-2", "--fields", "--output",
-            str(tmp_path / "f.h5"))  # fmt: skip
+    r = cli(geometry, *args, *loads, "--fields", "--output", str(tmp_path / "f.h5"))
     assert r.returncode == 0, r.stderr
     assert "12.5% of the map's heights were undefined and are filled (harmonic)" in r.stderr
     assert "12.5%), read by" in r.stdout and "filled (harmonic)" in r.stdout

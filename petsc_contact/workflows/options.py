@@ -613,7 +613,9 @@ _COMPARE = (
         shown_default="cg,pk,tron,bnls,bntr,bqnls,blmvm,bncg,gpcg, each with its "
         "options/NAME.opts, which the command line's PETSc options override",
         more="The files are shipped with the package; a path runs that file instead, another "
-        "TAO type PETSc's defaults; `-tao_type` is refused ([solvers.md](solvers.md))",
+        "TAO type PETSc's defaults; `-tao_type` is refused ([solvers.md](solvers.md)). Each "
+        "solver's options prefix is its name: `-bncg_tao_max_it 50` reaches `bncg` alone, "
+        "an unprefixed option every solver",
     ),
     _option(
         "time_limit",

@@ -96,7 +96,12 @@ def extrapolation(hurst: float, ratios: list[float], results: dict) -> dict:
     """``alpha`` against ``x = (lambda_1/lambda_r)^(1/(1+H))``, weighted by its errors, and
     the straight line through them to ``x = 0`` (``alpha_0`` with an error from three
     ratios on).  A ratio with one seed so far has no seed spread in its error: it is drawn
-    but left out of the line (``used``)."""
+    but left out of the line (``used``).
+
+    The fit's error assumes the points scatter about the line as their errors say; where
+    they scatter more (``chi^2`` above its degrees of freedom) the error is scaled by
+    ``sqrt(chi^2/dof)`` (Birge's ratio; the Particle Data Group's rule), which
+    ``extrapolated_alpha_scaled_error`` gives."""
     alpha = np.array([results[f"ratio{r:g}"]["alpha"] for r in ratios])
     error = np.array([results[f"ratio{r:g}"]["alpha_error"] for r in ratios])
     used = np.array([len(results[f"ratio{r:g}"]["stiffness"]) > 1 for r in ratios])
@@ -108,6 +113,9 @@ def extrapolation(hurst: float, ratios: list[float], results: dict) -> dict:
         if used.sum() > 2
         else (np.polyfit(x[used], alpha[used], 1), np.full((2, 2), np.nan))
     )
+    residual = alpha[used] - np.polyval(coef, x[used])
+    chi2, dof = float(np.sum(w * residual**2)), int(used.sum()) - 2
+    birge = max(1.0, np.sqrt(chi2 / dof)) if dof > 0 else np.nan
     return {
         "used": used,
         "x": x,
@@ -117,6 +125,9 @@ def extrapolation(hurst: float, ratios: list[float], results: dict) -> dict:
         "coefficients": coef,
         "extrapolated_alpha": coef[1],
         "extrapolated_alpha_error": float(np.sqrt(cov[1, 1])),
+        "extrapolated_alpha_scaled_error": float(birge * np.sqrt(cov[1, 1])),
+        "chi2": chi2,
+        "dof": dof,
     }
 
 
@@ -127,8 +138,8 @@ def _draw(args: argparse.Namespace, ratios: list[float], results: dict, fit: dic
     import matplotlib.pyplot as plt
 
     x, exponent = fit["x"], fit["exponent"]
-    a0, a0_err = fit["extrapolated_alpha"], fit["extrapolated_alpha_error"]
-    fig, ax = plt.subplots(figsize=(5.5, 4.2), constrained_layout=True)
+    a0, a0_err = fit["extrapolated_alpha"], fit["extrapolated_alpha_scaled_error"]
+    fig, ax = plt.subplots(figsize=(6.4, 5.0), constrained_layout=True)
     used = fit["used"]
     ax.errorbar(x[used], fit["alpha"][used], fit["alpha_error"][used], fmt="o", label="simulations")
     if not used.all():
@@ -146,7 +157,8 @@ def _draw(args: argparse.Namespace, ratios: list[float], results: dict, fit: dic
         xs,
         np.polyval(fit["coefficients"], xs),
         "--",
-        label=f"linear fit: {a0:.3f} $\\pm$ {a0_err:.3f}",
+        label=f"linear fit: {a0:.3f} $\\pm$ {a0_err:.3f}"
+        + (f" ($\\chi^2$ = {fit['chi2']:.1f}, {fit['dof']} dof)" if fit["dof"] > 0 else ""),
     )
     ax.plot([0], [exponent], "ks", label="theory 1/(1+H)")
     ax.set(
@@ -170,10 +182,10 @@ def _draw(args: argparse.Namespace, ratios: list[float], results: dict, fit: dic
         line = inset.loglog(p[ok], k[ok], "-", lw=0.8, label=f"{r:g}")
         inset.loglog(p[~ok], k[~ok], "x", ms=3, color=line[0].get_color())
         inset.loglog(p[fitted], k[fitted], "o", ms=2.5, color=line[0].get_color())
-    inset.set_xlabel("$p/E^*$", fontsize=7)
-    inset.set_ylabel(r"$K h_\mathrm{rms}/E^*$", fontsize=7)
-    inset.tick_params(labelsize=6)
-    inset.legend(fontsize=5, title=r"$\lambda_r/\lambda_1$", title_fontsize=5)
+    inset.set_xlabel("$p/E^*$", fontsize=8)
+    inset.set_ylabel(r"$K h_\mathrm{rms}/E^*$", fontsize=8)
+    inset.tick_params(labelsize=7.5)
+    inset.legend(fontsize=6.5, title=r"$\lambda_r/\lambda_1$", title_fontsize=6.5)
     fig.savefig(f"{args.output}.png", dpi=120)
 
 
@@ -193,6 +205,8 @@ def main() -> None:
         **({"study_data": args.data} if args.data else {"grid": args.grid}),
         extrapolated_alpha=fit["extrapolated_alpha"],
         extrapolated_alpha_error=fit["extrapolated_alpha_error"],
+        extrapolated_alpha_scaled_error=fit["extrapolated_alpha_scaled_error"],
+        chi2=fit["chi2"],
         theory_alpha=fit["exponent"],
     )
     _draw(args, ratios, results, fit)
@@ -204,9 +218,16 @@ def main() -> None:
             f"{res['crossover']:.2g})"
         )
     if fit["used"].sum() > 2:
+        error, scaled = fit["extrapolated_alpha_error"], fit["extrapolated_alpha_scaled_error"]
+        chi2 = f"chi2 = {fit['chi2']:.1f} on {fit['dof']} degrees of freedom"
+        how = (
+            f"the fit's error {error:.3f} scaled by sqrt(chi2/dof): {chi2}"
+            if scaled > error
+            else f"{chi2}: the fit's error stands"
+        )
         print(
-            f"extrapolated alpha = {fit['extrapolated_alpha']:.3f} +- "
-            f"{fit['extrapolated_alpha_error']:.3f}; 1/(1+H) = {fit['exponent']:.3f}"
+            f"extrapolated alpha = {fit['extrapolated_alpha']:.3f} +- {scaled:.3f} ({how}); "
+            f"1/(1+H) = {fit['exponent']:.3f}"
         )
     else:
         print("the extrapolation needs three ratios or more (drawn, but without an error)")

@@ -65,18 +65,23 @@ def _from_data(args: argparse.Namespace) -> tuple[np.ndarray, dict]:
     return next(iter(results.values()))["nominal_pressure"][0], results
 
 
-def eq12_ratios(r: dict, hurst: float) -> tuple[float, np.ndarray]:
+def eq12_ratios(r: dict, hurst: float) -> tuple[float, np.ndarray, np.ndarray]:
     """The simulated ``K`` over paper Eq. 12's at the fitted loads (geometric mean): of the
-    seed-averaged ``K`` against Eq. 12 with the seeds' mean ``h_rms``, and of each seed's
-    ``K`` against Eq. 12 with its own ``h_rms``."""
+    seed-averaged ``K`` against Eq. 12 with the seeds' mean ``h_rms``, of each seed's ``K``
+    against Eq. 12 with its own ``h_rms``, and the first's 68% interval over the seeds
+    resampled with replacement (``scenes.seed_bootstrap``)."""
     p = r["nominal_pressure"][0][r["fitted"]]
 
     def ratio(k: np.ndarray, h_rms: float) -> float:
         eq12 = theory.finite_size_stiffness(p, 1.0, h_rms, hurst, 1.0, 1.0)
         return float(np.exp(np.mean(np.log(k[r["fitted"]] / eq12))))
 
+    def resampled(rows: np.ndarray) -> float:
+        return ratio(np.nanmean(r["stiffness"][rows], axis=0), float(r["h_rms"][rows].mean()))
+
     seeds = np.array([ratio(k, h) for k, h in zip(r["stiffness"], r["h_rms"], strict=True)])
-    return ratio(r["stiffness_mean"], float(r["h_rms"].mean())), seeds
+    interval = scenes.seed_bootstrap(len(seeds), resampled)
+    return ratio(r["stiffness_mean"], float(r["h_rms"].mean())), seeds, interval
 
 
 def _arguments() -> argparse.Namespace:
@@ -160,7 +165,14 @@ def main() -> None:
     p, results = (_from_data if args.data else _computed)(args)
     for h in args.hursts:
         r = results[f"H{h}"]
-        r["eq12_ratio"], r["eq12_ratios"] = eq12_ratios(r, h)
+        r["eq12_ratio"], r["eq12_ratios"], r["eq12_ratio_interval"] = eq12_ratios(r, h)
+        low, high = r["alpha_interval"]
+        k_low, k_high = r["eq12_ratio_interval"]
+        print(
+            f"H = {h}: alpha = {r['alpha']:.3f} +- {r['alpha_error']:.3f} (68% over the seeds "
+            f"resampled: {low:.3f}-{high:.3f}); K/Eq. 12 = {r['eq12_ratio']:.2f} "
+            f"({k_low:.2f}-{k_high:.2f}); fitted loads below p_c: {r['below_crossover']}"
+        )
     scenes.save(
         f"{args.output}.h5",
         {"nominal_pressure": p, **results},

@@ -58,6 +58,24 @@ def test_resolution_rule_counts_pixels_and_keeps_unresolved_loads_out_of_the_fit
     assert np.flatnonzero(fit["fitted"]).tolist() == [2, 3, 4, 5]
     assert fit["below_crossover"] == 4
     assert fit["alpha"] == pytest.approx(0.8, abs=1e-12)
+    assert fit["alpha_interval"] == pytest.approx([0.8, 0.8], abs=1e-12)  # seeds that agree
+
+
+def test_the_seed_bootstrap_spans_what_the_seeds_disagree_on():
+    """Four seeds of exponents 0.6, 0.7, 0.8 and 0.9: the 68% interval of the averaged
+    stiffness' exponent over resampled seeds lies inside the seeds' range and holds the
+    average's own exponent; it narrows as the seeds agree more."""
+    from petsc_contact.workflows.scenes import finite_size_fit
+
+    n, p = 512, np.geomspace(1e-6, 1e-5, 4)
+    curves = {"nominal_pressure": p, "area_fraction": np.full((4, 4), 0.01)}
+    wide = finite_size_fit(curves | {"stiffness": p ** np.array([[0.6], [0.7], [0.8], [0.9]])},
+                           n * n, crossover=1.0)  # fmt: skip
+    low, high = wide["alpha_interval"]
+    assert 0.6 < low < wide["alpha"] < high < 0.9 and high - low > 0.05
+    close = p ** np.array([[0.74], [0.75], [0.75], [0.76]])
+    narrow = finite_size_fit(curves | {"stiffness": close}, n * n, crossover=1.0)
+    assert np.diff(narrow["alpha_interval"])[0] < 0.2 * (high - low)
 
 
 def test_ensemble_command(tmp_path):

@@ -191,8 +191,15 @@ def _draw(args: argparse.Namespace, d: dict, n: int) -> None:
     ax = axes[1, 1]
     p = d["nominal_pressure"][0]
     ax.semilogx(p, d["spread_simulation"], "o-", ms=3, label="simulation")
-    ax.axhline(d["spread_eq12"], color="C3", label="Eq. 12 (the $h_\\mathrm{rms}$ scatter alone)")
-    ax.axhline(0, color="k", ls="--", lw=0.7, label=r"$p/(\gamma E^*)$")
+    shown = p[np.isfinite(d["spread_simulation"])]  # the loads every seed resolves
+    pc = float(np.nanmedian(d["pc_eq13"]))  # Eq. 12 holds below its crossover, Eq. 13's
+    eq12 = "Eq. 12 (the $h_\\mathrm{rms}$ scatter alone), below Eq. 13's $p_c$"
+    if pc > shown.min():
+        ax.hlines(d["spread_eq12"], shown.min(), min(pc, shown.max()), color="C3", label=eq12)
+    else:
+        ax.plot([], [], color="C3", label=f"{eq12} = {pc:.1g}\n(left of the axis)")
+    ax.hlines(0, max(pc, shown.min()), shown.max(), color="k", ls="--", lw=0.7,
+              label=r"$p/(\gamma E^*)$, above it")  # fmt: skip
     ax.axvline(
         np.nanmedian(d["pc_simulation"]), color="C0", ls=":", lw=1, label="median simulated $p_c$"
     )
@@ -201,7 +208,8 @@ def _draw(args: argparse.Namespace, d: dict, n: int) -> None:
         ylabel=r"std of $\ln(K h_\mathrm{rms}/E^*)$ over seeds",
         title="(d) scatter against load",
     )
-    ax.legend(fontsize=7)
+    ax.set_ylim(-0.01, 1.6 * np.nanmax(d["spread_simulation"]))  # the legend above the data
+    ax.legend(fontsize=7, loc="upper right")
     for a in axes.flat:
         a.grid(alpha=0.3, which="both")
     fig.suptitle(

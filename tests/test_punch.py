@@ -71,14 +71,15 @@ def test_hertz():
 
 
 def test_flat_square_punch():
-    """Stiffness within 1% of 1.012 x 2 E* sqrt(A/pi) (Pharr et al.) on 128^2; pressure grows
-    monotonically from the centre to the edge (the edge singularity)."""
+    """Stiffness within 0.3% of the exact square's pi C E* L on 128^2 (0.27% below it, as
+    tests/test_flat_reference.py measures); pressure grows monotonically from the centre to
+    the edge (the edge singularity)."""
     (step,) = punch_contact(
         np.zeros((N, N)), length=1.0, modulus=1.0, approaches=[1e-3], fields=True
     )
     s = step.scalars
     assert step.converged and s["area_fraction"] == 1.0
-    assert s["force"] / 1e-3 == pytest.approx(flat_punch_stiffness(1.0, 1.0), rel=0.01)
+    assert s["force"] / 1e-3 == pytest.approx(flat_punch_stiffness(1.0, 1.0), rel=3e-3)
     assert s["total_stiffness"] == pytest.approx(s["force"] / 1e-3, rel=1e-8)
     assert s["flat_punch_stiffness"] == pytest.approx(s["total_stiffness"], rel=1e-8)
     line = step.pressure[N // 2, N // 2 :]

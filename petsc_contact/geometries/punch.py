@@ -21,8 +21,11 @@ Eq. 2's flat-punch reference), area fraction
 (of footprint pixels; contact when ``p > k g``, ``k = 1/G_00``), exact total stiffness
 ``dF/dδ`` with the contact set fixed, and the interfacial stiffness per area from springs in
 series (paper Eq. 2), ``1/K_int = 1/K_tot - 1/K_flat``, ``K = K_int / (Lx Ly)``.  ``K_flat`` is
-the flat punch of the same footprint computed on the same grid (default: discretisation
-errors cancel) or Pharr, Oliver & Brotzen's ``β 2 E* sqrt(A/π)``, ``β = 1.012`` (square).
+the flat punch of the same footprint computed on the same grid (``grid``, the default:
+discretisation errors cancel), the analytic ``β 2 E* sqrt(A/π)`` with the footprint's exact
+shape factor (``analytic``: ``β = 1.0212`` for the square, 1 for the disk;
+:mod:`~petsc_contact.reference.flat_punch`) or King's estimate ``β = 1.012`` for the square, as
+Pharr, Oliver & Brotzen quote it (``king``).  Each step records ``K_flat`` and its ``β``.
 
 The problem is written once on the arrays of a :class:`~petsc_contact.numerics.device.Device`:
 on ``cpu`` TAO minimises it on PETSc Vecs and ``KSPCG`` solves the held sets of the exact
@@ -34,6 +37,7 @@ The observables are measured on the host.
 from __future__ import annotations
 
 import time
+import warnings
 from typing import Any
 
 import numpy as np
@@ -53,8 +57,8 @@ from ..solver.linear import held_set_solve
 from ..solver.report import FORCE_ACCURACY, Accuracy, accuracy_limit
 from .step import MeasuredSolve, Step, contact_fields, requested_stiffness_rtol, residual_verdict
 
-PHARR_BETA = flat_punch.SQUARE_BETA
 FOOTPRINTS = ("square", "disk")
+FLAT_REFERENCES = ("grid", "analytic", "king")
 
 
 def disk_footprint(n: int) -> np.ndarray:
@@ -63,24 +67,76 @@ def disk_footprint(n: int) -> np.ndarray:
     return x[:, None] ** 2 + x[None, :] ** 2 < (n / 2) ** 2
 
 
+def __getattr__(name: str) -> Any:
+    """``PHARR_BETA``, deprecated (a ``DeprecationWarning``): King's 1.012, ``KING_BETA`` of
+    :mod:`~petsc_contact.reference.flat_punch`, no longer the square's analytic shape factor
+    (``SQUARE_BETA`` there, 1.0212)."""
+    if name == "PHARR_BETA":
+        warnings.warn(
+            "geometries.punch.PHARR_BETA is deprecated: it is King's estimate 1.012, "
+            "reference.flat_punch.KING_BETA; the square's exact shape factor is "
+            "reference.flat_punch.SQUARE_BETA (1.0212)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return flat_punch.KING_BETA
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 def footprint_mask(grid: Grid, footprint: str | np.ndarray | None) -> tuple[Any, float]:
     """A punch's local footprint mask (``None``: the whole grid) and the shape factor of its
-    flat-punch stiffness (paper Eq. 2): ``square`` or ``None`` (Pharr's), ``disk`` (the
-    inscribed disk of a square grid; 1), or a full ``nx x ny`` boolean mask (Pharr's)."""
+    analytic flat-punch stiffness (paper Eq. 2): ``square`` or ``None`` (the square's exact
+    1.0212), ``disk`` (the inscribed disk of a square grid; 1), or a full ``nx x ny`` boolean
+    mask (the square's)."""
     if footprint is None or (isinstance(footprint, str) and footprint == "square"):
-        return None, PHARR_BETA
+        return None, flat_punch.SQUARE_BETA
     if isinstance(footprint, str):
         if footprint != "disk":
             raise ValueError(f"the footprint is one of {', '.join(FOOTPRINTS)} or a mask")
         if not grid.square:
             raise ValueError("--footprint disk needs a square grid")
         return grid.scatter(disk_footprint(grid.shape[0]).astype(float)) > 0, 1.0
-    return grid.scatter(np.asarray(footprint, dtype=float)) > 0, PHARR_BETA
+    return grid.scatter(np.asarray(footprint, dtype=float)) > 0, flat_punch.SQUARE_BETA
 
 
-def flat_punch_stiffness(modulus: float, area: float, beta: float = PHARR_BETA) -> float:
-    """Pharr, Oliver & Brotzen (1992): ``K = β 2 E* sqrt(A/π)`` (β = 1.012 for a square)."""
+def flat_punch_stiffness(
+    modulus: float, area: float, beta: float = flat_punch.SQUARE_BETA
+) -> float:
+    """The analytic flat punch of paper Eq. 2, ``K = β 2 E* sqrt(A/π)``
+    (:func:`petsc_contact.reference.flat_punch.stiffness`; default: the square's exact β)."""
     return flat_punch.stiffness(area, modulus, beta)
+
+
+def reference_beta(flat: str, beta: float, square: bool) -> float:
+    """The shape factor of the analytic flat punch that the reference ``flat`` of paper Eq. 2
+    takes: the footprint's ``beta`` (``grid``, ``analytic``) or King's 1.012 (``king``).
+
+    Parameters
+    ----------
+    flat
+        ``grid``, ``analytic`` or ``king`` (:data:`FLAT_REFERENCES`).
+    beta
+        The footprint's exact shape factor (:func:`footprint_mask`).
+    square
+        Whether the footprint is a square: ``king`` is an estimate for the square only.
+
+    Raises
+    ------
+    ValueError
+        For another ``flat``, or ``king`` on a footprint that is not a square.
+    """
+    if flat not in FLAT_REFERENCES:
+        raise ValueError(
+            f"flat-punch stiffness must be one of {', '.join(FLAT_REFERENCES)}, got {flat}"
+        )
+    if flat != "king":
+        return beta
+    if not square:
+        raise ValueError(
+            "--flat-stiffness king is King's estimate for a square footprint; this one is not "
+            "square (its analytic value, 1 for the disk, is exact: use analytic)"
+        )
+    return flat_punch.KING_BETA
 
 
 def interfacial_stiffness(total: float, flat: float) -> float:
@@ -109,9 +165,11 @@ class PunchProblem:
         This rank's slab of a boolean mask of the pixels that belong to the punch
         (default: the whole square); pressure is held at zero elsewhere.
     flat, beta
-        The flat-punch stiffness of paper Eq. 2: ``'grid'``, the flat punch of the same
-        footprint on the same grid (discretisation errors cancel), or ``'analytic'``,
-        ``beta 2 E* sqrt(A/pi)``.
+        The flat-punch stiffness of paper Eq. 2 (:data:`FLAT_REFERENCES`): ``'grid'``, the flat
+        punch of the same footprint on the same grid (discretisation errors cancel),
+        ``'analytic'``, ``beta 2 E* sqrt(A/pi)`` with ``beta`` the footprint's exact shape
+        factor (default: the square's, 1.0212), or ``'king'``, King's ``beta = 1.012`` (a
+        square footprint only: :func:`reference_beta`).
     device
         Where the solver's fields live (:class:`~petsc_contact.numerics.device.Device`): the
         ``cpu`` device's are TAO's (NumPy, FFTW); ``gpu`` and ``cpu-array`` run the package's
@@ -131,15 +189,13 @@ class PunchProblem:
         modulus: float,
         footprint: np.ndarray | None = None,
         flat: str = "grid",
-        beta: float = PHARR_BETA,
+        beta: float = flat_punch.SQUARE_BETA,
         *,
         device: Device = CPU,
         settings: ArraySettings | None = None,
     ) -> None:
         positive("modulus", modulus)
         compile_kernels(announce=grid.comm.rank == 0)  # before any step's timer
-        if flat not in ("grid", "analytic"):
-            raise ValueError(f"flat-punch stiffness must be 'grid' or 'analytic', got {flat}")
         self.flat = flat
         self.grid = grid
         self.device = device
@@ -154,6 +210,8 @@ class PunchProblem:
         self.footprint_pixels = int(grid.sum(np.count_nonzero(self.footprint))[0])
         if self.footprint_pixels == 0:
             raise ValueError("the punch footprint is empty")
+        whole = self.footprint_pixels == grid.shape[0] * grid.shape[1]
+        analytic_beta = reference_beta(flat, beta, whole and grid.square)
         self.recess, self.scale_length = self._recess(heights)
         self._operators()
         self.approach = np.nan
@@ -167,12 +225,17 @@ class PunchProblem:
         self.held_set_solve: Any = restricted_solve
         if device.name != "cpu":
             self.held_set_solve = self._array_held_set_solve
-        self.k_flat_analytic = flat_punch_stiffness(
-            self.modulus, self.footprint_pixels * grid.pixel_area, beta
-        )
+        area = self.footprint_pixels * grid.pixel_area
+        self.k_flat_analytic = flat_punch_stiffness(self.modulus, area, beta)  # the footprint's
         self.flat_residual = 0.0  # the recomputed residual of the flat punch's held-set solve
         self.k_flat_grid = self.flat_stiffness_on_grid() if flat == "grid" else np.nan
-        self.k_flat = self.k_flat_grid if flat == "grid" else self.k_flat_analytic
+        self.k_flat = (
+            self.k_flat_grid
+            if flat == "grid"
+            else flat_punch_stiffness(self.modulus, area, analytic_beta)
+        )
+        # the shape factor of K_flat: the reference's, or the grid's flat punch's
+        self.flat_beta = self.k_flat / flat_punch_stiffness(self.modulus, area, 1.0)
 
     def _recess(self, heights: np.ndarray) -> tuple[np.ndarray, float]:
         """The recess ``s = max(h) - h`` on the footprint (0 off it) of this rank's heights,
@@ -318,6 +381,7 @@ class PunchProblem:
             "total_stiffness": k_tot,
             "interfacial_stiffness": interfacial_stiffness(k_tot, self.k_flat) / grid.area,
             "flat_punch_stiffness": self.k_flat,
+            "flat_punch_beta": self.flat_beta,
             "stiffness_iterations": k_its,
             "stiffness_time": k_time,
             "stiffness_residual": (

@@ -189,7 +189,19 @@ PUNCH_COLUMNS = _entries(
     mean_gap=("length", "mean gap u_bar over the footprint (-dp/du_bar: K without paper Eq. 2)"),
     total_stiffness=("pressure*length", "dF/d delta with the contact set held fixed"),
     interfacial_stiffness=("pressure/length", "interfacial stiffness per area (paper Eq. 2)"),
-    flat_punch_stiffness=("pressure*length", "the flat punch's stiffness used in paper Eq. 2"),
+    flat_punch_stiffness=(
+        "pressure*length",
+        "K_flat, the flat punch's stiffness used in paper Eq. 2: the same grid's flat punch "
+        "(--flat-stiffness grid) or beta 2 E* sqrt(A/pi) (analytic, king; beta: "
+        "flat_punch_beta)",
+    ),
+    flat_punch_beta=(
+        "1",
+        "the shape factor beta = K_flat / (2 E* sqrt(A/pi)) of paper Eq. 2's flat punch: "
+        "analytic, the square's exact 1.0212 (Read's capacitance) or the disk's 1; king, "
+        "King's estimate 1.012; grid, the same grid's flat punch's (a file without it is "
+        "older: there analytic meant 1.012)",
+    ),
     kkt_residual=("1", "natural residual rms(min(g, p/k)) / l, l the rms recess"),
     target_force=("pressure*length^2", "the prescribed force (load control)"),
     force_balance=(

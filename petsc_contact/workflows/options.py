@@ -451,11 +451,16 @@ _PUNCH_LOADS = (
     _option(
         "flat_stiffness",
         "flat-punch stiffness in Eq. 2: computed on the same grid, or beta x 2 E* "
-        "sqrt(A/pi), beta = 1.012 (square) or 1 (disk)",
+        "sqrt(A/pi) with the exact beta = 1.0212 (square, from the unit square's capacitance "
+        "0.3667874) or 1 (disk), or King's estimate beta = 1.012 (square only, 0.9% low)",
         PUNCH,
         default="grid",
-        choices=("grid", "analytic"),
-        more="On the same grid the discretisation errors cancel",
+        choices=("grid", "analytic", "king"),
+        more=(
+            "On the same grid the discretisation errors cancel; the square's grid value "
+            "approaches the exact one as 1/n (0.27% below it at 128 pixels a side, 0.017% at "
+            "2048). Each step records `flat_punch_stiffness` and its `flat_punch_beta`"
+        ),
     ),
 )
 

@@ -285,9 +285,9 @@ def punch_contact(
     footprint
         ``square`` (default) or ``disk``, as ``Run``'s, or a full ``nx x ny`` boolean mask.
     flat_stiffness, beta
-        The flat-punch stiffness of paper Eq. 2 (``grid`` or ``analytic``) and its shape
-        factor (default: the footprint's, :func:`footprint_mask`); ``flat`` is the deprecated
-        name of ``flat_stiffness`` (a ``DeprecationWarning``; removed in 0.3.0).
+        Paper Eq. 2's flat punch, ``grid``, ``analytic`` (``beta 2 E* sqrt(A/pi)``, ``beta``
+        by default the footprint's, :func:`footprint_mask`) or ``king`` (square only);
+        ``flat``, its deprecated name (a ``DeprecationWarning``; removed in 0.3.0).
 
     Returns
     -------

@@ -30,7 +30,8 @@ def main() -> None:
     ax.plot(h, inv0, label=r"$1/\theta_0$ (Hertz mesoasperity)")
     ax.plot(h, inv1, label=r"$1/\theta_1$ (microroughness)")
     ax.plot(h, inv0 + inv1, "k", label=r"$1/\theta$")
-    ax.set(xlabel="Hurst exponent $H$", ylabel="prefactor", title="Fig. 2")
+    title = "the paper's Fig. 5: $1/\\theta(H)$ (App. B)"
+    ax.set(xlabel="Hurst exponent $H$", ylabel="prefactor", title=title)
     ax.legend()
     ax.grid(alpha=0.3)
     fig.savefig(f"{args.output}.png", dpi=120)

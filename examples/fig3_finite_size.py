@@ -153,7 +153,9 @@ def _draw(args: argparse.Namespace, results: dict) -> None:
     ax.set(
         xlabel="$p_0/E^*$",
         ylabel=r"$K h_\mathrm{rms}/E^*$",
-        title=f"paper Fig. 2: L = $\\lambda_r$, {args.grid}$^2$",
+        title=f"paper Fig. 2: L = $\\lambda_r$, {args.grid}$^2$"
+        if args.data
+        else f"quick look at {args.grid}$^2$ (the paper's Fig. 2: 8192$^2$)",
     )
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1))  # beside: no data hidden
     ax.grid(alpha=0.3, which="both")

@@ -164,7 +164,8 @@ def _draw(args: argparse.Namespace, ratios: list[float], results: dict, fit: dic
     ax.set(
         xlabel=rf"$(\lambda_1/\lambda_r)^{{{exponent:.2f}}}$",
         ylabel=r"$\alpha$",
-        title=f"H = {args.hurst}, "
+        title=("paper Fig. 3: " if args.data else "quick look: ")
+        + f"H = {args.hurst}, "
         + (r"$n = 2\lambda_r/\lambda_1$" if args.data else f"{args.grid}$^2$")
         + r", $L = \lambda_r$",
     )

@@ -65,7 +65,7 @@ def panel(ax, data: dict, ratio: float, cutoff: float, title: str) -> None:
     for label, value in marks.items():
         ax.axvline(value, color="0.5", lw=0.8, ls="--")
         ax.text(value, 0.97, label, transform=ax.get_xaxis_transform(), ha="center", va="top")
-    ax.set(xlabel="$q$ (1/L)", ylabel="$C(q)$", title=title)
+    ax.set(xlabel="$q$ (in $1/L$, $L$ the cell's side)", ylabel="$C(q)$", title=title)
     ax.grid(alpha=0.3, which="both")
 
 
@@ -102,6 +102,7 @@ def main() -> None:
         roll = "without roll-off" if ratio <= 1 else f"with roll-off, $L/\\lambda_r$ = {ratio:g}"
         panel(ax, data[key], ratio, cutoff, f"({key}) H = {args.hurst}, {roll}")
     axes[0].legend(loc="upper right", bbox_to_anchor=(1.0, 0.92))  # below the q marks
+    fig.suptitle(f"the paper's Fig. 4 (Eq. 5's spectrum), one {args.grid}$^2$ realisation")
     fig.savefig(f"{args.output}.png", dpi=120)
     for key, d in data.items():
         print(

@@ -250,7 +250,9 @@ def _draw(args: argparse.Namespace, data: dict) -> None:
     axes[0].plot([], [], ":", color="gray", label="Hertz: summit radius, periodic cell")
     axes[0].set(ylabel=r"$K h_\mathrm{rms}/E^*$", title="(a) stiffness")
     axes[1].axhline(1.0, color="k", lw=0.8)
-    axes[1].set(ylabel=r"$K / K_\mathrm{Hertz}$", title="(b) against Hertz (summit radius, periodic cell)")
+    axes[1].set(
+        ylabel=r"$K / K_\mathrm{Hertz}$", title="(b) against Hertz (summit radius, periodic cell)"
+    )
     axes[1].set_ylim(0, 3)
     for value, text in ((1 / 3, "1/3 (Hertz)"), (1 / (1 + HURST), "1/(1+H)"), (1.0, "1")):
         axes[2].axhline(value, color="k", ls="--", lw=0.7)

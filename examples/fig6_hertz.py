@@ -177,19 +177,6 @@ def report(d: dict) -> str:
     )
 
 
-def refined(heights: np.ndarray, factor: int) -> np.ndarray:
-    """The same band-limited surface on a grid ``factor`` times finer (its spectrum padded
-    with zeros: exact trigonometric interpolation, the heights at the old pixels kept)."""
-    n = heights.shape[0]
-    m = n * factor
-    spectrum = np.fft.fft2(heights)
-    keep = np.r_[0 : n // 2, m - n // 2 : m]
-    source = np.r_[0 : n // 2, n - n // 2 : n]
-    padded = np.zeros((m, m), dtype=complex)
-    padded[np.ix_(keep, keep)] = spectrum[np.ix_(source, source)]
-    return np.real(np.fft.ifft2(padded)) * factor * factor
-
-
 def refinement(pixels: int, seed: int, loads: np.ndarray, factors=(1, 2, 4)) -> list[str]:
     """``K/K_Hertz`` (periodic cell, the summit's radius) at ``loads`` on the 512^2 surface
     of ``lambda_1 = pixels`` and ``seed`` solved on grids ``factors`` times finer: whether a
@@ -200,7 +187,8 @@ def refinement(pixels: int, seed: int, loads: np.ndarray, factors=(1, 2, 4)) -> 
     hertz = theory.hertz_stiffness(loads, 1.0, summit_radius(h), 1.0, cell=1.0)
     lines = []
     for factor in factors:
-        steps = periodic_contact(refined(h, factor), length=1.0, pressures=loads, stiffness=True)
+        fine = scenes.refined(h, factor)
+        steps = periodic_contact(fine, length=1.0, pressures=loads, stiffness=True)
         k = np.array([step.scalars["stiffness"] for step in steps])
         area = np.array([step.scalars["area_fraction"] for step in steps]) * (512 * factor) ** 2
         patches = [int(step.scalars["contact_patches"]) for step in steps]

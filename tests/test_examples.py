@@ -342,3 +342,22 @@ def test_sweeps_whose_loads_differ_by_rounding_are_one_sweep(tmp_path):
     assert same["stiffness"].shape == (2, 6) and np.isfinite(same["stiffness"]).all()
     with pytest.raises(ValueError, match="same loads"):
         curves_from_files([str(tmp_path / "a.h5"), str(tmp_path / "c.h5")])
+
+
+def test_the_grid_refinement_reuses_what_it_solved(tmp_path):
+    """``examples/grid_refinement.py``: a table of K on the coarser grids over the finest's,
+    binned by contact pixels; each seed's curves kept, so that a second run solves nothing."""
+    import numpy as np
+
+    script = str(ROOT / "examples" / "grid_refinement.py")
+    args = [sys.executable, script, "--grid", "32", "--seeds", "2", "--pressures", "1e-4",
+            "3e-2", "5", "--output", str(tmp_path / "r")]  # fmt: skip
+    env = {"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"}
+    first = subprocess.run(args, capture_output=True, text=True, timeout=600, env=env)
+    assert first.returncode == 0, first.stderr
+    assert first.stdout.count("solved") == 6 and "| contact pixels" in first.stdout
+    again = subprocess.run(args, capture_output=True, text=True, timeout=600, env=env)
+    assert "solved" not in again.stdout
+    assert again.stdout.splitlines()[-3:] == first.stdout.splitlines()[-3:]
+    with np.load(tmp_path / "r_seed1.npz") as kept:
+        assert kept["stiffness_4"].shape == (5,) and np.isfinite(kept["stiffness_4"]).all()

@@ -106,3 +106,17 @@ def test_realised_psd_matches_prescribed_level():
 def test_bad_parameters(bad):
     with pytest.raises(ValueError):
         make(64, **bad)
+
+
+def test_a_refined_surface_is_the_same_surface():
+    """``scenes.refined``: the heights at the coarse pixels are kept, the spectrum is the
+    coarse one (the new wavevectors empty), so h_rms and the rms slope are the same."""
+    from petsc_contact.workflows import scenes
+
+    h, _ = scenes.surface(64, 0.7, 1.0, 16, seed=5)
+    fine = scenes.refined(h, 4)
+    assert fine.shape == (256, 256)
+    assert np.allclose(fine[::4, ::4], h, rtol=0, atol=1e-12 * np.abs(h).max())
+    assert fine.std() == pytest.approx(h.std(), rel=1e-12)
+    spectrum = np.fft.fft2(fine) / 16
+    assert np.abs(spectrum[32:-32, :]).max() < 1e-12 * np.abs(spectrum).max()

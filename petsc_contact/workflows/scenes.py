@@ -54,6 +54,20 @@ def surface(
     return h, rms_of(grid, fft, h)
 
 
+def refined(heights: np.ndarray, factor: int) -> np.ndarray:
+    """The same band-limited surface on a grid ``factor`` times finer: its spectrum padded
+    with zeros (exact trigonometric interpolation; the heights at the old pixels kept), so
+    that a grid refinement changes the discretisation and nothing of the surface."""
+    n = heights.shape[0]
+    m = n * factor
+    spectrum = np.fft.fft2(heights)
+    keep = np.r_[0 : n // 2, m - n // 2 : m]
+    source = np.r_[0 : n // 2, n - n // 2 : n]
+    padded = np.zeros((m, m), dtype=complex)
+    padded[np.ix_(keep, keep)] = spectrum[np.ix_(source, source)]
+    return np.real(np.fft.ifft2(padded)) * factor * factor
+
+
 def stiffness_curve(
     heights: np.ndarray,
     pressures: Sequence[float],

@@ -1,10 +1,17 @@
-"""Fig. 1: K(p) for L/lambda_r = 1 and 8 with Persson theory, K = p/u0 and the punch; inset p(u)."""
+"""Fig. 1: K(p) for L/lambda_r = 1 and 8 with Persson theory, K = p/u0 and the punch; inset p(u).
+
+The punch's K is paper Eq. 2 with the same grid's flat punch, drawn beside Eq. 2 with the
+analytic flat punch: the square's exact 1.1523 E* L_p and King's 1.142 E* L_p (the paper's,
+through Pharr et al.); the punch's table against the periodic curves is printed.
+"""
 
 import argparse
 
 import numpy as np
 
+from petsc_contact.geometries.punch import flat_punch_stiffness, interfacial_stiffness
 from petsc_contact.physics import theory
+from petsc_contact.reference import flat_punch
 from petsc_contact.workflows import scenes
 from petsc_contact.workflows.ensemble import power_law_fit
 from petsc_contact.workflows.paper_study import (
@@ -56,7 +63,11 @@ def _solved_punch(args: argparse.Namespace) -> tuple[dict, float, int]:
     n = args.punch_grid or args.grid // 2
     hp, hp_rms = scenes.surface(n, args.hurst, 1.0, n / 4, args.seed)
     approaches = np.geomspace(1e-2, 30.0, 18) * hp_rms  # to well over 10% contact area
-    return scenes.punch_curve(hp, approaches), hp_rms, n
+    punch = scenes.punch_curve(hp, approaches)
+    k_tot, k_int = punch["total_stiffness"], punch["interfacial_stiffness"]
+    with np.errstate(divide="ignore", invalid="ignore"):  # the grid's flat punch, from Eq. 2
+        punch["flat_punch_stiffness"] = 1 / (1 / k_tot - 1 / k_int)
+    return with_analytic_references(punch, 1.0, 1.0), hp_rms, n
 
 
 def _read_punch(args: argparse.Namespace) -> tuple[dict, float, int]:
@@ -66,9 +77,31 @@ def _read_punch(args: argparse.Namespace) -> tuple[dict, float, int]:
     if not paths:
         raise SystemExit(f"no complete Fig. 1 punch in {args.data}")
     with h5py.File(paths[0]) as f:
-        keys = "approach force nominal_pressure area_fraction interfacial_stiffness".split()
+        keys = (
+            "approach force nominal_pressure area_fraction interfacial_stiffness "
+            "total_stiffness flat_punch_stiffness"
+        ).split()
         punch = {k: f[k][:] for k in keys} | {"converged": f["converged"][:].astype(bool)}
+        area, modulus = float(np.prod(f.attrs["lengths"])), float(f.attrs["modulus"])
+        punch = with_analytic_references(punch, modulus, area)
         return punch, float(f.attrs["rms_height"]), int(f.attrs["grid"])
+
+
+ANALYTIC = {"exact": flat_punch.SQUARE_BETA, "king": flat_punch.KING_BETA}
+"""The analytic flat punches of paper Eq. 2 beside the grid's: the square's exact shape factor
+and King's estimate, the paper's choice (as Pharr et al. quote it)."""
+
+
+def with_analytic_references(punch: dict, modulus: float, area: float) -> dict:
+    """The punch's columns with ``exact_stiffness`` and ``king_stiffness``: its interfacial
+    stiffness per area from paper Eq. 2 with each analytic flat punch of :data:`ANALYTIC`
+    (``inf`` or negative where the total stiffness reaches or passes King's)."""
+    out = dict(punch)
+    for name, beta in ANALYTIC.items():
+        k_flat = flat_punch_stiffness(modulus, area, beta)
+        k = [interfacial_stiffness(k_tot, k_flat) for k_tot in punch["total_stiffness"]]
+        out[f"{name}_stiffness"] = np.array(k) / area
+    return out
 
 
 def _arguments() -> argparse.Namespace:
@@ -186,15 +219,7 @@ def _draw(args: argparse.Namespace, data: dict, n: int) -> None:
     ax.plot([], [], "-.", color="gray", label=r"Hertz, $K \propto p^{1/3}$")
     ax.plot([], [], ":", color="gray", label="$p_c$, Eq. 13 (the paper's recipe)")
     ax.loglog(p, p / theory.GAMMA, "k--", lw=1, label=r"$K = p/(\gamma h_\mathrm{rms})$")
-    ok = punch["converged"] & (punch["nominal_pressure"] > 0)
-    ax.loglog(
-        punch["nominal_pressure"][ok],
-        punch["interfacial_stiffness"][ok] * punch["h_rms"],
-        "s",
-        mfc="none",
-        color="gray",
-        label="punch (Eq. 2)",
-    )
+    _draw_punch(ax, punch)
     ax.set(
         xlabel="$p_0/E^*$",
         ylabel=r"$K h_\mathrm{rms}/E^*$",
@@ -208,6 +233,57 @@ def _draw(args: argparse.Namespace, data: dict, n: int) -> None:
     inset.tick_params(labelsize=6, labelleft=False, labelright=True)
     inset.yaxis.set_label_position("right")
     fig.savefig(f"{args.output}.png", dpi=120)
+
+
+def _draw_punch(ax: object, punch: dict) -> None:
+    """The punch's ``K h_rms`` from Eq. 2 with the grid's flat punch (squares), the exact
+    analytic one (pluses) and King's (dotted, up to the last load before it turns negative)."""
+    ok = punch["converged"] & (punch["nominal_pressure"] > 0)
+    p, hp = punch["nominal_pressure"], punch["h_rms"]
+    k = punch["interfacial_stiffness"]
+    ax.loglog(p[ok], k[ok] * hp, "s", mfc="none", color="gray", label="punch (Eq. 2)")
+    exact = punch["exact_stiffness"]
+    label = "punch, Eq. 2 with the exact flat square"
+    ax.loglog(p[ok], exact[ok] * hp, "+", color="k", ms=5, label=label)
+    king = punch["king_stiffness"]
+    with np.errstate(invalid="ignore"):
+        shown = ok & np.isfinite(king) & (king > 0)
+    label = "punch, Eq. 2 with King's flat square (the paper's)"
+    ax.loglog(p[shown], king[shown] * hp, ":", color="k", lw=1.2, label=label)
+
+
+def punch_table(data: dict) -> list[str]:
+    """The punch against the periodic curves at its loads, as Markdown rows: ``p/E*``, area,
+    ``K h_rms/p`` from Eq. 2 with the grid's, the exact and King's flat punch,
+    ``K_tot/K_flat`` (the grid's), each periodic curve's ``K h_rms/p`` at the same load
+    (log-log interpolated over its resolved loads) and the punch over the first."""
+    punch = data["punch"]
+    p, hp = punch["nominal_pressure"], punch["h_rms"]
+    cells = {}
+    for key, d in data.items():
+        if key.startswith("ratio"):
+            ok = d["resolved"] & np.isfinite(d["stiffness"]) & (d["stiffness"] > 0)
+            x, y = np.log(d["nominal_pressure"][ok]), np.log(d["stiffness"][ok] * d["h_rms"])
+            with np.errstate(divide="ignore"):
+                at = np.exp(np.interp(np.log(p), x, y, left=np.nan, right=np.nan))
+            cells[key] = at / p
+    names = " | ".join(f"periodic `L/lambda_r = {k[5:]}`" for k in cells)
+    rows = [
+        "| `p/E*` | area | punch `K h_rms/p`, Eq. 2 with the grid's flat punch | the exact "
+        f"analytic | King's | `K_tot/K_flat` | {names} | punch / periodic {min(cells)[5:]} |",
+        "| --- " * (7 + len(cells)) + "|",
+    ]
+    for i in np.flatnonzero(punch["converged"] & (p > 0)):
+        norm = [punch[f"{k}_stiffness"][i] * hp / p[i] for k in ("interfacial", "exact", "king")]
+        periodic = [c[i] for c in cells.values()]
+        if not np.isfinite(periodic).any():
+            continue
+        ratio = punch["total_stiffness"][i] / punch["flat_punch_stiffness"][i]
+        values = [f"{v:.3g}" for v in (*norm, ratio, *periodic, norm[0] / periodic[0])]
+        rows.append(
+            f"| {p[i]:.1e} | {punch['area_fraction'][i]:.2g} | " + " | ".join(values) + " |"
+        )
+    return rows
 
 
 def main() -> None:
@@ -242,6 +318,8 @@ def main() -> None:
             f"d ln K/d ln p at the lowest resolved loads {d['lowest_slope']:.2f} (Hertz 1/3), "
             f"one contact patch up to p0/E* = {single_patch_limit(d):.2g} (nan: at no load)"
         )
+    for row in punch_table(data):
+        print(row)
     print(f"wrote {args.output}.png and {args.output}.h5")
 
 

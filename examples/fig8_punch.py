@@ -1,6 +1,8 @@
 """The rough punch settled: K h_rms/p against p for periodic faces and faces cut from a larger
-surface, L_p/lambda_r = 1 and 8, several seeds; K from springs in series (paper Eq. 2) and
--dp/du_bar over the face beside it; the periodic cell of Fig. 1 for reference."""
+surface, L_p/lambda_r = 1 and 8, several seeds; K from springs in series (paper Eq. 2) with the
+same grid's flat punch, beside Eq. 2 with the analytic flat punch (the square's exact 1.1523
+E* L_p, and King's 1.142 E* L_p, the paper's choice) and -dp/du_bar over the face; the periodic
+cell of Fig. 1 for reference."""
 
 import argparse
 
@@ -8,6 +10,7 @@ import numpy as np
 
 from petsc_contact.geometries.punch import flat_punch_stiffness, interfacial_stiffness
 from petsc_contact.physics import theory
+from petsc_contact.reference import flat_punch
 from petsc_contact.workflows import scenes
 from petsc_contact.workflows.paper_study import (
     CUT_FROM,
@@ -19,6 +22,9 @@ from petsc_contact.workflows.paper_study import (
 HURST = 0.7
 FACES = ("periodic", "cut")
 TOLERANCES = (0.05, 0.1)  # K/p within +-5% or +-10%: the linear regime
+ANALYTIC = {"exact": flat_punch.SQUARE_BETA, "king": flat_punch.KING_BETA}
+"""The analytic flat punches of paper Eq. 2 beside the grid's: the square's exact shape factor
+and King's estimate, the paper's choice (as Pharr et al. quote it)."""
 
 
 def linear_width(p: np.ndarray, ratio: np.ndarray, tolerance: float) -> tuple:
@@ -56,9 +62,9 @@ def linearity(p: np.ndarray, k: np.ndarray, resolved: np.ndarray) -> str:
 def punch_rows(paths: list[str]) -> list[dict]:
     """Each punch piece's columns (NaN where a step did not converge), its face's realised
     ``h_rms`` and seed, ``-dp/du_bar`` by finite differences where ``mean_gap`` is kept, and
-    ``K`` from Eq. 2 with Pharr's analytic flat punch, as the paper took it (negative where
-    the discretised punch is already stiffer than Pharr's flat one).  An unfinished piece
-    with no converged step yet is left out."""
+    ``K`` from Eq. 2 with each analytic flat punch of :data:`ANALYTIC` (``exact_stiffness``,
+    ``king_stiffness``: negative where the discretised punch is already stiffer than King's
+    flat one).  An unfinished piece with no converged step yet is left out."""
     import h5py
 
     rows = []
@@ -78,12 +84,11 @@ def punch_rows(paths: list[str]) -> list[dict]:
             )
             row = {k: np.where(ok, f[k][:], np.nan) for k in keys if k in f}
             area = float(np.prod(f.attrs["lengths"]))
-            pharr = flat_punch_stiffness(float(f.attrs["modulus"]), area)
+            for name, beta in ANALYTIC.items():
+                k_flat = flat_punch_stiffness(float(f.attrs["modulus"]), area, beta)
+                k = [interfacial_stiffness(k_tot, k_flat) for k_tot in row["total_stiffness"]]
+                row[f"{name}_stiffness"] = np.array(k) / area
             row |= {
-                "pharr_stiffness": np.array(
-                    [interfacial_stiffness(k, pharr) for k in row["total_stiffness"]]
-                )
-                / area,
                 "h_rms": float(f.attrs["rms_height"]),
                 "pixels": int(np.prod(np.atleast_1d(f.attrs["grid"])[[0, -1]])),  # n x n
                 "seed": int(f.attrs["seed"]),
@@ -179,11 +184,11 @@ def _range(values: np.ndarray, digits: int = 2) -> str:
 def summary(face: str, ratio: int, rows: list, ref: dict | None) -> str:
     """A variant over its seeds, as a Markdown table row.  As ``median [min-max]`` over the
     seeds: the punch over the cell at 1, 5, 10 and 20% area; ``K h_rms/p`` at the step
-    nearest 20% area with the grid's and Pharr's flat punch (negative where the punch is
-    stiffer than Pharr's flat one); the widest window within 10% (decades); the area at
-    which the total stiffness is half the flat punch's (the edges' share).  Then the range of
-    ``-dp/du_bar`` over Eq. 2 over every step from 0.1% to 10% area of every seed, and the
-    scatter between seeds at fixed loads, the standard deviation (ddof 1) of
+    nearest 20% area with the grid's, the exact analytic and King's flat punch (negative
+    where the punch is stiffer than King's flat one); the widest window within 10% (decades);
+    the area at which the total stiffness is half the flat punch's (the edges' share).  Then
+    the range of ``-dp/du_bar`` over Eq. 2 over every step from 0.1% to 10% area of every
+    seed, and the scatter between seeds at fixed loads, the standard deviation (ddof 1) of
     ``ln(K h_rms)``."""
     areas = np.array(AREAS)
     half = np.array(
@@ -195,7 +200,10 @@ def summary(face: str, ratio: int, rows: list, ref: dict | None) -> str:
     vs_cell = np.array([log_interp(areas, r["area_fraction"], against_cell(r, ref)) for r in rows])
     near = [int(np.nanargmin(np.abs(np.log(r["area_fraction"] / 0.2)))) for r in rows]
     top = np.array([normalised(r)[i] for r, i in zip(rows, near, strict=True)])
-    pharr = np.array([normalised(r, "pharr_stiffness")[i] for r, i in zip(rows, near, strict=True)])
+    exact, king = (
+        np.array([normalised(r, key)[i] for r, i in zip(rows, near, strict=True)])
+        for key in ("exact_stiffness", "king_stiffness")
+    )
     reached = np.array([r["area_fraction"][i] for r, i in zip(rows, near, strict=True)])
     widths = []
     for r in rows:
@@ -218,7 +226,9 @@ def summary(face: str, ratio: int, rows: list, ref: dict | None) -> str:
         f"{face} face, `L_p/lambda_r = {ratio}`",
         str(len(rows)),
         *(_range(vs_cell[:, i]) for i in range(areas.size)),
-        f"{_range(top)} ({_range(pharr)}) at {reached.min():.0%}-{reached.max():.0%}",
+        f"{_range(top)} at {reached.min():.0%}-{reached.max():.0%}",
+        _range(exact),
+        _range(king),
         _range(np.array(widths)),
         gap_text,
         _range(100 * half, 1),
@@ -228,17 +238,52 @@ def summary(face: str, ratio: int, rows: list, ref: dict | None) -> str:
 
 
 SUMMARY_HEADER = (
-    "| punch | seeds | punch / cell at 1% area | 5% | 10% | 20% | `K h_rms/p` near 20% (Pharr's) "
+    "| punch | seeds | punch / cell at 1% area | 5% | 10% | 20% | `K h_rms/p` near 20%, Eq. 2 "
+    "with the grid's flat punch | with the exact analytic | with King's "
     "| within 10% (decades) | `-dp/du_bar` / Eq. 2, 0.1-10% area | area (%) at `K_tot = "
     "K_flat/2` | std of `ln(K h_rms)` at "
     + ", ".join(f"{p:.0e}" for p in SCATTER_LOADS)
     + " E* |\n"
-    + "| --- " * 11
+    + "| --- " * 13
     + "|"
 )
 
 
 MEDIAN = {"ls": "-", "ms": 3.5, "mfc": "none", "lw": 1.6, "markevery": 4}  # median over seeds
+
+
+REFERENCE_STYLES = (
+    ({"ls": (0, (3, 3)), "lw": 0.8}, "Eq. 2 with the exact flat square (median, in black)"),
+    (
+        {"ls": ":", "lw": 1.3},
+        "Eq. 2 with King's flat square, the paper's (median, to a seed's < 0)",
+    ),
+    ({"ls": "none", "marker": "x", "ms": 4}, r"$-dp/d\bar u$ (median)"),
+)
+"""How :func:`_draw_references` draws Eq. 2 with the analytic flat punches and ``-dp/du_bar``."""
+
+
+def _draw_references(ax: object, rows: list, p: np.ndarray, color: str) -> None:
+    """A variant's medians over its seeds at ``p`` of Eq. 2 with the exact and with King's
+    flat punch (the latter up to the last load before a seed's turns negative) and of
+    ``-dp/du_bar`` (every third load), in the face's ``color`` (the exact one in black, on
+    top of the grid's, from which it differs by at most a few percent)."""
+    (exact_style, _), (king_style, _), (gap_style, _) = REFERENCE_STYLES
+    exact = [normalised(r, "exact_stiffness") for r in rows]
+    ax.loglog(p, seed_median(rows, "nominal_pressure", exact, p), color="k", **exact_style)
+    king = [normalised(r, "king_stiffness") for r in rows]
+    ends = []  # the last load before a seed's Eq. 2 with King's turns negative
+    for r, v in zip(rows, king, strict=True):
+        with np.errstate(invalid="ignore"):
+            turned = np.flatnonzero(v <= 0)
+        ends.append(r["nominal_pressure"][turned[0] - 1] if turned.size else np.inf)
+    shown = p <= min(ends)
+    median = seed_median(rows, "nominal_pressure", king, p)
+    ax.loglog(p[shown], median[shown], color=color, **king_style)
+    if all("mean_gap_stiffness" in r for r in rows):
+        gap = [normalised(r, "mean_gap_stiffness") for r in rows]
+        median = seed_median(rows, "nominal_pressure", gap, p)
+        ax.loglog(p[::3], median[::3], color=color, **gap_style)
 
 
 def _draw(args: argparse.Namespace, variants: dict, references: dict) -> None:
@@ -296,31 +341,7 @@ def _draw(args: argparse.Namespace, variants: dict, references: dict) -> None:
             eq2 = seed_median(rows, "nominal_pressure", [normalised(r) for r in rows], p)
             label = f"{face} face, Eq. 2: median of {n} seeds (thin: each)"
             ax.loglog(p, eq2, marker, color=color, label=label, **MEDIAN)
-            pharr = [normalised(r, "pharr_stiffness") for r in rows]
-            ends = []  # the last load before a seed's Eq. 2 with Pharr's turns negative
-            for r, v in zip(rows, pharr, strict=True):
-                with np.errstate(invalid="ignore"):
-                    turned = np.flatnonzero(v <= 0)
-                ends.append(r["nominal_pressure"][turned[0] - 1] if turned.size else np.inf)
-            shown = p <= min(ends)
-            ax.loglog(
-                p[shown],
-                seed_median(rows, "nominal_pressure", pharr, p)[shown],
-                ":",
-                color=color,
-                lw=1.3,
-                label=f"{face} face, Eq. 2 with Pharr's flat punch (median, until one turns < 0)",
-            )
-            if all("mean_gap_stiffness" in r for r in rows):
-                gap = [normalised(r, "mean_gap_stiffness") for r in rows]
-                ax.loglog(
-                    p[::3],
-                    seed_median(rows, "nominal_pressure", gap, p)[::3],
-                    "x",
-                    color=color,
-                    ms=4,
-                    label=rf"{face} face, $-dp/d\bar u$ (median)",
-                )
+            _draw_references(ax, rows, p, color)
             a = np.geomspace(1e-4, 0.5, 60)
             cell = seed_median(rows, "area_fraction", [against_cell(r, ref) for r in rows], a)
             label = f"{face} face: median (thin: each seed)"
@@ -335,6 +356,8 @@ def _draw(args: argparse.Namespace, variants: dict, references: dict) -> None:
                 ms=3.5,
                 label="Fig. 1's punch (periodic face, seed 1)",
             )
+        for style, label in REFERENCE_STYLES:  # one entry per style, both faces' colours
+            ax.plot([], [], color="0.3", label=label, **style)
         ax.axhline(1 / theory.GAMMA, color="k", ls="--", lw=0.8, label=r"$1/\gamma$")
         ax.set(
             title=f"$L_p/\\lambda_r$ = {ratio}, $L_p/\\lambda_1$ = 1024, 2048$^2$",
@@ -342,12 +365,12 @@ def _draw(args: argparse.Namespace, variants: dict, references: dict) -> None:
             xlabel="$p/E^*$",
         )
         ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=7, loc="upper right")
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.45, 1.0))
         below.axhline(1, color="k", lw=0.8)
         below.set(xlabel="contact area fraction", xlim=(1e-4, 0.6), yscale="log")
         below.grid(alpha=0.3, which="both")
         below.legend(fontsize=7, loc="lower left")
-    axes[0, 0].set(ylabel=r"$K h_\mathrm{rms}/p$ (flat: linear regime)", ylim=(0.5, 300))
+    axes[0, 0].set(ylabel=r"$K h_\mathrm{rms}/p$ (flat: linear regime)", ylim=(0.5, 1500))
     axes[1, 0].set(ylabel="punch / periodic cell at the same $p$", ylim=(0.3, 3))
     ticks = (0.3, 0.5, 0.7, 1, 1.5, 2, 3)
     axes[1, 0].set_yticks(ticks, [f"{t:g}" for t in ticks])
@@ -372,13 +395,14 @@ def report(face: str, ratio: int, rows: list) -> list[str]:
             f"{np.nanmax(row['area_fraction']):.1%}; Eq. 2: "
             f"{linearity(p, row['interfacial_stiffness'], ok)}"
         )
-        pharr = row["pharr_stiffness"] / row["interfacial_stiffness"]
         top = np.nanargmax(row["area_fraction"])
-        text += (
-            f"; Eq. 2 with Pharr's flat punch {pharr[top]:.2f} x at the top load, "
-            f"{np.nanmax(np.where(row['area_fraction'] < 0.2, pharr, np.nan)):.2f} x below 20% "
-            "area"
-        )
+        for name, key in (("the exact", "exact_stiffness"), ("King's", "king_stiffness")):
+            over = row[key] / row["interfacial_stiffness"]
+            below = np.where(row["area_fraction"] < 0.2, over, np.nan)
+            text += (
+                f"; Eq. 2 with {name} flat punch {over[top]:.3f} x at the top load, "
+                f"{np.nanmin(below):.3f}-{np.nanmax(below):.3f} x below 20% area"
+            )
         if "mean_gap_stiffness" in row:
             ratio_k = row["mean_gap_stiffness"] / row["interfacial_stiffness"]
             mid = (row["area_fraction"] >= 1e-3) & (row["area_fraction"] <= 0.1)

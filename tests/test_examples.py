@@ -180,13 +180,17 @@ def test_a_ratio_with_one_seed_is_drawn_but_not_fitted():
     three = fig4.extrapolation(0.3, ratios[:3], results)
     assert np.allclose(fit["coefficients"], three["coefficients"])
     assert np.isfinite(fit["extrapolated_alpha_error"])
-    # the three fitted points scatter about their line by more than their errors: chi^2 on
-    # one degree of freedom scales the error; points on the line leave it as it is
-    assert fit["dof"] == 1 and fit["chi2"] > 1
-    scaled = fit["extrapolated_alpha_error"] * np.sqrt(fit["chi2"])
-    assert fit["extrapolated_alpha_scaled_error"] == pytest.approx(scaled, rel=1e-12)
+    # 768's point 0.1 below the others, errors of 0.005: the three fitted points scatter
+    # about their line by more than their errors say, and chi^2 on one degree of freedom
+    # scales the error; on the line it stands
+    tight = {k: v | {"alpha_error": 0.005} for k, v in results.items()}
+    tight["ratio768"] = tight["ratio768"] | {"alpha": 0.62}
+    scattered = fig4.extrapolation(0.3, ratios, tight)
+    assert scattered["dof"] == 1 and scattered["chi2"] > 1
+    scaled = scattered["extrapolated_alpha_error"] * np.sqrt(scattered["chi2"])
+    assert scattered["extrapolated_alpha_scaled_error"] == pytest.approx(scaled, rel=1e-12)
     on_line = {
-        k: v | {"alpha": 0.8 - 0.1 * (1 / float(k[5:])) ** (1 / 1.3)} for k, v in results.items()
+        k: v | {"alpha": 0.8 - 0.1 * (1 / float(k[5:])) ** (1 / 1.3)} for k, v in tight.items()
     }
     straight = fig4.extrapolation(0.3, ratios, on_line)
     assert straight["chi2"] < 1e-20

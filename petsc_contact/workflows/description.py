@@ -97,7 +97,8 @@ class Run:
         and text with commas is read as the command line reads it (``"1e-3,2MPa"``).
     footprint, flat_stiffness, stiffness
         The punch's outline (``square``, ``disk``) and its flat-punch reference (``grid``,
-        ``analytic``); whether every step adds the exact stiffness.
+        ``analytic``: the exact continuum value, ``king``: King's estimate for a square);
+        whether every step adds the exact stiffness.
     output, fields, scalars_only, resume, overwrite, stop_after
         The HDF5 file (none: results only in memory), whether the fields of every step are
         stored, whether the height map is left out, whether an interrupted run is continued

@@ -154,8 +154,10 @@ def test_run_takes_the_device_through_run_contact(tmp_path, petsc):
     assert array.to_dataframe()["mean_gap"].tolist() == [s["mean_gap"] for s in array.table]
     with pytest.raises(ValueError, match="-tao_type needs --device cpu"):
         run_contact(run.with_(device="cpu-array", options=("-tao_type", "bncg")))
-    with pytest.raises(ValueError, match="unknown device 'tpu'"):
+    with pytest.raises(ValueError, match="--device must be one of cpu, gpu, cpu-array, not 'tpu'"):
         Run(grid=64, device="tpu")
+    with pytest.raises(ValueError, match="--flat-stiffness must be one of grid, analytic, king"):
+        Run(grid=64, geometry="punch", flat_stiffness="pharr")
 
 
 def test_the_stand_in_runs_the_cli_without_petsc4py_pyfftw_or_surfacetopography(tmp_path):

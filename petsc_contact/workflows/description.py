@@ -25,7 +25,6 @@ from typing import Any
 import numpy as np
 
 from ..conventions.units import METRES, NEWTONS, PASCALS, parse_quantity
-from ..numerics.device import DEVICES
 
 GEOMETRIES = ("periodic", "punch")
 LOADS = ("pressures", "sweep", "approaches", "forces")
@@ -178,8 +177,9 @@ class Run:
         if self.geometry not in GEOMETRIES:
             raise ValueError(f"geometry must be one of {', '.join(GEOMETRIES)}: {self.geometry}")
         positive("--modulus", self.modulus_value)
-        if self.device not in DEVICES:
-            raise ValueError(f"unknown device '{self.device}': choose one of {', '.join(DEVICES)}")
+        from .options import check_choices
+
+        check_choices(lambda name: getattr(self, name))  # --device, --footprint, ...
         if self.cut_from < 1:
             raise ValueError(f"--cut-from must be a whole number >= 1, got {self.cut_from}")
         if self.stop_after is not None:

@@ -724,6 +724,19 @@ def options_of(command: str) -> list[Option]:
     return [o for o in OPTIONS if command in o.commands]
 
 
+def check_choices(values: Callable[[str], Any]) -> None:
+    """``ValueError`` naming the option, as the command line does, for a field of ``Run``
+    (``values(name)``) that is not one of its option's choices (``None``: not given)."""
+    for option in OPTIONS:
+        if option.field and option.choices is not None:
+            value = values(option.name)
+            if value is not None and value not in option.choices:
+                raise ValueError(
+                    f"{option.flags[0]} must be one of {', '.join(option.choices)}, not "
+                    f"'{value}'"
+                )
+
+
 def run_fields(command: str) -> list[str]:
     """The options of ``command`` that are fields of ``Run``."""
     return [o.name for o in options_of(command) if o.field]

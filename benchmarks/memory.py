@@ -1,9 +1,20 @@
-"""Peak memory per grid point of one load step or of a sweep, per geometry and solver.
+"""Peak memory per grid point of one load step or of a sweep, per geometry and solver; and
+peak memory per rank of a run on several ranks.
 
 usage: .venv/bin/python benchmarks/memory.py [--grids 1024 2048 4096] [--punch-grids 512 1024]
        [--loads N]  (N > 1: a sweep of N loads with the exact stiffness at each, as the study's)
+       .venv/bin/python benchmarks/memory.py --ranks 1 2 4 8 [--grids 4096] [--loads 2]
 Each case runs in a fresh process; peak resident memory (ru_maxrss) minus the resident memory
 of the same process before the grid is allocated, divided by n^2, is bytes per grid point.
+
+With ``--ranks``, each grid runs as ``petsc-contact periodic --fields --stiffness`` would,
+written to a file (``--loads`` loads from 1e-3 to 1e-2 of the modulus), under
+``mpiexec --oversubscribe -n P`` for each ``P`` (as root, set OMPI_ALLOW_RUN_AS_ROOT=1 and
+OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1); every rank reports its peak resident memory and its
+resident memory before the run (the per-process constant: Python, PETSc, MPI, the
+package).  The target of ``P`` ranks is the serial run's memory above its constant divided
+by ``P``, plus the constant of ``P`` ranks' processes: the largest rank should be within 15%
+of it, and rank 0 within 15% of the others' largest.
 """
 
 from __future__ import annotations
@@ -40,13 +51,82 @@ print(json.dumps({"geometry": geometry, "n": n, "solver": solver, "peak_GiB": pe
 """
 
 
+RANK_CHILD = r"""
+import json, os, resource, sys, time
+from mpi4py import MPI
+from petsc_contact import Run, run_contact
+from petsc_contact.backend import _petsc
+_petsc.init([])
+n, loads, folder = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
+comm = MPI.COMM_WORLD
+base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+run = Run(grid=n, hurst=0.7, rms_slope=0.1, seed=1, sweep=(loads, 1e-3, 1e-2), stiffness=True,
+          fields=True, output=os.path.join(folder, f"memory-{n}-{comm.size}.h5"))
+comm.Barrier()
+t = time.perf_counter()
+result = run_contact(run)
+took = time.perf_counter() - t
+peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+said = comm.gather({"rank": comm.rank, "base": base, "peak": peak}, root=0)
+if comm.rank == 0:
+    print(json.dumps({"n": n, "size": comm.size, "time": took, "ranks": said,
+                      "converged": all(bool(s["converged"]) for s in result.table)}))
+"""
+
+
+def per_rank(n: int, size: int, loads: int, folder: str) -> dict | None:
+    """Every rank's base and peak resident memory for a run of ``n^2`` on ``size`` ranks."""
+    command = [sys.executable, "-c", RANK_CHILD, str(n), str(loads), folder]
+    if size > 1:
+        command = ["mpiexec", "--oversubscribe", "-n", str(size), *command]
+    out = subprocess.run(command, capture_output=True, text=True)
+    line = [text for text in out.stdout.splitlines() if text.startswith("{")]
+    if not line:
+        print(f"{n} on {size} ranks: failed: {out.stderr.strip().splitlines()[-3:]}")
+        return None
+    return json.loads(line[0])
+
+
+def rank_table(grids: list[int], sizes: list[int], loads: int) -> None:
+    """Peak memory per rank on each of ``sizes`` ranks, against serial/P plus the constant."""
+    import tempfile
+
+    gib = 2.0**30
+    print(
+        "| grid | ranks | rank 0 (GiB) | largest rank (GiB) | smallest rank (GiB) | constant "
+        "(GiB) | target (GiB) | largest / target | rank 0 / others' largest | time (s) |"
+    )
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for n in grids:
+        serial = None
+        for size in sizes:
+            with tempfile.TemporaryDirectory() as folder:
+                r = per_rank(n, size, loads, folder)
+            if r is None:
+                continue
+            peaks = [p["peak"] for p in r["ranks"]]
+            constant = sorted(p["base"] for p in r["ranks"])[len(peaks) // 2]
+            if serial is None:
+                serial = peaks[0] - constant  # the first size given is the reference
+            target = constant + serial / size
+            others = max(peaks[1:], default=peaks[0])
+            print(f"| {n} | {size} | {peaks[0] / gib:.3f} | {max(peaks) / gib:.3f} | "
+                  f"{min(peaks) / gib:.3f} | {constant / gib:.3f} | {target / gib:.3f} | "
+                  f"{max(peaks) / target:.3f} | {peaks[0] / others:.3f} | {r['time']:.0f} |",
+                  flush=True)  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grids", type=int, nargs="+", default=[1024, 2048, 4096])
     ap.add_argument("--punch-grids", type=int, nargs="*", default=[512, 1024, 2048])
     ap.add_argument("--solvers", nargs="+", default=["cg", "tron", "bqnls"])
     ap.add_argument("--loads", type=int, default=1, help="loads per run (default: one step)")
+    ap.add_argument("--ranks", type=int, nargs="*", help="peak memory per rank on these ranks")
     args = ap.parse_args()
+    if args.ranks:
+        rank_table(args.grids, args.ranks, args.loads)
+        return
     cases = [("periodic", n, s) for n in args.grids for s in args.solvers]
     cases += [("punch", n, "cg") for n in args.punch_grids]
     for geometry, n, solver in cases:

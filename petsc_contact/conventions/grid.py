@@ -16,7 +16,7 @@ from __future__ import annotations
 import os
 import sys
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, SupportsFloat, TypeVar
+from typing import TYPE_CHECKING, Any, Protocol, SupportsFloat, TypeVar
 
 import numpy as np
 
@@ -33,6 +33,18 @@ LAUNCHER_VARIABLES = {
     "rank": ("OMPI_COMM_WORLD_RANK", "PMI_RANK"),
 }
 T = TypeVar("T")
+
+
+class RowSource(Protocol):
+    """A global field that hands out its rows without being read whole (the rows of a resume
+    state saved in slabs): ``source[a:b]`` reads rows ``a`` to ``b``."""
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """The global field's shape."""
+        ...
+
+    def __getitem__(self, rows: slice) -> np.ndarray: ...
 
 
 class MPIUnavailable(ImportError):
@@ -282,12 +294,14 @@ class Grid:
         """Root mean square of a distributed field."""
         return float(np.sqrt(self.sum(np.vdot(local, local).real)[0] / self.size))
 
-    def scatter(self, full: np.ndarray) -> np.ndarray:
-        """This rank's slab of a global array that every rank can read (e.g. memory-mapped)."""
+    def scatter(self, full: np.ndarray | RowSource) -> np.ndarray:
+        """This rank's slab of a global array that every rank can read (memory-mapped, or a
+        :class:`RowSource`): only its rows are read."""
         return np.ascontiguousarray(full[self.rows], dtype=float)
 
     def gather(self, local: np.ndarray) -> np.ndarray | None:
-        """The global array on rank 0 (``None`` elsewhere), of the local slabs' dtype."""
+        """The global array on rank 0 (``None`` elsewhere), of the local slabs' dtype: for
+        small maps only (a run's output never gathers a field: each rank writes its rows)."""
         if self.comm.size == 1:
             return np.array(local, copy=True)
         counts = self.comm.gather(local.size, root=0)

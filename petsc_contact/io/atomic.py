@@ -1,6 +1,7 @@
 """Writes that never leave a torn file: a file is written under a temporary name and renamed
 into place when whole, and every failure to write is one :class:`StorageError` naming the
 file and the system's reason.  :func:`on_root` runs a write on rank 0 and raises its
+failure on every rank; :func:`on_every` runs each rank's own write and raises any rank's
 failure on every rank."""
 
 from __future__ import annotations
@@ -109,15 +110,32 @@ def on_root(comm: Any, work: Any) -> None:
         except Exception as exc:
             failure = exc
     if comm.size > 1:
-        said = comm.bcast(None if failure is None else _portable(failure), root=0)
+        said = comm.bcast(None if failure is None else _portable(failure, 0), root=0)
         if said is not None and failure is None:
             failure = said
     if failure is not None:
         raise failure
 
 
-def _portable(exc: BaseException) -> BaseException:
+def on_every(comm: Any, work: Any) -> None:
+    """Run ``work`` on every rank of ``comm`` (each writing its own file); when it fails on
+    any rank, every rank raises the failure of the first that failed (collective)."""
+    failure: BaseException | None = None
+    try:
+        work()
+    except Exception as exc:
+        failure = exc
+    if comm.size > 1:
+        said = comm.allgather(None if failure is None else _portable(failure, comm.rank))
+        first = next((s for s in said if s is not None), None)
+        if failure is None:
+            failure = first
+    if failure is not None:
+        raise failure
+
+
+def _portable(exc: BaseException, rank: int) -> BaseException:
     """An exception every rank can raise (pickled through MPI)."""
     if isinstance(exc, StorageError):
         return StorageError(exc.errno, exc.strerror or str(exc))
-    return RuntimeError(f"rank 0 failed to write results: {type(exc).__name__}: {exc}")
+    return RuntimeError(f"rank {rank} failed to write results: {type(exc).__name__}: {exc}")

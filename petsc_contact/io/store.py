@@ -1,6 +1,8 @@
 """Durable run files: one writer per output, every finished step on disk whatever happens.
 
-While a run with output ``OUT.h5`` is under way, rank 0 keeps beside it:
+While a run with output ``OUT.h5`` is under way, its ranks keep beside it (the record and
+the table on rank 0; every array in row slabs, each rank writing its own rows to its own
+files, :mod:`~petsc_contact.io.parts`: no rank ever holds a whole field):
 
 ``OUT.h5.lock``
     held (``flock``) by the running process from before it touches anything to its end, so
@@ -14,16 +16,19 @@ While a run with output ``OUT.h5`` is under way, rank 0 keeps beside it:
 ``OUT.h5.parts/``
     the bulky arrays, one HDF5 file each, each written to a temporary name and renamed before
     the step is committed: ``heights.h5``, and ``step-000001.h5``, ... with a step's fields,
-    compressed once, as the final file holds them.  The commit records each part's SHA-256
-    (the ``.partial``'s attribute ``parts``); a part is used only when its bytes match it.
+    compressed once, as the final file holds them (on ``P`` ranks, ``P`` slabs of each).  The
+    commit records each file's SHA-256 (the ``.partial``'s attribute ``parts``); a part is
+    used only when the bytes of every slab match it.
 ``OUT.h5.state.npz``
     the solution the next step starts from (``after_step`` says which step it ends), written
-    after the commit; a resume that finds it missing, damaged or stale starts the next step
-    from first touch (the same result to the solver's tolerance, at a different cost).
+    after the commit (on ``P`` ranks, ``P`` slabs); a resume that finds it missing, damaged or
+    stale starts the next step from first touch (the same result to the solver's tolerance,
+    at a different cost).  A resume on any rank count reads each rank's rows only.
 
 When the run ends, every part is checked against its checksum, ``OUT.h5`` is assembled
-from them (the fields' compressed chunks copied as they are), written to a temporary name and
-renamed into place, then its step table ``OUT.csv`` is written, and the rest is removed.  An
+from them by rank 0, a band of rows at a time (the fields' compressed chunks copied as they
+are where a slab's rows fall on whole chunks), written to a temporary name and renamed into
+place, then its step table ``OUT.csv`` is written, and the rest is removed.  An
 earlier run's ``OUT.csv`` is removed before the new ``OUT.h5`` is renamed into place, so that
 a table is never beside another run's ``OUT.h5``; a table missing beside a complete
 ``OUT.h5`` is written again by :func:`tidy` or ``--resume`` (the ``.partial`` is removed
@@ -50,6 +55,7 @@ import json
 import os
 import re
 import shutil
+import zipfile
 from contextlib import suppress
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -57,7 +63,16 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..physics.continuation import Held
-from .atomic import StorageError, _reason, atomic_h5, check_room, on_root, replaced, storage
+from .atomic import (
+    StorageError,
+    _reason,
+    atomic_h5,
+    check_room,
+    on_every,
+    on_root,
+    replaced,
+    storage,
+)
 from .interrupts import check_interrupt, forget_interrupts, interrupt
 from .lock import OutputBusy, OutputLock, _now, check_writable
 from .names import (
@@ -73,7 +88,18 @@ from .names import (
     state_path,
     step_part,
 )
-from .parts import PartsCheck, _steps, check_parts, part_problem
+from .parts import (
+    PartsCheck,
+    SlabRows,
+    _steps,
+    check_parts,
+    mapped,
+    part_problem,
+    slab_name,
+    slab_of,
+    slab_rows,
+    slabs,
+)
 from .provenance import source_commit
 from .schema import (
     COORDINATES,
@@ -88,7 +114,7 @@ from .schema import (
 )
 
 if TYPE_CHECKING:
-    from ..conventions.grid import Grid
+    from ..conventions.grid import Grid, RowSource
 
 __all__ = [  # the names of the modules this one was split into stay importable from it
     "FIELD_CHUNK",
@@ -138,9 +164,9 @@ class Finished:
 
     steps: int
     table: dict[str, list[Any]] = field(default_factory=dict)
-    state: np.ndarray | None = None
+    state: RowSource | None = None  # read a rank's rows at a time (grid.scatter)
     state_problem: str = ""  # why the state could not be used ("" when it can)
-    held: Held | None = None  # what the sweep held beside the state (whole fields)
+    held: Held | None = None  # what the sweep held beside the state (fields as row sources)
     parts: dict[str, str] = field(default_factory=dict)  # the parts' SHA-256 at their commit
     rewrite_maps: bool = False  # heights.h5 is missing or damaged: the run writes it again
 
@@ -158,6 +184,7 @@ class Finished:
         kept = {step_part(k) for k in range(1, steps + 1)}
         if not check.maps:
             kept.add(HEIGHTS_PART)
+        kept = {f for f in self.parts if any(slab_of(n, f) is not None for n in kept)}
         state, problem, held = self.state, self.state_problem, self.held
         if steps < self.steps:
             state = held = None
@@ -267,27 +294,81 @@ def _values(dataset: Any) -> np.ndarray:
     return values
 
 
-def _saved_state(path: str, steps: int) -> tuple[np.ndarray | None, Held | None, str]:
+def _saved_state(path: str, steps: int) -> tuple[RowSource | None, Held | None, str]:
     """The state after step ``steps`` and what the sweep held beside it (``None`` in a state
-    file of an earlier version), or ``None`` and why not."""
+    file of an earlier version), as row sources whose rows are read when a rank asks for
+    them, or ``None`` and why not.  Of the sets of slabs left by runs on different rank
+    counts (a run killed before it removed the older set), the newest sound one."""
     where = state_path(path)
     if not steps:
         return None, None, ""
-    if not os.path.exists(where):
-        return None, None, f"{where} is missing"
-    try:
-        with np.load(where) as saved:
-            after, state = int(saved["after_step"]), saved["state"]
+    problem = f"{where} is missing"
+    for i, files in enumerate(_state_sets(where)):
+        try:
+            after, slabs_of = _read_slabs(files)
+        except _Damaged as exc:
+            problem = str(exc) if i == 0 else problem
+            continue
+        if after + 1 == steps:
+            state = SlabRows(slabs_of.pop("state"))
             held = None
-            if "held" in saved:
-                count = sum(name.startswith("held_field_") for name in saved.files)
-                fields = tuple(saved[f"held_field_{i}"] for i in range(count))
-                held = Held(saved["held"], fields)
-    except Exception as exc:  # a truncated or foreign file: any reader failure
-        return None, None, f"{where} is damaged ({_reason(exc)})"
-    if after + 1 != steps:
-        return None, None, f"{where} is of step {after + 1}, not {steps}"
-    return state, held, ""
+            if "held" in slabs_of:
+                scalars = slabs_of.pop("held")[0][1]
+                fields: tuple[Any, ...] = tuple(
+                    SlabRows(slabs_of[f"held_field_{k}"]) for k in range(len(slabs_of))
+                )  # row sources: each rank reads its rows of each (grid.scatter)
+                held = Held(np.asarray(scalars), fields)
+            return state, held, ""
+        problem = f"{files[0]} is of step {after + 1}, not {steps}" if i == 0 else problem
+    return None, None, problem
+
+
+class _Damaged(Exception):
+    """A state slab that cannot be used: missing, truncated, foreign or failing its CRC."""
+
+
+def _state_sets(where: str) -> list[list[str]]:
+    """The files of every set of state slabs beside ``where`` (``OUT.h5.state.npz``), one
+    list per rank count, in rank order, the newest set first."""
+    folder, name = os.path.split(where)
+    times: dict[int, int] = {}  # each rank count's newest slab
+    for entry in os.listdir(folder or "."):
+        found = slab_of(name, entry)
+        if found is not None:
+            time = os.stat(os.path.join(folder, entry)).st_mtime_ns
+            times[found[1]] = max(times.get(found[1], 0), time)
+    newest = sorted(times, key=lambda size: -times[size])
+    return [[os.path.join(folder, slab_name(name, r, p)) for r in range(p)] for p in newest]
+
+
+def _read_slabs(files: list[str]) -> tuple[int, dict[str, list[tuple[int, np.ndarray]]]]:
+    """The step a set of state slabs ends and each of their arrays as ``(first row, array)``
+    per slab, memory-mapped (``held``'s whole, it is small); every member's CRC checked,
+    streamed.  :class:`_Damaged` naming the first slab that cannot be used."""
+    afters: set[int] = set()
+    arrays: dict[str, list[tuple[int, np.ndarray]]] = {}
+    first = 0
+    for where in files:
+        if not os.path.exists(where):
+            raise _Damaged(f"{where} is missing")
+        try:
+            with zipfile.ZipFile(where) as archive:
+                bad = archive.testzip()
+            if bad is not None:
+                raise ValueError(f"{bad} fails its CRC")
+            with np.load(where) as saved:
+                afters.add(int(saved["after_step"]))
+                names = [m for m in saved.files if m != "after_step"]
+                mine = {"held": saved["held"]} if "held" in names else {}
+            mine.update({m: mapped(where, m) for m in names if m != "held"})
+        except Exception as exc:  # a truncated or foreign file: any reader failure
+            raise _Damaged(f"{where} is damaged ({_reason(exc)})") from None
+        for member, array in mine.items():
+            arrays.setdefault(member, []).append((first, array))
+        first += len(mine["state"])
+    if len(afters) != 1:
+        raise _Damaged(f"{files[0]} and its other slabs end different steps")
+    return afters.pop(), arrays
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -305,8 +386,9 @@ def _same(a: Any, b: Any) -> bool:
 class StepStore:
     """A run's results, durable step by step (see the module docstring).
 
-    Rank 0 writes; the other ranks join the gathers of fields and state, and every rank
-    raises the same :class:`StorageError` when rank 0 cannot write.
+    Rank 0 writes the record and the table; every rank writes its own rows of the maps,
+    fields and state (slabs, :mod:`~petsc_contact.io.parts`), and every rank raises the same
+    :class:`StorageError` when any rank cannot write.
 
     Parameters
     ----------
@@ -331,6 +413,7 @@ class StepStore:
         self.digests: dict[str, str] = {}  # the parts' SHA-256, recorded at each commit
         self.maps = False  # whether the run stores heights.h5
         self.assembled = False  # OUT.h5 is in place
+        self.fresh_state = True  # no state written yet: another rank count's is removed
 
     @classmethod
     def create(
@@ -347,21 +430,21 @@ class StepStore:
         filled heights are written (local slabs)."""
         store = cls(path, grid, fields)
         store.maps = heights is not None or filled is not None
-        full = _gathered(grid, heights, filled)  # collective
         store.attributes = {**attributes, "created": _now(), "complete": False}
 
         def begin() -> None:
             _clear(path, keep_steps=False)
             os.makedirs(store.parts)
-            try:
-                if store.maps:
-                    store._write_part(HEIGHTS_PART, full, chunked=False)
-                store._commit()
-            except BaseException:
-                _clear(path, keep_steps=False)  # nothing was finished: nothing is left
-                raise
 
         store._on_root(begin)
+        try:
+            if store.maps:
+                store._write_part(HEIGHTS_PART, _maps(heights, filled), chunked=False)
+            store._on_root(store._commit)
+        except BaseException:
+            if store.root:
+                _clear(path, keep_steps=False)  # nothing was finished: nothing is left
+            raise
         return store
 
     @classmethod
@@ -385,12 +468,13 @@ class StepStore:
         store = cls(path, grid, fields)
         store.steps = finished.steps
         store.digests = dict(finished.parts)
-        store.maps = heights is not None or filled is not None or HEIGHTS_PART in finished.parts
-        full = _gathered(grid, heights, filled) if finished.rewrite_maps else {}  # collective
+        stored = any(slab_of(HEIGHTS_PART, p) is not None for p in finished.parts)
+        store.maps = heights is not None or filled is not None or stored
         if store.root:
             with h5py.File(store.partial, "r") as f:
                 store.attributes = {k: v for k, v in f.attrs.items() if k != "parts"}
             store.table = {k: list(v) for k, v in finished.table.items()}
+        store.attributes = grid.comm.bcast(store.attributes, root=0)  # every rank's schema
         earlier = json.loads(str(store.attributes.get("resumed", "[]")) or "[]")
         segment = {
             "after_step": finished.steps,
@@ -406,11 +490,12 @@ class StepStore:
         def begin() -> None:
             _clear(path, keep_steps=True)
             _make_folder(store.parts)
-            if full:
-                store._write_part(HEIGHTS_PART, full, chunked=False)
-            store._commit()
 
         store._on_root(begin)
+        maps = _maps(heights, filled) if finished.rewrite_maps else {}
+        if maps:
+            store._write_part(HEIGHTS_PART, maps, chunked=False)
+        store._on_root(store._commit)
         return store
 
     def append(
@@ -422,21 +507,12 @@ class StepStore:
     ) -> None:
         """Commit one finished step: its fields (if stored), then its scalars, then the state
         a resume would start the next step from and what the sweep ``held`` beside it
-        (collective)."""
-        gathered: dict[str, Any] = (
-            {k: self.grid.gather(fields[k]) for k in self.fields} if fields else {}
-        )
-        full_state = self.grid.gather(state) if state is not None else None
-        kept: dict[str, Any] = {}
-        if held is not None:
-            kept["held"] = np.asarray(held.scalars, dtype=float)
-            for i, slab in enumerate(held.fields):
-                kept[f"held_field_{i}"] = self.grid.gather(slab)
+        (collective; every rank writes its own rows)."""
         step = self.steps + 1
+        if fields and self.fields:
+            self._write_part(step_part(step), {k: fields[k] for k in self.fields}, True)
 
         def commit() -> None:
-            if gathered:
-                self._write_part(step_part(step), gathered, chunked=True)
             for key, value in scalars.items():
                 if key not in self.table:  # new, or new since the version a resume began with
                     self.table[key] = [_missing(value)] * self.steps
@@ -448,21 +524,36 @@ class StepStore:
                 for column in self.table.values():
                     column.pop()
                 raise
-            self.steps = step
-            if full_state is not None:
-                where = state_path(self.path)
-                with storage(where), replaced(where) as tmp, open(tmp, "wb") as f:
-                    np.savez(f, **kept, state=full_state, after_step=step - 1)
 
         self._on_root(commit)
         self.steps = step
+        if state is not None:
+            self._write_state(state, held, step)
+
+    def _write_state(self, state: np.ndarray, held: Held | None, step: int) -> None:
+        """Every rank saves its rows of the state after ``step`` and of the fields ``held``
+        beside it (its slab of ``OUT.h5.state.npz``); after the first, the slabs another rank
+        count left are removed (collective)."""
+        comm = self.grid.comm
+        kept: dict[str, Any] = {}
+        if held is not None:
+            kept["held"] = np.asarray(held.scalars, dtype=float)
+            kept.update({f"held_field_{i}": slab for i, slab in enumerate(held.fields)})
+        where = slab_name(state_path(self.path), comm.rank, comm.size)
+
+        def save() -> None:
+            with storage(where), replaced(where) as tmp, open(tmp, "wb") as f:
+                np.savez(f, **kept, state=state, after_step=step - 1)
+
+        on_every(comm, save)
+        if self.fresh_state:
+            self._on_root(lambda: _remove_states(self.path, keep=comm.size))
+            self.fresh_state = False
 
     def finish(self) -> None:
         """Assemble ``OUT.h5`` (complete), rename it into place, remove the rest (collective)."""
 
         def assemble() -> None:
-            import h5py
-
             self._check_parts()
             parts = [os.path.join(self.parts, p) for p in os.listdir(self.parts)]
             needed = sum(os.path.getsize(p) for p in [self.partial, *parts])
@@ -474,9 +565,7 @@ class StepStore:
                 write_attributes(f, {**self.attributes, "complete": True})
                 self._write_table(f)
                 if self.maps:
-                    with h5py.File(os.path.join(self.parts, HEIGHTS_PART), "r") as part:
-                        for name in part:  # the heights, and a measured map's filled mask
-                            f.copy(part[name], name)
+                    self._copy_maps(f)
                 for name in self.fields:
                     self._copy_field(f, name)
                 self._label_maps(f)
@@ -583,17 +672,48 @@ class StepStore:
                 f[field_name].dims[axis].attach_scale(scale)
 
     def _write_part(self, name: str, arrays: dict[str, np.ndarray], chunked: bool) -> None:
-        """Write part ``name``; its checksum goes into the next commit."""
-        with atomic_h5(os.path.join(self.parts, name), digests=self.digests) as f:
-            for key, value in arrays.items():
-                if chunked:
-                    d = f.create_dataset(key, data=value[None], **_field_layout(value.shape))
-                else:
-                    d = f.create_dataset(key, data=value)
-                describe(d, self._entry(key))
+        """Every rank writes its rows of part ``name`` (``arrays``, local slabs) to its slab
+        file; their checksums go into rank 0's next commit (collective)."""
+        comm = self.grid.comm
+        slab = os.path.join(self.parts, slab_name(name, comm.rank, comm.size))
+        mine: dict[str, str] = {}
+
+        def write() -> None:
+            with atomic_h5(slab, digests=mine) as f:
+                for key, value in arrays.items():
+                    if chunked:
+                        d = f.create_dataset(key, data=value[None], **_field_layout(value.shape))
+                    else:
+                        d = f.create_dataset(key, data=value)
+                    describe(d, self._entry(key))
+
+        on_every(comm, write)
+        for digests in comm.gather(mine, root=0) or ():
+            self.digests.update(digests)
+
+    def _copy_maps(self, f: Any) -> None:
+        """The heights, and a measured map's filled mask, into ``f``: the one part copied as
+        it is, or its slabs' rows a band at a time."""
+        import h5py
+
+        files = slabs(HEIGHTS_PART, self.digests)
+        for slab in files:
+            rows = slab_rows(HEIGHTS_PART, slab, self.grid.shape[0])
+            with h5py.File(os.path.join(self.parts, slab), "r") as part:
+                for name in part:
+                    if len(files) == 1:
+                        f.copy(part[name], name)
+                        continue
+                    if name not in f:
+                        out = f.create_dataset(name, self.grid.shape, dtype=part[name].dtype)
+                        out.attrs.update(part[name].attrs)
+                    for a, b in _bands(rows):
+                        f[name][a:b] = part[name][a - rows.start : b - rows.start]
 
     def _copy_field(self, f: Any, name: str) -> None:
-        """Stack every step's ``name`` into ``f``, copying its compressed chunks as they are."""
+        """Stack every step's ``name`` into ``f``, slab by slab: their compressed chunks
+        copied as they are where the slab's rows are whole chunks of ``f``'s (always on one
+        rank), else a band of rows at a time."""
         import h5py
 
         nx, ny = self.grid.shape
@@ -604,18 +724,39 @@ class StepStore:
         )  # fmt: skip
         describe(out, self._entry(name))
         for k in range(self.steps):  # every part checked already (_check_parts)
-            with h5py.File(os.path.join(self.parts, step_part(k + 1)), "r") as part:
-                source = part[name].id
-                for i in range(source.get_num_chunks()):
-                    info = source.get_chunk_info(i)
-                    mask, data = source.read_direct_chunk(info.chunk_offset)
-                    out.id.write_direct_chunk((k, *info.chunk_offset[1:]), data, mask)
+            for slab in slabs(step_part(k + 1), self.digests):
+                rows = slab_rows(step_part(k + 1), slab, nx)
+                with h5py.File(os.path.join(self.parts, slab), "r") as part:
+                    source = part[name]
+                    if not _whole_chunks(source.chunks, out.chunks, rows, nx):
+                        for a, b in _bands(rows):
+                            out[k, a:b] = source[0, a - rows.start : b - rows.start]
+                        continue
+                    for i in range(source.id.get_num_chunks()):
+                        info = source.id.get_chunk_info(i)
+                        mask, data = source.id.read_direct_chunk(info.chunk_offset)
+                        first, column = info.chunk_offset[1:]
+                        out.id.write_direct_chunk((k, rows.start + first, column), data, mask)
 
 
-def _gathered(grid: Grid, heights: np.ndarray | None, filled: np.ndarray | None) -> dict[str, Any]:
-    """The maps a run stores, whole on rank 0 (``None`` elsewhere; collective)."""
-    maps = {"heights": heights, "filled": filled}
-    return {k: grid.gather(v) for k, v in maps.items() if v is not None}
+def _whole_chunks(chunks: tuple[int, ...], into: tuple[int, ...], rows: slice, nx: int) -> bool:
+    """Whether a slab of ``rows`` stored in ``chunks`` is whole chunks of a field stored in
+    ``into``: the same chunks, starting on one, ending on one or on the grid's last row."""
+    size = into[1]
+    ends = rows.stop == nx or rows.stop % size == 0
+    return tuple(chunks) == tuple(into) and rows.start % size == 0 and ends
+
+
+def _bands(rows: slice) -> list[tuple[int, int]]:
+    """``rows`` cut on the field chunks' row boundaries: the bands the assembly moves."""
+    cuts = range((rows.start // FIELD_CHUNK + 1) * FIELD_CHUNK, rows.stop, FIELD_CHUNK)
+    edges = [rows.start, *cuts, rows.stop]
+    return list(zip(edges[:-1], edges[1:], strict=True))
+
+
+def _maps(heights: np.ndarray | None, filled: np.ndarray | None) -> dict[str, np.ndarray]:
+    """The maps a run stores (local slabs): its heights and a measured map's filled mask."""
+    return {k: v for k, v in {"heights": heights, "filled": filled}.items() if v is not None}
 
 
 def _field_layout(shape: tuple[int, ...]) -> dict[str, Any]:
@@ -690,7 +831,7 @@ def _clear(path: str, keep_steps: bool) -> None:
     folder, name = os.path.split(os.path.abspath(path))
     table = os.path.basename(csv_path(path))
     pattern = re.compile(
-        rf"({re.escape(name)}(\.partial|\.state\.npz)?|{re.escape(table)})\.\d+\.tmp"
+        rf"({re.escape(name)}(\.partial|\.state(\.\d+of\d+)?\.npz)?|{re.escape(table)})\.\d+\.tmp"
     )
     for entry in os.listdir(folder):
         if pattern.fullmatch(entry):
@@ -703,15 +844,25 @@ def _clear(path: str, keep_steps: bool) -> None:
                 with suppress(FileNotFoundError):
                     os.remove(os.path.join(parts, entry))
         return
-    for leftover in (partial_path(path), state_path(path)):  # the record first
-        with suppress(FileNotFoundError):
-            os.remove(leftover)
+    with suppress(FileNotFoundError):
+        os.remove(partial_path(path))  # the record first
+    _remove_states(path, keep=0)
     parts = parts_path(path)
     if os.path.isdir(parts) and not os.path.islink(parts):
         shutil.rmtree(parts, ignore_errors=True)
     else:  # a plain file of that name, which no run writes
         with suppress(FileNotFoundError):
             os.remove(parts)
+
+
+def _remove_states(path: str, keep: int) -> None:
+    """Remove the state slabs of output ``path`` but those written on ``keep`` ranks."""
+    folder, name = os.path.split(os.path.abspath(state_path(path)))
+    for entry in os.listdir(folder):
+        found = slab_of(name, entry)
+        if found is not None and found[1] != keep:
+            with suppress(FileNotFoundError):
+                os.remove(os.path.join(folder, entry))
 
 
 def _make_folder(folder: str) -> None:

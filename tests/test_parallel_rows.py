@@ -1,0 +1,199 @@
+"""No rank holds the grid: on 4 and 8 ranks every rank writes its own rows of the maps, fields
+and resume state, the assembled file is the serial run's, and a run paused or killed on one
+rank count goes on on another (docs/parallel.md)."""
+
+from __future__ import annotations
+
+import json
+import textwrap
+from pathlib import Path
+
+import h5py
+import numpy as np
+from conftest import ROOT, cli, python
+from kill_at import same_result
+
+# 60 rows: 8 ranks hold 8 or 7 rows each (no slab ends on a chunk), 4 ranks 15
+SWEEP = "periodic --grid 60 --hurst 0.7 --rms-slope 0.1 --seed 3 --sweep 3,1e-4,1e-2 --stiffness"
+TIMES = ("solve_time", "stiffness_time")  # wall time: the columns that differ
+RESIDUALS = (  # rounding-level residuals: to 1e-10 absolute, not relative
+    "complementarity",
+    "force_balance",
+    "gradient_norm",
+    "kkt_residual",
+    "min_pressure",
+    "stiffness_residual",
+)
+
+
+def _serial(tmp_path: Path) -> Path:
+    out = tmp_path / "serial.h5"
+    r = cli(*SWEEP.split(), "--fields", "--quiet", "--output", str(out))
+    assert r.returncode == 0, r.stderr
+    return out
+
+
+def _same_file(a: Path, b: Path) -> None:
+    """Every dataset of ``b`` is ``a``'s: maps and fields to 1e-12 of their largest value,
+    scalars to 1e-10 (residuals near rounding to 1e-10 absolute), their attributes' names
+    equal."""
+    with h5py.File(a) as fa, h5py.File(b) as fb:
+        assert sorted(fa) == sorted(fb)
+        for name in fa:
+            x, y = fa[name][...], fb[name][...]
+            assert x.shape == y.shape and x.dtype == y.dtype, name
+            assert dict(fa[name].attrs).keys() == dict(fb[name].attrs).keys(), name
+            if name in TIMES or x.dtype.kind not in "fiub":
+                continue
+            if x.ndim == 3 or name in ("heights", "x", "y"):
+                scale = max(np.abs(x.astype(float)).max(), 1.0)
+                assert np.allclose(x, y, rtol=0, atol=1e-12 * scale), name
+            else:
+                floor = 1e-10 if name in RESIDUALS else 0.0
+                assert np.allclose(x, y, rtol=1e-10, atol=floor, equal_nan=True), name
+        assert fa["gap"].chunks == fb["gap"].chunks
+
+
+def test_four_and_eight_ranks_write_the_serial_file(tmp_path):
+    """--fields --stiffness on 4 and 8 ranks: the file is the serial run's, and every reader
+    reads it."""
+    import xarray
+
+    from petsc_contact import read_frame
+
+    serial = _serial(tmp_path)
+    for ranks in (4, 8):
+        out = tmp_path / f"mpi{ranks}.h5"
+        r = cli(*SWEEP.split(), "--fields", "--quiet", "--output", str(out), mpi=ranks)
+        assert r.returncode == 0, r.stderr
+        _same_file(serial, out)
+        assert sorted(p.name for p in tmp_path.glob(f"mpi{ranks}.*")) == [
+            f"mpi{ranks}.csv",
+            f"mpi{ranks}.h5",
+        ]
+    assert len(read_frame(str(out))) == 3
+    with xarray.open_dataset(out, engine="h5netcdf") as data:
+        assert data["gap"].dims == ("step", "x", "y")
+
+
+def test_paused_on_eight_goes_on_on_three_then_one(tmp_path):
+    """Paused after each step (``--stop-after 0``) on 8 ranks, then 3, then finished on one:
+    each resume reads its rows of the other rank count's state slabs, and the file is the
+    uninterrupted serial run's to rounding."""
+    serial = _serial(tmp_path)
+    out = tmp_path / "paused.h5"
+    args = [*SWEEP.split(), "--fields", "--quiet", "--output", str(out)]
+    r = cli(*args, "--stop-after", "0", mpi=8)
+    assert r.returncode == 75, r.stderr
+    assert len(list(tmp_path.glob("paused.h5.state.*of8.npz"))) == 8
+    r = cli(*args, "--stop-after", "0", "--resume", mpi=3)
+    assert r.returncode == 75, r.stderr
+    assert sorted(p.name for p in tmp_path.glob("paused.h5.state*")) == [
+        f"paused.h5.state.{k}of3.npz" for k in range(3)
+    ]  # the 8 slabs of the older state removed once the 3 were written
+    r = cli(*args, "--resume")
+    assert r.returncode == 0, r.stderr
+    same_result(serial, out, fields=True)
+    with h5py.File(out) as f:
+        segments = json.loads(f.attrs["resumed"])
+    assert [s["from_saved_state"] for s in segments] == [True, True]
+
+
+def test_a_rank_killed_on_four_resumed_on_two(tmp_path):
+    """Rank 0 killed on 4 ranks after committing step 2 (before its state was saved), resumed
+    on 2: every step there, equal to the serial run to the solver's tolerance."""
+    serial = _serial(tmp_path)
+    out = tmp_path / "killed.h5"
+    args = [*SWEEP.split(), "--fields", "--quiet", "--output", str(out)]
+    r = python(str(ROOT / "tests" / "kill_at.py"), "after:commit:3", "--", *args, mpi=4)
+    assert r.returncode != 0 and not out.exists()
+    r = cli(*args, "--resume", mpi=2)
+    assert r.returncode == 0, r.stderr
+    assert "starts from first touch" in r.stderr
+    same_result(serial, out, fields=True)
+
+
+WATCHED = """
+import sys
+import h5py
+import numpy as np
+from mpi4py import MPI
+from petsc_contact import Run, run_contact
+from petsc_contact.conventions import grid as grids
+from petsc_contact.io import store
+
+def refuse(self, local):
+    raise AssertionError("a field gathered")
+
+grids.Grid.gather = refuse
+largest = [0]
+
+def watch(size):
+    largest[0] = max(largest[0], int(size))
+
+def wrapped(method, size):
+    def call(self, *args, **kwargs):
+        out = method(self, *args, **kwargs)
+        watch(size(args, kwargs, out))
+        return out
+    return call
+
+data = lambda args, kwargs, out: np.size(kwargs.get("data", 0))
+h5py.Group.create_dataset = wrapped(h5py.Group.create_dataset, data)
+h5py.Dataset.__getitem__ = wrapped(h5py.Dataset.__getitem__, lambda a, k, out: np.size(out))
+h5py.Dataset.__setitem__ = wrapped(h5py.Dataset.__setitem__, lambda a, k, out: np.size(a[1]))
+savez = np.savez
+np.savez = lambda f, **arrays: (watch(max(np.size(v) for v in arrays.values())), savez(f, **arrays))
+run = Run(grid=60, hurst=0.7, rms_slope=0.1, seed=3, sweep=(3, 1e-4, 1e-2), stiffness=True,
+          fields=True, output=sys.argv[1])
+run_contact(run)
+with open(f"{sys.argv[1]}.largest.{MPI.COMM_WORLD.rank}", "w") as out:
+    out.write(str(largest[0]))
+"""
+
+
+def test_no_rank_holds_a_field_to_write_it(tmp_path):
+    """On 4 ranks with ``Grid.gather`` refusing, the largest array any rank hands HDF5 or
+    ``np.savez``, or reads back to assemble the file, is at most a slab (15 of 60 rows) or a
+    band of the assembly (at most one chunk's rows of one slab)."""
+    script = tmp_path / "watched.py"
+    script.write_text(textwrap.dedent(WATCHED))
+    r = python(str(script), str(tmp_path / "watched.h5"), mpi=4)
+    assert r.returncode == 0, r.stderr
+    sizes = [int(p.read_text()) for p in tmp_path.glob("watched.h5.largest.*")]
+    assert len(sizes) == 4 and max(sizes) <= 15 * 60, sizes
+    assert (tmp_path / "watched.h5").exists()
+
+
+def test_slabs_are_named_by_rank_and_count():
+    """The slab names and the rows each holds (``io.parts``)."""
+    from petsc_contact.io.parts import slab_name, slab_of, slab_rows, slabs
+
+    assert slab_name("step-000001.h5", 0, 1) == "step-000001.h5"
+    assert slab_name("step-000001.h5", 2, 8) == "step-000001.2of8.h5"
+    assert slab_of("step-000001.h5", "step-000001.2of8.h5") == (2, 8)
+    assert slab_of("step-000001.h5", "step-000011.2of8.h5") is None
+    digests = {"step-000001.1of2.h5": "b", "step-000001.0of2.h5": "a", "heights.h5": "c"}
+    assert slabs("step-000001.h5", digests) == ["step-000001.0of2.h5", "step-000001.1of2.h5"]
+    assert slabs("step-000002.h5", digests) == ["step-000002.h5"]
+    assert slab_rows("step-000001.h5", "step-000001.1of2.h5", 5) == slice(3, 5)
+
+
+def test_a_saved_state_is_read_a_rank_s_rows_at_a_time(tmp_path):
+    """A state saved as slabs on 3 ranks reads back on 2 rank by rank, each reading only the
+    slabs that hold its rows."""
+    from petsc_contact.conventions.grid import block_rows
+    from petsc_contact.io.parts import SlabRows, mapped
+
+    whole = np.arange(10 * 4, dtype=float).reshape(10, 4)
+    pieces = []
+    for rank in range(3):
+        rows = block_rows(10, 3, rank)
+        where = tmp_path / f"s.{rank}of3.npz"
+        np.savez(where, state=whole[rows], after_step=1)
+        pieces.append((rows.start, mapped(str(where), "state")))
+    source = SlabRows(pieces)
+    assert source.shape == (10, 4)
+    for rank in range(2):
+        rows = block_rows(10, 2, rank)
+        assert np.array_equal(source[rows], whole[rows])

@@ -9,6 +9,7 @@ from petsc_contact.geometries.periodic import PeriodicProblem
 from petsc_contact.numerics.fft import make_fft
 from petsc_contact.numerics.schur import response_quarter
 from petsc_contact.physics.surface import self_affine
+from petsc_contact.solver.cg import ONE_RANK, growth_fraction
 from petsc_contact.workflows.periodic_sweep import periodic_contact
 
 
@@ -87,3 +88,33 @@ def test_schur_steps_take_no_hessian_transform(petsc, monkeypatch):
         assert s["hessian_applications"] == 0 < t["hessian_applications"]
         assert s["iterations"] == t["iterations"]
         assert abs(s["mean_gap"] - t["mean_gap"]) <= 1e-9 * abs(t["mean_gap"])
+
+
+def reference_fraction(x, d, alpha, lower, limit):
+    """The growth limit's fraction from the fractions gathered (one rank)."""
+    below = x < lower
+    lo = lower if isinstance(lower, float) else lower[below]
+    reach = 1.0 - (x[below] - lo) / (alpha * d[below])
+    reach = np.sort(reach[reach > 1e-9])[:limit]
+    low, high = 0.0, 1.0
+    for _ in range(40):
+        mid = 0.5 * (low + high)
+        low, high = (mid, high) if np.count_nonzero(reach <= mid) < limit else (low, mid)
+    return high
+
+
+def test_growth_fraction_in_work_arrays():
+    """The fraction computed in the CG's work arrays is the one of the gathered fractions,
+    bit for bit, with a bound array or a number, starts on the bound and zero directions."""
+    rng = np.random.default_rng(3)
+    n = 5000
+    x0 = np.abs(rng.standard_normal(n))
+    x0[:300] = 0.0  # on the bound
+    d = rng.standard_normal(n)
+    d[300:400] = 0.0
+    for lower, limit in ((0.0, 64), (0.0, 1000), (0.0, 10000), (rng.random(n) * 0.1, 200)):
+        alpha = 0.8
+        x = x0 - alpha * d
+        work = (np.empty(n), np.empty(n))
+        got = growth_fraction(x, d, alpha, lower, limit, ONE_RANK.sum, work)
+        assert got == reference_fraction(x, d, alpha, lower, limit)

@@ -180,7 +180,13 @@ def compact_bound(values: Array) -> Array | float:
 
 
 def growth_fraction(
-    x: Array, d: Array, alpha: float, lower: Array | float, limit: int, allsum: Any
+    x: Array,
+    d: Array,
+    alpha: float,
+    lower: Array | float,
+    limit: int,
+    allsum: Any,
+    work: tuple[Array, Array],
 ) -> float:
     """Fraction of the step ``alpha d`` (just taken to ``x``) at which ``limit`` variables
     reach ``lower``.
@@ -190,14 +196,24 @@ def growth_fraction(
     preconditioned direction may point into the bound) are clipped at any fraction and
     do not count.  The fraction is found by bisection on the global count, so it is
     the same on every rank, over each rank's ``limit`` smallest fractions only (the
-    global ``limit`` smallest are among them, and so is the answer).
+    global ``limit`` smallest are among them, and so is the answer).  ``work`` is two
+    arrays like ``x`` to compute in (overwritten), the fractions of the variables that do
+    not count set to infinity there instead of gathering the others: from first touch
+    nearly every variable ends below its bound, and fresh field-sized temporaries cost more
+    than the arithmetic (the first call of a 2048^2 solve: 0.19 s with them).
     """
-    below = x < lower
-    lo = lower if isinstance(lower, float) else lower[below]
-    reach = 1.0 - (x[below] - lo) / (alpha * d[below])
-    reach = reach[reach > 1e-9]  # below: rounding of a start on the bound
+    reach, scaled = work
+    with np.errstate(divide="ignore", invalid="ignore"):  # d = 0 where x is not below
+        np.multiply(d, alpha, out=scaled)
+        np.subtract(x, lower, out=reach)
+        np.divide(reach, scaled, out=reach)
+        np.subtract(1.0, reach, out=reach)
+        keep = np.greater(reach, 1e-9)  # not: rounding of a start on the bound
+    keep &= x < lower
+    np.copyto(reach, np.inf, where=np.logical_not(keep, out=keep))  # never counted
     if reach.size > limit:
-        reach = np.partition(reach, limit - 1)[:limit]
+        reach.partition(limit - 1)
+        reach = reach[:limit]
     low, high = 0.0, 1.0
     for _ in range(40):
         mid = 0.5 * (low + high)
@@ -420,7 +436,8 @@ class ConstrainedCG:
         settled = self.contact is not None and self.contact.two_level
         limit = int(max((TWO_LEVEL_GROWTH if settled else GROWTH) * bound_count, self.min_limit))
         if below > limit:
-            fraction = growth_fraction(xa, d, alpha, lower, limit, self.allsum)
+            work = (self.z, self.r)  # the old direction and the residual: used up
+            fraction = growth_fraction(xa, d, alpha, lower, limit, self.allsum, work)
             passes.axpy((fraction - 1.0) * alpha, d, xa)
             alpha *= fraction
         self.step_length = abs(alpha)

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import h5py
 import numpy as np
+import pytest
 from conftest import ROOT, cli, python
 from kill_at import same_result
 
@@ -26,8 +27,10 @@ RESIDUALS = (  # rounding-level residuals: to 1e-10 absolute, not relative
 )
 
 
-def _serial(tmp_path: Path) -> Path:
-    out = tmp_path / "serial.h5"
+@pytest.fixture(scope="module")
+def serial(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The uninterrupted serial run every other is held against."""
+    out = tmp_path_factory.mktemp("serial") / "serial.h5"
     r = cli(*SWEEP.split(), "--fields", "--quiet", "--output", str(out))
     assert r.returncode == 0, r.stderr
     return out
@@ -54,14 +57,13 @@ def _same_file(a: Path, b: Path) -> None:
         assert fa["gap"].chunks == fb["gap"].chunks
 
 
-def test_four_and_eight_ranks_write_the_serial_file(tmp_path):
+def test_four_and_eight_ranks_write_the_serial_file(tmp_path, serial):
     """--fields --stiffness on 4 and 8 ranks: the file is the serial run's, and every reader
     reads it."""
     import xarray
 
     from petsc_contact import read_frame
 
-    serial = _serial(tmp_path)
     for ranks in (4, 8):
         out = tmp_path / f"mpi{ranks}.h5"
         r = cli(*SWEEP.split(), "--fields", "--quiet", "--output", str(out), mpi=ranks)
@@ -76,11 +78,10 @@ def test_four_and_eight_ranks_write_the_serial_file(tmp_path):
         assert data["gap"].dims == ("step", "x", "y")
 
 
-def test_paused_on_eight_goes_on_on_three_then_one(tmp_path):
+def test_paused_on_eight_goes_on_on_three_then_one(tmp_path, serial):
     """Paused after each step (``--stop-after 0``) on 8 ranks, then 3, then finished on one:
     each resume reads its rows of the other rank count's state slabs, and the file is the
     uninterrupted serial run's to rounding."""
-    serial = _serial(tmp_path)
     out = tmp_path / "paused.h5"
     args = [*SWEEP.split(), "--fields", "--quiet", "--output", str(out)]
     r = cli(*args, "--stop-after", "0", mpi=8)
@@ -99,10 +100,9 @@ def test_paused_on_eight_goes_on_on_three_then_one(tmp_path):
     assert [s["from_saved_state"] for s in segments] == [True, True]
 
 
-def test_a_rank_killed_on_four_resumed_on_two(tmp_path):
+def test_a_rank_killed_on_four_resumed_on_two(tmp_path, serial):
     """Rank 0 killed on 4 ranks after committing step 2 (before its state was saved), resumed
     on 2: every step there, equal to the serial run to the solver's tolerance."""
-    serial = _serial(tmp_path)
     out = tmp_path / "killed.h5"
     args = [*SWEEP.split(), "--fields", "--quiet", "--output", str(out)]
     r = python(str(ROOT / "tests" / "kill_at.py"), "after:commit:3", "--", *args, mpi=4)

@@ -58,6 +58,28 @@ def simulated_crossover(
     return linear_crossover(c, alpha, u0), u0
 
 
+def knee(p: np.ndarray, k: np.ndarray, resolved: np.ndarray, alpha: float) -> float:
+    """A seed's ``p_c`` read off its own curve: the load at which the local slope
+    ``d ln K/d ln p`` between neighbouring resolved loads reaches ``(alpha + 1)/2``, halfway
+    from the power law to the linear law, to stay there for the next pair of loads too (a
+    single steep pair among a few contacts is not the crossover); log-interpolated between
+    the pairs' midpoints, NaN where it never does.  Unlike :func:`simulated_crossover` it
+    extrapolates neither law."""
+    ok = np.flatnonzero(resolved & np.isfinite(k) & (k > 0))
+    x, y = np.log(p[ok]), np.log(k[ok])
+    slope, middle = np.diff(y) / np.diff(x), 0.5 * (x[1:] + x[:-1])
+    target = 0.5 * (alpha + 1)
+    steep = slope >= target
+    lasting = np.flatnonzero(steep[:-1] & steep[1:])
+    if not lasting.size:
+        return float("nan")
+    j = lasting[0]
+    if j == 0:
+        return float(np.exp(middle[0]))
+    t = (target - slope[j - 1]) / (slope[j] - slope[j - 1])
+    return float(np.exp(middle[j - 1] + t * (middle[j] - middle[j - 1])))
+
+
 def log_spread(values: np.ndarray) -> float:
     """The standard deviation of ``ln(values)`` over the finite ones (ddof 1): the relative
     scatter of a positive quantity."""
@@ -90,7 +112,9 @@ def analyse(curves: dict, n: int, rolloff_ratio: float, at: list[float], points:
         ]
     ).T
     seen = np.count_nonzero(resolved, axis=0) == h.size
+    knees = [knee(p, curves["stiffness"][s], resolved[s], alpha) for s in range(h.size)]
     return curves | {
+        "pc_knee": np.array(knees),
         "loads": p[index],
         "scaled_stiffness": scaled[:, index],
         "eq12_scaled_stiffness": (prefactors * h)[:, None] * p[index] ** (1 / (1 + HURST)),
@@ -234,10 +258,16 @@ def report(d: dict) -> list[str]:
         )
     p_fit = d["nominal_pressure"][0][d["fitted"]]
     lines.append(
-        f"p_c/E*: simulation median {np.nanmedian(d['pc_simulation']):.3g} (range "
+        f"p_c/E*: simulation median {np.nanmedian(d['pc_simulation']):.3g} (quartiles "
+        f"{_quartiles(d['pc_simulation'])}, range "
         f"{np.nanmin(d['pc_simulation']):.3g}-{np.nanmax(d['pc_simulation']):.3g}, std of ln "
         f"{log_spread(d['pc_simulation']):.3f}); Eq. 13 median {np.median(d['pc_eq13']):.3g} "
-        f"(std of ln {log_spread(d['pc_eq13']):.3f}); alpha {d['alpha']:.3f} (the seeds' "
+        f"(std of ln {log_spread(d['pc_eq13']):.3f}); read off each seed's curve where its "
+        f"local slope reaches (alpha + 1)/2: median {np.nanmedian(d['pc_knee']):.3g} "
+        f"(quartiles {_quartiles(d['pc_knee'])}, range "
+        f"{np.nanmin(d['pc_knee']):.3g}-{np.nanmax(d['pc_knee']):.3g}, std of ln "
+        f"{log_spread(d['pc_knee']):.3f}, {np.count_nonzero(np.isfinite(d['pc_knee']))} "
+        f"seeds); alpha {d['alpha']:.3f} (the seeds' "
         f"geometric-mean K at p0/E* {p_fit.min():.2g}-{p_fit.max():.2g}; each seed's own: "
         f"{np.mean(d['alphas']):.3f} +- {np.std(d['alphas'], ddof=1):.3f}, "
         f"{d['alphas'].min():.2f}-{d['alphas'].max():.2f})"
@@ -247,6 +277,12 @@ def report(d: dict) -> list[str]:
         f"{np.nanmedian(d['u0'] / d['h_rms']):.3f} median (gamma = {theory.GAMMA})"
     )
     return lines
+
+
+def _quartiles(values: np.ndarray) -> str:
+    """The first and third quartiles of the finite ``values``."""
+    low, high = np.nanpercentile(values, [25, 75])
+    return f"{low:.3g}-{high:.3g}"
 
 
 def _correlation(h: np.ndarray, values: np.ndarray) -> float:

@@ -365,3 +365,27 @@ def test_the_grid_refinement_reuses_what_it_solved(tmp_path):
     assert again.stdout.splitlines()[-3:] == first.stdout.splitlines()[-3:]
     with np.load(tmp_path / "r_seed1.npz") as kept:
         assert kept["stiffness_4"].shape == (5,) and np.isfinite(kept["stiffness_4"]).all()
+
+
+def test_the_knee_of_a_curve_is_its_crossover():
+    """``fig7``'s second ``p_c``: on ``c p^0.77`` and ``p/u0`` joined smoothly the local
+    slope reaches (0.77 + 1)/2 at the laws' crossing within a quarter of a decade; one steep
+    pair among the low loads is not taken for it, and a curve that never steepens has none."""
+    import importlib.util
+
+    import numpy as np
+
+    spec = importlib.util.spec_from_file_location(
+        "fig7", ROOT / "examples" / "fig7_seed_distribution.py"
+    )
+    fig7 = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(fig7)
+    p = np.geomspace(1e-8, 1e-2, 25)
+    crossing = 1e-5  # c p^0.77 = p/u0 there, with u0 = 1
+    k = np.hypot(crossing**0.23 * p**0.77, p)  # the two laws joined smoothly
+    resolved = np.ones(p.size, bool)
+    assert abs(np.log10(fig7.knee(p, k, resolved, 0.77) / crossing)) < 0.25
+    bumped = k.copy()
+    bumped[3] *= 2.0  # one steep pair at a few contacts, then back on the power law
+    assert abs(np.log10(fig7.knee(p, bumped, resolved, 0.77) / crossing)) < 0.25
+    assert np.isnan(fig7.knee(p, p**0.77, resolved, 0.77))

@@ -37,10 +37,20 @@ from typing import Any
 
 import numpy as np
 import scipy.fft
-from scipy.linalg import LinAlgError, cho_factor, cho_solve
 
 from ..conventions.grid import Grid
-from ..numerics.aggregates import grouped, monopoles, near_pairs, pair_sums_direct, spectral_dots
+from ..numerics.aggregates import (
+    grouped,
+    half_spectrum_weights,
+    monopoles,
+    monopoles_array,
+    near_pairs,
+    near_pairs_array,
+    offset_kernels,
+    pair_sums_cells,
+    pair_sums_direct,
+    spectral_dots,
+)
 from ..numerics.device import CPU, Device
 from ..numerics.schur import allgather
 from . import _petsc
@@ -121,21 +131,12 @@ def _pair_sums_fft(
     """
     nx, ny = shape
     m = 2 * block
-    w = np.arange(-block + 1, block)
     offsets = origin[pairs[:, 0]] - origin[pairs[:, 1]]
     keys, kind = np.unique(
         np.stack([offsets[:, 0] % nx, offsets[:, 1] % ny], axis=1), axis=0, return_inverse=True
     )
-    kernels = np.empty((len(keys), m, m // 2 + 1), dtype=complex)
-    for i, (dx, dy) in enumerate(keys):  # T^ for each distinct block offset (a few)
-        fx, fy = (dx + w) % nx, (dy + w) % ny
-        cell = np.zeros((m, m))
-        cell[np.ix_(w % m, w % m)] = quarter[
-            np.ix_(np.minimum(fx, nx - fx), np.minimum(fy, ny - fy))
-        ]
-        kernels[i] = scipy.fft.rfft2(cell)
-    weight = np.full(m // 2 + 1, 2.0 / (m * m))
-    weight[0] = weight[-1] = 1.0 / (m * m)
+    kernels = offset_kernels(np, scipy.fft.rfft2, keys, quarter, shape, block)
+    weight = half_spectrum_weights(np, m)
     out = np.empty(len(pairs))
     order = np.argsort(pairs[:, 0], kind="stable")
     first = pairs[order, 0]
@@ -188,6 +189,122 @@ def coarse_matrix(
     return e_mat
 
 
+@dataclass(frozen=True)
+class CoarseMatrix:
+    """The aggregates of a bound set and their coarse matrix, before its factorisation.
+
+    Attributes
+    ----------
+    local
+        This rank's bound pixels (flat local indices), on the device.
+    labels
+        Each of them its aggregate, on the device.
+    block
+        The block side used.
+    sizes
+        The pixels of each aggregate (floats): on the host from :func:`host_coarse_matrix`,
+        on the device from :func:`array_coarse_matrix`.
+    matrix
+        ``E`` (:func:`coarse_matrix`), the diagonal raised (upper triangle only on the host,
+        full and symmetric on the device).
+    """
+
+    local: Any
+    labels: Any
+    block: int
+    sizes: Any
+    matrix: Any
+
+
+def aggregate(
+    xp: Any, rows: Any, cols: Any, shape: tuple[int, int], block: int, max_size: int
+) -> tuple[int, Any, Any, Any]:
+    """The aggregates of the pixels ``(rows, cols)`` (global indices, arrays of ``xp``): the
+    block side ``b >= block`` grown until at most ``max_size`` blocks hold pixels; returns
+    ``b``, each pixel's aggregate, the blocks that hold pixels (flat block indices, in order:
+    aggregate ``I`` is block ``ids[I]``) and the pixels of every block."""
+    nx, ny = shape
+    while True:
+        bx, by = -(-nx // block), -(-ny // block)
+        block_id = (rows // block) * by + cols // block
+        counts = xp.bincount(block_id, minlength=bx * by)
+        ids = xp.flatnonzero(counts)
+        if ids.size <= max_size:
+            break
+        block = max(block + 1, int(np.ceil(block * np.sqrt(ids.size / max_size))))
+    return block, (xp.cumsum(counts > 0) - 1)[block_id], ids, counts
+
+
+def block_lookup(xp: Any, ids: Any, shape: tuple[int, int], block: int) -> tuple[Any, Any]:
+    """Each aggregate's block ``(bi, bj)`` and the aggregate of each block (``-1``: none)."""
+    bx, by = (-(-n // block) for n in shape)
+    block_rc = xp.stack([ids // by, ids % by], axis=1)
+    lookup = xp.full((bx, by), -1, dtype=np.int64)
+    lookup[block_rc[:, 0], block_rc[:, 1]] = xp.arange(ids.size)
+    return block_rc, lookup
+
+
+def _raise_diagonal(xp: Any, matrix: Any, block: int) -> None:
+    """Raise ``E``'s diagonal by :data:`DIAGONAL_INFLATION` (not for single pixels, where the
+    monopoles are exact)."""
+    if block > 1:
+        d = xp.arange(matrix.shape[0])
+        matrix[d, d] *= 1.0 + DIAGONAL_INFLATION
+
+
+def host_coarse_matrix(
+    grid: Grid, quarter: np.ndarray, bound: Any, block: int, max_size: int, device: Device
+) -> CoarseMatrix:
+    """The coarse matrix summed on the host by the numba loops (every rank's bound pixels
+    gathered): the ``cpu`` device's build."""
+    local = np.flatnonzero(device.to_host(bound))
+    nx, ny = grid.shape
+    rows, cols = np.divmod(local, ny)
+    both = allgather(np.stack([rows + grid.rows.start, cols], axis=1), grid.comm)
+    offset = 0 if grid.comm.size == 1 else int(grid.comm.exscan(len(local)) or 0)
+    block, labels, ids, counts = aggregate(np, both[:, 0], both[:, 1], (nx, ny), block, max_size)
+    starts = np.concatenate([[0], np.cumsum(counts[ids])]).astype(np.int64)
+    order = grouped(labels, starts)
+    block_rc, lookup = block_lookup(np, ids, (nx, ny), block)
+    matrix = coarse_matrix(
+        np.ascontiguousarray(both[order, 0]),
+        np.ascontiguousarray(both[order, 1]),
+        starts,
+        block_rc,
+        lookup,
+        np.ascontiguousarray(quarter, dtype=float),
+        (nx, ny),
+        block,
+    )
+    _raise_diagonal(np, matrix, block)
+    own = labels[offset : offset + len(local)]
+    sizes = counts[ids].astype(float)
+    return CoarseMatrix(device.asarray(local), device.asarray(own), block, sizes, matrix)
+
+
+def array_coarse_matrix(
+    grid: Grid, quarter: np.ndarray, bound: Any, block: int, max_size: int, device: Device
+) -> CoarseMatrix:
+    """The coarse matrix summed with the array operations of ``device`` where the bound set
+    lives (one rank): the same ``E`` as :func:`host_coarse_matrix` to rounding, its near
+    pairs always by FFTs on cells (:func:`~petsc_contact.numerics.aggregates.pair_sums_cells`).
+    Only ``quarter`` crosses to the device and only scalars (counts) come back."""
+    xp, shape = device.xp, grid.shape
+    local = xp.flatnonzero(device.asarray(bound).reshape(-1))
+    rows, cols = local // shape[1], local % shape[1]
+    block, labels, ids, counts = aggregate(xp, rows, cols, shape, block, max_size)
+    sizes = counts[ids].astype(float)
+    block_rc, lookup = block_lookup(xp, ids, shape, block)
+    near = device.asarray(quarter, dtype=float)
+    matrix = monopoles_array(xp, rows, cols, labels, sizes, near, shape)
+    pairs = near_pairs_array(xp, block_rc, lookup, NEAR_REACH)
+    sums = pair_sums_cells(xp, rows, cols, labels, block_rc * block, pairs, near, shape, block)
+    matrix[pairs[:, 0], pairs[:, 1]] = sums
+    matrix[pairs[:, 1], pairs[:, 0]] = sums
+    _raise_diagonal(xp, matrix, block)
+    return CoarseMatrix(local, labels, block, sizes, matrix)
+
+
 class CoarseSpace:
     """The aggregates of a bound set and the factorised coarse system (module docstring).
 
@@ -196,16 +313,19 @@ class CoarseSpace:
     grid
         The row-slab layout.
     quarter
-        ``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, on every rank.
+        ``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, on every rank (on the host).
     bound
-        This rank's slab of the bound-set mask (``True`` on ``B``); not empty on all ranks.
+        This rank's slab of the bound-set mask (``True`` on ``B``; an array of ``device`` or
+        of the host); not empty on all ranks.
     block
         The aggregates' smallest block side ``b`` in pixels.
     max_size
         The most aggregates: ``b`` grows until there are at most this many.
     device
-        Where the fields it corrects live: built on the host, applied on the device (the
-        factor's triangular solves too, :meth:`~petsc_contact.numerics.device.Device.cho_solve`).
+        Where the fields it corrects live.  On the ``cpu`` device the matrix is summed by
+        the numba loops (:func:`host_coarse_matrix`); on the array devices by array
+        operations on the device (:func:`array_coarse_matrix`), where it is also
+        factorised and solved (:meth:`~petsc_contact.numerics.device.Device.cho_factor`).
 
     Attributes
     ----------
@@ -223,60 +343,25 @@ class CoarseSpace:
         self,
         grid: Grid,
         quarter: np.ndarray,
-        bound: np.ndarray,
+        bound: Any,
         block: int,
         max_size: int,
         device: Device = CPU,
     ) -> None:
         self.grid = grid
         self.device = device
-        local = np.flatnonzero(bound)
-        self.local = device.asarray(local)
-        nx, ny = grid.shape
-        rows, cols = np.divmod(local, ny)
-        both = allgather(np.stack([rows + grid.rows.start, cols], axis=1), grid.comm)
-        offset = 0 if grid.comm.size == 1 else int(grid.comm.exscan(len(local)) or 0)
-        while True:
-            bx, by = -(-nx // block), -(-ny // block)
-            block_id = (both[:, 0] // block) * by + both[:, 1] // block
-            counts = np.bincount(block_id, minlength=bx * by)
-            ids = np.flatnonzero(counts)
-            if len(ids) <= max_size:
-                break
-            block = max(block + 1, int(np.ceil(block * np.sqrt(len(ids) / max_size))))
-        labels = (np.cumsum(counts > 0) - 1)[block_id]
-        self.block = block
-        self.labels = device.asarray(labels[offset : offset + len(local)])
-        self.size = k = len(ids)
-        self.sizes = counts[ids].astype(float)
-        starts = np.concatenate([[0], np.cumsum(counts[ids])]).astype(np.int64)
-        order = grouped(labels, starts)
-        lookup = np.full((bx, by), -1, dtype=np.int64)
-        block_rc = np.stack(np.divmod(ids, by), axis=1)
-        lookup[block_rc[:, 0], block_rc[:, 1]] = np.arange(k)
-        coarse = coarse_matrix(
-            np.ascontiguousarray(both[order, 0]),
-            np.ascontiguousarray(both[order, 1]),
-            starts,
-            block_rc,
-            lookup,
-            np.ascontiguousarray(quarter, dtype=float),
-            (nx, ny),
-            block,
-        )
-        if block > 1:  # single pixels: the monopoles are exact
-            coarse[np.diag_indices(k)] *= 1.0 + DIAGONAL_INFLATION
-        try:
-            self._factor = cho_factor(coarse, lower=False, overwrite_a=True, check_finite=False)
-        except LinAlgError:  # E not positive definite: no coarse space
-            self.factorised = False
+        build = host_coarse_matrix if device.name == "cpu" else array_coarse_matrix
+        built = build(grid, quarter, bound, block, max_size, device)
+        self.local, self.labels, self.block = built.local, built.labels, built.block
+        self.size = int(built.sizes.size)
+        factor = device.cho_factor(built.matrix)
+        self.factorised = factor is not None
+        if factor is None:  # E not positive definite: no coarse space
             return
-        self.factorised = True
-        e_w = cho_solve(self._factor, self.sizes, check_finite=False)  # E^-1 W^T 1
-        self._w_e_w = float(self.sizes @ e_w)
-        self._e_w, self._device_sizes = device.asarray(e_w), device.asarray(self.sizes)
-        if not device.on_host:  # the factor's solves run where the fields are
-            self._factor = (device.asarray(self._factor[0]), self._factor[1])
+        sizes = device.asarray(built.sizes)
+        e_w = device.cho_solve(factor, sizes)  # E^-1 W^T 1
+        self._factor, self._e_w, self._device_sizes = factor, e_w, sizes
+        self._w_e_w = float(sizes @ e_w)
 
     def solve(self, g_r: Any, r_sum: float) -> tuple[Any, float]:
         """``(W a on this rank's bound pixels, c)`` for ``G r`` (local slab) and ``sum(r)``."""

@@ -163,6 +163,12 @@ class MeanModePreconditioner(FourierOperator):
             )
         return self._quarter
 
+    def compliance_quarter(self, scale: float) -> np.ndarray | None:
+        """The quarter of ``G = 1/K`` (zero ``q = 0`` entry) for the Hessian ``scale K`` this
+        preconditioner inverts, from the column of ``1/(scale K)`` it keeps (rescaled with the
+        Hessian at every :meth:`invert`); ``None`` before a set-dependent form made it."""
+        return None if self._quarter is None else self._quarter * scale
+
     def work_fields(self) -> np.ndarray:
         """Two flat field-sized arrays, the first zero, kept while a set-dependent form is in
         use (:func:`~petsc_contact.backend.coarse.add_correction`); lent to the held-set
@@ -182,7 +188,7 @@ class MeanModePreconditioner(FourierOperator):
         coarse = CoarseSpace(
             self.grid,
             self._exact_compliance(),
-            self.device.to_host(~free).reshape(self.grid.local_shape),
+            (~free).reshape(self.grid.local_shape),  # on the device: built there
             self.options.block,
             coarse_limit(self.grid.size),
             self.device,

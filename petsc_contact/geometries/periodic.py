@@ -84,9 +84,9 @@ class PeriodicProblem:
         self.modulus = float(modulus)
         self.filled: np.ndarray | None = None  # this rank's filled pixels (a measured map)
         host = np.asarray(heights, dtype=float)
-        self.heights_host = np.ascontiguousarray(host - grid.mean(host))  # for observables
-        self.heights = self.device.asarray(self.heights_host)  # the solver's (a GPU's) copy
-        self.h_rms = grid.rms(self.heights_host)
+        centred = np.ascontiguousarray(host - grid.mean(host))
+        self.heights = self.device.asarray(centred)  # on the device (a GPU's copy)
+        self.h_rms = grid.rms(centred)
         self.scale_length = self.h_rms if self.h_rms > 0 else max(grid.lengths)
         q = wavevector_magnitude(grid, fft)
         self.stiffness = FourierOperator(grid, fft, periodic_stiffness(q, modulus))
@@ -170,13 +170,17 @@ class PeriodicProblem:
         """The step of a solution ``x`` (TAO's scaled gap) at the current nominal pressure:
         observables, TAO's report, the package's verdict, the measured accuracy
         (:meth:`accuracy`) and, if asked, the exact stiffness ``-dp0/du_bar`` with the
-        contact set held fixed."""
+        contact set held fixed.
+
+        The observables are taken where the solution lives (:func:`~petsc_contact.physics.
+        observables.step_observables` on the device's arrays): only scalars, histograms and
+        the patches' sizes come to the host, and the fields only when ``fields`` asks."""
         grid, ell, p0, device = self.grid, self.scale_length, self.nominal_pressure, self.device
-        gap_on_device = x.reshape(grid.local_shape) * ell
-        pressure = device.to_host(self.pressure(gap_on_device))
-        gap = device.to_host(gap_on_device)
+        gap = x.reshape(grid.local_shape) * ell
+        pressure = self.pressure(gap)
+        filled = None if self.filled is None else device.asarray(self.filled)
         obs = step_observables(
-            grid, gap, pressure, self.heights_host, p0, self.pixel_stiffness, self.filled
+            grid, gap, pressure, self.heights, p0, self.pixel_stiffness, filled, device
         )
         contact = obs.pop("contact")
         verdict = verify(info, obs, ell)
@@ -192,13 +196,14 @@ class PeriodicProblem:
         self.accuracy().assess(scalars)
         if not fields:
             return Step(scalars)
+        gap, pressure, contact = (device.to_host(a) for a in (gap, pressure, contact))
         return Step(scalars, *contact_fields(gap, pressure, contact), contact=contact)
 
     def held_set_stiffness(self, contact: np.ndarray, converged: bool) -> dict[str, Any]:
-        """The exact stiffness ``-dp0/du_bar`` with ``contact`` held fixed (NaN unless
-        ``converged``), its solve's iterations and time, the residual of its answer
-        recomputed (:func:`~petsc_contact.geometries.step.held_set_residual`) and the
-        tolerance asked."""
+        """The exact stiffness ``-dp0/du_bar`` with ``contact`` (this rank's mask, on the
+        device) held fixed (NaN unless ``converged``), its solve's iterations and time, the
+        residual of its answer recomputed
+        (:func:`~petsc_contact.geometries.step.held_set_residual`) and the tolerance asked."""
         grid = self.grid
         solve = MeasuredSolve(self.held_set_solve, self.device)
         start = time.perf_counter()
@@ -241,16 +246,22 @@ class PeriodicProblem:
         one operator recomputed in place.
         """
         pre = self.preconditioner
-        (m,) = self.grid.sum(np.count_nonzero(contact))
+        (m,) = self.grid.sum(self.device.xp.count_nonzero(contact))
         exact = pre.options.enabled and 0 < m <= pre.schur_max
         if not (exact or (m > 0 and pre.options.covers(int(m), self.grid.size))):
             return self.held_compliance(self.interfacial_stiffness)
         compliance = self._compliance(0.0)
         set_mean_mode(compliance, 0.0)
         work = pre.work_fields()  # the contact solve is over: its work fields are free
+        # G's column: the contact solve's preconditioner keeps it (times the Hessian's scale)
+        column = pre.compliance_quarter(self._s * self.scale_length)
         space = CoarseSpace(
             self.grid,
-            response_quarter(self.grid, compliance.apply_array, work, self.device),
+            (
+                response_quarter(self.grid, compliance.apply_array, work, self.device)
+                if column is None
+                else column
+            ),
             contact.reshape(self.grid.local_shape),
             1 if exact else pre.options.block,
             self.grid.size if exact else coarse_limit(self.grid.size),

@@ -1,5 +1,7 @@
-"""Sums of the compliance over aggregates of contact pixels (numba): the loops of the coarse
-matrix of the two-level preconditioner (:mod:`petsc_contact.backend.coarse`), without PETSc.
+"""Sums of the compliance over aggregates of contact pixels: the loops of the coarse matrix of
+the two-level preconditioner (:mod:`petsc_contact.backend.coarse`), without PETSc, in numba for
+the ``cpu`` device and in array operations for the array devices (the ``*_array`` functions,
+for any array module ``xp`` with NumPy's interface: NumPy or CuPy).
 
 An aggregate ``I`` holds the pixels ``starts[I]:starts[I+1]`` of ``(rows, cols)`` (global
 pixel indices, grouped by :func:`grouped`); ``quarter`` is the compliance ``G`` at the offsets
@@ -161,6 +163,128 @@ def spectral_dots(
                 z = np.conj(spectra[a, i, j]) * kernels[c, i, j] * spectra[b, i, j]
                 total += weight[j] * z.real
         out[where[t]] = total
+
+
+CHUNK_ENTRIES = 1 << 22  # the array functions' temporaries hold at most this many entries
+
+
+def monopoles_array(
+    xp: Any, rows: Any, cols: Any, labels: Any, sizes: Any, quarter: Any, shape: tuple[int, int]
+) -> Any:
+    """:func:`monopoles` on arrays of ``xp``, for the pixels ``(rows, cols)`` of aggregates
+    ``labels`` (``sizes``: their pixel counts, floats): the full symmetric ``k x k`` matrix,
+    in bands of rows of at most :data:`CHUNK_ENTRIES` entries.  The centroids are exact
+    sums of integers over the counts, as :func:`monopoles`' means, and the interpolation is
+    its formula term by term."""
+    k = sizes.size
+    centre_r = xp.bincount(labels, weights=rows.astype(float), minlength=k) / sizes
+    centre_c = xp.bincount(labels, weights=cols.astype(float), minlength=k) / sizes
+    out = xp.empty((k, k))
+    band = max(1, CHUNK_ENTRIES // max(k, 1))
+    for lo in range(0, k, band):
+        hi = min(k, lo + band)
+        g = _interpolate_array(
+            xp, quarter, centre_r[lo:hi, None] - centre_r, centre_c[lo:hi, None] - centre_c, shape
+        )
+        out[lo:hi] = sizes[lo:hi, None] * sizes * g
+    return out
+
+
+def _interpolate_array(xp: Any, quarter: Any, dx: Any, dy: Any, shape: tuple[int, int]) -> Any:
+    """:func:`_interpolate` element by element on arrays of offsets ``|dx| < nx``, ``|dy| < ny``."""
+    nx, ny = shape
+    dx, dy = xp.abs(dx), xp.abs(dy)
+    dx, dy = xp.minimum(dx, nx - dx), xp.minimum(dy, ny - dy)
+    hx, hy = quarter.shape[0] - 1, quarter.shape[1] - 1
+    i, j = xp.minimum(dx.astype(np.int64), hx), xp.minimum(dy.astype(np.int64), hy)
+    i1, j1 = xp.minimum(i + 1, hx), xp.minimum(j + 1, hy)
+    fx, fy = dx - i, dy - j
+    return (1.0 - fx) * ((1.0 - fy) * quarter[i, j] + fy * quarter[i, j1]) + fx * (
+        (1.0 - fy) * quarter[i1, j] + fy * quarter[i1, j1]
+    )
+
+
+def near_pairs_array(xp: Any, block_rc: Any, lookup: Any, reach: int) -> Any:
+    """:func:`near_pairs` on arrays of ``xp`` (each pair once, ``I <= J``, in the order of
+    ``I k + J``)."""
+    k = block_rc.shape[0]
+    bx, by = lookup.shape
+    steps = xp.arange(-reach, reach + 1)
+    di, dj = (s.reshape(-1) for s in xp.meshgrid(steps, steps, indexing="ij"))
+    partner = lookup[(block_rc[:, :1] + di) % bx, (block_rc[:, 1:] + dj) % by]
+    first = xp.broadcast_to(xp.arange(k)[:, None], partner.shape)
+    keep = partner >= first
+    keys = xp.unique(first[keep] * k + partner[keep])
+    return xp.stack([keys // k, keys % k], axis=1)
+
+
+def offset_kernels(
+    xp: Any, rfft2: Any, offsets: Any, quarter: Any, shape: tuple[int, int], block: int
+) -> Any:
+    """The half spectra ``T^`` on ``2b x 2b`` cells of ``T(w) = G(d + w)``, ``|w| < b``, for
+    each block offset ``d`` (rows of ``offsets``, each in ``0 .. n - 1``): the kernels of the
+    FFT pair sums (:func:`pair_sums_cells`; ``rfft2`` transforms the last two axes)."""
+    nx, ny = shape
+    m = 2 * block
+    w = xp.arange(-block + 1, block)
+    fx = (offsets[:, :1] + w) % nx
+    fy = (offsets[:, 1:] + w) % ny
+    fx, fy = xp.minimum(fx, nx - fx), xp.minimum(fy, ny - fy)
+    cells = xp.zeros((offsets.shape[0], m, m))
+    cells[:, (w % m)[:, None], (w % m)[None, :]] = quarter[fx[:, :, None], fy[:, None, :]]
+    return rfft2(cells)
+
+
+def half_spectrum_weights(xp: Any, m: int) -> Any:
+    """Parseval's weights of an ``m x m`` cell's half spectrum over ``m^2`` (each column but
+    the first and the Nyquist one counted twice)."""
+    weight = xp.full(m // 2 + 1, 2.0 / (m * m))
+    weight[0] = weight[-1] = 1.0 / (m * m)
+    return weight
+
+
+def pair_sums_cells(
+    xp: Any,
+    rows: Any,
+    cols: Any,
+    labels: Any,
+    origin: Any,
+    pairs: Any,
+    quarter: Any,
+    shape: tuple[int, int],
+    block: int,
+) -> Any:
+    """:func:`pair_sums_direct`'s sums by FFTs on ``2b x 2b`` cells, on arrays of ``xp``
+    (``origin``: each aggregate's block corner): ``sum_k w Re(conj(A^) T^ B^)`` per pair
+    (the method of :func:`petsc_contact.backend.coarse._pair_sums_fft`), the pairs taken in
+    batches whose spectra hold at most :data:`CHUNK_ENTRIES` entries."""
+    nx, ny = shape
+    m = 2 * block
+    offsets = origin[pairs[:, 0]] - origin[pairs[:, 1]]
+    keys, kind = xp.unique((offsets[:, 0] % nx) * ny + offsets[:, 1] % ny, return_inverse=True)
+    kernels = offset_kernels(
+        xp, xp.fft.rfft2, xp.stack([keys // ny, keys % ny], axis=1), quarter, shape, block
+    )
+    weight = half_spectrum_weights(xp, m)
+    where = xp.full(origin.shape[0], -1, dtype=np.int64)
+    out = xp.empty(pairs.shape[0])
+    batch = max(1, CHUNK_ENTRIES // (m * m))
+    for lo in range(0, pairs.shape[0], batch):
+        chosen = slice(lo, lo + batch)
+        members, index = xp.unique(pairs[chosen].reshape(-1), return_inverse=True)
+        where[members] = xp.arange(members.size)
+        cell = where[labels]
+        on = cell >= 0
+        cells = xp.zeros((members.size, m, m))
+        mine = labels[on]
+        cells[cell[on], rows[on] - origin[mine, 0], cols[on] - origin[mine, 1]] = 1.0
+        where[members] = -1
+        spectra = xp.fft.rfft2(cells)
+        index = index.reshape(-1, 2)
+        z = xp.conj(spectra[index[:, 0]]) * kernels[kind.reshape(-1)[chosen]]
+        z *= spectra[index[:, 1]]
+        out[chosen] = (z.real @ weight).sum(axis=1)
+    return out
 
 
 def specimen_calls() -> list[tuple[Any, tuple[Any, ...]]]:

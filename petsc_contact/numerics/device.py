@@ -201,8 +201,29 @@ class Device:
         if not self.on_host:
             self.xp.cuda.get_current_stream().synchronize()
 
+    def cho_factor(self, matrix: Any) -> tuple[Any, bool] | None:
+        """The Cholesky factor of a symmetric ``E`` (an array of this device) as SciPy's
+        ``cho_factor`` pair ``(c, lower)``, on this device; ``None`` where ``E`` is not
+        positive definite.  On the host SciPy's upper factor, in ``E``'s memory (only ``E``'s
+        upper triangle is read); on a GPU cuSOLVER's lower one (its lower triangle is read)."""
+        if self.on_host:
+            from scipy.linalg import LinAlgError, cho_factor
+
+            try:
+                return cho_factor(matrix, lower=False, overwrite_a=True, check_finite=False)
+            except LinAlgError:
+                return None
+        import cupyx
+
+        try:
+            with cupyx.errstate(linalg="raise"):  # CuPy ignores a failed potrf by default
+                return self.xp.linalg.cholesky(matrix), True
+        except np.linalg.LinAlgError:
+            return None
+
     def cho_solve(self, factor: tuple[Any, bool], b: Any) -> Any:
-        """``E^-1 b`` from SciPy's ``cho_factor`` pair of ``E`` (its factor on this device)."""
+        """``E^-1 b`` from the ``cho_factor`` pair of ``E`` (its factor on this device,
+        :meth:`cho_factor`)."""
         if self.on_host:
             from scipy.linalg import cho_solve
 
@@ -213,6 +234,16 @@ class Device:
         first, second = ("N", "T") if lower else ("T", "N")
         t = solve_triangular(c, b, trans=first, lower=lower)
         return solve_triangular(c, t, trans=second, lower=lower)
+
+    def label(self, mask: Any) -> tuple[Any, int]:
+        """The 4-connected clusters of a boolean mask of this device: its labels (0 off the
+        mask, an array of this device) and their number (SciPy's or CuPy's ``ndimage.label``)."""
+        if self.on_host:
+            from scipy import ndimage
+        else:
+            from cupyx.scipy import ndimage
+        labels, count = ndimage.label(mask)
+        return labels, int(count)
 
     def fft(self, grid: Grid) -> Any:
         """The FFT engine of ``grid`` on this device."""

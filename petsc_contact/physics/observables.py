@@ -1,4 +1,8 @@
-"""What one converged (or not) load step measures: pure numpy on distributed fields.
+"""What one converged (or not) load step measures, on distributed fields of any device.
+
+Written once against the device's array module (NumPy on the ``cpu`` device, CuPy on a GPU):
+the fields stay where they are, and only scalars, histograms and the contact patches' sizes
+and edge labels come to the host (:class:`~petsc_contact.numerics.device.Device`).
 
 Contact rule: a pixel is in contact when ``p > k g``, with ``k`` the diagonal of the
 stiffness operator (the pressure a pixel's own unit gap would produce).  It is the
@@ -14,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..conventions.grid import Grid
+from ..numerics.device import CPU, Device
 
 
 def contact_mask(gap: np.ndarray, pressure: np.ndarray, pixel_stiffness: float) -> np.ndarray:
@@ -21,29 +26,37 @@ def contact_mask(gap: np.ndarray, pressure: np.ndarray, pixel_stiffness: float) 
     return pressure > pixel_stiffness * gap
 
 
-def natural_residual(gap: np.ndarray, pressure: np.ndarray, pixel_stiffness: float) -> np.ndarray:
+def natural_residual(
+    gap: np.ndarray, pressure: np.ndarray, pixel_stiffness: float, device: Device = CPU
+) -> np.ndarray:
     """``min(k g, p)``: zero exactly where ``g >= 0, p >= 0, g p = 0`` (pressure units)."""
-    return np.minimum(pixel_stiffness * gap, pressure)
+    return device.xp.minimum(pixel_stiffness * gap, pressure)
 
 
-def contact_patches(grid: Grid, contact: np.ndarray, periodic: bool = True) -> int:
+def contact_patches(
+    grid: Grid, contact: np.ndarray, periodic: bool = True, device: Device = CPU
+) -> int:
     """Number of contact patches: clusters of contact pixels joined through their edges
     (4-connected), across the cell's edges when ``periodic`` (same on every rank)."""
-    return int(patch_sizes(grid, contact, periodic).size)
+    return int(patch_sizes(grid, contact, periodic, device).size)
 
 
-def patch_sizes(grid: Grid, contact: np.ndarray, periodic: bool = True) -> np.ndarray:
-    """The size (pixels) of every contact patch (see :func:`contact_patches`), on every rank.
+def patch_sizes(
+    grid: Grid, contact: np.ndarray, periodic: bool = True, device: Device = CPU
+) -> np.ndarray:
+    """The size (pixels) of every contact patch (see :func:`contact_patches`), on every rank,
+    on the host.
 
-    Each rank labels its row slab and sends its boundary rows and columns and its labels'
-    sizes; rank 0 joins the labels that touch across slabs (and across the periodic edges)
-    and adds up the sizes of each joined patch.
+    Each rank labels its row slab (on its device, :meth:`~petsc_contact.numerics.device.
+    Device.label`) and sends its boundary rows and columns and its labels' sizes; rank 0
+    joins the labels that touch across slabs (and across the periodic edges) and adds up the
+    sizes of each joined patch.  Only those edges and sizes leave the device.
     """
-    from scipy import ndimage
-
-    labels, count = ndimage.label(contact)
-    sizes = np.bincount(labels.ravel(), minlength=count + 1)[1:]
-    ends = (labels[:1], labels[-1:], labels[:, :1].T, labels[:, -1:].T)
+    labels, count = device.label(contact)
+    sizes = device.to_host(device.xp.bincount(labels.ravel(), minlength=count + 1)[1:])
+    ends = tuple(
+        device.to_host(e) for e in (labels[:1], labels[-1:], labels[:, :1].T, labels[:, -1:].T)
+    )
     gathered = grid.comm.gather((count, ends, sizes), root=0)
     total = np.zeros(0, dtype=np.int64)
     if gathered is not None:
@@ -73,6 +86,7 @@ def distributions(
     sizes: np.ndarray,
     inside: np.ndarray | None = None,
     filled: np.ndarray | None = None,
+    device: Device = CPU,
 ) -> dict[str, Any]:
     """How one step's pressure, gap and contact patches are distributed (same on every rank).
 
@@ -86,6 +100,8 @@ def distributions(
         The pixels that count (the punch's footprint); default every pixel.
     filled
         The pixels whose heights were filled (``--fill-undefined``), if any.
+    device
+        Where the fields (and ``inside``, ``filled``) live; the results are on the host.
 
     Returns
     -------
@@ -98,51 +114,65 @@ def distributions(
         ``filled_contact_fraction`` (of the contact pixels) and ``filled_load_fraction`` (of
         the force) on filled pixels.
     """
-    inside = np.ones(contact.shape, bool) if inside is None else inside
-    pixels = int(grid.sum(np.count_nonzero(inside))[0])
+    xp = device.xp
+    inside = xp.ones(contact.shape, bool) if inside is None else inside
+    pixels = int(grid.sum(xp.count_nonzero(inside))[0])
     s_edges = 2.0 ** np.arange(int(np.ceil(np.log2(max(grid.size, 2)))) + 2)
     out: dict[str, Any] = {
-        **_histograms(grid, gap, pressure, contact, inside),
+        **_histograms(grid, gap, pressure, contact, inside, device),
         "patch_size_histogram": np.histogram(sizes, s_edges)[0].astype(np.int64),
         "largest_patch": int(sizes.max(initial=0)),
         "largest_patch_fraction": float(sizes.max(initial=0)) / pixels,
     }
     if filled is not None:
-        out |= _on_filled(grid, pressure, contact, filled)
+        out |= _on_filled(grid, pressure, contact, filled, device)
     return out
 
 
+def largest(values: Any) -> float:
+    """This rank's largest entry of a field, and zero if that is larger or it is empty (NaN
+    if it holds one, as NumPy's ``max(initial=0.0)``, which CuPy does not have)."""
+    return float(np.maximum(float(values.max()), 0.0)) if values.size else 0.0
+
+
 def _histograms(
-    grid: Grid, gap: np.ndarray, pressure: np.ndarray, contact: np.ndarray, inside: np.ndarray
+    grid: Grid,
+    gap: np.ndarray,
+    pressure: np.ndarray,
+    contact: np.ndarray,
+    inside: np.ndarray,
+    device: Device,
 ) -> dict[str, Any]:
     """The contact pixels' pressures and the open pixels' gaps (of those ``inside``), in
     equal bins from zero to the largest (same on every rank)."""
+    xp = device.xp
     open_ = inside & ~contact
-    p_top = grid.max(float(np.where(contact, pressure, 0.0).max(initial=0.0)))
-    g_top = grid.max(float(np.where(open_, gap, 0.0).max(initial=0.0)))
+    p_top = grid.max(largest(xp.where(contact, pressure, 0.0)))
+    g_top = grid.max(largest(xp.where(open_, gap, 0.0)))
     p_range = (0.0, p_top if p_top > 0 else 1.0)
     g_range = (0.0, g_top if g_top > 0 else 1.0)
     # equal bins given by their number and range: numpy's fast path (edges need a search)
-    p_hist, p_edges = np.histogram(pressure[contact], PRESSURE_BINS, p_range)
-    g_hist, g_edges = np.histogram(gap[open_], GAP_BINS, g_range)
-    counts = grid.sum(*p_hist, *g_hist).astype(np.int64)
+    p_hist, p_edges = xp.histogram(pressure[contact], PRESSURE_BINS, p_range)
+    g_hist, g_edges = xp.histogram(gap[open_], GAP_BINS, g_range)
+    counts = grid.sum(*device.to_host(p_hist), *device.to_host(g_hist)).astype(np.int64)
     return {
         "pressure_histogram": counts[:PRESSURE_BINS],
-        "pressure_bins": p_edges,
+        "pressure_bins": device.to_host(p_edges),
         "gap_histogram": counts[PRESSURE_BINS:],
-        "gap_bins": g_edges,
+        "gap_bins": device.to_host(g_edges),
     }
 
 
 def _on_filled(
-    grid: Grid, pressure: np.ndarray, contact: np.ndarray, filled: np.ndarray
+    grid: Grid, pressure: np.ndarray, contact: np.ndarray, filled: np.ndarray, device: Device
 ) -> dict[str, float]:
     """The fractions of the contact pixels and of the force on ``filled`` pixels."""
+    xp = device.xp
     n_contact, on_filled, load, load_filled = grid.sum(
-        np.count_nonzero(contact),
-        np.count_nonzero(contact & filled),
-        np.where(contact, pressure, 0.0).sum(),
-        np.where(contact & filled, pressure, 0.0).sum(),
+        xp.count_nonzero(contact),
+        xp.count_nonzero(contact & filled),
+        xp.where(contact, pressure, 0.0).sum(),
+        xp.where(contact & filled, pressure, 0.0).sum(),
     )
     return {
         "filled_contact_fraction": on_filled / n_contact if n_contact else 0.0,
@@ -175,8 +205,10 @@ def step_observables(
     nominal_pressure: float,
     pixel_stiffness: float,
     filled: np.ndarray | None = None,
+    device: Device = CPU,
 ) -> dict[str, Any]:
-    """Scalars (and :func:`distributions`) of one load step (same on every rank).
+    """Scalars (and :func:`distributions`) of one load step (same on every rank), from the
+    fields of ``device`` (``filled`` too), with only scalars and histograms brought to the host.
 
     Returns
     -------
@@ -188,22 +220,23 @@ def step_observables(
         ``max_pressure``; ``min_gap``; ``min_pressure`` (over all pixels; negative values
         are tension); ``complementarity`` ``sum(p+ g) / (sum(p+) h_rms)`` as Tamaas reports
         it; ``kkt_residual`` ``rms(min(k g, p)) / p0``; ``contact``, the local boolean
-        contact mask (not a scalar: callers pop it).
+        contact mask on the device (not a scalar: callers pop it).
     """
+    xp = device.xp
     contact = contact_mask(gap, pressure, pixel_stiffness)
-    sizes = patch_sizes(grid, contact)
-    p_plus = np.maximum(pressure, 0.0)
-    p_contact = np.where(contact, p_plus, 0.0)
-    r = natural_residual(gap, pressure, pixel_stiffness)
+    sizes = patch_sizes(grid, contact, device=device)
+    p_plus = xp.maximum(pressure, 0.0)
+    p_contact = xp.where(contact, p_plus, 0.0)
+    r = natural_residual(gap, pressure, pixel_stiffness, device)
     sums = grid.sum(
         gap.sum(),
-        np.count_nonzero(contact),
+        xp.count_nonzero(contact),
         p_contact.sum(),
-        np.vdot(gap + heights, pressure - nominal_pressure),
-        np.vdot(p_plus, gap),
+        xp.vdot(gap + heights, pressure - nominal_pressure),
+        xp.vdot(p_plus, gap),
         p_plus.sum(),
-        np.vdot(r, r),
-        np.vdot(heights, heights),
+        xp.vdot(r, r),
+        xp.vdot(heights, heights),
     )
     g_sum, n_contact, pc_sum, work, pg, p_sum, r2, h2 = sums
     n = grid.size
@@ -214,11 +247,11 @@ def step_observables(
         "contact_patches": sizes.size,
         "contact_pressure_mean": pc_sum / n,
         "elastic_energy": 0.5 * work / n,
-        "max_pressure": grid.max(float(p_contact.max(initial=0.0))),
+        "max_pressure": grid.max(largest(p_contact)),
         "min_gap": grid.min(float(gap.min())),
         "min_pressure": grid.min(float(pressure.min())),
         "complementarity": pg / (p_sum * h_rms) if p_sum > 0 and h_rms > 0 else 0.0,
         "kkt_residual": np.sqrt(r2 / n) / nominal_pressure,
-        **distributions(grid, gap, pressure, contact, sizes, filled=filled),
+        **distributions(grid, gap, pressure, contact, sizes, filled=filled, device=device),
         "contact": contact,
     }

@@ -1,0 +1,145 @@
+"""The array path's work kept on its device, checked on the CPU stand-in (``cpu-array``).
+
+- The coarse matrix of the two-level form summed with array operations (as on a GPU) equals
+  the numba build of the ``cpu`` device to rounding, and is factorised on the device.
+- A step's observables are taken where its fields live: with ``fields=False`` no field
+  crosses to the host.
+- The held-set stiffness's preconditioner takes ``G``'s column from the contact solve's
+  preconditioner instead of transforming an impulse again, with the same stiffness.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pytest
+from test_device import surface
+
+from petsc_contact.backend.coarse import array_coarse_matrix, host_coarse_matrix
+from petsc_contact.backend.preconditioner import MeanModePreconditioner
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.geometries.periodic import PeriodicProblem
+from petsc_contact.numerics.device import CPU, Device, get_device
+from petsc_contact.solver.driver import ArraySettings, ArraySolver
+from petsc_contact.workflows.periodic_sweep import periodic_contact
+
+
+@dataclass(frozen=True)
+class RecordingDevice(Device):
+    """The stand-in, recording the size of every array it brings to the host."""
+
+    moved: list[int] = field(default_factory=list)
+
+    def to_host(self, values):
+        self.moved.append(int(np.size(values)))
+        return super().to_host(values)
+
+
+def compliance_quarter(n: int) -> np.ndarray:
+    """``G``'s quarter of a ``n^2`` periodic problem on the stand-in."""
+    grid = Grid(n, 1.0)
+    device = get_device("cpu-array")
+    problem = PeriodicProblem(grid, device.fft(grid), surface(n, 0.7, n // 2), 1.0)
+    problem.set_pressure(1e-3)
+    return problem.preconditioner._exact_compliance()
+
+
+@pytest.mark.parametrize(
+    ("n", "fraction", "block"),
+    [(128, 0.03, 16), (128, 0.08, 4), (256, 0.02, 16), (256, 0.08, 8), (256, 0.2, 4)],
+)
+def test_the_device_build_of_the_coarse_matrix_is_the_numba_one(n, fraction, block):
+    """The same aggregates and ``E`` to 1e-12 relative on clustered contact sets (the highest
+    pixels of a rough surface), whichever way the numba build takes its near sums."""
+    heights = surface(n, 0.3, n // 2, seed=2)
+    bound = heights > np.quantile(heights, 1.0 - fraction)
+    grid, quarter = Grid(n, 1.0), compliance_quarter(n)
+    host = host_coarse_matrix(grid, quarter, bound, block, 10**6, CPU)
+    array = array_coarse_matrix(grid, quarter, bound, block, 10**6, get_device("cpu-array"))
+    assert array.block == host.block and host.matrix.shape[0] > 20
+    np.testing.assert_array_equal(array.local, host.local)
+    np.testing.assert_array_equal(array.labels, host.labels)
+    np.testing.assert_array_equal(array.sizes, host.sizes)
+    np.testing.assert_array_equal(array.matrix, array.matrix.T)
+    scale = np.abs(host.matrix).max()
+    assert np.abs(np.triu(array.matrix) - host.matrix).max() <= 1e-12 * scale
+
+
+def test_the_block_grows_alike_on_the_device():
+    heights = surface(128, 0.7, 64, seed=2)
+    bound = heights > np.quantile(heights, 0.9)
+    grid, quarter = Grid(128, 1.0), compliance_quarter(128)
+    host = host_coarse_matrix(grid, quarter, bound, 2, 40, CPU)
+    array = array_coarse_matrix(grid, quarter, bound, 2, 40, get_device("cpu-array"))
+    assert host.block > 2 and array.block == host.block
+    assert array.matrix.shape == (host.sizes.size,) * 2 and host.sizes.size <= 40
+
+
+def test_the_device_factorises_or_says_it_cannot():
+    device = get_device("cpu-array")
+    rng = np.random.default_rng(0)
+    a = rng.standard_normal((30, 30))
+    e = a @ a.T + 30 * np.eye(30)
+    b = rng.standard_normal(30)
+    factor = device.cho_factor(e.copy())
+    assert factor is not None
+    np.testing.assert_allclose(device.cho_solve(factor, b), np.linalg.solve(e, b), rtol=1e-12)
+    assert device.cho_factor(e - 100 * np.eye(30)) is None
+
+
+def test_a_step_measured_on_the_array_path_brings_no_field_to_the_host():
+    """Scalars, histograms and the patches' sizes and edge rows cross; the gap, pressure and
+    contact mask only with ``fields=True``."""
+    n = 128
+    grid = Grid(n, 1.0)
+    device = RecordingDevice("cpu-array", np)
+    problem = PeriodicProblem(grid, device.fft(grid), surface(n, 0.7, 32), 1.0)
+    settings = ArraySettings()
+    problem.configure(settings)
+    problem.set_pressure(3e-3)
+    x0 = problem.initial_gap().reshape(-1) / problem.scale_length
+    problem.start(x0)
+    solver = ArraySolver(problem.hessian, problem.preconditioner, device, settings)
+    x, info = solver.solve(problem.objective_gradient, x0)
+    for stiffness in (False, True):
+        device.moved.clear()
+        step = problem.measure(x, info, stiffness=stiffness, fields=False)
+        assert step.scalars["verification"] == "ok" and step.gap is None
+        assert device.moved and max(device.moved) <= n, device.moved
+    device.moved.clear()
+    with_fields = problem.measure(x, info, fields=True)
+    assert device.moved.count(n * n) == 3  # the gap, the pressure and the contact mask
+    assert with_fields.scalars["mean_gap"] == step.scalars["mean_gap"]
+    assert with_fields.gap is not None and with_fields.gap.shape == (n, n)
+
+
+@pytest.mark.parametrize("device", ["cpu-array", "cpu"])
+def test_the_stiffness_takes_the_contact_solves_column(device, request, monkeypatch):
+    """The held-set solve's coarse spaces built on the preconditioner's column of ``G``
+    give the stiffnesses of a column transformed afresh, to 1e-12 (the Schur form at the
+    first load, the two-level form at the others)."""
+    if device == "cpu":
+        request.getfixturevalue("petsc")
+    heights = surface(128, 0.7, 32)
+    loads = [1e-4, 1e-3, 3.2e-3]
+    kept = MeanModePreconditioner.compliance_quarter
+    given: list[bool] = []
+
+    def spied(self, scale):
+        column = kept(self, scale)
+        given.append(column is not None)
+        return column
+
+    def run():
+        steps = periodic_contact(
+            heights, length=1.0, modulus=1.0, pressures=loads, stiffness=True, device=device
+        )
+        return np.array([s.scalars["stiffness"] for s in steps])
+
+    monkeypatch.setattr(MeanModePreconditioner, "compliance_quarter", spied)
+    reused = run()
+    assert given == [True] * len(loads)
+    monkeypatch.setattr(MeanModePreconditioner, "compliance_quarter", lambda self, scale: None)
+    afresh = run()
+    np.testing.assert_allclose(reused, afresh, rtol=1e-12)

@@ -732,8 +732,7 @@ def check_choices(values: Callable[[str], Any]) -> None:
             value = values(option.name)
             if value is not None and value not in option.choices:
                 raise ValueError(
-                    f"{option.flags[0]} must be one of {', '.join(option.choices)}, not "
-                    f"'{value}'"
+                    f"{option.flags[0]} must be one of {', '.join(option.choices)}, not '{value}'"
                 )
 
 

@@ -231,7 +231,8 @@ def offset_kernels(
     fy = (offsets[:, 1:] + w) % ny
     fx, fy = xp.minimum(fx, nx - fx), xp.minimum(fy, ny - fy)
     cells = xp.zeros((offsets.shape[0], m, m))
-    cells[:, (w % m)[:, None], (w % m)[None, :]] = quarter[fx[:, :, None], fy[:, None, :]]
+    which = xp.arange(offsets.shape[0])[:, None, None]
+    cells[which, (w % m)[:, None], (w % m)[None, :]] = quarter[fx[:, :, None], fy[:, None, :]]
     return rfft2(cells)
 
 

@@ -361,11 +361,12 @@ def _read_slabs(files: list[str]) -> tuple[int, dict[str, list[tuple[int, np.nda
                 names = [m for m in saved.files if m != "after_step"]
                 mine = {"held": saved["held"]} if "held" in names else {}
             mine.update({m: mapped(where, m) for m in names if m != "held"})
+            rows = len(mine["state"])
         except Exception as exc:  # a truncated or foreign file: any reader failure
             raise _Damaged(f"{where} is damaged ({_reason(exc)})") from None
         for member, array in mine.items():
             arrays.setdefault(member, []).append((first, array))
-        first += len(mine["state"])
+        first += rows
     if len(afters) != 1:
         raise _Damaged(f"{files[0]} and its other slabs end different steps")
     return afters.pop(), arrays

@@ -238,9 +238,11 @@ class MeanModePreconditioner(FourierOperator):
 
 
 def set_mean_mode(op: FourierOperator, value: float) -> None:
-    """Set the normalised ``q = 0`` entry of ``op``'s multiplier (on the rank that holds it)."""
+    """Set the normalised ``q = 0`` entry of ``op``'s multiplier (on the rank that holds it:
+    FFTW-MPI may give a rank no spectrum columns at all, its empty range starting at 0)."""
     rows, cols = op.fft.spectral_index
-    if rows.start == 0 and cols.start == 0:
+    holds = rows.start == 0 and cols.start == 0 and rows.stop > 0 and cols.stop > 0
+    if holds:
         op.set_entry(0, 0, value)
 
 

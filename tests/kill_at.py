@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import sys
 import weakref
@@ -81,12 +82,18 @@ def same_result(a: Path, b: Path, fields: bool) -> None:
             assert np.allclose(fb["heights"][...], h, rtol=0, atol=1e-12 * np.abs(h).max())
 
 
+RANK = r"(\.\d+of\d+)?"  # on several ranks each writes its own: heights.2of4.h5, .state.2of4.npz
+
+
 def _target(path: str) -> str:
     path = str(path)
     for name, found in (
-        ("heights", f"{os.sep}heights.h5" in path and ".parts" in path),
+        (
+            "heights",
+            ".parts" in path and bool(re.search(rf"{re.escape(os.sep)}heights{RANK}\.h5", path)),
+        ),
         ("step", f"{os.sep}step-" in path and ".parts" in path),
-        ("state", ".state.npz" in path),
+        ("state", bool(re.search(rf"\.state{RANK}\.npz", path))),
         ("commit", path.endswith(".partial")),
         ("table", path.endswith(".csv")),
         ("final", path.endswith(".h5")),

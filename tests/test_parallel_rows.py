@@ -213,3 +213,10 @@ def test_a_rank_without_spectrum_columns_takes_part(tmp_path):
         assert b.attrs["fft_backend"] == "FFTWMPI" and b.attrs["mpi_size"] == 8
         np.testing.assert_allclose(b["mean_gap"][:], a["mean_gap"][:], rtol=1e-10)
         np.testing.assert_allclose(b["stiffness"][:], a["stiffness"][:], rtol=1e-10)
+
+
+def test_an_argument_error_on_several_ranks_is_one_line():
+    """Every rank parses the same command line; the first prints the error, all exit 2."""
+    r = cli("periodic", "--grid", "32", mpi=3, timeout=60)
+    assert r.returncode == 2
+    assert r.stderr.count("petsc-contact: error: the following arguments are required") == 1

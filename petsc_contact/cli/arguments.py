@@ -273,7 +273,12 @@ class _Parser(argparse.ArgumentParser):
     """Argument errors in one line (what is wrong, where the help is), exit status 2."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"petsc-contact: error: {message} (see {self.prog} --help)\n")
+        """The error in one line, printed by the first rank of an MPI launch only (every
+        rank parses the same command line), and exit status 2 on every rank."""
+        from ..conventions.grid import launched
+
+        text = f"petsc-contact: error: {message} (see {self.prog} --help)\n"
+        self.exit(2, text if launched("rank") == 0 else None)
 
     def parse_args(self, args: Any = None, namespace: Any = None) -> Any:
         """The parsed arguments; a deprecated spelling among them is a warning on standard

@@ -193,6 +193,7 @@ def _draw(args: argparse.Namespace, data: dict, n: int) -> None:
     p, punch = data["nominal_pressure"], data["punch"]
     fig, ax = plt.subplots(figsize=(6, 4.6), constrained_layout=True)
     inset = ax.inset_axes([0.62, 0.1, 0.35, 0.33])
+    hertz = False  # a Hertz guide only where the lowest resolved load rests on one patch
     for ratio in args.rolloff_ratios:
         d = data[f"ratio{ratio:g}"]
         hr, ok = d["h_rms"], d["resolved"]
@@ -209,25 +210,29 @@ def _draw(args: argparse.Namespace, data: dict, n: int) -> None:
         ax.loglog(p, d["persson_stiffness"] * hr, "-", color=color, lw=1)
         ax.axvline(d["pc_formula"], color=color, ls=":", lw=1)
         first = np.flatnonzero(ok & np.isfinite(k) & (k > 0))[:1]
-        if first.size:  # single asperities at the lowest resolved loads: K ~ p^(1/3)
+        if first.size and single[first[0]]:  # one asperity at the lowest resolved load
+            hertz = True
             ph = p[first[0]] * np.geomspace(1 / 30, 10, 8)
             ax.loglog(ph, k[first[0]] * (ph / p[first[0]]) ** (1 / 3), "-.", color=color, lw=1)
         inset.semilogy(d["mean_gap"] / hr, p, "o", ms=2, color=color)
         inset.semilogy(d["persson_mean_gap"] / hr, p, "-", lw=1, color=color)
     ax.plot([], [], "o", color="gray", label="one contact patch")
     ax.plot([], [], ".", color="gray", label="< 16 contact pixels (not fitted)")
-    ax.plot([], [], "-.", color="gray", label=r"Hertz, $K \propto p^{1/3}$")
+    ax.plot([], [], "x", color="gray", ms=4, label=r"$-dp/d\bar u$ along the sweep")
+    ax.plot([], [], "-", color="gray", lw=1, label=f"Persson on Eq. 5 at rms slope {RMS_SLOPE:g}")
+    if hertz:
+        ax.plot([], [], "-.", color="gray", label=r"Hertz, $K \propto p^{1/3}$")
     ax.plot([], [], ":", color="gray", label="$p_c$, Eq. 13 (the paper's recipe)")
     ax.loglog(p, p / theory.GAMMA, "k--", lw=1, label=r"$K = p/(\gamma h_\mathrm{rms})$")
     _draw_punch(ax, punch)
     ax.set(
         xlabel="$p_0/E^*$",
         ylabel=r"$K h_\mathrm{rms}/E^*$",
-        title=f"Fig. 1: H = {args.hurst}, {n}$^2$ (x: -dp/du)\n"
-        f"lines: Persson on Eq. 5 at rms slope {RMS_SLOPE:g}",
+        title=("paper Fig. 1: " if args.data else "quick look at the paper's Fig. 1: ")
+        + f"H = {args.hurst}, {n}$^2$",
     )
     ax.set_ylim(top=10)  # K diverges at full contact: the last loads leave the frame
-    ax.legend(fontsize=7, loc="upper left")
+    ax.legend(fontsize=6.5, loc="upper left")
     ax.grid(alpha=0.3, which="both")
     inset.set(xlabel=r"$\bar u/h_\mathrm{rms}$", ylabel="$p_0/E^*$")
     inset.tick_params(labelsize=6, labelleft=False, labelright=True)

@@ -120,6 +120,13 @@ def petsc_comm(comm: Any) -> Any:
 OptionsArg: TypeAlias = Sequence[str] | str | Mapping[str, Any] | None
 
 _PREFIX: ContextVar[str] = ContextVar("options_prefix", default="")
+_OPTION_NAME = re.compile(r"^-[A-Za-z_]")
+
+
+def is_petsc_option(token: str) -> bool:
+    """``-tao_type`` is a PETSc option's name; ``--grid``, ``-h`` and numbers such as
+    ``-1e-3`` (an option's value) are not."""
+    return token != "-h" and bool(_OPTION_NAME.match(token)) and not token.startswith("--")
 
 
 def check_prefix(prefix: str) -> str:

@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from typing import Any, NoReturn
 
 from .._version import __version__
+from ..backend._petsc import is_petsc_option
 from ..workflows.options import OPTIONS, Option, default_text, minutes, options_of
 
 DEMO: dict[str, Any] = {
@@ -33,15 +34,7 @@ DEMO: dict[str, Any] = {
 SURFACE_GROUP = "surface (a file, or a generated self-affine surface, paper Eq. 5)"
 
 
-_PETSC_OPTION = re.compile(r"^-[A-Za-z_]")
-
-
 _NUMBER = re.compile(r"^-?(\d|\.\d)")
-
-
-def is_petsc_option(token: str) -> bool:
-    """``-tao_type`` is a PETSc option; ``--grid``, ``-h`` and numbers such as ``-1`` are not."""
-    return token != "-h" and bool(_PETSC_OPTION.match(token)) and not token.startswith("--")
 
 
 def options_files(petsc_args: Sequence[str]) -> list[str]:

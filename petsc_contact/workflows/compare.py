@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import json
 import os
-import re
 import time
 from collections.abc import Callable, Sequence
 from contextlib import suppress
@@ -51,7 +50,6 @@ from ..physics.observables import natural_residual
 from ..physics.surface import rms_of
 from .periodic_sweep import sweep
 
-_OPTION_NAME = re.compile(r"^-[A-Za-z_]")  # an option's name, not a value such as -1e-3
 REFERENCE_GATOL = 1e-12
 STALL_GAIN = 0.9  # a new low of the natural residual must be 10% below the best so far
 DEFAULT_SOLVERS = ("cg", "pk", "tron", "bnls", "bntr", "bqnls", "blmvm", "bncg", "gpcg")
@@ -86,7 +84,7 @@ def own_options(options: Sequence[str], name: str, solvers: Sequence[str]) -> li
     prefixes = {f"-{group_name(other)}_": other for other in solvers}
     own, keep = [], True
     for token in options:
-        if _OPTION_NAME.match(token):
+        if _petsc.is_petsc_option(token):
             prefix = next((p for p in prefixes if token.startswith(p)), None)
             keep = prefix is None or prefixes[prefix] == name
             if keep:

@@ -365,6 +365,13 @@ def test_the_grid_refinement_reuses_what_it_solved(tmp_path):
     assert again.stdout.splitlines()[-3:] == first.stdout.splitlines()[-3:]
     with np.load(tmp_path / "r_seed1.npz") as kept:
         assert kept["stiffness_4"].shape == (5,) and np.isfinite(kept["stiffness_4"]).all()
+    # other loads with the same files: refused in one line, not a table of the old curves
+    other = [*args[:-5], "1e-4", "1e-2", "5", *args[-2:]]
+    refused = subprocess.run(other, capture_output=True, text=True, timeout=600, env=env)
+    assert refused.returncode == 1 and "holds another run's curves" in refused.stderr
+    (tmp_path / "r_seed2.npz").write_bytes(b"not a numpy file")  # bad bytes
+    damaged = subprocess.run(args, capture_output=True, text=True, timeout=600, env=env)
+    assert damaged.returncode == 1 and "r_seed2.npz is damaged" in damaged.stderr
 
 
 def test_the_knee_of_a_curve_is_its_crossover():

@@ -647,7 +647,8 @@ def test_study_computes_a_shared_run_once():
 def test_dataset_pieces_reuse_the_paper_figures_runs():
     """The seed distribution's seeds 1-4 are Fig. 3's ``ratio512`` files (not computed again),
     seeds 5-64 its own; the punch has 8 seeds of each face and ``L_p/lambda_r``, the cut faces
-    from a 4x larger surface; the Hertz pieces put ``lambda_1`` at 16, 32 and 64 pixels."""
+    from a 4x larger surface; the Hertz pieces put ``lambda_1`` at 16, 32 and 64 pixels; each
+    periodic punch face is also a periodic cell, loaded 0.05 decades apart."""
     from petsc_contact.workflows.paper_study import pieces
 
     todo = pieces()
@@ -662,6 +663,14 @@ def test_dataset_pieces_reuse_the_paper_figures_runs():
     assert [p.run.seed for p in punch[:4]] == [1, 1, 1, 1]  # each variant's first seed first
     hertz = [p for p in todo if p.figure == "hertz"]
     assert sorted({p.grid / p.run.cutoff_ratio for p in hertz}) == [16, 32, 64]  # lambda_1, px
+    cells = [p for p in todo if p.figure == "cells"]
+    faces = {p.name: p.run for p in punch if p.run.cut_from == 1}
+    assert len(cells) == 16 and all(p.run.geometry == "periodic" for p in cells)
+    for cell in cells:  # the same surface as the punch's periodic face of its name
+        surface = ("grid", "hurst", "rms_slope", "rolloff_ratio", "cutoff_ratio", "seed")
+        assert all(getattr(cell.run, k) == getattr(faces[cell.name], k) for k in surface)
+    loads = np.geomspace(*cells[0].run.sweep[1:], cells[0].run.sweep[0])  # type: ignore[misc]
+    assert np.allclose(np.diff(np.log10(loads)), 0.05)
 
 
 def test_resumed_file_marks_a_new_column_missing_before_it(tmp_path):

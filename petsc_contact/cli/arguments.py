@@ -320,10 +320,11 @@ def _study_parser(sub: Any) -> None:
     p = _command(sub, "study")
     p.add_argument(
         "--figure",
-        choices=("1", "2", "3", "hertz", "seeds", "punch", "all"),
+        choices=("1", "2", "3", "hertz", "seeds", "punch", "cells", "all"),
         default="all",
         help="the paper's Figs. 1-3, or the datasets beyond them: the Hertz regime, the "
-        "distribution over 64 seeds, the punch's periodic and cut faces (default all)",
+        "distribution over 64 seeds, the punch's periodic and cut faces, the punch's periodic "
+        "faces as periodic cells (default all)",
     )
     p.add_argument("--minutes", type=minutes, default=45.0, help="time budget (default 45)")
     p.add_argument("--data", default=os.path.join("data", "paper"), help="default data/paper")

@@ -57,13 +57,18 @@ CUT_FROM = 4  # a cut face: the central patch of a periodic surface of 4 L_p
 # need the longer travel (on 256^2 trial faces 20 rms heights gave 62-76% area at 1 and 31% at
 # 8, and 2048^2 faces have about half the area of 256^2 ones at the same approach)
 PUNCH_APPROACHES = {1: (0.03, 20.0, 16), 8: (0.03, 40.0, 16)}
+# the punch's periodic faces as periodic cells: loads 0.05 decades apart through 1-10% contact
+# area (the 2048^2 faces reach 1% near 5e-4 E* and 10% near 5e-3 E*, Fig. 1's table), so that
+# the punch and the cell of the same face are read by one linearity criterion, and u0 rests on
+# more than six loads of the window
+CELL_SWEEP = (30, 10**-3.5, 10**-2.05)
 
 
 @dataclass(frozen=True)
 class Piece:
     """One run of the study: its figure, its file name and its description."""
 
-    figure: str  # "fig1", "fig2", "fig3", "hertz", "seeds" or "punch": where the file is kept
+    figure: str  # "fig1", "fig2", "fig3", "hertz", "seeds", "punch" or "cells": its folder
     name: str
     run: Run
     used_by: tuple[str, ...] = ()  # further figures drawn from the same file
@@ -156,7 +161,8 @@ def pieces(shrink: int = 1) -> list[Piece]:
             )
             for k in SEEDS
         ]
-    return _once(out + hertz_pieces(shrink) + distribution_pieces(shrink) + punch_pieces(shrink))
+    beyond = hertz_pieces(shrink) + distribution_pieces(shrink) + punch_pieces(shrink)
+    return _once(out + beyond + cell_pieces(shrink))
 
 
 def hertz_pieces(shrink: int = 1) -> list[Piece]:
@@ -215,6 +221,22 @@ def punch_pieces(shrink: int = 1) -> list[Piece]:
             )
             out.append(Piece("punch", f"{face}_r{r}_seed{k}", run))
     return out
+
+
+def cell_pieces(shrink: int = 1) -> list[Piece]:
+    """The punch's periodic faces as periodic cells (``cells/periodic_r{R}_seed{k}``): the
+    surfaces of :func:`punch_pieces`' ``periodic`` faces (the same grid, spectrum and seed, so
+    the same heights), loaded by :data:`CELL_SWEEP`."""
+    n = PAPER_GRID // 4 // shrink
+    return [
+        Piece(
+            "cells",
+            f"periodic_r{r}_seed{k}",
+            Run(**_surface(n, 0.7, r, n / 2, k), sweep=CELL_SWEEP),
+        )
+        for k in PUNCH_SEEDS
+        for r in PUNCH_RATIOS
+    ]
 
 
 def _once(todo: list[Piece]) -> list[Piece]:

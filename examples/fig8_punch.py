@@ -27,34 +27,14 @@ ANALYTIC = {"exact": flat_punch.SQUARE_BETA, "king": flat_punch.KING_BETA}
 and King's estimate, the paper's choice (as Pharr et al. quote it)."""
 
 
-def linear_width(p: np.ndarray, ratio: np.ndarray, tolerance: float) -> tuple:
-    """The widest run of consecutive loads over which ``K/p`` stays within ``1 +- tolerance``
-    of its geometric middle (``max/min <= (1 + tol)/(1 - tol)``): its width in decades of
-    load and its first and last load (0 and NaN without two such loads)."""
-    good = np.isfinite(ratio) & (ratio > 0)
-    best = (0.0, float("nan"), float("nan"))
-    limit = (1 + tolerance) / (1 - tolerance)
-    for i in np.flatnonzero(good):
-        for j in range(i + 1, p.size):
-            if not good[j]:
-                break
-            window = ratio[i : j + 1]
-            if window.max() / window.min() > limit:
-                break
-            width = float(np.log10(p[j] / p[i]))
-            if width > best[0]:
-                best = (width, float(p[i]), float(p[j]))
-    return best
-
-
 def linearity(p: np.ndarray, k: np.ndarray, resolved: np.ndarray) -> str:
     """How far ``K ~ p`` holds over the ``resolved`` loads (at least 16 contact pixels): the
-    widest windows of :func:`linear_width` at each of :data:`TOLERANCES`, and the smallest
-    ``K/p``'s load."""
+    widest windows of :func:`~petsc_contact.workflows.scenes.linear_width` at each of
+    :data:`TOLERANCES`, and the smallest ``K/p``'s load."""
     ratio = np.where(resolved, k / p, np.nan)
     parts = [f"K/p smallest at p/E* {p[np.nanargmin(ratio)]:.2g}"]
     for tolerance in TOLERANCES:
-        width, low, high = linear_width(p, ratio, tolerance)
+        width, low, high = scenes.linear_width(p, ratio, tolerance)
         parts.append(f"K/p within {tolerance:.0%} over {width:.2f} decades ({low:.2g}-{high:.2g})")
     return ", ".join(parts)
 
@@ -129,17 +109,6 @@ def periodic_reference(data: str, ratio: int) -> dict | None:
     return ref | {"n": n, "resolved": ok, "normalised": ref["stiffness"] * ref["h_rms"] / p}
 
 
-def log_interp(x: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
-    """``ys(xs)`` at ``x``, interpolated linearly in ``ln x`` and ``ln y`` over the finite
-    positive points, taken in order of ``xs``; ``nan`` outside their range."""
-    ok = np.isfinite(xs) & np.isfinite(ys) & (xs > 0) & (ys > 0)
-    if ok.sum() < 2:
-        return np.full(np.shape(x), np.nan)
-    order = np.argsort(xs[ok])
-    lx, lxs = np.log(np.asarray(x, dtype=float)), np.log(xs[ok][order])
-    return np.exp(np.interp(lx, lxs, np.log(ys[ok][order]), left=np.nan, right=np.nan))
-
-
 def normalised(row: dict, key: str = "interfacial_stiffness") -> np.ndarray:
     """``K h_rms/p`` of a punch piece over its resolved loads (``nan`` elsewhere): constant
     in a linear regime."""
@@ -153,13 +122,15 @@ def against_cell(row: dict, ref: dict | None) -> np.ndarray:
     if ref is None:
         return np.full(row["nominal_pressure"].shape, np.nan)
     cell = np.where(ref["resolved"], ref["normalised"], np.nan)
-    return normalised(row) / log_interp(row["nominal_pressure"], ref["nominal_pressure"], cell)
+    return normalised(row) / scenes.log_interp(
+        row["nominal_pressure"], ref["nominal_pressure"], cell
+    )
 
 
 def seed_median(rows: list, x_key: str, y: list[np.ndarray], x: np.ndarray) -> np.ndarray:
     """The median over seeds of ``y`` (one array per seed, against its ``x_key`` column) at
     ``x``, where at least half of the seeds (and two) reach it."""
-    at = np.array([log_interp(x, r[x_key], v) for r, v in zip(rows, y, strict=True)])
+    at = np.array([scenes.log_interp(x, r[x_key], v) for r, v in zip(rows, y, strict=True)])
     enough = np.sum(np.isfinite(at), axis=0) >= max(2, (len(rows) + 1) // 2)
     middle = np.full(x.shape, np.nan)
     middle[enough] = np.nanmedian(at[:, enough], axis=0)
@@ -193,11 +164,15 @@ def summary(face: str, ratio: int, rows: list, ref: dict | None) -> str:
     areas = np.array(AREAS)
     half = np.array(
         [
-            log_interp(0.5, r["total_stiffness"] / r["flat_punch_stiffness"], r["area_fraction"])
+            scenes.log_interp(
+                0.5, r["total_stiffness"] / r["flat_punch_stiffness"], r["area_fraction"]
+            )
             for r in rows
         ]
     )
-    vs_cell = np.array([log_interp(areas, r["area_fraction"], against_cell(r, ref)) for r in rows])
+    vs_cell = np.array(
+        [scenes.log_interp(areas, r["area_fraction"], against_cell(r, ref)) for r in rows]
+    )
     near = [int(np.nanargmin(np.abs(np.log(r["area_fraction"] / 0.2)))) for r in rows]
     top = np.array([normalised(r)[i] for r, i in zip(rows, near, strict=True)])
     exact, king = (
@@ -209,7 +184,7 @@ def summary(face: str, ratio: int, rows: list, ref: dict | None) -> str:
     for r in rows:
         ok = scenes.contact_resolved(r["area_fraction"], r["pixels"])
         ratio_k = np.where(ok, r["interfacial_stiffness"] / r["nominal_pressure"], np.nan)
-        widths.append(linear_width(r["nominal_pressure"], ratio_k, 0.1)[0])
+        widths.append(scenes.linear_width(r["nominal_pressure"], ratio_k, 0.1)[0])
     gap = []
     for r in rows:
         mid = (r["area_fraction"] >= 1e-3) & (r["area_fraction"] <= 0.1)
@@ -217,7 +192,7 @@ def summary(face: str, ratio: int, rows: list, ref: dict | None) -> str:
             gap.extend((r["mean_gap_stiffness"] / r["interfacial_stiffness"])[mid])
     gap_text = f"{np.nanmin(gap):.2f}-{np.nanmax(gap):.2f}" if np.isfinite(gap).any() else "-"
     loads = np.array(SCATTER_LOADS)
-    at = np.array([log_interp(loads, r["nominal_pressure"], normalised(r)) for r in rows])
+    at = np.array([scenes.log_interp(loads, r["nominal_pressure"], normalised(r)) for r in rows])
     scatter = []
     for column in at.T:
         column = column[np.isfinite(column)]

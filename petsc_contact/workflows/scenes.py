@@ -356,3 +356,34 @@ def save(path: str, data: dict[str, Any], **attributes: Any) -> None:
     with atomic_h5(path) as f:
         put(f, data)
         write_attributes(f, attributes)
+
+
+def linear_width(p: np.ndarray, ratio: np.ndarray, tolerance: float) -> tuple[float, float, float]:
+    """The widest run of consecutive loads over which ``K/p`` stays within ``1 +- tolerance``
+    of its geometric middle (``max/min <= (1 + tol)/(1 - tol)``): its width in decades of
+    load and its first and last load (0 and NaN without two such loads)."""
+    good = np.isfinite(ratio) & (ratio > 0)
+    best = (0.0, float("nan"), float("nan"))
+    limit = (1 + tolerance) / (1 - tolerance)
+    for i in np.flatnonzero(good):
+        for j in range(i + 1, p.size):
+            if not good[j]:
+                break
+            window = ratio[i : j + 1]
+            if window.max() / window.min() > limit:
+                break
+            width = float(np.log10(p[j] / p[i]))
+            if width > best[0]:
+                best = (width, float(p[i]), float(p[j]))
+    return best
+
+
+def log_interp(x: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    """``ys(xs)`` at ``x``, interpolated linearly in ``ln x`` and ``ln y`` over the finite
+    positive points, taken in order of ``xs``; ``nan`` outside their range."""
+    ok = np.isfinite(xs) & np.isfinite(ys) & (xs > 0) & (ys > 0)
+    if ok.sum() < 2:
+        return np.full(np.shape(x), np.nan)
+    order = np.argsort(xs[ok])
+    lx, lxs = np.log(np.asarray(x, dtype=float)), np.log(xs[ok][order])
+    return np.exp(np.interp(lx, lxs, np.log(ys[ok][order]), left=np.nan, right=np.nan))

@@ -396,3 +396,24 @@ def test_the_knee_of_a_curve_is_its_crossover():
     bumped[3] *= 2.0  # one steep pair at a few contacts, then back on the power law
     assert abs(np.log10(fig7.knee(p, bumped, resolved, 0.77) / crossing)) < 0.25
     assert np.isnan(fig7.knee(p, p**0.77, resolved, 0.77))
+
+
+def test_the_eq12_trace_tabulates_and_reuses_what_it_solved(tmp_path):
+    """``examples/eq12_trace.py``: the fields' measurements against Appendix B in two tables;
+    Appendix B's energy gives Eq. 12 back; each seed kept, another run's file refused."""
+    script = str(ROOT / "examples" / "eq12_trace.py")
+    args = [sys.executable, script, "--grid", "64", "--seeds", "2", "--hursts", "0.7",
+            "--pressures", "1e-4", "3e-2", "8", "--output", str(tmp_path / "t")]  # fmt: skip
+    env = {"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"}
+    first = subprocess.run(args, capture_output=True, text=True, timeout=600, env=env)
+    assert first.returncode == 0, first.stderr
+    assert first.stdout.count("solved") == 2 and "K over Eq. 12 1.0000" in first.stdout
+    assert "| H | clusters |" in first.stdout and "| 0.7 |" in first.stdout
+    again = subprocess.run(args, capture_output=True, text=True, timeout=600, env=env)
+    assert (
+        "solved" not in again.stdout
+        and again.stdout.splitlines()[-4:] == first.stdout.splitlines()[-4:]
+    )
+    other = [*args[:-5], "1e-4", "1e-2", "8", *args[-2:]]
+    refused = subprocess.run(other, capture_output=True, text=True, timeout=600, env=env)
+    assert refused.returncode == 1 and "holds another run's measurements" in refused.stderr

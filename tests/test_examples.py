@@ -329,6 +329,44 @@ def test_punch_figure_redraws_from_study_files(tmp_path):
     with h5py.File(f"{out}.h5") as f:
         assert sorted(f) == ["cut_r1", "cut_r8", "periodic_r1", "periodic_r8"]
         assert all(len(f[v]) == 8 for v in f)
+    _punch_against_its_own_cell(data, tmp_path)
+
+
+def _punch_against_its_own_cell(data, tmp_path):
+    """The cells of the punch's periodic faces: each seed's punch is compared with the cell
+    of its own face (one row per ``L_p/lambda_r``, 8 seeds), and a cell whose face is not its
+    punch's is refused in one line."""
+    cells = ["-m", "petsc_contact.cli", "study", "--figure", "cells", "--shrink", "128"]
+    r = subprocess.run(
+        [sys.executable, *cells, "--data", str(data), "--quiet"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=STUDY_ENV,
+    )
+    assert r.returncode == 0, r.stderr
+    script = [sys.executable, str(ROOT / "examples" / "punch_own_cell.py"), "--data", str(data)]
+    r = subprocess.run(
+        [*script, "--output", str(tmp_path / "own")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=STUDY_ENV,
+    )
+    assert r.returncode == 0, r.stderr
+    rows = [line for line in r.stdout.splitlines() if line.startswith("| `L")]
+    assert len(rows) == 4 and all(line.split(" | ")[1] == "8" for line in rows), rows
+    assert (tmp_path / "own.png").stat().st_size > 5000
+    with h5py.File(data / "cells" / "periodic_r8_seed3.h5", "r+") as f:  # another face
+        f.attrs["rms_height"] = 1.01 * f.attrs["rms_height"]
+    r = subprocess.run(
+        [*script, "--output", str(tmp_path / "own2")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=STUDY_ENV,
+    )
+    assert r.returncode == 1 and "not the same face" in r.stderr and "seed 3" in r.stderr
 
 
 def test_sweeps_whose_loads_differ_by_rounding_are_one_sweep(tmp_path):

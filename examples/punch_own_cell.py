@@ -1,0 +1,251 @@
+"""The punch against the periodic cell of its own face, and u0 from the cells' loads.
+
+Each periodic punch face of ``petsc-contact study --figure punch`` (2048^2, H = 0.7,
+``L_p/lambda_1 = 1024``, ``L_p/lambda_r`` 1 and 8, 8 seeds) is also solved as a periodic cell
+(``--figure cells``: the same heights, loads 0.05 decades apart from 3.2e-4 to 8.9e-3 E*).
+Both are read by one linearity criterion: the exponent ``m`` of ``K ~ p^m`` fitted over the
+resolved steps at 1-10% contact area (``m = 1``: the linear regime of paper Eq. 1), and the
+widest window of loads over which ``K/p`` stays within 10%. The cells also give ``u0`` of
+Persson's exponential law (paper Eq. 3) from every load in the 1-10% window, two ways: the
+median of ``p/K`` and the slope ``-du_bar/d ln p`` of the mean gap, each with a 68% interval
+over seeds and loads resampled, beside Persson's closed form for the face's spectrum.
+"""
+
+import argparse
+
+import numpy as np
+
+from petsc_contact.physics import theory
+from petsc_contact.workflows import scenes
+from petsc_contact.workflows.paper_study import (
+    PUNCH_RATIOS,
+    RMS_SLOPE,
+    add_data_options,
+    piece_files,
+)
+
+HURST = 0.7
+WINDOW = (0.01, 0.1)  # the contact areas where the linear regime is read
+TOLERANCE = 0.1  # K/p within +-10%: the linear window's width
+AREAS = (0.01, 0.05, 0.1)  # where the punch is divided by its cell
+SAME_FACE = 1e-9  # the punch's and the cell's h_rms agree to this: one face
+KEYS = ("nominal_pressure", "area_fraction", "mean_gap")
+
+
+def read(path: str) -> dict:
+    """A piece's columns (``nan`` where a step did not converge), its stiffness ``K`` (the
+    cell's exact one, the punch's paper Eq. 2 with the grid's flat punch), its face's realised
+    ``h_rms``, seed, pixel count and which steps are resolved (at least 16 contact pixels)."""
+    import h5py
+
+    with h5py.File(path, "r", locking=False) as f:
+        ok = f["converged"][:].astype(bool)
+        stiffness = "interfacial_stiffness" if "interfacial_stiffness" in f else "stiffness"
+        row = {k: np.where(ok, f[k][:], np.nan) for k in (*KEYS, stiffness)}
+        row["K"] = row.pop(stiffness)
+        pixels = int(np.prod(np.atleast_1d(f.attrs["grid"])[[0, -1]]))
+        row |= {"h_rms": float(f.attrs["rms_height"]), "seed": int(f.attrs["seed"])}
+        row["n"] = int(np.atleast_1d(f.attrs["grid"])[0])
+    row["resolved"] = ok & scenes.contact_resolved(row["area_fraction"], pixels)
+    return row
+
+
+def pairs(data: str, ratio: int) -> list[tuple[dict, dict]]:
+    """The (punch, cell) of every seed with both complete at this ``L_p/lambda_r``;
+    ``SystemExit`` (one line) where a cell's face is not its punch's (another ``h_rms``)."""
+    where = {"rolloff_ratio": f"{ratio:g}"}
+    faces = piece_files(data, "punch", "punch", cut_from="1", **where)  # periodic faces
+    punches = {r["seed"]: r for r in map(read, faces)}
+    out = []
+    for cell in map(read, piece_files(data, "cells", **where)):
+        punch = punches.get(cell["seed"])
+        if punch is None:
+            continue
+        if abs(punch["h_rms"] / cell["h_rms"] - 1) > SAME_FACE:
+            raise SystemExit(
+                f"cells: seed {cell['seed']} at L/lambda_r = {ratio} has h_rms "
+                f"{cell['h_rms']:.9g}, its punch face {punch['h_rms']:.9g}: not the same face, "
+                "not compared"
+            )
+        out.append((punch, cell))
+    return out
+
+
+def in_window(row: dict) -> np.ndarray:
+    """The resolved steps at :data:`WINDOW` contact area."""
+    area = row["area_fraction"]
+    return row["resolved"] & (area >= WINDOW[0]) & (area <= WINDOW[1])
+
+
+def exponent(row: dict) -> float:
+    """``m`` of ``K ~ p^m`` by least squares over :func:`in_window` (NaN under 3 steps)."""
+    mid = in_window(row)
+    if mid.sum() < 3:
+        return float("nan")
+    return float(np.polyfit(np.log(row["nominal_pressure"][mid]), np.log(row["K"][mid]), 1)[0])
+
+
+def width(row: dict) -> float:
+    """The widest window (decades of load) over which ``K/p`` stays within :data:`TOLERANCE`
+    (resolved steps only)."""
+    ratio = np.where(row["resolved"], row["K"] / row["nominal_pressure"], np.nan)
+    return scenes.linear_width(row["nominal_pressure"], ratio, TOLERANCE)[0]
+
+
+def over_cell(punch: dict, cell: dict) -> np.ndarray:
+    """The punch's ``K`` over its cell's at the same load (log-log interpolated between the
+    cell's resolved loads), at :data:`AREAS` of the punch's contact area."""
+    cell_k = np.where(cell["resolved"], cell["K"], np.nan)
+    ratio = np.where(
+        punch["resolved"],
+        punch["K"] / scenes.log_interp(punch["nominal_pressure"], cell["nominal_pressure"], cell_k),
+        np.nan,
+    )
+    return scenes.log_interp(np.array(AREAS), punch["area_fraction"], ratio)
+
+
+def _range(values: np.ndarray, digits: int = 2) -> str:
+    """``median [min-max]`` of the finite values, ``-`` without any."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if not v.size:
+        return "-"
+    return f"{np.median(v):.{digits}f} [{v.min():.{digits}f}-{v.max():.{digits}f}]"
+
+
+def comparison_row(ratio: int, rows: list[tuple[dict, dict]]) -> str:
+    """A variant over its seeds as a Markdown table row (:data:`COMPARISON_HEADER`)."""
+    vs = np.array([over_cell(p, c) for p, c in rows])
+    cells = [
+        f"`L_p/lambda_r = {ratio}`",
+        str(len(rows)),
+        *(_range(vs[:, i]) for i in range(len(AREAS))),
+        _range(np.array([exponent(p) for p, _ in rows])),
+        _range(np.array([exponent(c) for _, c in rows])),
+        str(int(np.median([in_window(p).sum() for p, _ in rows]))),
+        str(int(np.median([in_window(c).sum() for _, c in rows]))),
+        _range(np.array([width(p) for p, _ in rows])),
+        _range(np.array([width(c) for _, c in rows])),
+    ]
+    return "| " + " | ".join(cells) + " |"
+
+
+COMPARISON_HEADER = (
+    "| face | seeds | punch / own cell at 1% area | 5% | 10% | `m` of `K ~ p^m` at 1-10% "
+    "area, punch | own cell | steps in the window, punch | own cell | `K/p` within 10% "
+    "(decades), punch | own cell |\n" + "| --- " * 11 + "|"
+)
+
+
+def u0_by_stiffness(p: np.ndarray, k: np.ndarray, gap: np.ndarray) -> float:
+    """``u0 = p/K`` (paper Eq. 1), the median over the loads given."""
+    return float(np.median(p / k))
+
+
+def u0_by_gap(p: np.ndarray, k: np.ndarray, gap: np.ndarray) -> float:
+    """``u0 = -du_bar/d ln p`` (paper Eq. 3), a least-squares line (NaN under 2 loads)."""
+    if np.unique(p).size < 2:
+        return float("nan")
+    return float(-np.polyfit(np.log(p), gap, 1)[0])
+
+
+def seeds_and_loads(windows: list[tuple[np.ndarray, ...]], estimator: object) -> np.ndarray:
+    """The 68% percentile interval of the median over seeds of ``estimator(p, K, u_bar)``,
+    seeds resampled and, within each seed drawn, its window's loads resampled
+    (:data:`~petsc_contact.workflows.scenes.BOOTSTRAP_RESAMPLES` times, a fixed stream)."""
+    rng = np.random.default_rng(scenes.BOOTSTRAP_SEED)
+    values = []
+    for _ in range(scenes.BOOTSTRAP_RESAMPLES):
+        per_seed = []
+        for i in rng.integers(0, len(windows), len(windows)):
+            picked = rng.integers(0, windows[i][0].size, windows[i][0].size)
+            per_seed.append(estimator(*(c[picked] for c in windows[i])))  # type: ignore[operator]
+        values.append(np.nanmedian(per_seed))
+    return np.percentile(values, [16, 84])
+
+
+def u0_row(ratio: int, rows: list[tuple[dict, dict]]) -> str:
+    """The cells' ``u0/h_rms`` at this ``L/lambda_r`` by both estimators, median over seeds
+    [68% interval over seeds and loads], in the realised ``h_rms``; beside Persson's closed
+    form on the spectrum (in the spectrum's ``h_rms``), as a Markdown table row."""
+    windows = []
+    for _, cell in rows:
+        mid = in_window(cell)
+        scale = cell["h_rms"]
+        windows.append(
+            (cell["nominal_pressure"][mid], cell["K"][mid] * scale, cell["mean_gap"][mid] / scale)
+        )
+    text = [f"`L/lambda_r = {ratio}`", str(len(rows)), str(min(w[0].size for w in windows))]
+    windows = [w for w in windows if w[0].size >= 2]  # a slope needs two loads
+    for estimator in (u0_by_stiffness, u0_by_gap):
+        if not windows:
+            text.append("-")
+            continue
+        median = np.median([estimator(*w) for w in windows])
+        low, high = seeds_and_loads(windows, estimator)
+        text.append(f"{median:.3f} [{low:.3f}-{high:.3f}]")
+    n = rows[0][1]["n"]  # the paper bandwidth: L/lambda_1 = n/2
+    q, c = scenes.ideal_spectrum(1.0, HURST, ratio, n / 2, rms_slope=RMS_SLOPE)
+    spectrum_h = float(np.sqrt(2 * np.pi * np.trapezoid(q * c, q)))
+    text.append(f"{theory.persson_exponential(q, c)[1] / spectrum_h:.3f}")
+    text.append(f"{np.median([cell['h_rms'] for _, cell in rows]) / spectrum_h:.3f}")
+    return "| " + " | ".join(text) + " |"
+
+
+U0_HEADER = (
+    "| cell | seeds | loads in the window (fewest) | `u0/h_rms` = `p/K` | `-du_bar/d ln p` "
+    "| Persson's closed form | realised / spectrum's `h_rms` |\n" + "| --- " * 7 + "|"
+)
+
+
+def draw(output: str, variants: dict) -> None:
+    """``K h_rms/p`` against contact area, each seed's cell (line) and punch (markers), one
+    panel per ``L_p/lambda_r``, the 1-10% window shaded."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(variants), figsize=(5.2 * len(variants), 4.2), sharey=True)
+    for ax, (ratio, rows) in zip(np.atleast_1d(axes), variants.items(), strict=True):
+        for i, (punch, cell) in enumerate(rows):
+            colour = plt.cm.viridis(i / max(len(rows) - 1, 1))
+            for row, style in ((cell, {"ls": "-", "lw": 1}), (punch, {"ls": "--", "marker": "o"})):
+                ok = row["resolved"]
+                y = row["K"][ok] * row["h_rms"] / row["nominal_pressure"][ok]
+                ax.loglog(row["area_fraction"][ok], y, color=colour, ms=3, **style)
+        ax.axvspan(*WINDOW, color="0.9", zorder=0)
+        ax.set(
+            xlabel="contact area fraction",
+            title=f"$L_p/\\lambda_r = {ratio}$: punch (o, dashed) and its own cell (line)",
+            xlim=(1e-3, 0.6),
+        )
+    np.atleast_1d(axes)[0].set_ylabel(r"$K h_\mathrm{rms}/p$ (each seed a colour)")
+    fig.tight_layout()
+    fig.savefig(f"{output}.png", dpi=120)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    add_data_options(ap, "cells", "punch_own_cell", required=True, partial=False)
+    args = ap.parse_args()
+    variants = {r: rows for r in PUNCH_RATIOS if (rows := pairs(args.data, r))}
+    if not variants:
+        raise SystemExit(f"no seed with both its punch and its cell complete in {args.data}")
+    print(COMPARISON_HEADER)
+    for ratio, rows in variants.items():
+        print(comparison_row(ratio, rows))
+    print()
+    print(U0_HEADER)
+    for ratio, rows in variants.items():
+        print(u0_row(ratio, rows))
+    draw(args.output, variants)
+    kept = {
+        f"r{r}": {f"seed{c['seed']}": {"punch": p, "cell": c} for p, c in rows}
+        for r, rows in variants.items()
+    }
+    scenes.save(f"{args.output}.h5", kept)
+
+
+if __name__ == "__main__":
+    main()

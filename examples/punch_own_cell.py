@@ -2,7 +2,9 @@
 
 Each periodic punch face of ``petsc-contact study --figure punch`` (2048^2, H = 0.7,
 ``L_p/lambda_1 = 1024``, ``L_p/lambda_r`` 1 and 8, 8 seeds) is also solved as a periodic cell
-(``--figure cells``: the same heights, loads 0.05 decades apart from 3.2e-4 to 8.9e-3 E*).
+(``--figure cells``: the same heights, loads 0.05 decades apart from 3.2e-4 to 8.9e-3 E*), and
+as a punch again by approaches about 0.05 decades of load apart through 1-10% contact area
+(read in place of ``punch/``'s where complete).
 Both are read by one linearity criterion: the exponent ``m`` of ``K ~ p^m`` fitted over the
 resolved steps at 1-10% contact area (``m = 1``: the linear regime of paper Eq. 1), and the
 widest window of loads over which ``K/p`` stays within 10%. The cells also give ``u0`` of
@@ -51,11 +53,13 @@ def read(path: str) -> dict:
 
 
 def pairs(data: str, ratio: int) -> list[tuple[dict, dict]]:
-    """The (punch, cell) of every seed with both complete at this ``L_p/lambda_r``;
+    """The (punch, cell) of every seed with both complete at this ``L_p/lambda_r`` (the punch
+    of ``cells/`` by approaches through 1-10% area where it is complete, else ``punch/``'s);
     ``SystemExit`` (one line) where a cell's face is not its punch's (another ``h_rms``)."""
     where = {"rolloff_ratio": f"{ratio:g}"}
     faces = piece_files(data, "punch", "punch", cut_from="1", **where)  # periodic faces
-    punches = {r["seed"]: r for r in map(read, faces)}
+    faces += piece_files(data, "cells", "punch", **where)  # their denser approaches, if done
+    punches = {r["seed"]: r for r in map(read, faces)}  # the denser ones where both are
     out = []
     for cell in map(read, piece_files(data, "cells", **where)):
         punch = punches.get(cell["seed"])

@@ -663,12 +663,15 @@ def test_dataset_pieces_reuse_the_paper_figures_runs():
     assert [p.run.seed for p in punch[:4]] == [1, 1, 1, 1]  # each variant's first seed first
     hertz = [p for p in todo if p.figure == "hertz"]
     assert sorted({p.grid / p.run.cutoff_ratio for p in hertz}) == [16, 32, 64]  # lambda_1, px
-    cells = [p for p in todo if p.figure == "cells"]
+    cells = [p for p in todo if p.figure == "cells" and p.run.geometry == "periodic"]
+    again = {p.name: p.run for p in todo if p.figure == "cells" and p.run.geometry == "punch"}
     faces = {p.name: p.run for p in punch if p.run.cut_from == 1}
-    assert len(cells) == 16 and all(p.run.geometry == "periodic" for p in cells)
+    assert len(cells) == 16 and len(again) == 16
+    surface = ("grid", "hurst", "rms_slope", "rolloff_ratio", "cutoff_ratio", "seed", "cut_from")
     for cell in cells:  # the same surface as the punch's periodic face of its name
-        surface = ("grid", "hurst", "rms_slope", "rolloff_ratio", "cutoff_ratio", "seed")
-        assert all(getattr(cell.run, k) == getattr(faces[cell.name], k) for k in surface)
+        face, dense = faces[cell.name], again[cell.name.replace("periodic", "punch")]
+        assert all(getattr(cell.run, k) == getattr(face, k) == getattr(dense, k) for k in surface)
+        assert len(dense.approaches) >= 24 and dense.approaches[0] > face.approaches[0]
     loads = np.geomspace(*cells[0].run.sweep[1:], cells[0].run.sweep[0])  # type: ignore[misc]
     assert np.allclose(np.diff(np.log10(loads)), 0.05)
 

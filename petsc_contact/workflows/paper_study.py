@@ -62,6 +62,10 @@ PUNCH_APPROACHES = {1: (0.03, 20.0, 16), 8: (0.03, 40.0, 16)}
 # the punch and the cell of the same face are read by one linearity criterion, and u0 rests on
 # more than six loads of the window
 CELL_SWEEP = (30, 10**-3.5, 10**-2.05)
+# and the same faces as punches again, their approaches through 1-10% contact area (1.5-7.3
+# and 2.9-14.4 expected rms heights beyond first touch over the 8 seeds of punch/ at
+# L_p/lambda_r = 1 and 8), the loads then about 0.05 decades apart as the cells'
+CELL_PUNCH_APPROACHES = {1: (1.45, 7.4, 32), 8: (2.9, 14.5, 24)}
 
 
 @dataclass(frozen=True)
@@ -226,17 +230,20 @@ def punch_pieces(shrink: int = 1) -> list[Piece]:
 def cell_pieces(shrink: int = 1) -> list[Piece]:
     """The punch's periodic faces as periodic cells (``cells/periodic_r{R}_seed{k}``): the
     surfaces of :func:`punch_pieces`' ``periodic`` faces (the same grid, spectrum and seed, so
-    the same heights), loaded by :data:`CELL_SWEEP`."""
+    the same heights), loaded by :data:`CELL_SWEEP`; then the same faces as punches
+    (``cells/punch_r{R}_seed{k}``), by the approaches of :data:`CELL_PUNCH_APPROACHES`."""
     n = PAPER_GRID // 4 // shrink
-    return [
-        Piece(
-            "cells",
-            f"periodic_r{r}_seed{k}",
-            Run(**_surface(n, 0.7, r, n / 2, k), sweep=CELL_SWEEP),
-        )
-        for k in PUNCH_SEEDS
-        for r in PUNCH_RATIOS
-    ]
+    cells, punches = [], []
+    for k in PUNCH_SEEDS:
+        for r in PUNCH_RATIOS:
+            surface = _surface(n, 0.7, r, n / 2, k)
+            cells.append(Piece("cells", f"periodic_r{r}_seed{k}", Run(**surface, sweep=CELL_SWEEP)))
+            low, high, count = CELL_PUNCH_APPROACHES[r]
+            h_rms = RMS_SLOPE * rms_height_per_slope(0.7, r, n / 2)
+            approaches = tuple(float(f"{d:.4g}") for d in np.geomspace(low, high, count) * h_rms)
+            run = Run(geometry="punch", **surface, approaches=approaches)
+            punches.append(Piece("cells", f"punch_r{r}_seed{k}", run))
+    return cells + punches
 
 
 def _once(todo: list[Piece]) -> list[Piece]:

@@ -305,7 +305,8 @@ GEOMETRY = (
     ("B7's R / B8's", "R_spectrum", "{:.2f}"),
 )
 ENERGY = (
-    ("U below pi/r0 (B: {theory_long_share:.2f})", "long_share", "{:.2f}"),
+    ("U below pi/r0", "long_share", "{:.2f}"),
+    ("B's U0/U", "theory_long_share", "{:.2f}"),
     ("U in q0", "q0_share", "{:.2f}"),
     ("(R/R_B)^1/3", "curvature", "{:.2f}"),
     ("(r0/r0_B)^((2-H)/3)", "size", "{:.2f}"),
@@ -322,9 +323,10 @@ ENERGY = (
 
 def table(rows: dict[float, dict[str, float]], columns: tuple) -> list[str]:
     """A markdown table, one row per H, of ``columns`` (header, key, format)."""
-    first = next(iter(rows.values()))
-    head = [c[0].format(**first) if "{" in c[0] else c[0] for c in columns]
-    lines = ["| H | " + " | ".join(head) + " |", "| --- |" + " --- |" * len(columns)]
+    lines = [
+        "| H | " + " | ".join(c[0] for c in columns) + " |",
+        "| --- |" + " --- |" * len(columns),
+    ]
     for hurst, row in rows.items():
         cells = [fmt.format(row[key]) for _, key, fmt in columns]
         lines.append(f"| {hurst} | " + " | ".join(cells) + " |")

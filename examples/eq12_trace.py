@@ -2,20 +2,21 @@
 the paper's scaling theory (Appendix B), at the loads where Eq. 12 is compared with the data.
 
 Appendix B builds ``K`` (paper Eq. 12) from the elastic energy through ``p = K dU_el/dF``
-(paper Eq. 7): one Hertz-like mesoasperity of radius ``R = chi r0^(2-H)`` (the mean summit
-curvature of the heights cut at ``pi/r0``, Eq. B8) touched over a disc of radius ``r0``
-(Eq. B10) stores ``U0 = 2/5 F delta`` (Eqs. B12-B14); the microroughness inside it stores
-``U1 = gamma h_rms^meso F`` (Eqs. B15-B19).  For each H (``L = lambda_r``,
+(paper Eq. 6): one Hertz-like mesoasperity of radius ``R = chi r0^(2-H)`` (the mean summit
+curvature of the heights cut at ``pi/r0``, Eqs. B6-B10) touched over a disc of radius ``r0``
+(Eq. B12) stores ``U0 = 2/5 F delta`` (Eqs. B14-B16); the microroughness inside it stores
+``U1 = gamma h_rms^meso F`` (Eqs. B17-B22).  For each H (``L = lambda_r``,
 ``L/lambda_1 = grid/2``) and seed this script solves the periodic contact with its fields,
 and at the fitted loads (the four lowest with 16 contact pixels in every seed below ``p_c``,
 as ``examples/fig3_finite_size.py`` fits) measures from them: the contact clusters and the
-force the largest carries; the contact's radius ``r0`` (the force's second moment, read as a
-Hertz disc's) and the force within ``lambda_r/4`` of its centroid; the mesoasperity's radius
-``R`` (the heights cut at ``pi/r0``, their curvature at the centroid); the elastic energy
-and its split at ``pi/r0`` and in the ``q0`` modes.  The simulated ``K`` over Eq. 12's is
+force the largest carries; the contact's radius ``r0`` (the force's second moment, and the
+radius that holds half the force, each read as a Hertz disc's) and the force within
+``lambda_r/4`` of its centroid; the mesoasperity's radius ``R`` (the heights cut at
+``pi/r0``, their curvature at their highest pixel within ``r0`` of the centroid); the
+elastic energy and its split at ``pi/r0`` and in the ``q0`` modes.  The simulated ``K`` over Eq. 12's is
 then the product of three measured factors: the theory's energy over the stored one, the
 exponents ``dln U/dln F`` (theory over fit) and ``K`` over ``p^2/(U dln U/dln F)`` (the
-identity Eq. 7 on the fields).  Each seed's measurements are kept in
+identity Eq. 6 on the fields).  Each seed's measurements are kept in
 ``OUTPUT_H<H>_seed<S>.npz`` with the settings they were solved for.
 """
 
@@ -43,8 +44,8 @@ HERTZ_HALF = np.sqrt(1 - 0.5 ** (2 / 3))  # half a Hertz disc's force lies withi
 
 def mesoasperity_theory(pressure: np.ndarray, h_rms: float, hurst: float) -> dict[str, np.ndarray]:
     """Appendix B's mesoasperity at the loads ``pressure`` (``E* = L = lambda_r = 1``, so
-    ``s = 1``): ``r0`` (Eq. B10), ``R`` (Eq. B11), the energies ``U0`` (Eq. B14) and ``U1``
-    (Eq. B19) per area, and ``K = p/(dU/dF)`` (Eq. B22, which is Eq. 12)."""
+    ``s = 1``): ``r0`` (Eq. B12), ``R`` (Eq. B10), the energies ``U0`` (Eq. B16) and ``U1``
+    (Eq. B22) per area, and ``K = p/(dU/dF)`` (Eqs. B25-B26, which are Eq. 12)."""
     q_r, beta, e = ROLLOFF_WAVEVECTOR, theory.NAYAK_BETA, 1 / (1 + hurst)
     chi = np.sqrt((2 - hurst) / hurst) * np.pi ** (hurst - 2) / (beta * q_r * h_rms)  # Eq. B9
     force = np.asarray(pressure, dtype=float) * q_r**2  # F q_r^2/E* with F = p L^2
@@ -84,10 +85,10 @@ def _wavenumbers(n: int) -> np.ndarray:
 
 
 def curvature_radii(heights: np.ndarray, cut: float, near: np.ndarray) -> tuple[float, ...]:
-    """The heights cut at ``|q|/q0 < cut`` (Eq. B8's ``pi/r0``): their Hertz-equivalent radius
+    """The heights cut at ``|q|/q0 < cut`` (Eq. B6's ``pi/r0``): their Hertz-equivalent radius
     ``1/sqrt(k1 k2)`` at their highest pixel where ``near`` (the mesoasperity's summit; ``nan``
     where that is no summit but the mask's edge), and the theory's
-    ``1/(beta rms(lap h))`` of the same cut spectrum (Nayak's mean summit curvature, Eq. B7,
+    ``1/(beta rms(lap h))`` of the same cut spectrum (Nayak's mean summit curvature, Eq. B6,
     without Eq. B8's asymptotic step)."""
     n = heights.shape[0]
     q = 2 * np.pi * fft_order(n)  # L = 1
@@ -239,8 +240,8 @@ def seed_factors(run: dict[str, np.ndarray], fitted: np.ndarray, hurst: float) -
     p = run["nominal_pressure"][fitted]
     m = {k: run[k][fitted] for k in (*MEASURED, "stiffness")}
     th = mesoasperity_theory(p, float(run["h_rms"]), hurst)
-    radius_at_r0 = th["R"] * (m["r0"] / th["r0"]) ** (2 - hurst)  # Eq. B8 at the measured r0
-    hertz_u0 = 0.4 * p * (9 * p**2 / (16 * m["R"])) ** (1 / 3)  # Eq. B12-B13, E* = A0 = 1
+    radius_at_r0 = th["R"] * (m["r0"] / th["r0"]) ** (2 - hurst)  # Eq. B10 at the measured r0
+    hertz_u0 = 0.4 * p * (9 * p**2 / (16 * m["R"])) ** (1 / 3)  # Eqs. B14-B15, E* = A0 = 1
     exponent = power_law_fit(p, m["u"], p.size).alpha  # dln U/dln F over the fitted loads
     eq12 = theory.finite_size_stiffness(p, 1.0, float(run["h_rms"]), hurst, 1.0, 1.0)
     return {
@@ -297,12 +298,12 @@ GEOMETRY = (
     ("clusters", "patches", "{:.0f}"),
     ("largest cluster's force", "largest_share", "{:.2f}"),
     ("force within lambda_r/4", "disc_share", "{:.2f}"),
-    ("B10's r0 / lambda_1", "r0_B_lambda1", "{:.1f}"),
+    ("B12's r0 / lambda_1", "r0_B_lambda1", "{:.1f}"),
     ("r0 (half the force) / lambda_r", "r0_lambda_r", "{:.3f}"),
-    ("r0 / B10's", "r0", "{:.1f}"),
-    ("r0 from half the force / B10's", "r0_half", "{:.1f}"),
-    ("R / B8's at r0", "R", "{:.2f}"),
-    ("B7's R / B8's", "R_spectrum", "{:.2f}"),
+    ("r0 / B12's", "r0", "{:.1f}"),
+    ("r0 from half the force / B12's", "r0_half", "{:.1f}"),
+    ("R / B10's at r0", "R", "{:.2f}"),
+    ("B6's R / B10's", "R_spectrum", "{:.2f}"),
 )
 ENERGY = (
     ("U below pi/r0", "long_share", "{:.2f}"),

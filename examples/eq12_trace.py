@@ -13,10 +13,10 @@ force the largest carries; the contact's radius ``r0`` (the force's second momen
 radius that holds half the force, each read as a Hertz disc's) and the force within
 ``lambda_r/4`` of its centroid; the mesoasperity's radius ``R`` (the heights cut at
 ``pi/r0``, their curvature at their highest pixel within ``r0`` of the centroid); the
-elastic energy and its split at ``pi/r0`` and in the ``q0`` modes.  The simulated ``K`` over Eq. 12's is
-then the product of three measured factors: the theory's energy over the stored one, the
-exponents ``dln U/dln F`` (theory over fit) and ``K`` over ``p^2/(U dln U/dln F)`` (the
-identity Eq. 6 on the fields).  Each seed's measurements are kept in
+elastic energy and its split at ``pi/r0`` and in the ``q0`` modes.  The simulated ``K``
+over Eq. 12's is then the product of three measured factors: the theory's energy over the
+stored one, the exponents ``dln U/dln F`` (theory over fit) and ``K`` over
+``p^2/(U dln U/dln F)`` (the identity Eq. 6 on the fields).  Each seed's measurements are kept in
 ``OUTPUT_H<H>_seed<S>.npz`` with the settings they were solved for.
 """
 

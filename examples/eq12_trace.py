@@ -272,19 +272,35 @@ def seed_factors(run: dict[str, np.ndarray], fitted: np.ndarray, hurst: float) -
 SHARES = ("patches", "largest_share", "disc_share", "long_share", "q0_share")
 
 
+def _aggregate(factors: list[dict]) -> dict[str, float]:
+    """:func:`seed_factors` of one or more seeds over all their loads: medians of counts and
+    shares, geometric means of ratios."""
+    out = {}
+    for key in factors[0]:
+        values = np.concatenate([s[key] for s in factors])
+        out[key] = float(np.nanmedian(values)) if key in SHARES else _geometric(values)
+    return out
+
+
+SEED_LINE = (
+    "# H = {hurst}, seed {seed}: {patches:.0f} clusters, r0 (half the force) {r0_half:.1f} "
+    "B12's, U below pi/r0 {long_share:.2f}, U_B/U {u:.2f}, K/Eq. 12 {eq12:.2f}"
+)
+
+
 def summary(runs: list[dict[str, np.ndarray]], hurst: float, grid: int) -> dict[str, float]:
     """The seeds of one H at their fitted loads (``scenes.finite_size_fit``, as
-    ``examples/fig3_finite_size.py``): medians of counts and shares, geometric means of
-    ratios, and ``K/Eq. 12`` of the seed-averaged ``K`` (the seeds' mean ``h_rms``)."""
+    ``examples/fig3_finite_size.py``; :func:`_aggregate`), each seed's line printed, and
+    ``K/Eq. 12`` of the seed-averaged ``K`` (the seeds' mean ``h_rms``)."""
     curves = {k: np.array([r[k] for r in runs]) for k in ("area_fraction", "stiffness", "h_rms")}
     curves["nominal_pressure"] = runs[0]["nominal_pressure"]
     fit = scenes.finite_size_fit(curves, grid * grid, scenes.crossover(curves["h_rms"], hurst, 1.0))
     fitted = fit["fitted"]
     per_seed = [seed_factors(r, fitted, hurst) for r in runs]
-    out = {}
-    for key in per_seed[0]:
-        values = np.concatenate([s[key] for s in per_seed])
-        out[key] = float(np.nanmedian(values)) if key in SHARES else _geometric(values)
+    for run, factors in zip(runs, per_seed, strict=True):
+        seed = int(run["settings"][2])
+        print(SEED_LINE.format(hurst=hurst, seed=seed, **_aggregate([factors])))
+    out = _aggregate(per_seed)
     p = curves["nominal_pressure"][fitted]
     eq12 = theory.finite_size_stiffness(p, 1.0, float(curves["h_rms"].mean()), hurst, 1.0, 1.0)
     out["eq12_mean"] = _geometric(fit["stiffness_mean"][fitted] / eq12)

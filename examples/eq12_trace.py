@@ -106,13 +106,17 @@ def curvature_radii(heights: np.ndarray, cut: float, near: np.ndarray) -> tuple[
     return float(summit), 1 / (theory.NAYAK_BETA * rms)
 
 
+def _energy_terms(displacement: np.ndarray, load: np.ndarray) -> np.ndarray:
+    """Each DFT mode's share of the elastic energy per area ``1/2 <u (p - p0)>`` (Parseval)."""
+    n = displacement.shape[0]
+    terms = np.real(np.fft.fft2(displacement) * np.conj(np.fft.fft2(load - load.mean())))
+    return terms * 0.5 / n**4
+
+
 def energy_split(displacement: np.ndarray, load: np.ndarray, cut: float) -> tuple[float, ...]:
     """The elastic energy per area ``1/2 <u (p - p0)>`` (Parseval) in the modes with
     ``|q|/q0 < cut``, in the ``q0`` modes (``|q| = q0``) and in all."""
-    n = displacement.shape[0]
-    terms = np.real(np.fft.fft2(displacement) * np.conj(np.fft.fft2(load - load.mean())))
-    terms *= 0.5 / n**4
-    k = _wavenumbers(n)
+    terms, k = _energy_terms(displacement, load), _wavenumbers(displacement.shape[0])
     return float(terms[k < cut].sum()), float(terms[k == 1].sum()), float(terms.sum())
 
 
@@ -131,8 +135,9 @@ def clusters(contact: np.ndarray, pressure: np.ndarray, centre: tuple[float, flo
     return float(np.max(forces) / np.sum(forces))
 
 
-def measure(step: Step, heights: np.ndarray) -> dict[str, float]:
-    """One load step's fields against Appendix B's mesoasperity (see the module docstring)."""
+def measure(step: Step, heights: np.ndarray, r0_theory: float) -> dict[str, float]:
+    """One load step's fields against Appendix B's mesoasperity (see the module docstring);
+    the energy is also split at ``pi/r0`` of B12's ``r0_theory``."""
     n, gap, load, contact = heights.shape[0], step.gap, step.pressure, step.contact
     assert gap is not None and load is not None and contact is not None, "solved with fields"
     pressure = np.where(contact, load, 0.0)
@@ -148,6 +153,7 @@ def measure(step: Step, heights: np.ndarray) -> dict[str, float]:
     cut = 1 / (2 * r0)  # pi/r0 in units of q0 = 2 pi
     summit, mean_summit = curvature_radii(heights, cut, distance2 <= r0**2)
     long, q0_modes, total = energy_split(gap + heights, load, cut)
+    long_theory = energy_split(gap + heights, load, 1 / (2 * r0_theory))[0]
     return {
         "patches": float(step.scalars["contact_patches"]),
         "largest_share": clusters(contact, pressure, centre),
@@ -159,6 +165,7 @@ def measure(step: Step, heights: np.ndarray) -> dict[str, float]:
         "u": total,
         "u_long": long,
         "u_q0": q0_modes,
+        "u_long_B": long_theory,
     }
 
 
@@ -173,6 +180,7 @@ MEASURED = (
     "u",
     "u_long",
     "u_q0",
+    "u_long_B",
 )
 
 
@@ -209,11 +217,11 @@ def solve_seed(args: argparse.Namespace, hurst: float, seed: int) -> dict[str, n
     heights, h_rms = scenes.surface(args.grid, hurst, 1.0, args.grid / 2, seed)
     p = log_pressures(args)
     rows: dict[str, list[float]] = {k: [] for k in (*MEASURED, "stiffness", "area_fraction")}
-    for step in periodic_contact(
-        heights, length=1.0, pressures=p.tolist(), fields=True, stiffness=True
-    ):
+    r0_theory = mesoasperity_theory(p, h_rms, hurst)["r0"]
+    steps = periodic_contact(heights, length=1.0, pressures=p.tolist(), fields=True, stiffness=True)
+    for step, r0 in zip(steps, r0_theory, strict=True):
         done = step.converged
-        found = measure(step, heights) if done else dict.fromkeys(MEASURED, np.nan)
+        found = measure(step, heights, r0) if done else dict.fromkeys(MEASURED, np.nan)
         for key in ("stiffness", "area_fraction"):
             found[key] = float(step.scalars[key]) if done else np.nan
         for key, value in found.items():
@@ -256,6 +264,9 @@ def seed_factors(run: dict[str, np.ndarray], fitted: np.ndarray, hurst: float) -
         "R_spectrum": m["R_spectrum"] / radius_at_r0,
         "long_share": m["u_long"] / m["u"],
         "q0_share": m["u_q0"] / m["u"],
+        "long_share_B": m["u_long_B"] / m["u"],
+        "u0_B": th["u0"] / m["u_long_B"],
+        "u1_B": th["u1"] / (m["u"] - m["u_long_B"]),
         "curvature": (m["R"] / radius_at_r0) ** (1 / 3),
         "size": (m["r0"] / th["r0"]) ** ((2 - hurst) / 3),
         "hertz": hertz_u0 / m["u_long"],
@@ -269,7 +280,7 @@ def seed_factors(run: dict[str, np.ndarray], fitted: np.ndarray, hurst: float) -
     }
 
 
-SHARES = ("patches", "largest_share", "disc_share", "long_share", "q0_share")
+SHARES = ("patches", "largest_share", "disc_share", "long_share", "q0_share", "long_share_B")
 
 
 def _aggregate(factors: list[dict]) -> dict[str, float]:
@@ -325,6 +336,9 @@ ENERGY = (
     ("U below pi/r0", "long_share", "{:.2f}"),
     ("B's U0/U", "theory_long_share", "{:.2f}"),
     ("U in q0", "q0_share", "{:.2f}"),
+    ("U below B12's pi/r0", "long_share_B", "{:.2f}"),
+    ("U0_B / U below B12's", "u0_B", "{:.2f}"),
+    ("U1_B / U above B12's", "u1_B", "{:.2f}"),
     ("(R/R_B)^1/3", "curvature", "{:.2f}"),
     ("(r0/r0_B)^((2-H)/3)", "size", "{:.2f}"),
     ("Hertz(R) / U below pi/r0", "hertz", "{:.2f}"),
@@ -350,6 +364,64 @@ def table(rows: dict[float, dict[str, float]], columns: tuple) -> list[str]:
     return lines
 
 
+def _panels(axes: tuple, hurst: float, seed: int, grid: int, load: float) -> None:
+    """One H's two panels: the contact pressure around the force's centroid with B12's
+    ``r0`` and the measured ones, and the elastic energy below ``|q|`` against ``|q|/q0``."""
+    heights, h_rms = scenes.surface(grid, hurst, 1.0, grid / 2, seed)
+    (step,) = periodic_contact(heights, length=1.0, pressures=[load], fields=True)
+    r0_b = float(mesoasperity_theory(np.array([load]), h_rms, hurst)["r0"][0])
+    found, gap, load_field = measure(step, heights, r0_b), step.gap, step.pressure
+    assert gap is not None and load_field is not None and step.contact is not None
+    pressure = np.where(step.contact, load_field, 0.0)
+    centre = force_centre(pressure)
+    shift = tuple(int(round(grid / 2 - c)) for c in centre)
+    half = int(np.clip(1.5 * found["r0"] * grid, 8, grid / 2))
+    window = np.roll(pressure, shift, axis=(0, 1))[grid // 2 - half : grid // 2 + half] / load
+    extent = np.array([-half, half, half, -half]) / grid
+    shown = np.ma.masked_equal(window[:, grid // 2 - half : grid // 2 + half], 0)
+    axes[0].imshow(shown.T, extent=extent, cmap="viridis", interpolation="nearest")
+    for radius, style, label in (
+        (r0_b, "r-", "B12's $r_0$"),
+        (found["r0_half"], "w--", "$r_0$, half the force"),
+        (found["r0"], "w-", "$r_0$, second moment"),
+    ):
+        t = np.linspace(0, 2 * np.pi, 200)
+        axes[0].plot(radius * np.cos(t), radius * np.sin(t), style, lw=1, label=label)
+    axes[0].set(title=f"H = {hurst}, seed {seed}, $p_0$ = {load:.2g} E*", xlabel="x / L")
+    terms = _energy_terms(gap + heights, load_field)
+    k = _wavenumbers(grid).ravel()
+    order = np.argsort(k)
+    below = np.cumsum(terms.ravel()[order]) / terms.sum()
+    axes[1].semilogx(k[order][1:], below[1:], "k-", lw=1, label="fields")
+    axes[1].axvline(1 / (2 * found["r0"]), color="gray", lw=1, label="$\\pi/r_0$, measured")
+    axes[1].axvline(1 / (2 * r0_b), color="r", lw=1, label="$\\pi/r_0$, B12's")
+    share = theory.KAPPA0 / (theory.KAPPA0 + float(theory.kappa1(hurst)))
+    axes[1].plot([1 / (2 * r0_b)], [share], "ro", label="Appendix B's $U_0/U$ at $\\pi/r_0$")
+    axes[1].set(xlabel="$|q|/q_0$", ylim=(0, 1))
+    axes[1].grid(alpha=0.3, which="both")
+
+
+def draw(args: argparse.Namespace, rows: dict[float, dict[str, float]]) -> None:
+    """``OUTPUT.png``: for each H, seed 1 at its second fitted load (:func:`_panels`)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, len(rows), figsize=(4 * len(rows), 7.4), squeeze=False)
+    p = log_pressures(args)
+    for column, (hurst, row) in enumerate(rows.items()):
+        load = float(p[(p >= row["low"] * (1 - 1e-9))][1])
+        _panels(tuple(axes[:, column]), hurst, 1, args.grid, load)
+    axes[0, 0].set_ylabel("y / L (contact pressure / $p_0$)")
+    axes[1, 0].set_ylabel("share of the elastic energy below $|q|$")
+    axes[0, -1].legend(fontsize=7, loc="lower right")
+    axes[1, -1].legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(f"{args.output}.png", dpi=110)
+    print(f"wrote {args.output}.png")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -362,6 +434,7 @@ def main() -> None:
     )
     ap.add_argument("--seeds", type=int, default=4, help="seeds 1..N per H (default 4)")
     ap.add_argument("--output", default="eq12_trace", help="prefix of the files written")
+    ap.add_argument("--figure", action="store_true", help="draw OUTPUT.png (solves seed 1 again)")
     add_pressures_option(ap, 1e-8, 1e-5, 13)
     args = ap.parse_args()
     rows = {}
@@ -377,6 +450,8 @@ def main() -> None:
     print("\n".join(table(rows, GEOMETRY)))
     print()
     print("\n".join(table(rows, ENERGY)))
+    if args.figure:
+        draw(args, rows)
 
 
 if __name__ == "__main__":

@@ -365,8 +365,9 @@ def table(rows: dict[float, dict[str, float]], columns: tuple) -> list[str]:
 
 
 def _panels(axes: tuple, hurst: float, seed: int, grid: int, load: float) -> None:
-    """One H's two panels: the contact pressure around the force's centroid with B12's
-    ``r0`` and the measured ones, and the elastic energy below ``|q|`` against ``|q|/q0``."""
+    """One H's two panels: the contact pixels about the force's centroid (coloured by their
+    pressure) with B12's ``r0`` and the measured ones, and the share of the elastic energy
+    below ``|q|`` against ``|q|/q0``."""
     heights, h_rms = scenes.surface(grid, hurst, 1.0, grid / 2, seed)
     (step,) = periodic_contact(heights, length=1.0, pressures=[load], fields=True)
     r0_b = float(mesoasperity_theory(np.array([load]), h_rms, hurst)["r0"][0])
@@ -374,26 +375,26 @@ def _panels(axes: tuple, hurst: float, seed: int, grid: int, load: float) -> Non
     assert gap is not None and load_field is not None and step.contact is not None
     pressure = np.where(step.contact, load_field, 0.0)
     centre = force_centre(pressure)
-    shift = tuple(int(round(grid / 2 - c)) for c in centre)
-    half = int(np.clip(1.5 * found["r0"] * grid, 8, grid / 2))
-    window = np.roll(pressure, shift, axis=(0, 1))[grid // 2 - half : grid // 2 + half] / load
-    extent = np.array([-half, half, half, -half]) / grid
-    shown = np.ma.masked_equal(window[:, grid // 2 - half : grid // 2 + half], 0)
-    axes[0].imshow(shown.T, extent=extent, cmap="viridis", interpolation="nearest")
+    dx, dy = (_offsets(grid, c) / grid for c in centre)
+    rows, cols = np.nonzero(pressure)
+    level = np.log10(pressure[rows, cols] / load)
+    axes[0].scatter(dx[rows], dy[cols], c=level, s=4, marker="s", cmap="viridis", linewidths=0)
+    t = np.linspace(0, 2 * np.pi, 200)
     for radius, style, label in (
         (r0_b, "r-", "B12's $r_0$"),
-        (found["r0_half"], "w--", "$r_0$, half the force"),
-        (found["r0"], "w-", "$r_0$, second moment"),
+        (found["r0_half"], "k--", "$r_0$ from half the force"),
+        (found["r0"], "k-", "$r_0$ from its second moment"),
     ):
-        t = np.linspace(0, 2 * np.pi, 200)
         axes[0].plot(radius * np.cos(t), radius * np.sin(t), style, lw=1, label=label)
+    extent = 1.15 * max(found["r0"], 4 * r0_b)
+    axes[0].set(xlim=(-extent, extent), ylim=(-extent, extent), aspect="equal")
     axes[0].set(title=f"H = {hurst}, seed {seed}, $p_0$ = {load:.2g} E*", xlabel="x / L")
     terms = _energy_terms(gap + heights, load_field)
     k = _wavenumbers(grid).ravel()
     order = np.argsort(k)
     below = np.cumsum(terms.ravel()[order]) / terms.sum()
-    axes[1].semilogx(k[order][1:], below[1:], "k-", lw=1, label="fields")
-    axes[1].axvline(1 / (2 * found["r0"]), color="gray", lw=1, label="$\\pi/r_0$, measured")
+    axes[1].semilogx(k[order][1:], below[1:], "C0-", lw=1.5, label="fields")
+    axes[1].axvline(1 / (2 * found["r0"]), color="k", lw=1, label="$\\pi/r_0$ (second moment)")
     axes[1].axvline(1 / (2 * r0_b), color="r", lw=1, label="$\\pi/r_0$, B12's")
     share = theory.KAPPA0 / (theory.KAPPA0 + float(theory.kappa1(hurst)))
     axes[1].plot([1 / (2 * r0_b)], [share], "ro", label="Appendix B's $U_0/U$ at $\\pi/r_0$")
@@ -413,7 +414,7 @@ def draw(args: argparse.Namespace, rows: dict[float, dict[str, float]]) -> None:
     for column, (hurst, row) in enumerate(rows.items()):
         load = float(p[(p >= row["low"] * (1 - 1e-9))][1])
         _panels(tuple(axes[:, column]), hurst, 1, args.grid, load)
-    axes[0, 0].set_ylabel("y / L (contact pressure / $p_0$)")
+    axes[0, 0].set_ylabel("y / L (contact pixels, colour: log$_{10}$ p/$p_0$)")
     axes[1, 0].set_ylabel("share of the elastic energy below $|q|$")
     axes[0, -1].legend(fontsize=7, loc="lower right")
     axes[1, -1].legend(fontsize=7, loc="lower right")

@@ -438,7 +438,8 @@ def test_the_knee_of_a_curve_is_its_crossover():
 
 def test_the_eq12_trace_tabulates_and_reuses_what_it_solved(tmp_path):
     """``examples/eq12_trace.py``: the fields' measurements against Appendix B in two tables;
-    Appendix B's energy gives Eq. 12 back; each seed kept, another run's file refused."""
+    Appendix B's energy gives Eq. 12 back; each seed kept (a second run with ``--figure``
+    solves only the figure's loads), another run's file refused."""
     script = str(ROOT / "examples" / "eq12_trace.py")
     args = [sys.executable, script, "--grid", "64", "--seeds", "2", "--hursts", "0.7",
             "--pressures", "1e-4", "3e-2", "8", "--output", str(tmp_path / "t")]  # fmt: skip
@@ -447,11 +448,13 @@ def test_the_eq12_trace_tabulates_and_reuses_what_it_solved(tmp_path):
     assert first.returncode == 0, first.stderr
     assert first.stdout.count("solved") == 2 and "K over Eq. 12 1.0000" in first.stdout
     assert "| H | clusters |" in first.stdout and "| 0.7 |" in first.stdout
-    again = subprocess.run(args, capture_output=True, text=True, timeout=600, env=env)
-    assert (
-        "solved" not in again.stdout
-        and again.stdout.splitlines()[-4:] == first.stdout.splitlines()[-4:]
+    again = subprocess.run(
+        [*args, "--figure"], capture_output=True, text=True, timeout=600, env=env
     )
+    assert again.returncode == 0, again.stderr
+    assert "solved" not in again.stdout
+    assert again.stdout.splitlines()[-5:-1] == first.stdout.splitlines()[-4:]
+    assert (tmp_path / "t.png").stat().st_size > 5000
     other = [*args[:-5], "1e-4", "1e-2", "8", *args[-2:]]
     refused = subprocess.run(other, capture_output=True, text=True, timeout=600, env=env)
     assert refused.returncode == 1 and "holds another run's measurements" in refused.stderr

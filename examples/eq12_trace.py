@@ -120,28 +120,29 @@ def energy_split(displacement: np.ndarray, load: np.ndarray, cut: float) -> tupl
     return float(terms[k < cut].sum()), float(terms[k == 1].sum()), float(terms.sum())
 
 
-def clusters(contact: np.ndarray, pressure: np.ndarray, centre: tuple[float, float]) -> float:
-    """The largest cluster's share of the force: the 4-connected clusters of the map rolled
-    to put the force's centroid in the middle (clusters cut by the cell's edges lie far from
-    it and are counted in pieces; their number is the sweep's periodic count)."""
+def clusters(contact: np.ndarray, pressure: np.ndarray, centre: tuple[float, float]) -> np.ndarray:
+    """Each cluster's share of the force: the 4-connected clusters of the map rolled to put
+    the force's centroid in the middle (clusters cut by the cell's edges lie far from it and
+    are counted in pieces; their number is the sweep's periodic count)."""
     from scipy import ndimage
 
     n = contact.shape[0]
     shift = tuple(int(round(n / 2 - c)) for c in centre)
     labels, count = ndimage.label(np.roll(contact, shift, axis=(0, 1)))
-    if count == 0:
-        return np.nan
     forces = ndimage.sum(np.roll(pressure, shift, axis=(0, 1)), labels, np.arange(1, count + 1))
-    return float(np.max(forces) / np.sum(forces))
+    return np.asarray(forces) / np.sum(forces)
 
 
-def measure(step: Step, heights: np.ndarray, r0_theory: float) -> dict[str, float]:
+def measure(step: Step, heights: np.ndarray, r0_theory: float, exponent: float) -> dict[str, float]:
     """One load step's fields against Appendix B's mesoasperity (see the module docstring);
-    the energy is also split at ``pi/r0`` of B12's ``r0_theory``."""
+    the energy is also split at ``pi/r0`` of B12's ``r0_theory``, and the clusters' force
+    shares ``f`` give ``sum f^exponent``: what Appendix B's ``U ~ F^exponent`` stores in
+    independent clusters, over one contact's."""
     n, gap, load, contact = heights.shape[0], step.gap, step.pressure, step.contact
     assert gap is not None and load is not None and contact is not None, "solved with fields"
     pressure = np.where(contact, load, 0.0)
     centre = force_centre(pressure)
+    shares = clusters(contact, pressure, centre)
     dx, dy = _offsets(n, centre[0])[:, None] / n, _offsets(n, centre[1])[None, :] / n
     distance2 = dx**2 + dy**2
     force = pressure.sum()
@@ -156,7 +157,8 @@ def measure(step: Step, heights: np.ndarray, r0_theory: float) -> dict[str, floa
     long_theory = energy_split(gap + heights, load, 1 / (2 * r0_theory))[0]
     return {
         "patches": float(step.scalars["contact_patches"]),
-        "largest_share": clusters(contact, pressure, centre),
+        "largest_share": float(shares.max()),
+        "independent": float(np.sum(shares**exponent)),
         "disc_share": float(pressure[distance2 <= DISC**2].sum() / force),
         "r0": r0,
         "r0_half": r_half / HERTZ_HALF,
@@ -181,6 +183,7 @@ MEASURED = (
     "u_long",
     "u_q0",
     "u_long_B",
+    "independent",
 )
 
 
@@ -217,11 +220,12 @@ def solve_seed(args: argparse.Namespace, hurst: float, seed: int) -> dict[str, n
     heights, h_rms = scenes.surface(args.grid, hurst, 1.0, args.grid / 2, seed)
     p = log_pressures(args)
     rows: dict[str, list[float]] = {k: [] for k in (*MEASURED, "stiffness", "area_fraction")}
-    r0_theory = mesoasperity_theory(p, h_rms, hurst)["r0"]
+    theory_at = mesoasperity_theory(p, h_rms, hurst)
+    r0_theory, exponent = theory_at["r0"], float(theory_at["exponent"][0])
     steps = periodic_contact(heights, length=1.0, pressures=p.tolist(), fields=True, stiffness=True)
     for step, r0 in zip(steps, r0_theory, strict=True):
         done = step.converged
-        found = measure(step, heights, r0) if done else dict.fromkeys(MEASURED, np.nan)
+        found = measure(step, heights, r0, exponent) if done else dict.fromkeys(MEASURED, np.nan)
         for key in ("stiffness", "area_fraction"):
             found[key] = float(step.scalars[key]) if done else np.nan
         for key, value in found.items():
@@ -273,6 +277,7 @@ def seed_factors(run: dict[str, np.ndarray], fitted: np.ndarray, hurst: float) -
         "u0": th["u0"] / m["u_long"],
         "u1": th["u1"] / (m["u"] - m["u_long"]),
         "u": (th["u0"] + th["u1"]) / m["u"],
+        "independent": 1 / m["independent"],
         "exponent": th["exponent"] / exponent,
         "identity": m["stiffness"] * exponent * m["u"] / p**2,
         "eq12": m["stiffness"] / eq12,
@@ -345,6 +350,7 @@ ENERGY = (
     ("U0_B / U below", "u0", "{:.2f}"),
     ("U1_B / U above", "u1", "{:.2f}"),
     ("U_B / U", "u", "{:.2f}"),
+    ("1 / sum f^((1+2H)/(1+H))", "independent", "{:.2f}"),
     ("exponent B / fit", "exponent", "{:.2f}"),
     ("K / (p^2/(U dlnU/dlnF))", "identity", "{:.2f}"),
     ("K / Eq. 12 (seeds)", "eq12", "{:.2f}"),
@@ -371,7 +377,7 @@ def _panels(axes: tuple, hurst: float, seed: int, grid: int, load: float) -> Non
     heights, h_rms = scenes.surface(grid, hurst, 1.0, grid / 2, seed)
     (step,) = periodic_contact(heights, length=1.0, pressures=[load], fields=True)
     r0_b = float(mesoasperity_theory(np.array([load]), h_rms, hurst)["r0"][0])
-    found, gap, load_field = measure(step, heights, r0_b), step.gap, step.pressure
+    found, gap, load_field = measure(step, heights, r0_b, 1.0), step.gap, step.pressure
     assert gap is not None and load_field is not None and step.contact is not None
     pressure = np.where(step.contact, load_field, 0.0)
     centre = force_centre(pressure)

@@ -686,7 +686,7 @@ def test_resumed_file_marks_a_new_column_missing_before_it(tmp_path):
     record = {"geometry": "periodic", "parameters": {"grid": 4}}
     first = StepStore.create(out, grid, record, None)
     first.append({"mean_gap": 1.0, "converged": True})
-    again = StepStore.resume(out, grid, read_resume(out, {"grid": 4}), record)
+    again = StepStore.resume(out, grid, read_resume(out, {"grid": 4}, grid), record)
     again.append({"mean_gap": 0.5, "converged": True, "contact_patches": 3, "stiffness": 2.0})
     again.finish()
     with h5py.File(out) as f:

@@ -165,6 +165,100 @@ def test_no_rank_holds_a_field_to_write_it(tmp_path):
     assert (tmp_path / "watched.h5").exists()
 
 
+READER = """
+import json, os, sys
+import h5py
+import numpy as np
+from mpi4py import MPI
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.io.store import read_resume
+
+out, seen = sys.argv[1], sys.argv[2]
+opened = []
+watching = [True]
+sys.addaudithook(lambda event, args: watching[0] and event == "open" and opened.append(args[0]))
+with h5py.File(out + ".partial", "r") as f:
+    parameters = json.loads(f.attrs["parameters"])
+grid = Grid(60, 1.0, MPI.COMM_WORLD)
+finished = read_resume(out, parameters, grid)
+rows = None if finished.state is None else finished.state[grid.rows]
+watching[0] = False
+said = {"opened": sorted({os.path.basename(str(p)) for p in opened if ".state." in str(p)}),
+        "problem": finished.state_problem, "rows": None}
+if rows is not None:  # against every slab read whole
+    slabs = sorted(p for p in os.listdir(os.path.dirname(out)) if ".state." in p)
+    whole = np.concatenate([np.load(os.path.join(os.path.dirname(out), p))["state"] for p in slabs])
+    said["rows"] = bool(np.array_equal(rows, whole[grid.rows]))
+with open(os.path.join(seen, str(grid.comm.rank)), "w") as f:
+    json.dump(said, f)
+"""
+
+
+def _paused_on_eight(folder: Path) -> list[str]:
+    """Run the sweep on 8 ranks paused after its first step, in ``folder``: its arguments."""
+    args = [*SWEEP.split(), "--fields", "--quiet", "--output", str(folder / "paused.h5")]
+    r = cli(*args, "--stop-after", "0", mpi=8)
+    assert r.returncode == 75, r.stderr
+    return args
+
+
+def _read_on_three(folder: Path) -> list[dict]:
+    """What each of 3 ranks opened and found reading the resume state of ``folder``."""
+    script, seen = folder / "reader.py", folder / "seen"
+    script.write_text(textwrap.dedent(READER))
+    seen.mkdir()
+    r = python(str(script), str(folder / "paused.h5"), str(seen), mpi=3)
+    assert r.returncode == 0, r.stderr
+    return [json.loads((seen / str(rank)).read_text()) for rank in range(3)]
+
+
+def _slabs_holding(rows: slice) -> list[str]:
+    """The 8-rank state slabs of 60 rows that hold any of ``rows``."""
+    from petsc_contact.conventions.grid import block_rows
+
+    spans = [block_rows(60, 8, k) for k in range(8)]
+    held = [k for k, s in enumerate(spans) if s.start < rows.stop and s.stop > rows.start]
+    return [f"paused.h5.state.{k}of8.npz" for k in held]
+
+
+def test_a_resuming_rank_opens_only_the_state_slabs_that_hold_its_rows(tmp_path):
+    """A state saved on 8 ranks read on 3: each rank opens (and CRC-checks) only the slabs
+    that hold its rows (20 of 60: 3 or 4 of the 8), and reads its rows right."""
+    from petsc_contact.conventions.grid import block_rows
+
+    _paused_on_eight(tmp_path)
+    said = _read_on_three(tmp_path)
+    for rank, mine in enumerate(said):
+        assert mine["opened"] == _slabs_holding(block_rows(60, 3, rank)), mine
+        assert mine["problem"] == "" and mine["rows"] is True
+
+
+def test_a_damaged_state_slab_is_refused_on_every_rank(tmp_path, serial):
+    """Bad bytes in one state slab of a run paused on 8 ranks, which only the last of 3
+    resuming ranks reads: every rank refuses the state with the same words, and the resume
+    on 3 ranks says so once, starts its next step from first touch and ends on the serial
+    run's result."""
+    from petsc_contact.io.parts import mapped
+
+    args = _paused_on_eight(tmp_path)
+    damaged = tmp_path / "paused.h5.state.6of8.npz"
+    offset = mapped(str(damaged), "state").offset
+    data = bytearray(damaged.read_bytes())
+    data[offset : offset + 64] = bytes(b ^ 0xFF for b in data[offset : offset + 64])
+    damaged.write_bytes(bytes(data))
+    said = _read_on_three(tmp_path)
+    assert [s["problem"] for s in said] == [f"{damaged} is damaged (state.npy fails its CRC)"] * 3
+    assert [s["rows"] for s in said] == [None] * 3
+    assert damaged.name not in said[0]["opened"] + said[1]["opened"]
+    r = cli(*args, "--resume", mpi=3)
+    assert r.returncode == 0, r.stderr
+    assert r.stderr.count("6of8.npz is damaged") == 1, r.stderr
+    assert "step 2 starts from first touch" in r.stderr
+    same_result(serial, tmp_path / "paused.h5", fields=True)
+    with h5py.File(tmp_path / "paused.h5") as f:
+        assert [s["from_saved_state"] for s in json.loads(f.attrs["resumed"])] == [False]
+
+
 def test_slabs_are_named_by_rank_and_count():
     """The slab names and the rows each holds (``io.parts``)."""
     from petsc_contact.io.parts import slab_name, slab_of, slab_rows, slabs
@@ -192,11 +286,12 @@ def test_a_saved_state_is_read_a_rank_s_rows_at_a_time(tmp_path):
         where = tmp_path / f"s.{rank}of3.npz"
         np.savez(where, state=whole[rows], after_step=1)
         pieces.append((rows.start, mapped(str(where), "state")))
-    source = SlabRows(pieces)
+    source = SlabRows(pieces, 10)
     assert source.shape == (10, 4)
     for rank in range(2):
         rows = block_rows(10, 2, rank)
         assert np.array_equal(source[rows], whole[rows])
+    assert np.array_equal(SlabRows(pieces[1:], 10)[4:7], whole[4:7])  # only the slabs it needs
 
 
 def test_a_rank_without_spectrum_columns_takes_part(tmp_path):

@@ -147,12 +147,14 @@ class SlabRows:
     Parameters
     ----------
     slabs
-        Each slab's first global row and its array, memory-mapped (:func:`mapped`).
+        The first global row and the array, memory-mapped (:func:`mapped`), of each slab this
+        rank may read: those that hold its rows.
+    rows
+        The global field's rows.
     """
 
-    def __init__(self, slabs: list[tuple[int, np.ndarray]]) -> None:
+    def __init__(self, slabs: list[tuple[int, np.ndarray]], rows: int) -> None:
         self.slabs = slabs
-        rows = sum(len(array) for _, array in slabs)
         self.shape: tuple[int, ...] = (rows, *slabs[0][1].shape[1:])
 
     def __getitem__(self, rows: slice) -> np.ndarray:

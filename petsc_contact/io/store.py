@@ -23,7 +23,8 @@ files, :mod:`~petsc_contact.io.parts`: no rank ever holds a whole field):
     the solution the next step starts from (``after_step`` says which step it ends), written
     after the commit (on ``P`` ranks, ``P`` slabs); a resume that finds it missing, damaged or
     stale starts the next step from first touch (the same result to the solver's tolerance,
-    at a different cost).  A resume on any rank count reads each rank's rows only.
+    at a different cost).  A resume on any rank count reads each rank's rows only, and each
+    rank checks only the slabs that hold them (the ranks agree on the verdict).
 
 When the run ends, every part is checked against its checksum, ``OUT.h5`` is assembled
 from them by rank 0, a band of rows at a time (the fields' compressed chunks copied as they
@@ -62,6 +63,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..conventions.grid import block_rows
 from ..physics.continuation import Held
 from .atomic import (
     StorageError,
@@ -202,9 +204,10 @@ class Finished:
         )
 
 
-def read_resume(path: str, parameters: dict[str, Any]) -> Finished:
+def read_resume(path: str, parameters: dict[str, Any], grid: Grid) -> Finished:
     """The finished steps of an interrupted run ``path + '.partial'``, its scalars, and the
-    state to go on from.
+    state to go on from, of which each rank of ``grid`` checks and reads only the slabs that
+    hold its rows (collective).
 
     Returns ``Finished(0)`` when there is nothing to resume.  Raises ``ValueError`` when the
     partial file belongs to a different run (its ``parameters`` differ, apart from
@@ -227,7 +230,7 @@ def read_resume(path: str, parameters: dict[str, Any]) -> Finished:
             f"cannot resume '{partial}': it is damaged ({_reason(exc)}); --overwrite starts afresh"
         ) from None
     check_same_run(partial, theirs, parameters)
-    state, held, problem = _saved_state(path, steps)
+    state, held, problem = _saved_state(path, steps, grid)
     return Finished(steps, table, state, problem, held, parts)
 
 
@@ -294,28 +297,33 @@ def _values(dataset: Any) -> np.ndarray:
     return values
 
 
-def _saved_state(path: str, steps: int) -> tuple[RowSource | None, Held | None, str]:
+def _saved_state(path: str, steps: int, grid: Grid) -> tuple[RowSource | None, Held | None, str]:
     """The state after step ``steps`` and what the sweep held beside it (``None`` in a state
-    file of an earlier version), as row sources whose rows are read when a rank asks for
-    them, or ``None`` and why not.  Of the sets of slabs left by runs on different rank
-    counts (a run killed before it removed the older set), the newest sound one."""
+    file of an earlier version), as row sources whose rows are read when a rank of ``grid``
+    asks for them, or ``None`` and why not.  Of the sets of slabs left by runs on different
+    rank counts (a run killed before it removed the older set), the newest sound one; every
+    rank of ``grid`` goes through the sets rank 0 found and reaches the same verdict on each
+    (collective)."""
     where = state_path(path)
     if not steps:
         return None, None, ""
+    comm = grid.comm
+    sets = comm.bcast(_state_sets(where) if comm.rank == 0 else None, root=0)
     problem = f"{where} is missing"
-    for i, files in enumerate(_state_sets(where)):
+    for i, files in enumerate(sets):
         try:
-            after, slabs_of = _read_slabs(files)
+            after, slabs_of = _read_slabs(files, grid)
         except _Damaged as exc:
             problem = str(exc) if i == 0 else problem
             continue
         if after + 1 == steps:
-            state = SlabRows(slabs_of.pop("state"))
+            rows = grid.shape[0]
+            state = SlabRows(slabs_of.pop("state"), rows)
             held = None
             if "held" in slabs_of:
                 scalars = slabs_of.pop("held")[0][1]
                 fields: tuple[Any, ...] = tuple(
-                    SlabRows(slabs_of[f"held_field_{k}"]) for k in range(len(slabs_of))
+                    SlabRows(slabs_of[f"held_field_{k}"], rows) for k in range(len(slabs_of))
                 )  # row sources: each rank reads its rows of each (grid.scatter)
                 held = Held(np.asarray(scalars), fields)
             return state, held, ""
@@ -341,35 +349,71 @@ def _state_sets(where: str) -> list[list[str]]:
     return [[os.path.join(folder, slab_name(name, r, p)) for r in range(p)] for p in newest]
 
 
-def _read_slabs(files: list[str]) -> tuple[int, dict[str, list[tuple[int, np.ndarray]]]]:
-    """The step a set of state slabs ends and each of their arrays as ``(first row, array)``
-    per slab, memory-mapped (``held``'s whole, it is small); every member's CRC checked,
-    streamed.  :class:`_Damaged` naming the first slab that cannot be used."""
+def _read_slabs(
+    files: list[str], grid: Grid
+) -> tuple[int, dict[str, list[tuple[int, np.ndarray]]]]:
+    """The step a set of state slabs ends and, of the slabs that hold this rank's rows of
+    ``grid``, each array as ``(first row, array)``, memory-mapped (``held``'s whole, it is
+    small).  A rank opens only those slabs (a rank without rows, the first), checks each
+    member's CRC, streamed, and the ranks agree (collective): every rank raises the same
+    :class:`_Damaged`, naming the first slab of the set that any rank could not use."""
+    total, mine = grid.shape[0], grid.rows
+    spans = [block_rows(total, len(files), k) for k in range(len(files))]  # their rows
+    needed = [k for k, r in enumerate(spans) if r.start < mine.stop and r.stop > mine.start]
+    problem: tuple[int, str] | None = None
     afters: set[int] = set()
     arrays: dict[str, list[tuple[int, np.ndarray]]] = {}
-    first = 0
-    for where in files:
-        if not os.path.exists(where):
-            raise _Damaged(f"{where} is missing")
+    for k in needed or [0]:
         try:
-            with zipfile.ZipFile(where) as archive:
-                bad = archive.testzip()
-            if bad is not None:
-                raise ValueError(f"{bad} fails its CRC")
-            with np.load(where) as saved:
-                afters.add(int(saved["after_step"]))
-                names = [m for m in saved.files if m != "after_step"]
-                mine = {"held": saved["held"]} if "held" in names else {}
-            mine.update({m: mapped(where, m) for m in names if m != "held"})
-            rows = len(mine["state"])
-        except Exception as exc:  # a truncated or foreign file: any reader failure
-            raise _Damaged(f"{where} is damaged ({_reason(exc)})") from None
-        for member, array in mine.items():
-            arrays.setdefault(member, []).append((first, array))
-        first += rows
+            after, members = _read_slab(files[k], spans[k].stop - spans[k].start)
+        except _Damaged as exc:
+            problem = (k, str(exc))
+            break
+        afters.add(after)
+        for member, array in members.items():
+            arrays.setdefault(member, []).append((spans[k].start, array))
+    said = grid.comm.gather((problem, afters), root=0)
+    verdict = None if said is None else _verdict(files, said)  # on rank 0
+    verdict = grid.comm.bcast(verdict, root=0)
+    if isinstance(verdict, str):
+        raise _Damaged(verdict)
+    return verdict, arrays
+
+
+def _verdict(files: list[str], said: list[tuple[tuple[int, str] | None, set[int]]]) -> int | str:
+    """The step the set of state slabs ``files`` ends, or what is wrong with it: its first
+    slab that a rank found wrong (``said``, each rank's first problem and the steps its slabs
+    end), or its slabs ending different steps."""
+    problems = sorted(problem for problem, _ in said if problem is not None)
+    if problems:
+        return problems[0][1]
+    afters = set().union(*(after for _, after in said))
     if len(afters) != 1:
-        raise _Damaged(f"{files[0]} and its other slabs end different steps")
-    return afters.pop(), arrays
+        return f"{files[0]} and its other slabs end different steps"
+    return afters.pop()
+
+
+def _read_slab(where: str, rows: int) -> tuple[int, dict[str, np.ndarray]]:
+    """The step the state slab ``where`` ends and its arrays, memory-mapped (``held``'s
+    whole); every member's CRC checked, streamed.  :class:`_Damaged` when it is missing or
+    cannot be used, or its state has not ``rows`` rows."""
+    if not os.path.exists(where):
+        raise _Damaged(f"{where} is missing")
+    try:
+        with zipfile.ZipFile(where) as archive:
+            bad = archive.testzip()
+        if bad is not None:
+            raise ValueError(f"{bad} fails its CRC")
+        with np.load(where) as saved:
+            after = int(saved["after_step"])
+            names = [m for m in saved.files if m != "after_step"]
+            members = {"held": saved["held"]} if "held" in names else {}
+        members.update({m: mapped(where, m) for m in names if m != "held"})
+        if len(members["state"]) != rows:
+            raise ValueError(f"its state has {len(members['state'])} rows, not {rows}")
+    except Exception as exc:  # a truncated or foreign file: any reader failure
+        raise _Damaged(f"{where} is damaged ({_reason(exc)})") from None
+    return after, members
 
 
 def _same(a: Any, b: Any) -> bool:

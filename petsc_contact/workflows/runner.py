@@ -348,8 +348,8 @@ def _finished(run: Run, scene: Scene, record: dict[str, Any], total: int) -> Fin
 def _resumable(output: str, run: Run, scene: Scene, parameters: dict[str, Any]) -> Finished:
     """What an interrupted ``run`` left in ``output``'s files to go on from, less what its
     part files cannot give (computed again, with a warning saying what); rank 0 reads the
-    parts."""
-    finished = read_resume(output, parameters)
+    parts; each rank checks the state's slabs that hold its rows."""
+    finished = read_resume(output, parameters, scene.grid)
     comm = scene.grid.comm
     maps = any(m is not None for m in _maps(run, scene))
     mine = check_parts(output, finished, maps, run.fields) if comm.rank == 0 else None

@@ -30,6 +30,7 @@ import time
 
 import numpy as np
 from mpi4py import MPI
+from projection import project, scaled_local
 
 from petsc_contact import periodic_contact
 from petsc_contact.backend.operator import FourierOperator
@@ -105,25 +106,6 @@ def measure(n: int, p0: float) -> dict[str, float]:
     return result
 
 
-def project(
-    n: int, local_1: float, ranks: list[int], bandwidth: float, latency: float, allreduces: int
-) -> list[tuple[int, float, float, float]]:
-    """(P, local FFT time, communication time, efficiency) per round trip at grid ``n``.
-
-    ``local_1`` is the measured local-transform time of one round trip on one rank of the
-    measured grid, already rescaled to ``n``.
-    """
-    rows = []
-    for p in ranks:
-        local = local_1 / p
-        volume = 2 * 16 * n * (n // 2 + 1) * (p - 1) / p**2
-        comm = (
-            volume / (bandwidth * 1e9) + 2 * (p - 1) * latency + allreduces * latency * np.log2(p)
-        )
-        rows.append((p, local, comm, local / (local + comm)))
-    return rows
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grid", type=int, nargs="+", default=[2048])
@@ -174,7 +156,7 @@ def main() -> None:
                 f"the {r['backend']} round trip less those: {local * 1e3:.1f} ms"
             )
             m = args.project
-            local_1 = local * comm.size * (m / n) ** 2 * np.log2(m) / np.log2(n)
+            local_1 = scaled_local(local, comm.size, n, m)
             print(
                 f"  projection to {m}^2 (bandwidth {args.bandwidth} GB/s per rank, "
                 f"latency {args.latency:g} s), per round trip:"

@@ -168,7 +168,8 @@ def coarse_matrix(
     """``E = W^T G_BB W`` for aggregates ``I`` holding the pixels ``starts[I]:starts[I+1]``
     of ``(rows, cols)``, in block ``block_rc[I]`` of side ``block``; ``lookup[bi, bj]`` is
     the aggregate of a block (``-1`` for none).  Exact between blocks at most
-    :data:`NEAR_REACH` blocks apart, monopoles beyond; only the upper triangle is filled.
+    :data:`NEAR_REACH` blocks apart, monopoles beyond; only the upper triangle is filled, in
+    Fortran order (factorised in place, :meth:`~petsc_contact.numerics.device.Device.cho_factor`).
 
     The near sums are taken pixel pair by pixel pair where the aggregates are small and by
     FFTs on ``2b x 2b`` cells where they are large (:func:`_pair_sums_fft`), whichever
@@ -205,8 +206,8 @@ class CoarseMatrix:
         The pixels of each aggregate (floats): on the host from :func:`host_coarse_matrix`,
         on the device from :func:`array_coarse_matrix`.
     matrix
-        ``E`` (:func:`coarse_matrix`), the diagonal raised (upper triangle only on the host,
-        full and symmetric on the device).
+        ``E`` (:func:`coarse_matrix`), the diagonal raised (upper triangle only, in Fortran
+        order, on the host; full and symmetric on the device).
     """
 
     local: Any

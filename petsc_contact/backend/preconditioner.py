@@ -151,6 +151,12 @@ class MeanModePreconditioner(FourierOperator):
         )
         return leaving
 
+    def release(self) -> None:
+        """Drop the set-dependent form once the solve is over (the two-level form's factor
+        is ``k x k``, on every rank); the next :meth:`invert` starts without it anyway.  The
+        quarter of ``G`` and :meth:`work_fields` are kept."""
+        self.correction = self._built_free = self._reactions = None
+
     def _exact_compliance(self) -> np.ndarray:
         """Become ``G = 1/K`` with a zero ``q = 0`` entry (the set-dependent forms); returns
         its quarter (:func:`~petsc_contact.numerics.schur.quarter`)."""

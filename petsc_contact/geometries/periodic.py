@@ -176,6 +176,7 @@ class PeriodicProblem:
         observables.step_observables` on the device's arrays): only scalars, histograms and
         the patches' sizes come to the host, and the fields only when ``fields`` asks."""
         grid, ell, p0, device = self.grid, self.scale_length, self.nominal_pressure, self.device
+        self.preconditioner.release()  # the solve is over (the stiffness solve builds its own)
         gap = x.reshape(grid.local_shape) * ell
         pressure = self.pressure(gap)
         filled = None if self.filled is None else device.asarray(self.filled)

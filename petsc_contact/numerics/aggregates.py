@@ -61,7 +61,8 @@ def monopoles(
 ) -> np.ndarray:
     """``|A_I| |A_J| G(c_I - c_J)`` for aggregates ``I`` holding the pixels
     ``starts[I]:starts[I+1]`` of ``(rows, cols)`` (``c`` their centroids), upper triangle
-    only (rows in parallel)."""
+    only, in Fortran order (columns in parallel): LAPACK factorises it in place, with no
+    copy of the ``k x k`` matrix."""
     k = starts.size - 1
     sizes = np.empty(k)
     centre = np.empty((k, 2))
@@ -71,12 +72,12 @@ def monopoles(
         # the centroid (an aggregate lies in one block, which does not wrap)
         centre[a, 0] = rows[s:e].astype(np.float64).mean()
         centre[a, 1] = cols[s:e].astype(np.float64).mean()
-    e_mat = np.zeros((k, k))
-    for a in prange(k):
-        ra, ca, sa = centre[a, 0], centre[a, 1], sizes[a]
-        for b in range(a, k):
+    e_mat = np.zeros((k, k)).T
+    for b in prange(k):
+        rb, cb, sb = centre[b, 0], centre[b, 1], sizes[b]
+        for a in range(b + 1):
             e_mat[a, b] = (
-                sa * sizes[b] * _interpolate(quarter, ra - centre[b, 0], ca - centre[b, 1], nx, ny)
+                sizes[a] * sb * _interpolate(quarter, centre[a, 0] - rb, centre[a, 1] - cb, nx, ny)
             )
     return e_mat
 

@@ -204,8 +204,9 @@ class Device:
     def cho_factor(self, matrix: Any) -> tuple[Any, bool] | None:
         """The Cholesky factor of a symmetric ``E`` (an array of this device) as SciPy's
         ``cho_factor`` pair ``(c, lower)``, on this device; ``None`` where ``E`` is not
-        positive definite.  On the host SciPy's upper factor, in ``E``'s memory (only ``E``'s
-        upper triangle is read); on a GPU cuSOLVER's lower one (its lower triangle is read)."""
+        positive definite.  On the host SciPy's upper factor (only ``E``'s upper triangle is
+        read), in ``E``'s memory if it is in Fortran order (else in a copy); on a GPU
+        cuSOLVER's lower one (its lower triangle is read)."""
         if self.on_host:
             from scipy.linalg import LinAlgError, cho_factor
 

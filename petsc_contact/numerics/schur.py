@@ -54,16 +54,10 @@ class ContactSchur:
         rows = rows + grid.rows.start
         both = allgather(np.stack([rows, cols], axis=1), grid.comm)
         self.offset = 0 if grid.comm.size == 1 else int(grid.comm.exscan(len(local)) or 0)
-        di, dj = (
-            _fold(both[:, k][:, None] - both[:, k][None, :], period)
-            for k, period in ((0, nx), (1, ny))
+        self._lu = lu_factor(
+            bordered_system(quarter, both, (nx, ny)), overwrite_a=True, check_finite=False
         )
-        m = len(both)
-        system = np.zeros((m + 1, m + 1))
-        system[:m, :m] = quarter[di, dj]
-        system[:m, m] = system[m, :m] = 1.0
-        self._lu = lu_factor(system, check_finite=False)
-        self.size = m
+        self.size = len(both)
 
     def solve(self, g_r: np.ndarray, r_sum: float) -> tuple[np.ndarray, float]:
         """``(lambda on this rank's bound pixels, c)`` for ``G r`` (local slab) and ``sum(r)``."""
@@ -76,16 +70,45 @@ class ContactSchur:
         return self.device.asarray(reactions), float(sol[self.size])
 
 
+SYSTEM_ROWS = 64  # rows of the bordered system filled at a time (bounds the temporaries)
+
+
+def bordered_system(quarter: np.ndarray, both: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """``[[G_BB, 1], [1^T, 0]]`` for the bound pixels ``both`` (global ``(row, col)`` pairs).
+
+    Filled :data:`SYSTEM_ROWS` rows at a time, so that the pixel offsets' temporaries stay
+    ``SYSTEM_ROWS x m`` for ``m`` pixels; returned in Fortran order (the transpose of the
+    rows filled: the system is symmetric), which LAPACK factorises in place.
+    """
+    m = len(both)
+    system = np.zeros((m + 1, m + 1))
+    for lo in range(0, m, SYSTEM_ROWS):
+        part = both[lo : lo + SYSTEM_ROWS]
+        di, dj = (
+            _fold(part[:, k][:, None] - both[:, k][None, :], period)
+            for k, period in enumerate(shape)
+        )
+        system[lo : lo + len(part), :m] = quarter[di, dj]
+    system[:m, m] = system[m, :m] = 1.0
+    return system.T
+
+
 def quarter(grid: Grid, column: Any, device: Device = CPU) -> np.ndarray:
     """``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, on every rank, on the host.
 
     ``column`` is this rank's slab of ``G e_0``, the response to a unit value at pixel
     ``(0, 0)`` (an array of ``device``); by periodicity and evenness
-    ``G(i, j) = G(min(i, nx - i), min(j, ny - j))``.
+    ``G(i, j) = G(min(i, nx - i), min(j, ny - j))``.  The ranks' rows are gathered straight
+    into the quarter (no pickled copies: it is a quarter of the grid).
     """
     half_x, half_y = (m // 2 + 1 for m in grid.shape)
     mine = column[: max(0, min(grid.rows.stop, half_x) - grid.rows.start), :half_y]
-    return allgather(np.ascontiguousarray(device.to_host(mine)), grid.comm)
+    mine = np.ascontiguousarray(device.to_host(mine))
+    if grid.comm.size == 1:
+        return mine
+    whole = np.empty((half_x, half_y))
+    grid.comm.Allgatherv(mine, [whole, grid.comm.allgather(mine.size)])
+    return whole
 
 
 def response_quarter(grid: Grid, apply: Any, work: Any, device: Device = CPU) -> np.ndarray:

@@ -299,6 +299,26 @@ class Grid:
         :class:`RowSource`): only its rows are read."""
         return np.ascontiguousarray(full[self.rows], dtype=float)
 
+    def slab_from(self, local: np.ndarray, held: list[slice]) -> np.ndarray:
+        """This rank's slab (:attr:`rows`) of a global array held in row blocks by the ranks:
+        rank ``q`` holds its rows ``held[q]`` (``local``: this rank's, ``ny`` values a row; the
+        blocks disjoint, together every row; one rank may hold them all and the others none).
+        One ``Alltoallv``: every rank sends each other the rows of its block in that rank's
+        slab, so that no rank holds more than its block and its slab."""
+        mine = held[self.comm.rank]
+        if self.comm.size == 1:
+            return np.ascontiguousarray(
+                local[self.rows.start - mine.start : self.rows.stop - mine.start]
+            )
+        moved = np.uint8 if local.dtype == bool else local.dtype  # MPI moves bytes, not bools
+        slabs = [block_rows(self.shape[0], self.comm.size, q) for q in range(self.comm.size)]
+        out = np.empty(self.local_shape, dtype=moved)
+        self.comm.Alltoallv(
+            _row_parts(np.ascontiguousarray(local, dtype=moved), mine, slabs),
+            _row_parts(out, self.rows, held),
+        )
+        return out.view(bool) if local.dtype == bool else out
+
     def gather(self, local: np.ndarray) -> np.ndarray | None:
         """The global array on rank 0 (``None`` elsewhere), of the local slabs' dtype: for
         small maps only (a run's output never gathers a field: each rank writes its rows)."""
@@ -313,6 +333,20 @@ class Grid:
             root=0,
         )
         return full.view(bool) if full is not None and local.dtype == bool else full
+
+
+def _row_parts(rows: np.ndarray, held: slice, parts: list[slice]) -> list[Any]:
+    """The ``Alltoallv`` message of ``rows`` (global rows ``held``) in the parts they share
+    with each rank's ``parts[q]``: the array, counts and displacements."""
+    width = rows.shape[1]
+    starts = [max(held.start, p.start) for p in parts]
+    counts = [
+        max(0, min(held.stop, p.stop) - a) * width for a, p in zip(starts, parts, strict=True)
+    ]
+    displacements = [
+        (a - held.start) * width if c else 0 for a, c in zip(starts, counts, strict=True)
+    ]
+    return [rows, (counts, displacements)]
 
 
 def sides(shape: tuple[int, ...], length: Any) -> tuple[float, float]:

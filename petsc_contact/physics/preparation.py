@@ -1,6 +1,6 @@
 """Preparing a measured height map for contact: missing data, detrending and plausibility.
 
-Pure numpy on the whole map (every rank holds it before the grid scatters it):
+Pure numpy on the whole map (the rank that reads it holds it before the grid's slabs are sent):
 
 - :func:`fill_undefined` replaces NaN heights (``mean``, or ``harmonic``: the solution of
   Laplace's equation on the missing pixels with the measured ones around them as boundary
@@ -141,9 +141,27 @@ def detrend(heights: np.ndarray, spacing: tuple[float, float], mode: str = "slop
 
 def rms_slope(heights: np.ndarray, spacing: tuple[float, float]) -> float:
     """The rms slope from forward differences inside the map (its edges not wrapped)."""
-    sx = np.diff(heights, axis=0) / spacing[0]
-    sy = np.diff(heights, axis=1) / spacing[1]
-    return float(np.sqrt(np.mean(sx**2) + np.mean(sy**2)))
+    return slope_rms(*slope_squares(heights, spacing), heights.shape)
+
+
+def slope_squares(
+    rows: np.ndarray, spacing: tuple[float, float], below: np.ndarray | None = None
+) -> tuple[float, float]:
+    """The sums of the squared forward-difference slopes inside ``rows`` along ``x`` and
+    ``y``; with ``below`` (the row after the last) the ``x`` slopes down to it too: a slab's
+    share of :func:`rms_slope`."""
+    sx = np.diff(rows, axis=0) / spacing[0]
+    sy = np.diff(rows, axis=1) / spacing[1]
+    along_x = float(np.sum(sx**2))
+    if below is not None and len(rows):
+        along_x += float(np.sum(((below - rows[-1]) / spacing[0]) ** 2))
+    return along_x, float(np.sum(sy**2))
+
+
+def slope_rms(along_x: float, along_y: float, shape: tuple[int, ...]) -> float:
+    """The rms slope of a map of ``shape`` from its :func:`slope_squares` sums."""
+    nx, ny = shape[0], shape[1]
+    return float(np.sqrt(along_x / ((nx - 1) * ny) + along_y / (nx * (ny - 1))))
 
 
 def edge_mismatch(heights: np.ndarray) -> float:

@@ -240,5 +240,5 @@ def _periodic_problem(
     grid = grid_for(array.shape, sides, comm)
     local = grid.scatter(array)
     check_finite(grid, local)
-    check_map(array, grid.spacing, periodic=True)
+    check_map(array, grid, periodic=True)
     return PeriodicProblem(grid, device.fft(grid), local, modulus)

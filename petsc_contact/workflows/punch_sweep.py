@@ -357,7 +357,7 @@ def _punch_problem(
         device=face.device,
         settings=face.settings,
     )
-    check_map(array, grid.spacing, periodic=False)
+    check_map(array, grid, periodic=False)
     return problem
 
 

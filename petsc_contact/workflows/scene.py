@@ -7,17 +7,24 @@ says what it read.  Doubtful maps warn with
 :class:`~petsc_contact.conventions.warnings.DoubtfulMap` (many heights filled, an implausible
 rms slope, opposite edges that do not match in a periodic run: :func:`check_map`); the run
 keeps their texts and the command line prints them.
+
+No rank holds the whole grid but the one that reads a measured map: the first rank of the
+run's communicator reads it (an instrument's file is read whole by its reader), prepares it
+and sends every other rank its rows (:meth:`~petsc_contact.conventions.grid.Grid.slab_from`);
+a face cut from a larger surface moves from the parent's slabs to the face's in the same way.
+The scene's warnings are given by that first rank.
 """
 
 from __future__ import annotations
 
+import pickle
 import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from ..conventions.grid import Grid, grid_for, world
+from ..conventions.grid import Grid, block_rows, grid_for, world
 from ..conventions.units import Lengths, factor, parse_lengths, unit_name
 from ..conventions.validation import check_finite
 from ..conventions.warnings import DoubtfulMap
@@ -84,10 +91,8 @@ def given_lengths(run: Run) -> Lengths | None:
     return Lengths(values, None)
 
 
-def shape_of(run: Run, full: np.ndarray | None) -> tuple[int, int]:
-    """The grid's ``(nx, ny)``: the map's, or the generated surface's."""
-    if full is not None:
-        return int(full.shape[0]), int(full.shape[1])
+def shape_of(run: Run) -> tuple[int, int]:
+    """The generated surface's ``(nx, ny)``."""
     grid = run.grid
     return (int(grid[0]), int(grid[1])) if isinstance(grid, (tuple, list)) else (grid, grid)  # type: ignore[return-value]
 
@@ -97,40 +102,87 @@ def prepare_scene(run: Run, comm: Any = None, default_solver: bool = True) -> Sc
     the memory it will need checked, its grid and FFT made (collective; the FFT of the run's
     device, :class:`~petsc_contact.numerics.device.DeviceUnavailable` where it cannot be used).
 
-    ``default_solver`` says whether the run uses the package's solver (the memory estimate
-    is larger for TAO's own types)."""
+    ``comm`` is the run's communicator (:func:`~petsc_contact.conventions.grid.world` when
+    not given).  A measured map is read, prepared and checked on its first rank only, which
+    holds it once (an instrument's file is read whole by its reader) and sends every other
+    rank its rows and its rows of the ``filled`` mask; no other rank holds the whole map.
+    Its shape, lengths, record and reading line are broadcast, and a failure to read it is
+    raised on every rank.  ``default_solver`` says whether the run uses the package's solver
+    (the memory estimate is larger for TAO's own types)."""
     check_surface(run)
+    comm = world() if comm is None else comm
     given = given_lengths(run)
-    full: np.ndarray | None = None
-    lengths, reading = given or Lengths((1.0,), None), ""
-    record: dict[str, Any] = {}
     if run.measured:
-        full, lengths, record, reading = measured(run, given)
-    shape = shape_of(run, full)
+        return measured_scene(run, given, comm, default_solver)
+    grid, fft, resolved = sized(
+        run, shape_of(run), given or Lengths((1.0,), None), comm, default_solver
+    )
+    from ..physics.surface import nyquist_ratio
+
+    cutoff = run.cutoff_ratio if run.cutoff_ratio is not None else nyquist_ratio(grid)
+    resolved["cutoff_ratio"] = cutoff
+    parent: dict[str, float] = {}
+    if run.cut_from == 1:
+        heights = generated(run, grid, fft, 1, cutoff)
+    else:
+        heights, parent = cut_face(run, grid, cutoff)
+    check_height_scale(np.array([grid.max(float(np.max(np.abs(heights))))]), grid.lengths)
+    return Scene(grid, fft, heights, resolved, realised=parent)
+
+
+def sized(
+    run: Run, shape: tuple[int, int], lengths: Lengths, comm: Any, default_solver: bool
+) -> tuple[Grid, Any, dict[str, Any]]:
+    """The memory ``run`` needs on a grid of ``shape`` checked, then that grid, its FFT
+    (collective) and the lengths the run resolved."""
     if not run.skip_memory_check:
         from ..conventions.resources import check_memory
 
         check_memory(shape[0] * shape[1], run.geometry, default_solver, run.fields)
     grid = grid_for(shape, lengths.pair, comm)
     fft = get_device(run.device).fft(grid)  # the device's: the surface transformed there
-    resolved: dict[str, Any] = {"length": list(grid.lengths), "length_unit": lengths.unit or ""}
-    if full is None:
-        from ..physics.surface import nyquist_ratio
+    return grid, fft, {"length": list(grid.lengths), "length_unit": lengths.unit or ""}
 
-        cutoff = run.cutoff_ratio if run.cutoff_ratio is not None else nyquist_ratio(grid)
-        resolved["cutoff_ratio"] = cutoff
-        parent: dict[str, float] = {}
-        if run.cut_from == 1:
-            heights = generated(run, grid, fft, 1, cutoff)
-        else:
-            heights, parent = cut_face(run, grid, cutoff)
-        check_height_scale(np.array([grid.max(float(np.max(np.abs(heights))))]), grid.lengths)
-        return Scene(grid, fft, heights, resolved, realised=parent)
-    local = grid.scatter(full)
+
+def measured_scene(run: Run, given: Lengths | None, comm: Any, default_solver: bool) -> Scene:
+    """:func:`prepare_scene` of a measured map: read and prepared on the first rank of
+    ``comm`` (:func:`measured`), every rank's slab and filled pixels sent to it from there."""
+    full = mask = failure = None
+    said: Any = None
+    if comm.rank == 0:
+        try:
+            full, lengths, record, reading = measured(run, given, comm)
+            mask = record.pop("filled")
+            said = (full.shape, lengths, record, reading)
+        except Exception as exc:
+            said, failure = portable(exc), exc
+    said = comm.bcast(said, root=0) if comm.size > 1 else said
+    if isinstance(said, Exception):
+        raise failure or said
+    shape, lengths, record, reading = said
+    grid, fft, resolved = sized(run, shape, lengths, comm, default_solver)
+    held = [slice(0, shape[0]) if q == 0 else slice(0, 0) for q in range(comm.size)]
+    local = grid.slab_from(_held(full, shape, float), held)
     check_finite(grid, local)
-    mask = record.pop("filled")
-    filled = grid.scatter(mask).astype(bool) if record["filled_fraction"] > 0 else None
+    filled = None
+    if record["filled_fraction"] > 0:
+        filled = grid.slab_from(_held(mask, shape, bool), held)
     return Scene(grid, fft, local, resolved, record, reading, filled)
+
+
+def _held(full: np.ndarray | None, shape: tuple[int, int], dtype: type) -> np.ndarray:
+    """The rows of a whole map this rank holds: all of them where it was read, none elsewhere."""
+    return np.empty((0, shape[1]), dtype) if full is None else np.asarray(full, dtype=dtype)
+
+
+def portable(exc: Exception) -> Exception:
+    """``exc`` where other ranks can raise it (pickled through MPI), else a ``RuntimeError``
+    naming it."""
+    try:
+        pickle.loads(pickle.dumps(exc))
+    except Exception:
+        return RuntimeError(f"{type(exc).__name__}: {exc}")
+    return exc
 
 
 def generated(run: Run, grid: Grid, fft: Any, scale: int, cutoff: float) -> np.ndarray:
@@ -158,8 +210,9 @@ def cut_face(run: Run, grid: Grid, cutoff: float) -> tuple[np.ndarray, dict[str,
     size, spectrum, rms target and seed (its own ``L/lambda_r = M L_p/lambda_r``), this rank's
     slab; with that parent surface's realised ``rms_height`` and ``rms_slope`` (spectral: the
     cut face's own are its edges' too) and the face's ``rms_slope_inside`` (finite differences
-    inside it; rank 0, NaN on the others)."""
-    from ..physics.preparation import rms_slope
+    inside it, :func:`rms_slope_inside`).  The patch's rows move from the parent's slabs to the
+    face's (:meth:`~petsc_contact.conventions.grid.Grid.slab_from`): no rank holds more than
+    its slab of the parent and of the face."""
     from ..physics.surface import rms_of
 
     m = run.cut_from
@@ -174,26 +227,50 @@ def cut_face(run: Run, grid: Grid, cutoff: float) -> tuple[np.ndarray, dict[str,
         "parent_rms_height": rms_of(parent, parent_fft, heights),
         "parent_rms_slope": rms_of(parent, parent_fft, heights, slope=True),
     }
-    full = parent.gather(heights)
-    patch = None
-    if full is not None:
-        i, j = ((m - 1) * n // 2 for n in grid.shape)
-        patch = np.ascontiguousarray(full[i : i + grid.shape[0], j : j + grid.shape[1]])
-    stats["rms_slope_inside"] = float("nan") if patch is None else rms_slope(patch, grid.spacing)
-    del full, heights
-    patch = grid.comm.bcast(patch, root=0) if grid.comm.size > 1 else patch
-    return grid.scatter(patch), stats  # type: ignore[arg-type]
+    (i, j), (nx, ny) = ((m - 1) * n // 2 for n in grid.shape), grid.shape
+    held = []  # the patch's rows (its own numbering) in each rank's slab of the parent
+    for q in range(grid.comm.size):
+        rows = block_rows(parent.shape[0], grid.comm.size, q)
+        start = min(max(rows.start, i), i + nx)
+        held.append(slice(start - i, max(start, min(rows.stop, i + nx)) - i))
+    mine, first = held[grid.comm.rank], parent.rows.start - i
+    face = grid.slab_from(heights[mine.start - first : mine.stop - first, j : j + ny], held)
+    stats["rms_slope_inside"] = rms_slope_inside(grid, face)
+    return face, stats
 
 
-def measured(run: Run, given: Lengths | None) -> tuple[np.ndarray, Lengths, dict[str, Any], str]:
+def rms_slope_inside(grid: Grid, local: np.ndarray) -> float:
+    """:func:`~petsc_contact.physics.preparation.rms_slope` of the field whose slab is
+    ``local``, from the slabs: each rank's differences and those down to the next rank's
+    first row (sent up to it), summed over the ranks; the serial value to rounding, and
+    exactly on one rank."""
+    from ..physics.preparation import slope_rms, slope_squares
+
+    below = None
+    if grid.comm.size > 1:
+        from mpi4py import MPI
+
+        rows, rank = grid.rows, grid.comm.rank
+        up = rank - 1 if rank > 0 and rows.stop > rows.start else MPI.PROC_NULL
+        down = rank + 1 if rows.stop < grid.shape[0] else MPI.PROC_NULL
+        below = grid.comm.sendrecv(local[0] if len(local) else None, dest=up, source=down)
+    along_x, along_y = grid.sum(*slope_squares(local, grid.spacing, below))
+    return slope_rms(float(along_x), float(along_y), grid.shape)
+
+
+def measured(
+    run: Run, given: Lengths | None, comm: Any
+) -> tuple[np.ndarray, Lengths, dict[str, Any], str]:
     """The prepared map (filled, detrended, in the lengths' unit), its lengths, what the run
-    records of it (its reader, channel and metadata, what was overridden), and one line on
-    what was read; warns about implausible slopes and, for periodic runs, edge mismatch."""
+    records of it (its reader, channel and metadata, what was overridden, the ``filled``
+    mask), and one line on what was read; warns about implausible slopes and, for periodic
+    runs, edge mismatch.  Called on the first rank of the run's ``comm`` only, which reads the
+    whole map (:func:`measured_scene`)."""
     from ..physics.preparation import detrend, fill_undefined
 
     topo = as_topography(run.heights, run.channel)
     lengths, scale, overridden = _units(run, topo, given)
-    spacing = grid_for(topo.heights.shape, lengths.pair).spacing
+    grid = grid_for(topo.heights.shape, lengths.pair, comm)
     filled = ~np.isfinite(topo.heights)
     share = float(np.mean(filled))
     full = fill_undefined(topo.heights, run.fill_undefined)
@@ -205,7 +282,7 @@ def measured(run: Run, given: Lengths | None) -> tuple[np.ndarray, Lengths, dict
             DoubtfulMap,
             stacklevel=2,
         )
-    full = detrend(full, spacing, run.detrend)
+    full = detrend(full, grid.spacing, run.detrend)
     if scale != 1.0:
         full = np.asarray(full, dtype=float) * scale
     check_height_scale(full, lengths.pair)
@@ -219,8 +296,7 @@ def measured(run: Run, given: Lengths | None) -> tuple[np.ndarray, Lengths, dict
         "filled_fraction": share,
         "filled": filled,  # the mask itself: the scene keeps it, the record does not
     }
-    inside = check_map(full, spacing, run.geometry == "periodic", run.detrend)
-    record["rms_slope_inside"] = inside  # finite differences inside the map (rank 0)
+    record["rms_slope_inside"] = check_map(full, grid, run.geometry == "periodic", run.detrend)
     name = run.heights if isinstance(run.heights, str) else record["heights_reader"]
     how = f", filled ({run.fill_undefined})" if share > 0 else ""
     return full, lengths, record, f"{name}: {topo.describe()}{how}"
@@ -279,19 +355,18 @@ def check_height_scale(heights: np.ndarray, length: Any) -> None:
         )
 
 
-def check_map(
-    full: np.ndarray, spacing: tuple[float, float], periodic: bool, detrended: str = "none"
-) -> float:
+def check_map(full: np.ndarray, grid: Grid, periodic: bool, detrended: str = "none") -> float:
     """Warn (:class:`~petsc_contact.conventions.warnings.DoubtfulMap`) about an implausible
     rms slope and, for a ``periodic`` contact, opposite edges that do not match; the rms slope
-    from finite differences inside the map (rank 0; NaN on the others, which skip the passes).
+    from finite differences inside the map (on the first rank of the run's communicator, the
+    grid's; NaN on the others, which skip the passes and say nothing).
 
     Parameters
     ----------
     full
         The whole map (as prepared: filled, detrended, in the lengths' unit).
-    spacing
-        The pixel's sides.
+    grid
+        The map's grid: its pixel's sides, and the run's communicator.
     periodic
         Whether the contact takes the map as periodic (the edges then matter).
     detrended
@@ -300,9 +375,9 @@ def check_map(
     """
     from ..physics.preparation import EDGE_MISMATCH_LIMIT, SLOPE_RANGE, edge_mismatch, rms_slope
 
-    if world().rank != 0:  # only rank 0 speaks: the others skip the passes over the map
+    if grid.comm.rank != 0:  # only the run's first rank speaks: the others skip the passes
         return float("nan")
-    slope = rms_slope(full, spacing)
+    slope = rms_slope(full, grid.spacing)
     if slope > 0 and not SLOPE_RANGE[0] <= slope <= SLOPE_RANGE[1]:
         warnings.warn(
             f"the map's rms slope (finite differences inside the map) is {slope:.3g}, outside "

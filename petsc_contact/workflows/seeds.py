@@ -107,7 +107,7 @@ def recorded_parameters(run: Run) -> dict[str, Any]:
     from .scene import given_lengths, shape_of
 
     lengths = given_lengths(run) or Lengths((1.0,), None)
-    grid = grid_for(shape_of(run, None), lengths.pair)
+    grid = grid_for(shape_of(run), lengths.pair)
     cutoff = nyquist_ratio(grid) if run.cutoff_ratio is None else run.cutoff_ratio
     out = run.parameters() | {
         "length": list(grid.lengths),

@@ -168,37 +168,53 @@ def seeds_and_loads(windows: list[tuple[np.ndarray, ...]], estimator: object) ->
     return np.percentile(values, [16, 84])
 
 
-def u0_row(ratio: int, rows: list[tuple[dict, dict]]) -> str:
-    """The cells' ``u0/h_rms`` at this ``L/lambda_r`` by both estimators, median over seeds
-    [68% interval over seeds and loads], in the realised ``h_rms``; beside Persson's closed
-    form on the spectrum (in the spectrum's ``h_rms``), as a Markdown table row."""
-    windows = []
-    for _, cell in rows:
+def _windows(rows: list[tuple[dict, dict]], unit: list[float]) -> list[tuple[np.ndarray, ...]]:
+    """Each cell's ``(p, K, u_bar)`` at its :func:`in_window` loads, lengths in ``unit`` (one
+    per seed), so that the estimators give ``u0`` in that unit."""
+    out = []
+    for (_, cell), scale in zip(rows, unit, strict=True):
         mid = in_window(cell)
-        scale = cell["h_rms"]
-        windows.append(
-            (cell["nominal_pressure"][mid], cell["K"][mid] * scale, cell["mean_gap"][mid] / scale)
-        )
-    text = [f"`L/lambda_r = {ratio}`", str(len(rows)), str(min(w[0].size for w in windows))]
+        p, k, gap = cell["nominal_pressure"][mid], cell["K"][mid], cell["mean_gap"][mid]
+        out.append((p, k * scale, gap / scale))
+    return out
+
+
+def _estimates(windows: list[tuple[np.ndarray, ...]]) -> list[str]:
+    """``median [68% interval]`` of both estimators over seeds (and loads), ``-`` without a
+    seed of two loads in the window."""
     windows = [w for w in windows if w[0].size >= 2]  # a slope needs two loads
+    if not windows:
+        return ["-", "-"]
+    text = []
     for estimator in (u0_by_stiffness, u0_by_gap):
-        if not windows:
-            text.append("-")
-            continue
         median = np.median([estimator(*w) for w in windows])
         low, high = seeds_and_loads(windows, estimator)
         text.append(f"{median:.3f} [{low:.3f}-{high:.3f}]")
+    return text
+
+
+def u0_row(ratio: int, rows: list[tuple[dict, dict]]) -> str:
+    """The cells' ``u0`` at this ``L/lambda_r`` by both estimators, median over seeds [68%
+    interval over seeds and loads]: in each face's realised ``h_rms``, and over Persson's
+    closed form on the prescribed spectrum (the same length unit); beside it Persson's in the
+    spectrum's ``h_rms``, as a Markdown table row."""
     n = rows[0][1]["n"]  # the paper bandwidth: L/lambda_1 = n/2
     q, c = scenes.ideal_spectrum(1.0, HURST, ratio, n / 2, rms_slope=RMS_SLOPE)
     spectrum_h = float(np.sqrt(2 * np.pi * np.trapezoid(q * c, q)))
-    text.append(f"{theory.persson_exponential(q, c)[1] / spectrum_h:.3f}")
-    text.append(f"{np.median([cell['h_rms'] for _, cell in rows]) / spectrum_h:.3f}")
+    persson = theory.persson_exponential(q, c)[1]
+    realised = [cell["h_rms"] for _, cell in rows]
+    windows = _windows(rows, realised)
+    text = [f"`L/lambda_r = {ratio}`", str(len(rows)), str(min(w[0].size for w in windows))]
+    text += _estimates(windows) + _estimates(_windows(rows, [persson] * len(rows)))
+    text.append(f"{persson / spectrum_h:.3f}")
+    text.append(f"{np.median(realised) / spectrum_h:.3f}")
     return "| " + " | ".join(text) + " |"
 
 
 U0_HEADER = (
     "| cell | seeds | loads in the window (fewest) | `u0/h_rms` = `p/K` | `-du_bar/d ln p` "
-    "| Persson's closed form | realised / spectrum's `h_rms` |\n" + "| --- " * 7 + "|"
+    "| `u0/u0_Persson` = `p/K` | `-du_bar/d ln p` | Persson's `u0/h_rms` (the spectrum's) "
+    "| realised / spectrum's `h_rms` |\n" + "| --- " * 9 + "|"
 )
 
 

@@ -3,7 +3,7 @@
 import h5py
 import numpy as np
 import pytest
-from conftest import cli
+from conftest import cli, python
 
 from petsc_contact import periodic_contact
 from petsc_contact.backend import _petsc, coarse
@@ -207,3 +207,47 @@ def test_mpi_matches_serial(tmp_path, ranks):
         assert np.allclose(p["mean_gap"][:], s["mean_gap"][:], rtol=1e-8, atol=0)
         assert np.allclose(p["stiffness"][:], s["stiffness"][:], rtol=1e-6, atol=0)
         assert np.abs(p["iterations"][:] - s["iterations"][:]).max() <= 2
+
+
+HELD_QUARTER = r"""
+import sys
+import numpy as np
+from mpi4py import MPI
+from petsc_contact.backend import coarse
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.numerics.device import CPU
+from petsc_contact.numerics.schur import ContactSchur, _fold, held_rows, quarter
+
+nx, ny = (int(v) for v in sys.argv[1].split(","))
+comm = MPI.COMM_WORLD
+grid, whole = (Grid((nx, ny), (1.0, ny / nx), c) for c in (comm, MPI.COMM_SELF))
+table = np.random.default_rng(2).random((nx // 2 + 1, ny // 2 + 1)) + 1.0
+i, j = np.meshgrid(_fold(np.arange(nx), nx), _fold(np.arange(ny), ny), indexing="ij")
+column = table[i, j]  # an even periodic G e_0
+mine, full = quarter(grid, column[grid.rows]), quarter(whole, column)
+held = held_rows(grid)
+rows = len(held) + (len(held) > 0 and held.stop < nx // 2 + 1)  # and the next row
+assert mine.shape == (rows, ny // 2 + 1) and rows < nx // 2 + 1, mine.shape
+assert np.array_equal(mine, table[held.start : held.start + rows])
+rng = np.random.default_rng(5)
+sparse = rng.random((nx, ny)) < 0.08  # single pixels: the near pairs summed pair by pair
+dense = rng.random((nx, ny)) < 0.9  # filled blocks: the near pairs summed by FFTs
+for bound, block in ((sparse, 1), (sparse, 3), (dense, 4)):
+    parts = [
+        (ContactSchur(g, q, bound[g.rows])._lu[0], coarse.host_coarse_matrix(
+            g, q, bound[g.rows], block, 10**6, CPU).matrix)
+        for g, q in ((grid, mine), (whole, full))
+    ]
+    (schur, e_mat), (schur_1, e_mat_1) = parts
+    assert np.array_equal(schur, schur_1), np.abs(schur - schur_1).max()
+    assert np.array_equal(e_mat, e_mat_1), np.abs(e_mat - e_mat_1).max()
+"""
+
+
+@pytest.mark.parametrize("ranks, shape", [(3, "30,26"), (4, "32,20")])
+def test_no_rank_holds_the_quarter(ranks, shape):
+    """On 3 and 4 ranks each rank holds only its slab's rows of ``G``'s quarter (and the next
+    row; the last ranks none), and the Schur system's factor and the coarse matrix (single
+    pixels, monopoles and near pairs pair by pair and by FFTs) are the serial ones exactly."""
+    r = python("-c", HELD_QUARTER, shape, mpi=ranks, timeout=240)
+    assert r.returncode == 0, r.stdout + r.stderr

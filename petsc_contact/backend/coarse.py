@@ -15,7 +15,8 @@ less accurate, never wrong (docs/solvers.md).  Its cost is two FFT round trips p
 application, a ``k x k`` Cholesky factorisation per build and two triangular solves per
 application (``k`` aggregates).
 
-``E`` comes from one column of ``G`` (the kernel is periodic and even, :func:`schur.quarter`):
+``E`` comes from one column of ``G`` (the kernel is periodic and even, :func:`schur.quarter`;
+on several ranks each rank makes the entries from its own rows of it, :func:`coarse_matrix`):
 exactly between aggregates of neighbouring blocks (pixel pair by pixel pair where the blocks
 hold few contact pixels, by FFTs on ``2b x 2b`` cells where they hold many,
 :func:`coarse_matrix`); as the
@@ -38,7 +39,7 @@ from typing import Any
 import numpy as np
 import scipy.fft
 
-from ..conventions.grid import Grid
+from ..conventions.grid import Grid, block_rows
 from ..numerics.aggregates import (
     grouped,
     half_spectrum_weights,
@@ -52,7 +53,7 @@ from ..numerics.aggregates import (
     spectral_dots,
 )
 from ..numerics.device import CPU, Device
-from ..numerics.schur import allgather
+from ..numerics.schur import allgather, held_rows, sum_over_ranks
 from . import _petsc
 from .operator import ShellInterface
 
@@ -162,7 +163,7 @@ def coarse_matrix(
     block_rc: np.ndarray,
     lookup: np.ndarray,
     quarter: np.ndarray,
-    shape: tuple[int, int],
+    grid: Grid,
     block: int,
 ) -> np.ndarray:
     """``E = W^T G_BB W`` for aggregates ``I`` holding the pixels ``starts[I]:starts[I+1]``
@@ -174,20 +175,39 @@ def coarse_matrix(
     The near sums are taken pixel pair by pixel pair where the aggregates are small and by
     FFTs on ``2b x 2b`` cells where they are large (:func:`_pair_sums_fft`), whichever
     costs fewer products (``|A_I| |A_J|`` against :data:`FFT_PRODUCTS` ``b^2`` per pair).
+    On several ranks (``quarter``: this rank's rows, :func:`~petsc_contact.numerics.schur.quarter`)
+    each rank makes the monopoles whose folded row offset it holds and a share of the near
+    pairs, and the ranks' matrices are summed (each entry made on one rank).
     """
-    nx, ny = shape
-    e_mat = monopoles(rows, cols, starts, quarter, nx, ny)
+    nx, ny = shape = grid.shape
+    held, comm = held_rows(grid), grid.comm
+    e_mat = monopoles(rows, cols, starts, quarter, nx, ny, held.start, held.stop)
     pairs = near_pairs(block_rc, lookup, NEAR_REACH)
     sizes = np.diff(starts).astype(float)
     direct = float(np.dot(sizes[pairs[:, 0]], sizes[pairs[:, 1]]))
+    near = near_corner(quarter, grid, (NEAR_REACH + 1) * block)
+    mine = pairs[block_rows(len(pairs), comm.size, comm.rank)]
     if direct > FFT_PRODUCTS * block**2 * len(pairs):
-        sums = _pair_sums_fft(rows, cols, starts, block_rc * block, pairs, quarter, shape, block)
+        sums = _pair_sums_fft(rows, cols, starts, block_rc * block, mine, near, shape, block)
     else:
-        reach = (NEAR_REACH + 1) * block  # the largest folded offset of a near pair, plus one
-        near = np.ascontiguousarray(quarter[:reach, :reach])
-        sums = pair_sums_direct(rows, cols, starts, pairs, near, nx, ny)
-    e_mat[pairs[:, 0], pairs[:, 1]] = sums
-    return e_mat
+        sums = pair_sums_direct(rows, cols, starts, mine, near, nx, ny)
+    if comm.size > 1:  # the near pairs' monopoles, made where their rows are held
+        e_mat[pairs[:, 0], pairs[:, 1]] = 0.0
+    e_mat[mine[:, 0], mine[:, 1]] = sums
+    return sum_over_ranks(e_mat, comm)
+
+
+def near_corner(quarter: np.ndarray, grid: Grid, reach: int) -> np.ndarray:
+    """The corner ``[:reach, :reach]`` of ``G``'s quarter (the offsets of near pairs, at most
+    ``reach - 1``), contiguous and whole on every rank: gathered from the ranks holding its
+    rows (``quarter``: this rank's, :func:`~petsc_contact.numerics.schur.quarter`)."""
+    if grid.comm.size == 1:
+        return np.ascontiguousarray(quarter[:reach, :reach])
+    held = held_rows(grid)
+    mine = np.ascontiguousarray(quarter[: max(0, min(held.stop, reach) - held.start), :reach])
+    corner = np.empty((min(reach, grid.shape[0] // 2 + 1), mine.shape[1]))
+    grid.comm.Allgatherv(mine, [corner, grid.comm.allgather(mine.size)])
+    return corner
 
 
 @dataclass(frozen=True)
@@ -274,7 +294,7 @@ def host_coarse_matrix(
         block_rc,
         lookup,
         np.ascontiguousarray(quarter, dtype=float),
-        (nx, ny),
+        grid,
         block,
     )
     _raise_diagonal(np, matrix, block)
@@ -314,7 +334,8 @@ class CoarseSpace:
     grid
         The row-slab layout.
     quarter
-        ``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, on every rank (on the host).
+        ``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, on the host: this rank's rows of it
+        (:func:`~petsc_contact.numerics.schur.quarter`; the array devices run on one rank).
     bound
         This rank's slab of the bound-set mask (``True`` on ``B``; an array of ``device`` or
         of the host); not empty on all ranks.

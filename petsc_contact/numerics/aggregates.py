@@ -6,7 +6,8 @@ for any array module ``xp`` with NumPy's interface: NumPy or CuPy).
 An aggregate ``I`` holds the pixels ``starts[I]:starts[I+1]`` of ``(rows, cols)`` (global
 pixel indices, grouped by :func:`grouped`); ``quarter`` is the compliance ``G`` at the offsets
 ``0 .. nx/2`` and ``0 .. ny/2`` (the kernel is periodic and even,
-:func:`~petsc_contact.numerics.schur.quarter`).  Compiled once, with the passes of
+:func:`~petsc_contact.numerics.schur.quarter`; on several ranks the rows one rank holds,
+:func:`monopoles`).  Compiled once, with the passes of
 :mod:`~petsc_contact.numerics.kernels` (:func:`~petsc_contact.numerics.kernels.compile_kernels`).
 """
 
@@ -38,16 +39,23 @@ def _fold(d: int, n: int) -> int:
 
 
 @njit(cache=True, nogil=True)
-def _interpolate(quarter: np.ndarray, dx: float, dy: float, nx: int, ny: int) -> float:
-    """``G`` at a real offset ``|dx| < nx``, ``|dy| < ny``, bilinear in the folded quarter."""
+def _interpolate(
+    quarter: np.ndarray, dx: float, dy: float, nx: int, ny: int, first: int, stop: int
+) -> float:
+    """``G`` at a real offset ``|dx| < nx``, ``|dy| < ny``, bilinear in the folded quarter, of
+    which ``quarter`` holds the rows ``first .. stop - 1`` and the next one (where there is
+    one); zero where the folded offset's row ``i`` is not among them (made on another rank)."""
     dx = abs(dx)
     dy = abs(dy)
     dx = min(dx, nx - dx)
     dy = min(dy, ny - dy)
-    hx, hy = quarter.shape[0] - 1, quarter.shape[1] - 1
+    hx, hy = nx // 2, quarter.shape[1] - 1
     i, j = min(int(dx), hx), min(int(dy), hy)
+    if i < first or i >= stop:
+        return 0.0
     i1, j1 = min(i + 1, hx), min(j + 1, hy)
     fx, fy = dx - i, dy - j
+    i, i1 = i - first, i1 - first
     if fx == 0.0 and fy == 0.0:  # a pixel offset (single-pixel aggregates)
         return quarter[i, j]
     return (1.0 - fx) * ((1.0 - fy) * quarter[i, j] + fy * quarter[i, j1]) + fx * (
@@ -57,12 +65,21 @@ def _interpolate(quarter: np.ndarray, dx: float, dy: float, nx: int, ny: int) ->
 
 @njit(cache=True, nogil=True, parallel=True)
 def monopoles(
-    rows: np.ndarray, cols: np.ndarray, starts: np.ndarray, quarter: np.ndarray, nx: int, ny: int
+    rows: np.ndarray,
+    cols: np.ndarray,
+    starts: np.ndarray,
+    quarter: np.ndarray,
+    nx: int,
+    ny: int,
+    first: int,
+    stop: int,
 ) -> np.ndarray:
     """``|A_I| |A_J| G(c_I - c_J)`` for aggregates ``I`` holding the pixels
     ``starts[I]:starts[I+1]`` of ``(rows, cols)`` (``c`` their centroids), upper triangle
     only, in Fortran order (columns in parallel): LAPACK factorises it in place, with no
-    copy of the ``k x k`` matrix."""
+    copy of the ``k x k`` matrix.  ``quarter`` holds the rows ``first .. stop - 1`` of
+    ``G``'s quarter and the next (:func:`~petsc_contact.numerics.schur.quarter`): the entries
+    whose folded row offset is elsewhere are zero (``0, nx // 2 + 1`` on one rank: none)."""
     k = starts.size - 1
     sizes = np.empty(k)
     centre = np.empty((k, 2))
@@ -76,9 +93,8 @@ def monopoles(
     for b in prange(k):
         rb, cb, sb = centre[b, 0], centre[b, 1], sizes[b]
         for a in range(b + 1):
-            e_mat[a, b] = (
-                sizes[a] * sb * _interpolate(quarter, centre[a, 0] - rb, centre[a, 1] - cb, nx, ny)
-            )
+            dx, dy = centre[a, 0] - rb, centre[a, 1] - cb
+            e_mat[a, b] = sizes[a] * sb * _interpolate(quarter, dx, dy, nx, ny, first, stop)
     return e_mat
 
 
@@ -299,7 +315,7 @@ def specimen_calls() -> list[tuple[Any, tuple[Any, ...]]]:
     index, weight = np.zeros(1, dtype=np.int64), np.ones(2)
     return [
         (grouped, (np.zeros(2, dtype=np.int64), starts)),
-        (monopoles, (rows, cols, starts, quarter, 2, 2)),
+        (monopoles, (rows, cols, starts, quarter, 2, 2, 0, 2)),
         (near_pairs, (pair, np.zeros((1, 1), dtype=np.int64), 1)),
         (pair_sums_direct, (rows, cols, starts, pair, quarter, 2, 2)),
         (spectral_dots, (spectra, spectra, pair, index, weight, np.zeros(1), index)),

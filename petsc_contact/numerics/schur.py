@@ -10,7 +10,9 @@ held at their bound, the solution of ``H_FF z_F = r_F``, ``z_B = 0`` is
 so ``r + lambda`` must have zero sum).  ``G_BB`` is a dense ``m x m`` block of the real-space
 compliance ``G(i - i', j - j')``, read from one column of ``G``: the operator is periodic and
 even in both offsets, so the quarter ``(nx/2 + 1) x (ny/2 + 1)`` of that column
-(:func:`quarter`) holds every entry.
+(:func:`quarter`) holds every entry.  On several ranks each rank holds only the quarter's rows
+in its own slab (:func:`held_rows`), makes only the entries whose folded row offset it holds,
+and the ranks' matrices are summed (:func:`sum_over_ranks`): each entry comes from one rank.
 Applied as the conjugate-gradient preconditioner, it makes each step exact on the current
 contact set; it costs two FFT round trips and an ``(m + 1)^2`` LU factorisation per set.
 """
@@ -34,7 +36,8 @@ class ContactSchur:
     grid
         The row-slab layout.
     quarter
-        ``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, on every rank (:func:`quarter`).
+        ``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, this rank's rows of it
+        (:func:`quarter`).
     bound
         This rank's slab of the bound-set mask (``True`` on ``B``), on the host.
     device
@@ -54,8 +57,9 @@ class ContactSchur:
         rows = rows + grid.rows.start
         both = allgather(np.stack([rows, cols], axis=1), grid.comm)
         self.offset = 0 if grid.comm.size == 1 else int(grid.comm.exscan(len(local)) or 0)
+        system = bordered_system(quarter, both, (nx, ny), held_rows(grid))
         self._lu = lu_factor(
-            bordered_system(quarter, both, (nx, ny)), overwrite_a=True, check_finite=False
+            sum_over_ranks(system, grid.comm), overwrite_a=True, check_finite=False
         )
         self.size = len(both)
 
@@ -73,14 +77,20 @@ class ContactSchur:
 SYSTEM_ROWS = 64  # rows of the bordered system filled at a time (bounds the temporaries)
 
 
-def bordered_system(quarter: np.ndarray, both: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    """``[[G_BB, 1], [1^T, 0]]`` for the bound pixels ``both`` (global ``(row, col)`` pairs).
+def bordered_system(
+    quarter: np.ndarray, both: np.ndarray, shape: tuple[int, int], held: range
+) -> np.ndarray:
+    """``[[G_BB, 1], [1^T, 0]]`` for the bound pixels ``both`` (global ``(row, col)`` pairs),
+    this rank's part of it: the entries whose folded row offset is in ``held``
+    (:func:`held_rows`, the rows of ``quarter`` from ``held.start``), zero elsewhere, and the
+    border on the rank holding row 0; on one rank the whole system.
 
     Filled :data:`SYSTEM_ROWS` rows at a time, so that the pixel offsets' temporaries stay
     ``SYSTEM_ROWS x m`` for ``m`` pixels; returned in Fortran order (the transpose of the
     rows filled: the system is symmetric), which LAPACK factorises in place.
     """
     m = len(both)
+    whole = held.start == 0 and held.stop == shape[0] // 2 + 1
     system = np.zeros((m + 1, m + 1))
     for lo in range(0, m, SYSTEM_ROWS):
         part = both[lo : lo + SYSTEM_ROWS]
@@ -88,27 +98,72 @@ def bordered_system(quarter: np.ndarray, both: np.ndarray, shape: tuple[int, int
             _fold(part[:, k][:, None] - both[:, k][None, :], period)
             for k, period in enumerate(shape)
         )
-        system[lo : lo + len(part), :m] = quarter[di, dj]
-    system[:m, m] = system[m, :m] = 1.0
+        system[lo : lo + len(part), :m] = quarter[di, dj] if whole else _held(quarter, di, dj, held)
+    if 0 in held:  # the border, on one rank
+        system[:m, m] = system[m, :m] = 1.0
     return system.T
 
 
+def _held(quarter: np.ndarray, di: np.ndarray, dj: np.ndarray, held: range) -> np.ndarray:
+    """``G(di, dj)`` where the row ``di`` is in ``held`` (``quarter``'s rows from
+    ``held.start``), zero elsewhere."""
+    out = np.zeros(di.shape)
+    mine = (di >= held.start) & (di < held.stop)
+    out[mine] = quarter[di[mine] - held.start, dj[mine]]
+    return out
+
+
+def sum_over_ranks(matrix: np.ndarray, comm: Any) -> np.ndarray:
+    """``matrix`` summed over the ranks in place and returned (each entry made on one rank,
+    zero on the others: the sum is exact); untouched on one rank."""
+    if comm.size > 1:
+        from mpi4py import MPI
+
+        comm.Allreduce(MPI.IN_PLACE, matrix, op=MPI.SUM)
+    return matrix
+
+
+def held_rows(grid: Grid) -> range:
+    """The rows of ``G``'s quarter (``0 .. nx/2``) in this rank's slab: all of them on one
+    rank, none on a rank whose slab lies beyond ``nx/2`` (or has no rows)."""
+    half_x = grid.shape[0] // 2 + 1
+    return range(min(grid.rows.start, half_x), min(grid.rows.stop, half_x))
+
+
 def quarter(grid: Grid, column: Any, device: Device = CPU) -> np.ndarray:
-    """``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, on every rank, on the host.
+    """``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, the rows this rank holds, on the host.
 
     ``column`` is this rank's slab of ``G e_0``, the response to a unit value at pixel
     ``(0, 0)`` (an array of ``device``); by periodicity and evenness
-    ``G(i, j) = G(min(i, nx - i), min(j, ny - j))``.  The ranks' rows are gathered straight
-    into the quarter (no pickled copies: it is a quarter of the grid).
+    ``G(i, j) = G(min(i, nx - i), min(j, ny - j))``.  On one rank the whole quarter; on
+    several the rows :func:`held_rows` (none gathered), followed by the next row of the
+    quarter where there is one (received from the rank holding it), which the bilinear
+    monopoles of :func:`~petsc_contact.numerics.aggregates.monopoles` read.
     """
     half_x, half_y = (m // 2 + 1 for m in grid.shape)
-    mine = column[: max(0, min(grid.rows.stop, half_x) - grid.rows.start), :half_y]
-    mine = np.ascontiguousarray(device.to_host(mine))
+    held = held_rows(grid)
+    mine = column[: len(held), :half_y]
     if grid.comm.size == 1:
-        return mine
-    whole = np.empty((half_x, half_y))
-    grid.comm.Allgatherv(mine, [whole, grid.comm.allgather(mine.size)])
-    return whole
+        return np.ascontiguousarray(device.to_host(mine))
+    next_row = bool(held) and held.stop < half_x
+    part = np.empty((len(held) + next_row, half_y))
+    part[: len(held)] = device.to_host(mine)
+    _next_row(grid.comm, held, part)
+    return part
+
+
+def _next_row(comm: Any, held: range, part: np.ndarray) -> None:
+    """Send this rank's first row of the quarter to the rank holding the rows before it, and
+    receive into ``part``'s last row the row after ``held`` where ``part`` has room for it
+    (ranks holding no rows take no part)."""
+    spans = comm.allgather((held.start, held.stop) if held else None)
+    holders = [(rank, span) for rank, span in enumerate(spans) if span is not None]
+    sends = [comm.Isend(part[0], dest=r) for r, (_, stop) in holders if held and stop == held.start]
+    if len(part) > len(held):
+        source = next(r for r, (start, _) in holders if start == held.stop)
+        comm.Recv(part[len(held)], source=source)
+    for request in sends:
+        request.Wait()
 
 
 def response_quarter(grid: Grid, apply: Any, work: Any, device: Device = CPU) -> np.ndarray:

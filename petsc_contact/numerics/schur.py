@@ -113,13 +113,23 @@ def _held(quarter: np.ndarray, di: np.ndarray, dj: np.ndarray, held: range) -> n
     return out
 
 
+SUM_CHUNK = 1 << 19
+"""Entries summed over the ranks by one ``Allreduce`` of :func:`sum_over_ranks` (4 MiB): the
+buffers MPI takes for a sum stay this small, not the matrix's size (up to 117 MiB)."""
+
+
 def sum_over_ranks(matrix: np.ndarray, comm: Any) -> np.ndarray:
-    """``matrix`` summed over the ranks in place and returned (each entry made on one rank,
-    zero on the others: the sum is exact); untouched on one rank."""
+    """``matrix`` (contiguous, in C or Fortran order) summed over the ranks in place and
+    returned, :data:`SUM_CHUNK` entries at a time (each entry made on one rank, zero on the
+    others: the sum is exact); untouched on one rank."""
     if comm.size > 1:
         from mpi4py import MPI
 
-        comm.Allreduce(MPI.IN_PLACE, matrix, op=MPI.SUM)
+        if not (matrix.flags.c_contiguous or matrix.flags.f_contiguous):
+            raise ValueError("sum_over_ranks sums a contiguous matrix in place")
+        flat = matrix.reshape(-1, order="A")  # a view of its memory, in order
+        for start in range(0, flat.size, SUM_CHUNK):
+            comm.Allreduce(MPI.IN_PLACE, flat[start : start + SUM_CHUNK], op=MPI.SUM)
     return matrix
 
 

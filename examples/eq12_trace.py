@@ -192,29 +192,14 @@ def _settings(args: argparse.Namespace, hurst: float, seed: int) -> np.ndarray:
     return np.array([args.grid, hurst, seed, *log_pressures(args)], dtype=float)
 
 
-def _kept(path: str, settings: np.ndarray) -> dict[str, np.ndarray] | None:
-    """The measurements ``path`` keeps, if it is this run's (``SystemExit``, one line, when it
-    is damaged or another run's)."""
-    if not os.path.exists(path):
-        return None
-    try:
-        with np.load(path) as kept:
-            rows = dict(kept)
-    except (OSError, ValueError, EOFError) as exc:
-        raise SystemExit(f"{path} is damaged ({exc}): remove it to solve that seed again") from None
-    if "settings" not in rows or not np.array_equal(rows["settings"], settings):
-        raise SystemExit(
-            f"{path} holds another run's measurements (other grid, loads or H): remove it "
-            "or give another --output"
-        )
-    return rows
-
-
 def solve_seed(args: argparse.Namespace, hurst: float, seed: int) -> dict[str, np.ndarray]:
     """One seed's sweep with its fields, measured at every load (:func:`measure`); kept in
     ``OUTPUT_H<H>_seed<S>.npz`` with the settings it was solved for."""
     path, settings = f"{args.output}_H{hurst}_seed{seed}.npz", _settings(args, hurst, seed)
-    kept = _kept(path, settings)
+    try:
+        kept = scenes.kept_seed(path, settings, "measurements (other grid, loads or H)")
+    except ValueError as exc:
+        raise SystemExit(str(exc)) from None
     if kept is not None:
         return kept
     heights, h_rms = scenes.surface(args.grid, hurst, 1.0, args.grid / 2, seed)

@@ -26,29 +26,14 @@ def _settings(args: argparse.Namespace, seed: int) -> np.ndarray:
     return np.array([*head, *log_pressures(args)], dtype=float)
 
 
-def _kept(path: str, settings: np.ndarray) -> dict[str, np.ndarray] | None:
-    """The curves ``path`` keeps, if it is this run's; ``SystemExit`` (one line) when it is
-    damaged or another run's, rather than a table of other curves."""
-    if not os.path.exists(path):
-        return None
-    try:
-        with np.load(path) as kept:
-            curves = dict(kept)
-    except (OSError, ValueError, EOFError) as exc:
-        raise SystemExit(f"{path} is damaged ({exc}): remove it to solve that seed again") from None
-    if "settings" not in curves or not np.array_equal(curves["settings"], settings):
-        raise SystemExit(
-            f"{path} holds another run's curves (other grid, loads, H or factors): remove it "
-            "or give another --output"
-        )
-    return curves
-
-
 def solve_seed(args: argparse.Namespace, seed: int) -> dict[str, np.ndarray]:
     """One seed's ``K`` and contact area on each grid (cached in ``OUTPUT_seedK.npz``, with
     the settings they were solved for)."""
     path, settings = f"{args.output}_seed{seed}.npz", _settings(args, seed)
-    kept = _kept(path, settings)
+    try:
+        kept = scenes.kept_seed(path, settings, "curves (other grid, loads, H or factors)")
+    except ValueError as exc:
+        raise SystemExit(str(exc)) from None
     if kept is not None:
         return kept
     h, _ = scenes.surface(args.grid, args.hurst, 1.0, args.grid / args.pixels, seed)

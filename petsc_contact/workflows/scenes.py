@@ -6,6 +6,7 @@ stiffness, compare with theory, save the numbers behind the plot.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -387,3 +388,25 @@ def log_interp(x: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
     order = np.argsort(xs[ok])
     lx, lxs = np.log(np.asarray(x, dtype=float)), np.log(xs[ok][order])
     return np.exp(np.interp(lx, lxs, np.log(ys[ok][order]), left=np.nan, right=np.nan))
+
+
+def kept_seed(path: str, settings: np.ndarray, holds: str) -> dict[str, np.ndarray] | None:
+    """The arrays a figure script kept for one seed in ``path`` (an ``.npz`` with the
+    ``settings`` they were computed for), or ``None`` where there is no such file.
+
+    Raises
+    ------
+    ValueError
+        One line, naming ``path``, when it cannot be read or holds another run's ``holds``
+        (its settings differ): the script refuses it rather than tabulate other numbers.
+    """
+    if not os.path.exists(path):
+        return None
+    try:
+        with np.load(path) as kept:
+            arrays = dict(kept)
+    except (OSError, ValueError, EOFError) as exc:
+        raise ValueError(f"{path} is damaged ({exc}): remove it to solve that seed again") from None
+    if "settings" not in arrays or not np.array_equal(arrays["settings"], settings):
+        raise ValueError(f"{path} holds another run's {holds}: remove it or give another --output")
+    return arrays

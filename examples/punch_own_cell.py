@@ -37,17 +37,21 @@ KEYS = ("nominal_pressure", "area_fraction", "mean_gap")
 def read(path: str) -> dict:
     """A piece's columns (``nan`` where a step did not converge), its stiffness ``K`` (the
     cell's exact one, the punch's paper Eq. 2 with the grid's flat punch), its face's realised
-    ``h_rms``, seed, pixel count and which steps are resolved (at least 16 contact pixels)."""
+    ``h_rms``, seed, pixel count and which steps are resolved (at least 16 contact pixels);
+    ``ValueError`` (one line, naming it) for a file that cannot be read."""
     import h5py
 
-    with h5py.File(path, "r", locking=False) as f:
-        ok = f["converged"][:].astype(bool)
-        stiffness = "interfacial_stiffness" if "interfacial_stiffness" in f else "stiffness"
-        row = {k: np.where(ok, f[k][:], np.nan) for k in (*KEYS, stiffness)}
-        row["K"] = row.pop(stiffness)
-        pixels = int(np.prod(np.atleast_1d(f.attrs["grid"])[[0, -1]]))
-        row |= {"h_rms": float(f.attrs["rms_height"]), "seed": int(f.attrs["seed"])}
-        row["n"] = int(np.atleast_1d(f.attrs["grid"])[0])
+    try:
+        with h5py.File(path, "r", locking=False) as f:
+            ok = f["converged"][:].astype(bool)
+            stiffness = "interfacial_stiffness" if "interfacial_stiffness" in f else "stiffness"
+            row = {k: np.where(ok, f[k][:], np.nan) for k in (*KEYS, stiffness)}
+            row["K"] = row.pop(stiffness)
+            grid = np.atleast_1d(f.attrs["grid"])
+            row |= {"h_rms": float(f.attrs["rms_height"]), "seed": int(f.attrs["seed"])}
+    except (OSError, KeyError) as exc:
+        raise ValueError(f"'{path}' cannot be read ({exc}): not compared") from None
+    pixels, row["n"] = int(grid[0] * grid[-1]), int(grid[0])
     row["resolved"] = ok & scenes.contact_resolved(row["area_fraction"], pixels)
     return row
 
@@ -249,7 +253,10 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     add_data_options(ap, "cells", "punch_own_cell", required=True, partial=False)
     args = ap.parse_args()
-    variants = {r: rows for r in PUNCH_RATIOS if (rows := pairs(args.data, r))}
+    try:
+        variants = {r: rows for r in PUNCH_RATIOS if (rows := pairs(args.data, r))}
+    except ValueError as exc:  # a damaged piece: named, never compared
+        raise SystemExit(str(exc)) from None
     if not variants:
         raise SystemExit(f"no seed with both its punch and its cell complete in {args.data}")
     print(COMPARISON_HEADER)

@@ -302,24 +302,14 @@ def test_punch_figure_redraws_from_study_files(tmp_path):
     figure: every variant has its 8 seeds, -dp/du_bar stands beside Eq. 2, and each variant's
     summary over its seeds is one table row."""
     data = tmp_path / "paper"
-    env = STUDY_ENV
     study = ["-m", "petsc_contact.cli", "study", "--figure", "punch", "--shrink", "128"]
-    r = subprocess.run(
-        [sys.executable, *study, "--data", str(data), "--quiet"],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env=env,
-    )
+    r = _run([sys.executable, *study, "--data", str(data), "--quiet"], timeout=300)
     assert r.returncode == 0, r.stderr
     out = tmp_path / "f8"
-    r = subprocess.run(
+    r = _run(
         [sys.executable, str(ROOT / "examples" / "fig8_punch.py"), "--data", str(data)]
         + ["--output", str(out)],
-        capture_output=True,
-        text=True,
         timeout=120,
-        env=env,
     )
     assert r.returncode == 0, r.stderr
     lines = r.stdout.splitlines()
@@ -337,36 +327,27 @@ def _punch_against_its_own_cell(data, tmp_path):
     of its own face (one row per ``L_p/lambda_r``, 8 seeds), and a cell whose face is not its
     punch's is refused in one line."""
     cells = ["-m", "petsc_contact.cli", "study", "--figure", "cells", "--shrink", "128"]
-    r = subprocess.run(
-        [sys.executable, *cells, "--data", str(data), "--quiet"],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env=STUDY_ENV,
-    )
+    r = _run([sys.executable, *cells, "--data", str(data), "--quiet"], timeout=300)
     assert r.returncode == 0, r.stderr
     script = [sys.executable, str(ROOT / "examples" / "punch_own_cell.py"), "--data", str(data)]
-    r = subprocess.run(
-        [*script, "--output", str(tmp_path / "own")],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        env=STUDY_ENV,
-    )
+    r = _run([*script, "--output", str(tmp_path / "own")], timeout=120)
     assert r.returncode == 0, r.stderr
     rows = [line for line in r.stdout.splitlines() if line.startswith("| `L")]
     assert len(rows) == 4 and all(line.split(" | ")[1] == "8" for line in rows), rows
     assert (tmp_path / "own.png").stat().st_size > 5000
     with h5py.File(data / "cells" / "periodic_r8_seed3.h5", "r+") as f:  # another face
         f.attrs["rms_height"] = 1.01 * f.attrs["rms_height"]
-    r = subprocess.run(
-        [*script, "--output", str(tmp_path / "own2")],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        env=STUDY_ENV,
-    )
+    r = _run([*script, "--output", str(tmp_path / "own2")], timeout=120)
     assert r.returncode == 1 and "not the same face" in r.stderr and "seed 3" in r.stderr
+    damaged = data / "cells" / "periodic_r1_seed2.h5"
+    damaged.write_bytes(bytes(range(256)) * 16)  # bad bytes: named in one line
+    r = _run([*script, "--output", str(tmp_path / "own3")], timeout=120)
+    assert r.returncode == 1 and str(damaged) in r.stderr and r.stderr.count("\n") == 1, r.stderr
+
+
+def _run(argv: list[str], timeout: int) -> subprocess.CompletedProcess:
+    """``argv`` run as the study's tests run it (this checkout, a plain PATH)."""
+    return subprocess.run(argv, capture_output=True, text=True, timeout=timeout, env=STUDY_ENV)
 
 
 def test_sweeps_whose_loads_differ_by_rounding_are_one_sweep(tmp_path):

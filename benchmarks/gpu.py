@@ -6,8 +6,8 @@ usage (on a machine with CuPy and a CUDA GPU, in the repository's root, no netwo
 
 1. makes the package importable from the working tree (``pip install --no-deps --no-index
    --no-build-isolation -e .``, else ``PYTHONPATH``): nothing is downloaded;
-2. runs ``pytest -m gpu tests/test_gpu.py`` (the device against its CPU stand-in,
-   256^2-1024^2);
+2. runs ``pytest -m gpu tests/test_gpu.py tests/test_device_punch.py`` (the device against
+   its CPU stand-in: periodic sweeps at 256^2-1024^2, the punch at 128^2 and 256^2);
 3. measures the floor at each grid: a cuFFT double real round trip (``rfft2`` + ``irfft2``
    through :class:`~petsc_contact.numerics.device.ArrayFFT`) and one fused pass
    (``y += a x``, an ``ElementwiseKernel``), CUDA events, median of 10;
@@ -29,6 +29,7 @@ import os
 import subprocess
 import sys
 import time
+import traceback
 from pathlib import Path
 from typing import Any
 
@@ -195,7 +196,8 @@ def main() -> int:
 
     if not args.skip_tests:
         done = subprocess.run(
-            [sys.executable, "-m", "pytest", "-q", "-m", "gpu", "tests/test_gpu.py"],
+            [sys.executable, "-m", "pytest", "-q", "-m", "gpu"]
+            + ["tests/test_gpu.py", "tests/test_device_punch.py"],
             capture_output=True,
             text=True,
             cwd=ROOT,
@@ -233,7 +235,7 @@ def main() -> int:
         try:
             result = sweep(n, loads, report["floor"].get(n))
         except Exception as error:  # recorded, and the next stage goes on
-            report["sweeps"].append({"grid": n, "error": repr(error)})
+            report["sweeps"].append({"grid": n, "error": traceback.format_exc()})
             say(f"{n}^2 sweep failed: {error!r}")
             save()
             continue
@@ -254,7 +256,7 @@ def main() -> int:
             wall, its = one["wall"], one["iterations"]
             say(f"8192^2 one step from first touch: wall {wall:.1f} s, {its} its")
         except Exception as error:
-            report["first_touch_8192"] = {"error": repr(error)}
+            report["first_touch_8192"] = {"error": traceback.format_exc()}
             say(f"8192^2 first touch failed: {error!r}")
         save()
     if left() > 120:
@@ -267,7 +269,7 @@ def main() -> int:
                 f"converged {big['all_converged']}"
             )
         except Exception as error:  # out of memory among them: recorded
-            report["largest"] = {"grid": args.largest, "error": repr(error)}
+            report["largest"] = {"grid": args.largest, "error": traceback.format_exc()}
             say(f"{args.largest}^2 failed: {error!r}")
         save()
     report["elapsed"] = time.perf_counter() - began

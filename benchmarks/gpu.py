@@ -15,7 +15,9 @@ usage (on a machine with CuPy and a CUDA GPU, in the repository's root, no netwo
    ``L/lambda_1 = n/2``, seed 1, 12 loads from 1e-7 to 1e-1 E*, ``--stiffness``): wall,
    iterations, seconds per iteration against 3.5 round trips and 10 passes, the stiffness
    solves, and the device memory the pool held (bytes per point);
-5. one 8192^2 step from first touch (``p0 = 1e-3 E*``) and a short sweep at ``--largest``.
+5. the 8192^2 sweep again with the unfused passes (:class:`ArrayPasses`: what the fused
+   kernels of :mod:`~petsc_contact.numerics.fused` save), one 8192^2 step from first touch
+   (``p0 = 1e-3 E*``) and a short sweep at ``--largest``.
 
 Every stage is skipped once ``--budget`` seconds have passed.  Writes ``gpu.json`` (every
 figure) and ``gpu.log`` (what was printed) to ``--out``.
@@ -111,7 +113,9 @@ def sweep(n: int, loads: list[float], floors: dict[str, float] | None) -> dict[s
     h = surface(n, "gpu")
     surface_time = time.perf_counter() - start
     start = time.perf_counter()
-    steps = periodic_contact(h, 1.0, 1.0, loads, stiffness=True, device="gpu")
+    steps = periodic_contact(
+        h, length=1.0, modulus=1.0, pressures=loads, stiffness=True, device="gpu"
+    )
     wall = time.perf_counter() - start
     rows = [
         {
@@ -154,6 +158,19 @@ def sweep(n: int, loads: list[float], floors: dict[str, float] | None) -> dict[s
         out["floor_per_iteration"] = ROUND_TRIPS * floors["round_trip"] + PASSES * floors["pass"]
         out["per_iteration_over_floor"] = out["per_iteration"] / out["floor_per_iteration"]
     return out
+
+
+def plain_passes_sweep(n: int, loads: list[float], report: dict[str, Any]) -> dict[str, Any]:
+    """:func:`sweep` with the GPU's passes as :class:`ArrayPasses` (one CuPy kernel per
+    operator) instead of the fused kernels: what the fusion saves, on the same surface."""
+    from petsc_contact.numerics import device
+
+    fused = device.Device.__dict__["passes"]
+    device.Device.passes = property(lambda self: device.ArrayPasses(self.xp))
+    try:
+        return sweep(n, loads, report["floor"].get(n))
+    finally:
+        device.Device.passes = fused
 
 
 def main() -> int:
@@ -249,6 +266,17 @@ def main() -> int:
             f"({result.get('per_iteration_over_floor', float('nan')):.2f}x floor), "
             f"{result['bytes_per_point']:.0f} B/point, converged {result['all_converged']}"
         )
+    if left() > 90 and 8192 in grids:  # the same sweep with the array module's passes
+        try:
+            report["plain_passes_8192"] = plain = plain_passes_sweep(8192, loads, report)
+            say(
+                f"8192^2 sweep with the unfused passes: wall {plain['wall']:.1f} s, solve "
+                f"{plain['solve_time']:.1f} s, {plain['per_iteration'] * 1e3:.2f} ms each"
+            )
+        except Exception as error:
+            report["plain_passes_8192"] = {"error": traceback.format_exc()}
+            say(f"8192^2 with the unfused passes failed: {error!r}")
+        save()
     if left() > 60 and 8192 in grids:
         try:
             one = sweep(8192, [1e-3], report["floor"].get(8192))

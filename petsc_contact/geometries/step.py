@@ -8,8 +8,8 @@ bound-constrained QP that TAO minimises, and the observables and verdict of its 
 
 from __future__ import annotations
 
-from collections.abc import Iterable
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
@@ -39,10 +39,33 @@ class Step:
     scalars: dict[str, Any]
     gap: np.ndarray | None = None
     pressure: np.ndarray | None = None
-    state: np.ndarray | None = None  # local gap/pressure the next step starts from
-    # (:func:`collect` keeps it and ``held`` on a list's last step only)
-    held: Held | None = None  # what the sweep holds besides, to go on from
     contact: np.ndarray | None = None  # local mask of the pixels in contact
+    resume: Callable[[], tuple[np.ndarray, Held]] | None = field(default=None, repr=False)
+    """Makes :attr:`state` and :attr:`held` on their first reading: a sweep whose steps
+    nobody goes on from moves no field off its device (512 MB a step at 8192^2)."""
+    _point: tuple[np.ndarray, Held] | None = field(default=None, init=False, repr=False)
+
+    @property
+    def state(self) -> np.ndarray | None:
+        """The local gap (periodic) or pressure (punch) slab the next step starts from, on
+        the host; ``None`` once :func:`collect` has dropped it (it keeps the last step's)."""
+        point = self._resume_point()
+        return None if point is None else point[0]
+
+    @property
+    def held(self) -> Held | None:
+        """What the sweep holds besides :attr:`state`, to go on from."""
+        point = self._resume_point()
+        return None if point is None else point[1]
+
+    def _resume_point(self) -> tuple[np.ndarray, Held] | None:
+        if self._point is None and self.resume is not None:
+            self._point = self.resume()
+        return self._point
+
+    def forget_resume(self) -> None:
+        """Drop :attr:`state` and :attr:`held` (and what makes them)."""
+        self.resume, self._point = None, None
 
     def field(self, name: str) -> np.ndarray | None:
         """A field by its dataset name: ``gap``, ``pressure`` or ``contact``."""
@@ -63,7 +86,7 @@ def collect(steps: Iterable[Step]) -> list[Step]:
     out: list[Step] = []
     for step in steps:
         if out:
-            out[-1].state = out[-1].held = None
+            out[-1].forget_resume()
         out.append(step)
     return out
 

@@ -174,11 +174,17 @@ class Device:
     @cached_property
     def passes(self) -> Any:
         """The element-wise passes: numba's on the ``cpu`` device
-        (:mod:`~petsc_contact.numerics.kernels`), :class:`ArrayPasses` on the others."""
+        (:mod:`~petsc_contact.numerics.kernels`), CuPy's fused kernels on the ``gpu``
+        (:class:`~petsc_contact.numerics.fused.FusedPasses`), :class:`ArrayPasses` on the
+        stand-in."""
         if self.name == "cpu":
             from . import kernels
 
             return kernels
+        if not self.on_host:
+            from .fused import FusedPasses
+
+            return FusedPasses(self.xp)
         return ArrayPasses(self.xp)
 
     @property

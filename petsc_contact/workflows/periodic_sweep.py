@@ -119,18 +119,25 @@ def sweep(
                 x = x_new
                 k = step.scalars.get("stiffness", np.nan)
                 path.add(ConvergedStep(p0, step.scalars["mean_gap"], x, k))
-            step.state = device.to_host(x).reshape(problem.grid.local_shape) * ell
-            step.held = _held(path, ell, device, problem.grid.local_shape)
+            step.resume = _resume_point(x, path, ell, device, problem.grid.local_shape)
             yield step
 
 
-def _held(path: LoadPath, ell: float, device: Any, shape: tuple[int, ...]) -> Held:
-    """What a sweep holds after a step: its load path's pressures, mean gaps and stiffnesses,
-    and the older of its two gaps (the newer is the step's ``state``)."""
-    steps = path.steps
-    scalars = np.array([[s.pressure, s.mean_gap, s.stiffness] for s in steps]).reshape(-1, 3)
-    older = tuple(device.to_host(s.gap).reshape(shape) * ell for s in steps[:-1])
-    return Held(scalars, older)
+def _resume_point(
+    x: Any, path: LoadPath, ell: float, device: Any, shape: tuple[int, ...]
+) -> Callable[[], tuple[np.ndarray, Held]]:
+    """What makes a step's state (the gap ``x`` the next step starts from, on the host) and
+    what the sweep holds after it: its load path's pressures, mean gaps and stiffnesses, and
+    the older of its two gaps.  Taken when read (the arrays are never changed in place)."""
+    steps = list(path.steps)
+
+    def make() -> tuple[np.ndarray, Held]:
+        scalars = np.array([[s.pressure, s.mean_gap, s.stiffness] for s in steps])
+        older = tuple(device.to_host(s.gap).reshape(shape) * ell for s in steps[:-1])
+        state = device.to_host(x).reshape(shape) * ell
+        return state, Held(scalars.reshape(-1, 3), older)
+
+    return make
 
 
 def _resumed_path(held: Held, x: Any, ell: float, device: Any) -> LoadPath:

@@ -91,8 +91,13 @@ class PunchSolver:
             self.x = x_new
             s = step.scalars
             self.last = (float(delta), s["force"], s["total_stiffness"])
-        step.state = pb.device.to_host(self.x).reshape(pb.grid.local_shape) * pb.pressure_scale
-        step.held = Held(np.array([self.last] if self.last is not None else []).reshape(-1, 3))
+        x, last = self.x, self.last
+
+        def resume_point() -> tuple[np.ndarray, Held]:
+            state = pb.device.to_host(x).reshape(pb.grid.local_shape) * pb.pressure_scale
+            return state, Held(np.array([last] if last is not None else []).reshape(-1, 3))
+
+        step.resume = resume_point
         return step
 
     def restart_from(self, pressure: np.ndarray, held: Held | None = None) -> None:

@@ -211,7 +211,7 @@ class Prepared:
                 store.append(step.scalars, fields, state=step.state, held=step.held)
             check_interrupt()
             if steps:
-                steps[-1].state = steps[-1].held = None  # a long sweep keeps one field
+                steps[-1].forget_resume()  # a long sweep keeps one field
             steps.append(step)
             table.append(step.scalars)
             if progress is not None:

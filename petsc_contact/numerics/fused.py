@@ -1,0 +1,125 @@
+"""The constrained CG's passes as fused CuPy kernels: the GPU's :class:`ArrayPasses`.
+
+:class:`~petsc_contact.numerics.device.ArrayPasses` writes each pass with the array module's
+operators, which on a GPU makes one kernel and one full-size temporary per operator: ``y += a
+x`` reads and writes twice the memory it needs, the free set's test makes seven masks.  Here
+the passes that touch whole fields every iteration are one ``ElementwiseKernel`` each, and
+the spectrum's weighted sum one ``ReductionKernel`` without the squared temporary; what is
+left (the counts of masks, the dot products) are CuPy's own reductions, read on the host in
+one transfer per pass.  The contracts are :class:`ArrayPasses`'s, which the stand-in
+(``cpu-array``) runs on NumPy: ``pytest -m gpu`` checks the two against each other.
+
+Only the ``gpu`` device imports this module (:attr:`Device.passes`), after CuPy.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+from typing import Any
+
+from .device import ArrayPasses
+
+
+@cache
+def _kernels() -> dict[str, Any]:
+    """The kernels, compiled by CuPy on first use (and cached by it on disk)."""
+    import cupy
+
+    return {
+        "free_set": cupy.ElementwiseKernel(
+            "float64 x, float64 g, float64 lower, float64 upper",
+            "bool mask, float64 r, int8 code",
+            """
+            const bool pull = g < 0.0;
+            const bool now = (x > lower || pull) && !(x >= upper && pull);
+            code = (now != mask ? 1 : 0) + (now && !mask ? 2 : 0);
+            mask = now;
+            r = now ? g : 0.0;
+            """,
+            "petsc_contact_free_set",
+        ),
+        "axpy": cupy.ElementwiseKernel(
+            "float64 a, float64 x", "float64 y", "y += a * x", "petsc_contact_axpy"
+        ),
+        "extend": cupy.ElementwiseKernel(
+            "float64 d, bool mask, float64 beta",
+            "float64 z",
+            "if (mask) z += beta * d;",
+            "petsc_contact_extend",
+        ),
+        "weighted_squares": cupy.ReductionKernel(
+            "float64 v, float64 m",
+            "float64 total",
+            "v * v * m",
+            "a + b",
+            "total = a",
+            "0",
+            "petsc_contact_weighted_squares",
+            reduce_type="float64",
+        ),
+        "changed": cupy.ReductionKernel(
+            "int8 code",
+            "int64 count",
+            "code & 1",
+            "a + b",
+            "count = a",
+            "0",
+            "petsc_contact_changed",
+            reduce_type="int64",
+        ),
+        "joined": cupy.ReductionKernel(
+            "int8 code",
+            "int64 count",
+            "(code >> 1) & 1",
+            "a + b",
+            "count = a",
+            "0",
+            "petsc_contact_joined",
+            reduce_type="int64",
+        ),
+    }
+
+
+class FusedPasses(ArrayPasses):
+    """:class:`ArrayPasses` on CuPy with the per-iteration passes fused (module docstring)."""
+
+    def free_set(
+        self, x: Any, g: Any, lower: Any, upper: Any, free: Any, r: Any
+    ) -> tuple[float, int, int, int]:
+        xp, k = self.xp, _kernels()
+        code = xp.empty(free.shape, dtype=xp.int8)
+        k["free_set"](x, g, self._bound(lower), self._bound(upper), free, r, code)
+        values = xp.stack(
+            [
+                xp.dot(r, r),
+                k["changed"](code).astype(float),
+                k["joined"](code).astype(float),
+                xp.count_nonzero(free).astype(float),
+            ]
+        ).get()
+        return float(values[0]), int(values[1]), int(values[2]), int(values[3])
+
+    def extend_direction(self, z: Any, d: Any, free: Any, beta: float, r: Any) -> float:
+        _kernels()["extend"](d, free, float(beta), z)
+        return float(self.xp.dot(r, z))
+
+    def advance(self, x: Any, d: Any, alpha: float, lower: Any, upper: Any) -> tuple[int, int]:
+        xp = self.xp
+        self.axpy(alpha, d, x)
+        counts = xp.stack([xp.count_nonzero(x < lower), xp.count_nonzero(x > upper)]).get()
+        return int(counts[0]), int(counts[1])
+
+    def axpy(self, a: float, x: Any, y: Any) -> None:
+        _kernels()["axpy"](float(a), x, y)
+
+    def _bound(self, value: Any) -> Any:
+        """A bound as a kernel takes it: an array of the device, or a float."""
+        return value if isinstance(value, self.xp.ndarray) else float(value)
+
+    def scale_spectrum(self, values: Any, multiplier: Any, single: Any) -> float:
+        xp = self.xp
+        re, im = values[2 * single], values[2 * single + 1]
+        once = xp.dot(multiplier[2 * single], re * re + im * im)
+        total = _kernels()["weighted_squares"](values, multiplier)
+        values *= multiplier
+        return float(2.0 * total - once)

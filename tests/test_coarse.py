@@ -254,3 +254,68 @@ def test_no_rank_holds_the_quarter(ranks, shape):
     pieces, are the serial ones exactly."""
     r = python("-c", HELD_QUARTER, shape, mpi=ranks, timeout=240)
     assert r.returncode == 0, r.stdout + r.stderr
+
+
+HALO = r"""
+import sys
+import numpy as np
+from mpi4py import MPI
+from petsc_contact.backend import coarse
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.numerics.device import CPU
+from petsc_contact.numerics.schur import _fold, quarter
+
+nx, ny = (int(v) for v in sys.argv[1].split(","))
+comm = MPI.COMM_WORLD
+grid, whole = (Grid((nx, ny), (1.0, ny / nx), c) for c in (comm, MPI.COMM_SELF))
+table = np.random.default_rng(2).random((nx // 2 + 1, ny // 2 + 1)) + 1.0
+i, j = np.meshgrid(_fold(np.arange(nx), nx), _fold(np.arange(ny), ny), indexing="ij")
+column = table[i, j]  # an even periodic G e_0
+mine, full = quarter(grid, column[grid.rows]), quarter(whole, column)
+held = []  # the bound pixels each exchange leaves this rank with
+exchange = coarse._halo
+
+
+def counted(*args):
+    near = exchange(*args)
+    held.append(len(near))
+    return near
+
+
+coarse._halo = counted
+rng = np.random.default_rng(7)
+sparse = rng.random((nx, ny)) < 0.05  # near pairs pixel pair by pair
+dense = rng.random((nx, ny)) < 0.9  # near pairs by FFTs
+cases = [(sparse, 3, 10**6), (sparse, 2, 80), (dense, 4, 10**6), (dense, 2, 60)]
+cases.append((dense, 2, 9))  # blocks of about nx/3: slabs beside their block rows, or none
+for case, (bound, block, cap) in enumerate(cases):
+    held.clear()
+    par = coarse.host_coarse_matrix(grid, mine, bound[grid.rows], block, cap, CPU)
+    ser = coarse.host_coarse_matrix(whole, full, bound, block, cap, CPU)
+    assert par.block == ser.block and (par.block > block) == (cap < 10**6), (par.block, block)
+    assert np.array_equal(par.matrix, ser.matrix), np.abs(par.matrix - ser.matrix).max()
+    assert np.array_equal(par.sizes, ser.sizes)
+    slab = (ser.local >= grid.rows.start * ny) & (ser.local < grid.rows.stop * ny)
+    assert np.array_equal(par.local + grid.rows.start * ny, ser.local[slab])
+    assert np.array_equal(par.labels, ser.labels[slab])
+    # at most the pixels of the rows the near block rows of this slab's can reach
+    b, reach = par.block, coarse.NEAR_REACH
+    near = np.arange(grid.rows.start - reach * b, grid.rows.stop + (reach + 1) * b) % nx
+    halo, own, total = bound[np.unique(near)].sum(), bound[grid.rows].sum(), bound.sum()
+    assert max(held) <= halo and (halo < total or case == len(cases) - 1), (held, halo, total)
+    counts = comm.gather((int(own), max(held), int(halo)), root=0)
+    if comm.rank == 0:
+        print(f"case {case} b {b} k {par.sizes.size} total {total} (own, held, bound):", counts)
+"""
+
+
+@pytest.mark.parametrize("ranks, shape", [(3, "128,96"), (4, "128,128")])
+def test_no_rank_holds_the_contact_set(ranks, shape):
+    """On 3 and 4 ranks the cpu device's coarse matrix, the local pixels' aggregates and their
+    sizes equal the serial ones exactly (near pairs pixel pair by pixel pair and by FFTs, the
+    block kept and grown, up to a block row wider than a slab), and no rank receives more of
+    the contact set (random, on every slab) than the pixels of the rows within reach of its
+    slab's near block rows: less than the whole set where the blocks are narrower than the
+    grid's share."""
+    r = python("-c", HALO, shape, mpi=ranks, timeout=240)
+    assert r.returncode == 0, r.stdout + r.stderr

@@ -16,7 +16,9 @@ application, a ``k x k`` Cholesky factorisation per build and two triangular sol
 application (``k`` aggregates).
 
 ``E`` comes from one column of ``G`` (the kernel is periodic and even, :func:`schur.quarter`;
-on several ranks each rank makes the entries from its own rows of it, :func:`coarse_matrix`):
+on several ranks each rank makes the entries from its own rows of it, :func:`coarse_matrix`,
+and its own contact pixels and those of the block rows near its own,
+:func:`distributed_aggregates`):
 exactly between aggregates of neighbouring blocks (pixel pair by pixel pair where the blocks
 hold few contact pixels, by FFTs on ``2b x 2b`` cells where they hold many,
 :func:`coarse_matrix`); as the
@@ -41,6 +43,7 @@ import scipy.fft
 
 from ..conventions.grid import Grid, block_rows
 from ..numerics.aggregates import (
+    centroids,
     grouped,
     half_spectrum_weights,
     monopoles,
@@ -156,19 +159,8 @@ def _pair_sums_fft(
     return out
 
 
-def coarse_matrix(
-    rows: np.ndarray,
-    cols: np.ndarray,
-    starts: np.ndarray,
-    block_rc: np.ndarray,
-    lookup: np.ndarray,
-    quarter: np.ndarray,
-    grid: Grid,
-    block: int,
-) -> np.ndarray:
-    """``E = W^T G_BB W`` for aggregates ``I`` holding the pixels ``starts[I]:starts[I+1]``
-    of ``(rows, cols)``, in block ``block_rc[I]`` of side ``block``; ``lookup[bi, bj]`` is
-    the aggregate of a block (``-1`` for none).  Exact between blocks at most
+def coarse_matrix(parts: Aggregates, quarter: np.ndarray, grid: Grid) -> np.ndarray:
+    """``E = W^T G_BB W`` for the aggregates ``parts``: exact between blocks at most
     :data:`NEAR_REACH` blocks apart, monopoles beyond; only the upper triangle is filled, in
     Fortran order (factorised in place, :meth:`~petsc_contact.numerics.device.Device.cho_factor`).
 
@@ -176,17 +168,19 @@ def coarse_matrix(
     FFTs on ``2b x 2b`` cells where they are large (:func:`_pair_sums_fft`), whichever
     costs fewer products (``|A_I| |A_J|`` against :data:`FFT_PRODUCTS` ``b^2`` per pair).
     On several ranks (``quarter``: this rank's rows, :func:`~petsc_contact.numerics.schur.quarter`)
-    each rank makes the monopoles whose folded row offset it holds and a share of the near
-    pairs, and the ranks' matrices are summed (each entry made on one rank).
+    each rank makes the monopoles whose folded row offset it holds and the near pairs
+    ``(I, J)``, ``I <= J``, of the aggregates ``I`` it owns (``parts.owned``), and the ranks'
+    matrices are summed (each entry made on one rank).
     """
     nx, ny = shape = grid.shape
-    held, comm = held_rows(grid), grid.comm
-    e_mat = monopoles(rows, cols, starts, quarter, nx, ny, held.start, held.stop)
+    held, comm, block = held_rows(grid), grid.comm, parts.block
+    e_mat = monopoles(parts.sizes, parts.centre, quarter, nx, ny, held.start, held.stop)
+    block_rc, lookup = block_lookup(np, parts.ids, shape, block)
     pairs = near_pairs(block_rc, lookup, NEAR_REACH)
-    sizes = np.diff(starts).astype(float)
-    direct = float(np.dot(sizes[pairs[:, 0]], sizes[pairs[:, 1]]))
+    direct = float(np.dot(parts.sizes[pairs[:, 0]], parts.sizes[pairs[:, 1]]))
     near = near_corner(quarter, grid, (NEAR_REACH + 1) * block)
-    mine = pairs[block_rows(len(pairs), comm.size, comm.rank)]
+    mine = pairs[slice(*np.searchsorted(pairs[:, 0], [parts.owned.start, parts.owned.stop]))]
+    rows, cols, starts = parts.rows, parts.cols, parts.starts
     if direct > FFT_PRODUCTS * block**2 * len(pairs):
         sums = _pair_sums_fft(rows, cols, starts, block_rc * block, mine, near, shape, block)
     else:
@@ -247,13 +241,24 @@ def aggregate(
     nx, ny = shape
     while True:
         bx, by = -(-nx // block), -(-ny // block)
-        block_id = (rows // block) * by + cols // block
+        block_id = block_of(rows, cols, ny, block)
         counts = xp.bincount(block_id, minlength=bx * by)
         ids = xp.flatnonzero(counts)
         if ids.size <= max_size:
             break
-        block = max(block + 1, int(np.ceil(block * np.sqrt(ids.size / max_size))))
+        block = grown(block, int(ids.size), max_size)
     return block, (xp.cumsum(counts > 0) - 1)[block_id], ids, counts
+
+
+def block_of(rows: Any, cols: Any, ny: int, block: int) -> Any:
+    """The flat index of the block of side ``block`` holding each pixel ``(rows, cols)``."""
+    return (rows // block) * -(-ny // block) + cols // block
+
+
+def grown(block: int, count: int, max_size: int) -> int:
+    """The next block side tried where ``block`` leaves ``count > max_size`` blocks holding
+    pixels: scaled by ``sqrt(count / max_size)``, at least one more."""
+    return max(block + 1, int(np.ceil(block * np.sqrt(count / max_size))))
 
 
 def block_lookup(xp: Any, ids: Any, shape: tuple[int, int], block: int) -> tuple[Any, Any]:
@@ -273,34 +278,155 @@ def _raise_diagonal(xp: Any, matrix: Any, block: int) -> None:
         matrix[d, d] *= 1.0 + DIAGONAL_INFLATION
 
 
+@dataclass(frozen=True)
+class Aggregates:
+    """The aggregates of a bound set as one rank holds them: every aggregate's block, size and
+    centroid (``k`` of each, ``k`` at most the coarse space's cap), and the pixels of those
+    whose near pairs it sums.
+
+    Attributes
+    ----------
+    block
+        The block side ``b``.
+    ids
+        Each aggregate's block (flat block indices, :func:`block_of`), in order.
+    sizes
+        Each aggregate's pixel count (floats).
+    centre
+        Each aggregate's centroid (``k x 2``, :func:`~petsc_contact.numerics.aggregates.centroids`).
+    rows, cols
+        The bound pixels this rank holds (global indices), grouped by aggregate, each
+        aggregate's in the order of their flat global indices.
+    starts
+        Aggregate ``I`` holds the pixels ``starts[I]:starts[I+1]`` of them (none where this
+        rank does not hold its pixels).
+    owned
+        The aggregates whose near pairs this rank sums (all of them on one rank).
+    """
+
+    block: int
+    ids: np.ndarray
+    sizes: np.ndarray
+    centre: np.ndarray
+    rows: np.ndarray
+    cols: np.ndarray
+    starts: np.ndarray
+    owned: range
+
+
+def whole_aggregates(
+    rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int], block: int, max_size: int
+) -> tuple[Aggregates, np.ndarray]:
+    """The aggregates of the bound pixels ``(rows, cols)``, all of them on one rank
+    (:func:`aggregate`), and each pixel's aggregate."""
+    block, labels, ids, counts = aggregate(np, rows, cols, shape, block, max_size)
+    starts = np.concatenate([[0], np.cumsum(counts[ids])]).astype(np.int64)
+    order = grouped(labels, starts)
+    rows, cols = rows[order], cols[order]
+    sizes = counts[ids].astype(float)
+    centre = centroids(rows, cols, starts)
+    return Aggregates(block, ids, sizes, centre, rows, cols, starts, range(len(ids))), labels
+
+
+def distributed_aggregates(
+    grid: Grid, rows: np.ndarray, cols: np.ndarray, block: int, max_size: int
+) -> tuple[Aggregates, np.ndarray]:
+    """The aggregates of every rank's bound pixels (this rank's: ``(rows, cols)``, global
+    indices) and the aggregate of each of this rank's, on several ranks, with no rank holding
+    them all: :func:`whole_aggregates`' blocks, numbering, sizes and centroids.
+
+    Each rank owns the block rows whose first pixel row is in its slab
+    (:func:`_owned_bands`) and the aggregates in them, receives the bound pixels of the
+    block rows within :data:`NEAR_REACH` of those (:func:`_halo`: those of its near pairs),
+    and makes its aggregates' sizes and centroids; the blocks, sizes and centroids are
+    gathered on every rank (``k`` of each, bounded by ``max_size``).  The block side grows as
+    in :func:`aggregate`, from the count of aggregates summed over the ranks.
+    """
+    comm, ny = grid.comm, grid.shape[1]
+    while True:
+        near = _halo(grid, rows, cols, block)
+        mine = _owned_blocks(near, grid.rows, ny, block)
+        count = comm.allreduce(mine.size)
+        if count <= max_size:
+            break
+        block = grown(block, count, max_size)
+    pieces = comm.allgather(mine)
+    first = sum(len(p) for p in pieces[: comm.rank])
+    ids = np.concatenate(pieces)
+    labels = np.searchsorted(ids, block_of(near[:, 0], near[:, 1], ny, block))
+    starts = np.concatenate([[0], np.cumsum(np.bincount(labels, minlength=ids.size))])
+    starts = starts.astype(np.int64)
+    order = grouped(labels, starts)
+    near_rows, near_cols = near[order, 0], near[order, 1]  # contiguous copies
+    owned = range(first, first + mine.size)
+    bounds = starts[owned.start : owned.stop + 1]
+    made = allgather(
+        np.column_stack([np.diff(bounds), centroids(near_rows, near_cols, bounds)]), comm
+    )
+    sizes, centre = np.ascontiguousarray(made[:, 0]), np.ascontiguousarray(made[:, 1:])
+    parts = Aggregates(block, ids, sizes, centre, near_rows, near_cols, starts, owned)
+    return parts, np.searchsorted(ids, block_of(rows, cols, ny, block))
+
+
+def _owned_bands(slab: slice, block: int) -> range:
+    """The block rows (of side ``block``) whose first pixel row is in the rows ``slab``."""
+    return range(-(-slab.start // block), -(-slab.stop // block))
+
+
+def _owned_blocks(pixels: np.ndarray, slab: slice, ny: int, block: int) -> np.ndarray:
+    """The blocks holding the pixels ``pixels`` (``(row, col)`` pairs) in the block rows owned
+    by the slab ``slab`` (:func:`_owned_bands`): flat block indices, in order."""
+    bands = _owned_bands(slab, block)
+    on = (pixels[:, 0] >= bands.start * block) & (pixels[:, 0] < bands.stop * block)
+    return np.unique(block_of(pixels[on, 0], pixels[on, 1], ny, block))
+
+
+def _near_bands(nx: int, slab: slice, block: int) -> np.ndarray:
+    """The block rows within :data:`NEAR_REACH` block rows (periodic) of those the slab
+    ``slab`` owns (:func:`_owned_bands`; none where it owns none)."""
+    bands = _owned_bands(slab, block)
+    if not bands:
+        return np.empty(0, dtype=np.int64)
+    return np.unique(np.arange(bands.start - NEAR_REACH, bands.stop + NEAR_REACH) % -(-nx // block))
+
+
+def _halo(grid: Grid, rows: np.ndarray, cols: np.ndarray, block: int) -> np.ndarray:
+    """The bound pixels of every rank in the block rows near this rank's (:func:`_near_bands`),
+    as ``(row, col)`` pairs (global indices) in rank order, so that each block's are in the
+    order of their flat indices: one ``Alltoallv``, each rank sending each other its pixels
+    ``(rows, cols)`` in that rank's near block rows."""
+    comm, nx = grid.comm, grid.shape[0]
+    bands = rows // block
+    chosen = [
+        np.flatnonzero(np.isin(bands, _near_bands(nx, block_rows(nx, comm.size, q), block)))
+        for q in range(comm.size)
+    ]
+    send = np.stack([rows, cols], axis=1)[np.concatenate(chosen)]
+    sent = [2 * len(c) for c in chosen]
+    taken = comm.alltoall(sent)
+    near = np.empty((sum(taken) // 2, 2), dtype=np.int64)
+    comm.Alltoallv([send, sent], [near, taken])
+    return near
+
+
 def host_coarse_matrix(
     grid: Grid, quarter: np.ndarray, bound: Any, block: int, max_size: int, device: Device
 ) -> CoarseMatrix:
-    """The coarse matrix summed on the host by the numba loops (every rank's bound pixels
-    gathered): the ``cpu`` device's build."""
+    """The coarse matrix summed on the host by the numba loops: the ``cpu`` device's build.
+    On several ranks no rank holds every bound pixel, only its own and those of the block
+    rows near the ones it owns (:func:`distributed_aggregates`)."""
     local = np.flatnonzero(device.to_host(bound))
-    nx, ny = grid.shape
-    rows, cols = np.divmod(local, ny)
-    both = allgather(np.stack([rows + grid.rows.start, cols], axis=1), grid.comm)
-    offset = 0 if grid.comm.size == 1 else int(grid.comm.exscan(len(local)) or 0)
-    block, labels, ids, counts = aggregate(np, both[:, 0], both[:, 1], (nx, ny), block, max_size)
-    starts = np.concatenate([[0], np.cumsum(counts[ids])]).astype(np.int64)
-    order = grouped(labels, starts)
-    block_rc, lookup = block_lookup(np, ids, (nx, ny), block)
-    matrix = coarse_matrix(
-        np.ascontiguousarray(both[order, 0]),
-        np.ascontiguousarray(both[order, 1]),
-        starts,
-        block_rc,
-        lookup,
-        np.ascontiguousarray(quarter, dtype=float),
-        grid,
-        block,
+    rows, cols = np.divmod(local, grid.shape[1])
+    rows += grid.rows.start
+    if grid.comm.size == 1:
+        parts, labels = whole_aggregates(rows, cols, grid.shape, block, max_size)
+    else:
+        parts, labels = distributed_aggregates(grid, rows, cols, block, max_size)
+    matrix = coarse_matrix(parts, np.ascontiguousarray(quarter, dtype=float), grid)
+    _raise_diagonal(np, matrix, parts.block)
+    return CoarseMatrix(
+        device.asarray(local), device.asarray(labels), parts.block, parts.sizes, matrix
     )
-    _raise_diagonal(np, matrix, block)
-    own = labels[offset : offset + len(local)]
-    sizes = counts[ids].astype(float)
-    return CoarseMatrix(device.asarray(local), device.asarray(own), block, sizes, matrix)
 
 
 def array_coarse_matrix(

@@ -63,32 +63,36 @@ def _interpolate(
     )
 
 
+@njit(cache=True, nogil=True)
+def centroids(rows: np.ndarray, cols: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """The centroid ``c_I`` of each aggregate ``I`` holding the pixels ``starts[I]:starts[I+1]``
+    of ``(rows, cols)`` (an aggregate lies in one block, which does not wrap): ``k x 2``."""
+    k = starts.size - 1
+    centre = np.empty((k, 2))
+    for a in range(k):
+        s, e = starts[a], starts[a + 1]
+        centre[a, 0] = rows[s:e].astype(np.float64).mean()
+        centre[a, 1] = cols[s:e].astype(np.float64).mean()
+    return centre
+
+
 @njit(cache=True, nogil=True, parallel=True)
 def monopoles(
-    rows: np.ndarray,
-    cols: np.ndarray,
-    starts: np.ndarray,
+    sizes: np.ndarray,
+    centre: np.ndarray,
     quarter: np.ndarray,
     nx: int,
     ny: int,
     first: int,
     stop: int,
 ) -> np.ndarray:
-    """``|A_I| |A_J| G(c_I - c_J)`` for aggregates ``I`` holding the pixels
-    ``starts[I]:starts[I+1]`` of ``(rows, cols)`` (``c`` their centroids), upper triangle
-    only, in Fortran order (columns in parallel): LAPACK factorises it in place, with no
-    copy of the ``k x k`` matrix.  ``quarter`` holds the rows ``first .. stop - 1`` of
-    ``G``'s quarter and the next (:func:`~petsc_contact.numerics.schur.quarter`): the entries
-    whose folded row offset is elsewhere are zero (``0, nx // 2 + 1`` on one rank: none)."""
-    k = starts.size - 1
-    sizes = np.empty(k)
-    centre = np.empty((k, 2))
-    for a in range(k):
-        s, e = starts[a], starts[a + 1]
-        sizes[a] = e - s
-        # the centroid (an aggregate lies in one block, which does not wrap)
-        centre[a, 0] = rows[s:e].astype(np.float64).mean()
-        centre[a, 1] = cols[s:e].astype(np.float64).mean()
+    """``|A_I| |A_J| G(c_I - c_J)`` for aggregates ``I`` of ``sizes[I]`` pixels (floats) and
+    centroids ``centre[I]`` (:func:`centroids`), upper triangle only, in Fortran order
+    (columns in parallel): LAPACK factorises it in place, with no copy of the ``k x k``
+    matrix.  ``quarter`` holds the rows ``first .. stop - 1`` of ``G``'s quarter and the next
+    (:func:`~petsc_contact.numerics.schur.quarter`): the entries whose folded row offset is
+    elsewhere are zero (``0, nx // 2 + 1`` on one rank: none)."""
+    k = sizes.size
     e_mat = np.zeros((k, k)).T
     for b in prange(k):
         rb, cb, sb = centre[b, 0], centre[b, 1], sizes[b]
@@ -191,7 +195,7 @@ def monopoles_array(
     """:func:`monopoles` on arrays of ``xp``, for the pixels ``(rows, cols)`` of aggregates
     ``labels`` (``sizes``: their pixel counts, floats): the full symmetric ``k x k`` matrix,
     in bands of rows of at most :data:`CHUNK_ENTRIES` entries.  The centroids are exact
-    sums of integers over the counts, as :func:`monopoles`' means, and the interpolation is
+    sums of integers over the counts, as :func:`centroids`' means, and the interpolation is
     its formula term by term."""
     k = sizes.size
     centre_r = xp.bincount(labels, weights=rows.astype(float), minlength=k) / sizes
@@ -315,7 +319,8 @@ def specimen_calls() -> list[tuple[Any, tuple[Any, ...]]]:
     index, weight = np.zeros(1, dtype=np.int64), np.ones(2)
     return [
         (grouped, (np.zeros(2, dtype=np.int64), starts)),
-        (monopoles, (rows, cols, starts, quarter, 2, 2, 0, 2)),
+        (centroids, (rows, cols, starts)),
+        (monopoles, (np.ones(1), np.zeros((1, 2)), quarter, 2, 2, 0, 2)),
         (near_pairs, (pair, np.zeros((1, 1), dtype=np.int64), 1)),
         (pair_sums_direct, (rows, cols, starts, pair, quarter, 2, 2)),
         (spectral_dots, (spectra, spectra, pair, index, weight, np.zeros(1), index)),

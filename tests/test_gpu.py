@@ -100,11 +100,3 @@ def test_each_fused_pass_is_the_array_pass(gpu):
     ra = fused.extend_direction(za, d, old, 0.7, x)
     assert ra == pytest.approx(plain.extend_direction(zb, d, old, 0.7, x), rel=1e-12)
     assert float(xp.abs(za - zb).max()) <= 1e-15
-    nx, m = 64, 33
-    values = xp.asarray(rng.normal(size=nx * m * 2))
-    multiplier = xp.asarray(np.repeat(rng.random(nx * m), 2))
-    single = xp.asarray(np.flatnonzero(np.tile(np.arange(m) % (m - 1) == 0, nx)))
-    va, vb = values.copy(), values.copy()
-    total = fused.scale_spectrum(va, multiplier, single)
-    assert total == pytest.approx(plain.scale_spectrum(vb, multiplier, single), rel=1e-12)
-    assert bool((va == vb).all())

@@ -3,7 +3,7 @@
 - The coarse matrix of the two-level form summed with array operations (as on a GPU) equals
   the numba build of the ``cpu`` device to rounding, and is factorised on the device.
 - A step's observables are taken where its fields live: with ``fields=False`` no field
-  crosses to the host.
+  crosses to the host, and a sweep's resume state crosses only when it is read.
 - The held-set stiffness's preconditioner takes ``G``'s column from the contact solve's
   preconditioner instead of transforming an impulse again, with the same stiffness.
 """
@@ -22,7 +22,7 @@ from petsc_contact.conventions.grid import Grid
 from petsc_contact.geometries.periodic import PeriodicProblem
 from petsc_contact.numerics.device import CPU, Device, get_device
 from petsc_contact.solver.driver import ArraySettings, ArraySolver
-from petsc_contact.workflows.periodic_sweep import periodic_contact
+from petsc_contact.workflows.periodic_sweep import periodic_contact, sweep
 
 
 @dataclass(frozen=True)
@@ -33,6 +33,19 @@ class RecordingDevice(Device):
 
     def to_host(self, values):
         self.moved.append(int(np.size(values)))
+        return super().to_host(values)
+
+
+@dataclass(frozen=True)
+class FieldRecordingDevice(Device):
+    """The stand-in, recording the size of every floating-point array it brings to the host
+    (not the Schur form's contact masks, which are boolean)."""
+
+    fields: list[int] = field(default_factory=list)
+
+    def to_host(self, values):
+        if np.asarray(values).dtype.kind == "f":
+            self.fields.append(int(np.size(values)))
         return super().to_host(values)
 
 
@@ -112,6 +125,26 @@ def test_a_step_measured_on_the_array_path_brings_no_field_to_the_host():
     assert device.moved.count(n * n) == 3  # the gap, the pressure and the contact mask
     assert with_fields.scalars["mean_gap"] == step.scalars["mean_gap"]
     assert with_fields.gap is not None and with_fields.gap.shape == (n, n)
+
+
+def test_a_sweep_brings_its_resume_state_to_the_host_only_when_read():
+    """No field crosses while a sweep runs without ``fields``; reading the last step's
+    ``state`` and ``held`` brings its gap and the load path's older gap, the gaps the sweep
+    ended with (the state's mean is the step's mean gap); a dropped step has none."""
+    n = 128
+    grid = Grid(n, 1.0)
+    device = FieldRecordingDevice("cpu-array", np)
+    problem = PeriodicProblem(grid, device.fft(grid), surface(n, 0.7, 32), 1.0)
+    steps = list(sweep(problem, [1e-3, 3e-3, 1e-2]))
+    assert all(s.converged for s in steps) and n * n not in device.fields, device.fields
+    state, held = steps[-1].state, steps[-1].held
+    assert device.fields.count(n * n) == 2 and state.shape == (n, n)
+    assert state.mean() == pytest.approx(steps[-1].scalars["mean_gap"], rel=1e-12)
+    assert held.scalars[:, 0].tolist() == [3e-3, 1e-2] and len(held.fields) == 1
+    assert held.fields[0].mean() == pytest.approx(steps[1].scalars["mean_gap"], rel=1e-12)
+    assert steps[-1].state is state  # taken once
+    steps[1].forget_resume()
+    assert steps[1].state is None and steps[1].held is None
 
 
 @pytest.mark.parametrize("device", ["cpu-array", "cpu"])

@@ -3,11 +3,12 @@
 :class:`~petsc_contact.numerics.device.ArrayPasses` writes each pass with the array module's
 operators, which on a GPU makes one kernel and one full-size temporary per operator: ``y += a
 x`` reads and writes twice the memory it needs, the free set's test makes seven masks.  Here
-the passes that touch whole fields every iteration are one ``ElementwiseKernel`` each, and
-the spectrum's weighted sum one ``ReductionKernel`` without the squared temporary; what is
-left (the counts of masks, the dot products) are CuPy's own reductions, read on the host in
-one transfer per pass.  The contracts are :class:`ArrayPasses`'s, which the stand-in
-(``cpu-array``) runs on NumPy: ``pytest -m gpu`` checks the two against each other.
+the passes that touch whole fields every iteration are one ``ElementwiseKernel`` each.  The
+sums and counts stay CuPy's own reductions (``dot``, ``count_nonzero``: cuBLAS and CUB), read
+on the host in one transfer per pass: a ``ReductionKernel`` of CuPy's to one scalar does not
+use CUB, and took the CG's iterations at 8192^2 from 44 to 209 ms on one H100 (docs/gpu.md).
+The contracts are :class:`ArrayPasses`'s, which the stand-in (``cpu-array``) runs on NumPy:
+``pytest -m gpu`` checks the two against each other.
 
 Only the ``gpu`` device imports this module (:attr:`Device.passes`), after CuPy.
 """
@@ -47,36 +48,6 @@ def _kernels() -> dict[str, Any]:
             "if (mask) z += beta * d;",
             "petsc_contact_extend",
         ),
-        "weighted_squares": cupy.ReductionKernel(
-            "float64 v, float64 m",
-            "float64 total",
-            "v * v * m",
-            "a + b",
-            "total = a",
-            "0",
-            "petsc_contact_weighted_squares",
-            reduce_type="float64",
-        ),
-        "changed": cupy.ReductionKernel(
-            "int8 code",
-            "int64 count",
-            "code & 1",
-            "a + b",
-            "count = a",
-            "0",
-            "petsc_contact_changed",
-            reduce_type="int64",
-        ),
-        "joined": cupy.ReductionKernel(
-            "int8 code",
-            "int64 count",
-            "(code >> 1) & 1",
-            "a + b",
-            "count = a",
-            "0",
-            "petsc_contact_joined",
-            reduce_type="int64",
-        ),
     }
 
 
@@ -89,11 +60,11 @@ class FusedPasses(ArrayPasses):
         xp, k = self.xp, _kernels()
         code = xp.empty(free.shape, dtype=xp.int8)
         k["free_set"](x, g, self._bound(lower), self._bound(upper), free, r, code)
-        values = xp.stack(
+        values = xp.stack(  # CuPy's reductions (CUB's), one transfer; code is 0, 1 or 3
             [
                 xp.dot(r, r),
-                k["changed"](code).astype(float),
-                k["joined"](code).astype(float),
+                xp.count_nonzero(code).astype(float),
+                xp.count_nonzero(code > 1).astype(float),
                 xp.count_nonzero(free).astype(float),
             ]
         ).get()
@@ -115,11 +86,3 @@ class FusedPasses(ArrayPasses):
     def _bound(self, value: Any) -> Any:
         """A bound as a kernel takes it: an array of the device, or a float."""
         return value if isinstance(value, self.xp.ndarray) else float(value)
-
-    def scale_spectrum(self, values: Any, multiplier: Any, single: Any) -> float:
-        xp = self.xp
-        re, im = values[2 * single], values[2 * single + 1]
-        once = xp.dot(multiplier[2 * single], re * re + im * im)
-        total = _kernels()["weighted_squares"](values, multiplier)
-        values *= multiplier
-        return float(2.0 * total - once)

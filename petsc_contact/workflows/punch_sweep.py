@@ -91,10 +91,10 @@ class PunchSolver:
             self.x = x_new
             s = step.scalars
             self.last = (float(delta), s["force"], s["total_stiffness"])
-        x, last = self.x, self.last
+        x, last, scale, shape = self.x, self.last, pb.pressure_scale, pb.grid.local_shape
 
-        def resume_point() -> tuple[np.ndarray, Held]:
-            state = pb.device.to_host(x).reshape(pb.grid.local_shape) * pb.pressure_scale
+        def resume_point() -> tuple[np.ndarray, Held]:  # taken when read (x never changes)
+            state = pb.device.to_host(x).reshape(shape) * scale
             return state, Held(np.array([last] if last is not None else []).reshape(-1, 3))
 
         step.resume = resume_point

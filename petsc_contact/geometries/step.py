@@ -9,7 +9,7 @@ bound-constrained QP that TAO minimises, and the observables and verdict of its 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import KW_ONLY, dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
@@ -39,6 +39,7 @@ class Step:
     scalars: dict[str, Any]
     gap: np.ndarray | None = None
     pressure: np.ndarray | None = None
+    _: KW_ONLY  # the rest by name only (the fourth field by position was ``state`` in 0.2.0)
     contact: np.ndarray | None = None  # local mask of the pixels in contact
     resume: Callable[[], tuple[np.ndarray, Held]] | None = field(default=None, repr=False)
     """Makes :attr:`state` and :attr:`held` on their first reading: a sweep whose steps

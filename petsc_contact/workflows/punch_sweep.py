@@ -92,9 +92,10 @@ class PunchSolver:
             s = step.scalars
             self.last = (float(delta), s["force"], s["total_stiffness"])
         x, last, scale, shape = self.x, self.last, pb.pressure_scale, pb.grid.local_shape
+        device = pb.device  # not the problem: a step kept must not keep its operators
 
         def resume_point() -> tuple[np.ndarray, Held]:  # taken when read (x never changes)
-            state = pb.device.to_host(x).reshape(shape) * scale
+            state = device.to_host(x).reshape(shape) * scale
             return state, Held(np.array([last] if last is not None else []).reshape(-1, 3))
 
         step.resume = resume_point

@@ -142,9 +142,13 @@ def test_a_sweep_brings_its_resume_state_to_the_host_only_when_read():
     assert state.mean() == pytest.approx(steps[-1].scalars["mean_gap"], rel=1e-12)
     assert held.scalars[:, 0].tolist() == [3e-3, 1e-2] and len(held.fields) == 1
     assert held.fields[0].mean() == pytest.approx(steps[1].scalars["mean_gap"], rel=1e-12)
-    assert steps[-1].state is state  # taken once
+    assert steps[-1].state is state and steps[-1].resume is None  # taken once, let go
     steps[1].forget_resume()
     assert steps[1].state is None and steps[1].held is None
+    kept = periodic_contact(
+        surface(n, 0.7, 32), length=1.0, modulus=1.0, pressures=[1e-3], device="cpu-array"
+    )[-1]  # the last step of a returned list holds its state on the host, no device array
+    assert kept.resume is None and kept.state.shape == (n, n)
 
 
 @pytest.mark.parametrize("device", ["cpu-array", "cpu"])

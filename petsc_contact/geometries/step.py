@@ -61,8 +61,13 @@ class Step:
 
     def _resume_point(self) -> tuple[np.ndarray, Held] | None:
         if self._point is None and self.resume is not None:
-            self._point = self.resume()
+            self._point, self.resume = self.resume(), None  # the device's arrays let go
         return self._point
+
+    def take_resume(self) -> None:
+        """Bring :attr:`state` and :attr:`held` to the host now, letting go of the device's
+        arrays they are made from (a kept step then holds no device memory)."""
+        self._resume_point()
 
     def forget_resume(self) -> None:
         """Drop :attr:`state` and :attr:`held` (and what makes them)."""
@@ -83,12 +88,14 @@ class Step:
 def collect(steps: Iterable[Step]) -> list[Step]:
     """The steps as a list, each ``state`` dropped once the next step is solved: a list of
     a long sweep would otherwise hold one full field per step (13 GB for 25 steps of
-    8192^2).  The last step keeps its state, the one to go on from."""
+    8192^2).  The last step keeps its state, the one to go on from, on the host."""
     out: list[Step] = []
     for step in steps:
         if out:
             out[-1].forget_resume()
         out.append(step)
+    if out:
+        out[-1].take_resume()
     return out
 
 

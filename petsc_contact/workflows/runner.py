@@ -218,7 +218,10 @@ class Prepared:
                 progress(i, len(self.loads), step.scalars)
             elapsed = grid.max(time.perf_counter() - began)  # every rank stops together
             if i + 1 < len(self.loads) and elapsed > limit:
+                step.take_resume()
                 return PAUSED
+        if steps:
+            steps[-1].take_resume()  # the one kept, on the host
         return COMPLETE
 
     def _check_filled_load(self, table: list[dict[str, Any]]) -> None:

@@ -1,6 +1,8 @@
 """One run, two doors: the library does what the command line does, to the same file."""
 
 import json
+import os
+import sys
 
 import h5py
 import numpy as np
@@ -105,3 +107,39 @@ def test_moved_modules_warn_and_forward(old, new, name):
     with pytest.warns(DeprecationWarning, match=f"petsc_contact.{new}"):
         module = importlib.import_module(f"petsc_contact.{old}")
     assert getattr(module, name) is getattr(importlib.import_module(f"petsc_contact.{new}"), name)
+
+
+def test_the_source_commit_says_dirty_for_a_change_anywhere_in_the_package(tmp_path):
+    """``+dirty`` follows a local change in any of the package's folders (it once looked
+    only at ``io/``, where :func:`source_commit` lives), and only there."""
+    import shutil
+    import subprocess
+
+    from petsc_contact.io import provenance
+
+    repo = tmp_path / "repo"
+    shutil.copytree(
+        os.path.dirname(provenance.__file__).rsplit(os.sep, 1)[0],
+        repo / "petsc_contact",
+        ignore=shutil.ignore_patterns("__pycache__"),
+    )
+    git = ["git", "-C", str(repo), "-c", "user.name=t", "-c", "user.email=t@t"]
+    subprocess.run([*git, "init", "-q"], check=True)
+    subprocess.run([*git, "add", "."], check=True)
+    subprocess.run([*git, "commit", "-qm", "x"], check=True)
+    probe = [
+        sys.executable,
+        "-c",
+        "from petsc_contact.io.provenance import source_commit as s; print(s())",
+    ]
+
+    def commit() -> str:
+        done = subprocess.run(probe, cwd=repo, capture_output=True, text=True, check=True)
+        return done.stdout.strip()
+
+    assert not commit().endswith("+dirty")
+    (repo / "notes.txt").write_text("outside the package")
+    assert not commit().endswith("+dirty")
+    with open(repo / "petsc_contact" / "solver" / "cg.py", "a") as f:
+        f.write("# a local change\n")
+    assert commit().endswith("+dirty")

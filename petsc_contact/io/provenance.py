@@ -61,11 +61,11 @@ def versions(petsc: Any | None = None) -> dict[str, str]:
 
 
 def source_commit() -> str:
-    """The git commit of the package's source (``+dirty`` with local changes), or
-    ``unknown`` outside a git checkout."""
+    """The git commit of the package's source (``+dirty`` with local changes anywhere in
+    the package, not only in this module's folder), or ``unknown`` outside a git checkout."""
     import subprocess
 
-    folder = os.path.dirname(os.path.abspath(__file__))
+    folder = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the package
     try:
         run = [
             subprocess.run(["git", "-C", folder, *args], capture_output=True, text=True, timeout=10)

@@ -209,6 +209,17 @@ def test_mpi_matches_serial(tmp_path, ranks):
         assert np.abs(p["iterations"][:] - s["iterations"][:]).max() <= 2
 
 
+EVEN_COLUMN = r"""
+nx, ny = (int(v) for v in sys.argv[1].split(","))
+comm = MPI.COMM_WORLD
+grid, whole = (Grid((nx, ny), (1.0, ny / nx), c) for c in (comm, MPI.COMM_SELF))
+table = np.random.default_rng(2).random((nx // 2 + 1, ny // 2 + 1)) + 1.0
+i, j = np.meshgrid(_fold(np.arange(nx), nx), _fold(np.arange(ny), ny), indexing="ij")
+column = table[i, j]  # an even periodic G e_0
+mine, full = quarter(grid, column[grid.rows]), quarter(whole, column)
+"""  # the scripts' grid on the run's ranks and on one, and G's column: its quarter on each
+
+
 HELD_QUARTER = r"""
 import sys
 import numpy as np
@@ -220,13 +231,7 @@ from petsc_contact.numerics import schur as sums
 from petsc_contact.numerics.schur import ContactSchur, _fold, held_rows, quarter
 
 sums.SUM_CHUNK = 37  # the matrices summed over the ranks in many pieces, the last one short
-nx, ny = (int(v) for v in sys.argv[1].split(","))
-comm = MPI.COMM_WORLD
-grid, whole = (Grid((nx, ny), (1.0, ny / nx), c) for c in (comm, MPI.COMM_SELF))
-table = np.random.default_rng(2).random((nx // 2 + 1, ny // 2 + 1)) + 1.0
-i, j = np.meshgrid(_fold(np.arange(nx), nx), _fold(np.arange(ny), ny), indexing="ij")
-column = table[i, j]  # an even periodic G e_0
-mine, full = quarter(grid, column[grid.rows]), quarter(whole, column)
+{even_column}
 held = held_rows(grid)
 rows = len(held) + (len(held) > 0 and held.stop < nx // 2 + 1)  # and the next row
 assert mine.shape == (rows, ny // 2 + 1) and rows < nx // 2 + 1, mine.shape
@@ -243,7 +248,7 @@ for bound, block in ((sparse, 1), (sparse, 3), (dense, 4)):
     (schur, e_mat), (schur_1, e_mat_1) = parts
     assert np.array_equal(schur, schur_1), np.abs(schur - schur_1).max()
     assert np.array_equal(e_mat, e_mat_1), np.abs(e_mat - e_mat_1).max()
-"""
+""".replace("{even_column}\n", EVEN_COLUMN.lstrip("\n"))
 
 
 @pytest.mark.parametrize("ranks, shape", [(3, "30,26"), (4, "32,20")])
@@ -265,13 +270,7 @@ from petsc_contact.conventions.grid import Grid
 from petsc_contact.numerics.device import CPU
 from petsc_contact.numerics.schur import _fold, quarter
 
-nx, ny = (int(v) for v in sys.argv[1].split(","))
-comm = MPI.COMM_WORLD
-grid, whole = (Grid((nx, ny), (1.0, ny / nx), c) for c in (comm, MPI.COMM_SELF))
-table = np.random.default_rng(2).random((nx // 2 + 1, ny // 2 + 1)) + 1.0
-i, j = np.meshgrid(_fold(np.arange(nx), nx), _fold(np.arange(ny), ny), indexing="ij")
-column = table[i, j]  # an even periodic G e_0
-mine, full = quarter(grid, column[grid.rows]), quarter(whole, column)
+{even_column}
 held = []  # the bound pixels each exchange leaves this rank with
 exchange = coarse._halo
 
@@ -306,7 +305,7 @@ for case, (bound, block, cap) in enumerate(cases):
     counts = comm.gather((int(own), max(held), int(halo)), root=0)
     if comm.rank == 0:
         print(f"case {case} b {b} k {par.sizes.size} total {total} (own, held, bound):", counts)
-"""
+""".replace("{even_column}\n", EVEN_COLUMN.lstrip("\n"))
 
 
 @pytest.mark.parametrize("ranks, shape", [(3, "128,96"), (4, "128,128")])

@@ -10,7 +10,9 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import sys
 from collections.abc import Sequence
+from contextlib import suppress
 from typing import Any, NoReturn
 
 from .._version import __version__
@@ -267,11 +269,20 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         """The error in one line, printed by the first rank of an MPI launch only (every
-        rank parses the same command line), and exit status 2 on every rank."""
-        from ..conventions.grid import launched
+        rank parses the same command line), and exit status 2 on every rank once it is
+        printed: the launcher stops every rank when one leaves with an error, which could
+        otherwise come before the first rank has said why."""
+        from ..conventions.grid import MPIUnavailable, launched, world
 
         text = f"petsc-contact: error: {message} (see {self.prog} --help)\n"
-        self.exit(2, text if launched("rank") == 0 else None)
+        if launched("size") == 1:
+            self.exit(2, text)
+        if launched("rank") == 0:
+            sys.stderr.write(text)
+            sys.stderr.flush()
+        with suppress(MPIUnavailable):  # without mpi4py the ranks cannot wait for each other
+            world().Barrier()
+        self.exit(2)
 
     def parse_args(self, args: Any = None, namespace: Any = None) -> Any:
         """The parsed arguments; a deprecated spelling among them is a warning on standard

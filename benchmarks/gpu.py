@@ -16,11 +16,12 @@ usage (on a machine with CuPy and a CUDA GPU, in the repository's root, no netwo
    iterations, seconds per iteration against 3.5 round trips and 10 passes, the stiffness
    solves, and the device memory the pool held (bytes per point);
 5. the 8192^2 sweep again with the unfused passes (:class:`ArrayPasses`: what the fused
-   kernels of :mod:`~petsc_contact.numerics.fused` save), one 8192^2 step from first touch
+   kernels of :mod:`~petsc_contact.numerics.fused` save), the 8192^2 sweep under cProfile
+   (where the wall goes: ``profile_8192.txt``), one 8192^2 step from first touch
    (``p0 = 1e-3 E*``) and a short sweep at ``--largest``.
 
 Every stage is skipped once ``--budget`` seconds have passed.  Writes ``gpu.json`` (every
-figure) and ``gpu.log`` (what was printed) to ``--out``.
+figure), ``gpu.log`` (what was printed) and the profile to ``--out``.
 """
 
 from __future__ import annotations
@@ -173,6 +174,25 @@ def plain_passes_sweep(n: int, loads: list[float], report: dict[str, Any]) -> di
         device.Device.passes = fused
 
 
+def profiled_sweep(n: int, loads: list[float], path: Path) -> dict[str, Any]:
+    """:func:`sweep` under cProfile, its 60 costliest calls (cumulative) written to ``path``
+    (the host waits at each synchronisation, so a device's work shows where it is awaited)."""
+    import cProfile
+    import io
+    import pstats
+
+    profiler = cProfile.Profile()
+    profiler.enable()
+    try:
+        result = sweep(n, loads, None)
+    finally:
+        profiler.disable()
+    text = io.StringIO()
+    pstats.Stats(profiler, stream=text).sort_stats("cumulative").print_stats(60)
+    path.write_text(text.getvalue())
+    return {k: result[k] for k in ("wall", "solve_time", "stiffness_time", "iterations")}
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, required=True)
@@ -276,6 +296,15 @@ def main() -> int:
         except Exception as error:
             report["plain_passes_8192"] = {"error": traceback.format_exc()}
             say(f"8192^2 with the unfused passes failed: {error!r}")
+        save()
+    if left() > 100 and 8192 in grids:  # where the time goes
+        try:
+            path = args.out / "profile_8192.txt"
+            report["profiled_8192"] = prof = profiled_sweep(8192, loads, path)
+            say(f"8192^2 sweep under cProfile: wall {prof['wall']:.1f} s, {path.name}")
+        except Exception as error:
+            report["profiled_8192"] = {"error": traceback.format_exc()}
+            say(f"8192^2 under cProfile failed: {error!r}")
         save()
     if left() > 60 and 8192 in grids:
         try:

@@ -81,7 +81,7 @@ def test_coarse_matrix_is_above_the_exact_one(petsc):
     bound = pb.heights > np.quantile(pb.heights, 0.97)
     space = CoarseSpace(grid, pre._quarter, bound, 8, grid.size)
     exact = exact_coarse(pre, space)
-    factor, lower = space._factor
+    factor, lower = space.system.factor
     triangle = np.tril(factor) if lower else np.triu(factor).T
     assembled = triangle @ triangle.T
     assert space.size > 50
@@ -213,9 +213,13 @@ EVEN_COLUMN = r"""
 nx, ny = (int(v) for v in sys.argv[1].split(","))
 comm = MPI.COMM_WORLD
 grid, whole = (Grid((nx, ny), (1.0, ny / nx), c) for c in (comm, MPI.COMM_SELF))
-table = np.random.default_rng(2).random((nx // 2 + 1, ny // 2 + 1)) + 1.0
+rng = np.random.default_rng(2)  # a random positive even spectrum, q = 0 entry zero
+spectrum = 1.0 + rng.random((nx, ny // 2 + 1))
+spectrum = spectrum + spectrum[-np.arange(nx) % nx]
+spectrum[0, 0] = 0.0
+table = np.fft.irfft2(spectrum, s=(nx, ny))[: nx // 2 + 1, : ny // 2 + 1]
 i, j = np.meshgrid(_fold(np.arange(nx), nx), _fold(np.arange(ny), ny), indexing="ij")
-column = table[i, j]  # an even periodic G e_0
+column = table[i, j]  # an even periodic G e_0, positive semi-definite (constants: zero)
 mine, full = quarter(grid, column[grid.rows]), quarter(whole, column)
 """  # the scripts' grid on the run's ranks and on one, and G's column: its quarter on each
 
@@ -241,7 +245,7 @@ sparse = rng.random((nx, ny)) < 0.08  # single pixels: the near pairs summed pai
 dense = rng.random((nx, ny)) < 0.9  # filled blocks: the near pairs summed by FFTs
 for bound, block in ((sparse, 1), (sparse, 3), (dense, 4)):
     parts = [
-        (ContactSchur(g, q, bound[g.rows])._lu[0], coarse.host_coarse_matrix(
+        (ContactSchur(g, q, bound[g.rows]).system.factor[0], coarse.host_coarse_matrix(
             g, q, bound[g.rows], block, 10**6, CPU).matrix)
         for g, q in ((grid, mine), (whole, full))
     ]

@@ -180,3 +180,35 @@ def test_the_stiffness_takes_the_contact_solves_column(device, request, monkeypa
     monkeypatch.setattr(MeanModePreconditioner, "compliance_quarter", lambda self, scale: None)
     afresh = run()
     np.testing.assert_allclose(reused, afresh, rtol=1e-12)
+
+
+def test_a_sweep_keeps_its_forms_and_checks_on_the_device(monkeypatch):
+    """From the map's checks through the Schur and two-level forms to the stiffness, a
+    sweep without fields brings no array longer than a row to the host: the map is checked
+    where it lives, the Schur form's ``G_BB`` is made, factorised and solved on the device
+    (no contact mask, no right-hand side crosses) and ``G``'s quarter stays there."""
+    from petsc_contact.backend import preconditioner
+    from petsc_contact.numerics.schur import ContactSchur
+    from petsc_contact.workflows.periodic_sweep import _periodic_problem
+
+    n = 128
+    made: list[int] = []  # the sizes of the Schur forms made, minus those of coarse spaces
+
+    class Counted(ContactSchur):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            made.append(self.size)
+
+    class Built(preconditioner.CoarseSpace):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            made.append(-self.size)
+
+    monkeypatch.setattr(preconditioner, "ContactSchur", Counted)
+    monkeypatch.setattr(preconditioner, "CoarseSpace", Built)
+    device = RecordingDevice("cpu-array", np)
+    problem = _periodic_problem(surface(n, 0.7, 32), (1.0, 1.0), 1.0, Grid(n, 1.0).comm, device)
+    steps = list(sweep(problem, [1e-4, 1e-3, 1e-2], stiffness=True))
+    assert all(s.converged for s in steps)
+    assert max(made) > 0 > min(made), made  # both forms were used (coarse: negative)
+    assert device.moved and max(device.moved) <= n, sorted(device.moved)[-5:]

@@ -56,7 +56,7 @@ from ..numerics.aggregates import (
     spectral_dots,
 )
 from ..numerics.device import CPU, Device
-from ..numerics.schur import allgather, held_rows, sum_over_ranks
+from ..numerics.schur import BorderedSystem, allgather, held_rows, sum_over_ranks
 from . import _petsc
 from .operator import ShellInterface
 
@@ -430,12 +430,12 @@ def host_coarse_matrix(
 
 
 def array_coarse_matrix(
-    grid: Grid, quarter: np.ndarray, bound: Any, block: int, max_size: int, device: Device
+    grid: Grid, quarter: Any, bound: Any, block: int, max_size: int, device: Device
 ) -> CoarseMatrix:
     """The coarse matrix summed with the array operations of ``device`` where the bound set
     lives (one rank): the same ``E`` as :func:`host_coarse_matrix` to rounding, its near
     pairs always by FFTs on cells (:func:`~petsc_contact.numerics.aggregates.pair_sums_cells`).
-    Only ``quarter`` crosses to the device and only scalars (counts) come back."""
+    Nothing crosses to the host but scalars (counts)."""
     xp, shape = device.xp, grid.shape
     local = xp.flatnonzero(device.asarray(bound).reshape(-1))
     rows, cols = local // shape[1], local % shape[1]
@@ -460,8 +460,9 @@ class CoarseSpace:
     grid
         The row-slab layout.
     quarter
-        ``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, on the host: this rank's rows of it
-        (:func:`~petsc_contact.numerics.schur.quarter`; the array devices run on one rank).
+        ``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, an array of ``device``: this rank's
+        rows of it (:func:`~petsc_contact.numerics.schur.quarter`; the array devices run on
+        one rank).
     bound
         This rank's slab of the bound-set mask (``True`` on ``B``; an array of ``device`` or
         of the host); not empty on all ranks.
@@ -473,7 +474,7 @@ class CoarseSpace:
         Where the fields it corrects live.  On the ``cpu`` device the matrix is summed by
         the numba loops (:func:`host_coarse_matrix`); on the array devices by array
         operations on the device (:func:`array_coarse_matrix`), where it is also
-        factorised and solved (:meth:`~petsc_contact.numerics.device.Device.cho_factor`).
+        factorised and solved (:class:`~petsc_contact.numerics.schur.BorderedSystem`).
 
     Attributes
     ----------
@@ -488,13 +489,7 @@ class CoarseSpace:
     """
 
     def __init__(
-        self,
-        grid: Grid,
-        quarter: np.ndarray,
-        bound: Any,
-        block: int,
-        max_size: int,
-        device: Device = CPU,
+        self, grid: Grid, quarter: Any, bound: Any, block: int, max_size: int, device: Device = CPU
     ) -> None:
         self.grid = grid
         self.device = device
@@ -502,14 +497,8 @@ class CoarseSpace:
         built = build(grid, quarter, bound, block, max_size, device)
         self.local, self.labels, self.block = built.local, built.labels, built.block
         self.size = int(built.sizes.size)
-        factor = device.cho_factor(built.matrix)
-        self.factorised = factor is not None
-        if factor is None:  # E not positive definite: no coarse space
-            return
-        sizes = device.asarray(built.sizes)
-        e_w = device.cho_solve(factor, sizes)  # E^-1 W^T 1
-        self._factor, self._e_w, self._device_sizes = factor, e_w, sizes
-        self._w_e_w = float(sizes @ e_w)
+        self.system = BorderedSystem(built.matrix, device.asarray(built.sizes), device)
+        self.factorised = self.system.factorised  # E not positive definite: no coarse space
 
     def solve(self, g_r: Any, r_sum: float) -> tuple[Any, float]:
         """``(W a on this rank's bound pixels, c)`` for ``G r`` (local slab) and ``sum(r)``."""
@@ -517,9 +506,7 @@ class CoarseSpace:
         f = xp.bincount(self.labels, weights=-g_r.reshape(-1)[self.local], minlength=self.size)
         if self.grid.comm.size > 1:
             f = self.grid.comm.allreduce(f)
-        y = self.device.cho_solve(self._factor, f)
-        c = (float(self._device_sizes @ y) + r_sum) / self._w_e_w
-        a = y - c * self._e_w
+        a, c = self.system.solve(f, r_sum)
         return a[self.labels], c
 
 

@@ -125,9 +125,9 @@ class SpectralOperator(ShellInterface):
 
     def _weighted_sum(self, grid: Grid) -> float:
         """The multiplier summed over the full spectrum of ``grid`` (the FFT's grid), all ranks:
-        the operator's diagonal entry."""
-        w = half_spectrum_weights(grid, self.fft)
-        return float(grid.sum((w * self.fft.device.to_host(self.spectrum)).sum())[0])
+        the operator's diagonal entry (summed on the device: one scalar crosses)."""
+        w = self.fft.device.asarray(half_spectrum_weights(grid, self.fft))
+        return float(grid.sum((w * self.spectrum).sum())[0])
 
     def _forward(self, x: np.ndarray) -> None:
         raise NotImplementedError
@@ -144,14 +144,16 @@ class FourierOperator(SpectralOperator):
     grid, fft
         Layout and FFT backend.
     kernel
-        The multiplier on ``fft.spectrum``'s block (without FFT normalisation).
+        The multiplier on ``fft.spectrum``'s block (without FFT normalisation), on the host
+        or on ``fft``'s device.
     """
 
     def __init__(self, grid: Grid, fft: FFT, kernel: np.ndarray) -> None:
         self.grid = grid
         self.fft = fft
         self.transform_size = grid.size
-        self.multiplier = fft.device.asarray(twice(self.normalised(kernel)))
+        device = fft.device  # the multiplier made where the kernel is moved to, once
+        self.multiplier = twice(self.normalised(device.asarray(kernel, dtype=float)), device.xp)
         self._single = fft.device.asarray(single_entries(grid, fft))
         self.applications = 0
 

@@ -37,7 +37,7 @@ class MeanModePreconditioner(FourierOperator):
     the Hessian on the free set, built on the unsupported inverse ``1/K``
     (:class:`~petsc_contact.numerics.schur.ContactSchur`: two FFT round trips and a dense solve of
     the contact pixels' bordered system per application), which
-    makes each CG step exact on the current contact set; :func:`schur_limit` keeps its LU
+    makes each CG step exact on the current contact set; :func:`schur_limit` keeps its
     factorisation, once per contact set, within about ten FFT round trips.
 
     Above that, up to the fraction ``options.max_fraction`` of the grid in contact, it is the
@@ -53,7 +53,7 @@ class MeanModePreconditioner(FourierOperator):
     """
 
     def __init__(self, grid: Grid, fft: FFT, hessian: FourierOperator, schur_max: int) -> None:
-        super().__init__(grid, fft, np.zeros(fft.spectrum.shape))  # filled by invert
+        super().__init__(grid, fft, fft.device.xp.zeros(fft.spectrum.shape))  # filled by invert
         self._hessian = hessian
         self.schur_max = schur_max  # the Schur form's largest bound set
         self.options = TwoLevelOptions()
@@ -133,9 +133,11 @@ class MeanModePreconditioner(FourierOperator):
         """
         last, self._last_count = self._last_count, bound_count
         if 0 < bound_count <= self.schur_max:
-            bound = self.device.to_host(~free).reshape(self.grid.local_shape)
-            self.correction = ContactSchur(self.grid, self._exact_compliance(), bound, self.device)
-            return True
+            bound = (~free).reshape(self.grid.local_shape)  # on the device: made there
+            schur = ContactSchur(self.grid, self._exact_compliance(), bound, self.device)
+            if schur.factorised:
+                self.correction = schur
+                return True
         settled = last > 0 and abs(bound_count - last) <= SETTLE_FRACTION * last
         if self.options.covers(bound_count, self.grid.size):
             if self.coarse is not None and not (settled and self._stale(free, bound_count)):

@@ -71,7 +71,8 @@ class PeriodicProblem:
     grid, fft
         Layout and FFT backend.
     heights
-        This rank's slab of the rigid surface heights (the mean is removed).
+        This rank's slab of the rigid surface heights (the mean is removed), on the host or
+        on ``fft``'s device.
     modulus
         Contact modulus ``E*``.
     """
@@ -83,12 +84,11 @@ class PeriodicProblem:
         self.device = fft.device
         self.modulus = float(modulus)
         self.filled: np.ndarray | None = None  # this rank's filled pixels (a measured map)
-        host = np.asarray(heights, dtype=float)
-        centred = np.ascontiguousarray(host - grid.mean(host))
-        self.heights = self.device.asarray(centred)  # on the device (a GPU's copy)
-        self.h_rms = grid.rms(centred)
+        given = self.device.asarray(heights, dtype=float)  # on the device (a GPU's copy)
+        self.heights = self.device.xp.ascontiguousarray(given - grid.mean(given))
+        self.h_rms = grid.rms(self.heights)
         self.scale_length = self.h_rms if self.h_rms > 0 else max(grid.lengths)
-        q = wavevector_magnitude(grid, fft)
+        q = wavevector_magnitude(grid, fft, self.device.xp)  # on the device
         self.stiffness = FourierOperator(grid, fft, periodic_stiffness(q, modulus))
         self.hessian = self.stiffness.scaled(1.0)
         limit = schur_limit(grid.size)

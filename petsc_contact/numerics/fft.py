@@ -409,10 +409,11 @@ def wavevectors(grid: Grid, fft: FFT) -> tuple[np.ndarray, np.ndarray]:
     return (qx[None, :], qy[:, None]) if fft.transposed else (qx[:, None], qy[None, :])
 
 
-def wavevector_magnitude(grid: Grid, fft: FFT) -> np.ndarray:
-    """``|q|`` on the local half-spectrum block."""
-    qx, qy = wavevectors(grid, fft)
-    return np.sqrt(qx**2 + qy**2)
+def wavevector_magnitude(grid: Grid, fft: FFT, xp: Any = np) -> Any:
+    """``|q|`` on the local half-spectrum block, an array of ``xp`` (made there: only the
+    axes' wavevectors cross)."""
+    qx, qy = (xp.asarray(q) for q in wavevectors(grid, fft))
+    return xp.sqrt(qx**2 + qy**2)
 
 
 def half_spectrum_weights(grid: Grid, fft: FFT) -> np.ndarray:

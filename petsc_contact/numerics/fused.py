@@ -16,6 +16,7 @@ Only the ``gpu`` device imports this module (:attr:`Device.passes`), after CuPy.
 from __future__ import annotations
 
 from functools import cache
+from types import ModuleType
 from typing import Any
 
 from .device import ArrayPasses
@@ -54,11 +55,17 @@ def _kernels() -> dict[str, Any]:
 class FusedPasses(ArrayPasses):
     """:class:`ArrayPasses` on CuPy with the per-iteration passes fused (module docstring)."""
 
+    def __init__(self, xp: ModuleType) -> None:
+        super().__init__(xp)
+        self._code: Any = None  # the free set's per-entry change codes, kept between calls
+
     def free_set(
         self, x: Any, g: Any, lower: Any, upper: Any, free: Any, r: Any
     ) -> tuple[float, int, int, int]:
         xp, k = self.xp, _kernels()
-        code = xp.empty(free.shape, dtype=xp.int8)
+        if self._code is None or self._code.shape != free.shape:
+            self._code = xp.empty(free.shape, dtype=xp.int8)
+        code = self._code  # each entry written by the kernel
         k["free_set"](x, g, self._bound(lower), self._bound(upper), free, r, code)
         values = xp.stack(  # CuPy's reductions (CUB's), one transfer; code is 0, 1 or 3
             [

@@ -10,11 +10,15 @@ held at their bound, the solution of ``H_FF z_F = r_F``, ``z_B = 0`` is
 so ``r + lambda`` must have zero sum).  ``G_BB`` is a dense ``m x m`` block of the real-space
 compliance ``G(i - i', j - j')``, read from one column of ``G``: the operator is periodic and
 even in both offsets, so the quarter ``(nx/2 + 1) x (ny/2 + 1)`` of that column
-(:func:`quarter`) holds every entry.  On several ranks each rank holds only the quarter's rows
-in its own slab (:func:`held_rows`), makes only the entries whose folded row offset it holds,
-and the ranks' matrices are summed (:func:`sum_over_ranks`): each entry comes from one rank.
+(:func:`quarter`) holds every entry.  ``G`` is positive semi-definite with only the constants
+in its null space, so ``G_BB`` is positive definite for any ``B`` short of the whole grid and
+the bordered system is solved by ``G_BB``'s Cholesky factor (:class:`BorderedSystem`, which
+the two-level form's coarse matrix shares), where the fields live: on a GPU, nothing but
+scalars comes to the host.  On several ranks each rank holds only the quarter's rows in its
+own slab (:func:`held_rows`), makes only the entries whose folded row offset it holds, and
+the ranks' matrices are summed (:func:`sum_over_ranks`): each entry comes from one rank.
 Applied as the conjugate-gradient preconditioner, it makes each step exact on the current
-contact set; it costs two FFT round trips and an ``(m + 1)^2`` LU factorisation per set.
+contact set; it costs two FFT round trips and an ``m x m`` Cholesky factorisation per set.
 """
 
 from __future__ import annotations
@@ -22,10 +26,56 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from scipy.linalg import lu_factor, lu_solve
 
 from ..conventions.grid import Grid
 from .device import CPU, Device
+
+
+class BorderedSystem:
+    """The bordered system ``[[E, w], [w^T, 0]] [a, c] = [f, -r_sum]`` of a symmetric
+    positive definite ``E``, solved by ``E``'s Cholesky factor on the device where ``E``
+    lives (:meth:`~petsc_contact.numerics.device.Device.cho_factor`):
+
+        a = y - c E^-1 w,    c = (w.y + r_sum) / (w.E^-1 w),    y = E^-1 f,
+
+    so that ``E a + c w = f`` and ``w.a = -r_sum``.  The exact Schur form (``E = G_BB``,
+    ``w = 1``) and the two-level form (``E`` the coarse matrix, ``w`` the aggregates' sizes)
+    both solve it once per application.
+
+    Parameters
+    ----------
+    matrix
+        ``E``, an array of ``device`` (on the host factorised in its own memory if it is in
+        Fortran order; only one triangle is read).
+    weights
+        ``w``, an array of ``device``.
+    device
+        Where ``E`` is factorised and the system solved.
+
+    Attributes
+    ----------
+    factorised
+        Whether ``E`` was positive definite (otherwise :meth:`solve` must not be used).
+    factor
+        SciPy's ``cho_factor`` pair of ``E`` (``None`` when it failed).
+    """
+
+    def __init__(self, matrix: Any, weights: Any, device: Device = CPU) -> None:
+        self.device = device
+        self.factor = device.cho_factor(matrix)
+        self.factorised = self.factor is not None
+        if self.factor is None:
+            return
+        self._weights = weights
+        self._e_w = device.cho_solve(self.factor, weights)  # E^-1 w
+        self._w_e_w = float(weights @ self._e_w)
+
+    def solve(self, f: Any, r_sum: float) -> tuple[Any, float]:
+        """``(a, c)`` for the right-hand side ``f`` (an array of the device) and ``r_sum``."""
+        assert self.factor is not None
+        y = self.device.cho_solve(self.factor, f)
+        c = (float(self._weights @ y) + r_sum) / self._w_e_w
+        return y - c * self._e_w, c
 
 
 class ContactSchur:
@@ -37,76 +87,79 @@ class ContactSchur:
         The row-slab layout.
     quarter
         ``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, this rank's rows of it
-        (:func:`quarter`).
+        (:func:`quarter`), an array of ``device``.
     bound
-        This rank's slab of the bound-set mask (``True`` on ``B``), on the host.
+        This rank's slab of the bound-set mask (``True`` on ``B``), an array of ``device``.
     device
-        Where the fields it corrects live (:attr:`local` is an index array of it); the
-        bordered system is factorised and solved on the host (``m <= 4096``).
+        Where the fields it corrects live, and where ``G_BB`` is made, factorised and solved
+        (:attr:`local` is an index array of it); on several ranks (the ``cpu`` device) every
+        rank factorises the whole ``G_BB``, summed over the ranks.
+
+    Attributes
+    ----------
+    local
+        This rank's bound pixels (flat local indices), the support of the reactions.
+    size
+        The number of bound pixels on all ranks, ``m``.
+    factorised
+        Whether ``G_BB`` was positive definite (it is, short of rounding, for ``m`` below the
+        grid's size; otherwise :meth:`solve` must not be used).
+    system
+        The :class:`BorderedSystem` of ``G_BB``.
     """
 
-    def __init__(
-        self, grid: Grid, quarter: np.ndarray, bound: np.ndarray, device: Device = CPU
-    ) -> None:
+    def __init__(self, grid: Grid, quarter: Any, bound: Any, device: Device = CPU) -> None:
         self.grid = grid
         self.device = device
-        local = np.flatnonzero(bound)
-        self.local = device.asarray(local)
-        nx, ny = grid.shape
-        rows, cols = np.divmod(local, ny)
+        xp = device.xp
+        self.local = xp.flatnonzero(device.asarray(bound).reshape(-1))
+        rows, cols = self.local // grid.shape[1], self.local % grid.shape[1]
         rows = rows + grid.rows.start
-        both = allgather(np.stack([rows, cols], axis=1), grid.comm)
-        self.offset = 0 if grid.comm.size == 1 else int(grid.comm.exscan(len(local)) or 0)
-        system = bordered_system(quarter, both, (nx, ny), held_rows(grid))
-        self._lu = lu_factor(
-            sum_over_ranks(system, grid.comm), overwrite_a=True, check_finite=False
-        )
+        both = allgather(xp.stack([rows, cols], axis=1), grid.comm)
+        self.offset = 0 if grid.comm.size == 1 else int(grid.comm.exscan(len(self.local)) or 0)
+        block = compliance_block(xp, quarter, both, grid.shape, held_rows(grid))
         self.size = len(both)
+        self.system = BorderedSystem(sum_over_ranks(block, grid.comm), xp.ones(self.size), device)
+        self.factorised = self.system.factorised
 
-    def solve(self, g_r: np.ndarray, r_sum: float) -> tuple[np.ndarray, float]:
+    def solve(self, g_r: Any, r_sum: float) -> tuple[Any, float]:
         """``(lambda on this rank's bound pixels, c)`` for ``G r`` (local slab) and ``sum(r)``."""
-        rhs = np.empty(self.size + 1)
-        mine = self.device.to_host(g_r.reshape(-1)[self.local])
-        rhs[: self.size] = -allgather(mine, self.grid.comm)
-        rhs[self.size] = -r_sum
-        sol = lu_solve(self._lu, rhs, check_finite=False)
-        reactions = sol[self.offset : self.offset + len(self.local)]
-        return self.device.asarray(reactions), float(sol[self.size])
+        mine = -g_r.reshape(-1)[self.local]
+        reactions, shift = self.system.solve(allgather(mine, self.grid.comm), r_sum)
+        if self.grid.comm.size > 1:
+            reactions = reactions[self.offset : self.offset + len(self.local)]
+        return reactions, shift
 
 
-SYSTEM_ROWS = 64  # rows of the bordered system filled at a time (bounds the temporaries)
+SYSTEM_ROWS = 64  # rows of G_BB filled at a time (bounds the temporaries)
 
 
-def bordered_system(
-    quarter: np.ndarray, both: np.ndarray, shape: tuple[int, int], held: range
-) -> np.ndarray:
-    """``[[G_BB, 1], [1^T, 0]]`` for the bound pixels ``both`` (global ``(row, col)`` pairs),
-    this rank's part of it: the entries whose folded row offset is in ``held``
-    (:func:`held_rows`, the rows of ``quarter`` from ``held.start``), zero elsewhere, and the
-    border on the rank holding row 0; on one rank the whole system.
+def compliance_block(xp: Any, quarter: Any, both: Any, shape: tuple[int, int], held: range) -> Any:
+    """``G_BB`` for the bound pixels ``both`` (global ``(row, col)`` pairs, an array of
+    ``xp``), this rank's part of it: the entries whose folded row offset is in ``held``
+    (:func:`held_rows`, the rows of ``quarter`` from ``held.start``), zero elsewhere; on one
+    rank the whole block.
 
     Filled :data:`SYSTEM_ROWS` rows at a time, so that the pixel offsets' temporaries stay
     ``SYSTEM_ROWS x m`` for ``m`` pixels; returned in Fortran order (the transpose of the
-    rows filled: the system is symmetric), which LAPACK factorises in place.
+    rows filled: the block is symmetric), which LAPACK factorises in place.
     """
     m = len(both)
     whole = held.start == 0 and held.stop == shape[0] // 2 + 1
-    system = np.zeros((m + 1, m + 1))
+    block = xp.zeros((m, m))
     for lo in range(0, m, SYSTEM_ROWS):
         part = both[lo : lo + SYSTEM_ROWS]
         di, dj = (
             _fold(part[:, k][:, None] - both[:, k][None, :], period)
             for k, period in enumerate(shape)
         )
-        system[lo : lo + len(part), :m] = quarter[di, dj] if whole else _held(quarter, di, dj, held)
-    if 0 in held:  # the border, on one rank
-        system[:m, m] = system[m, :m] = 1.0
-    return system.T
+        block[lo : lo + len(part)] = quarter[di, dj] if whole else _held(quarter, di, dj, held)
+    return block.T
 
 
 def _held(quarter: np.ndarray, di: np.ndarray, dj: np.ndarray, held: range) -> np.ndarray:
     """``G(di, dj)`` where the row ``di`` is in ``held`` (``quarter``'s rows from
-    ``held.start``), zero elsewhere."""
+    ``held.start``), zero elsewhere (several ranks: on the host)."""
     out = np.zeros(di.shape)
     mine = (di >= held.start) & (di < held.stop)
     out[mine] = quarter[di[mine] - held.start, dj[mine]]
@@ -140,8 +193,9 @@ def held_rows(grid: Grid) -> range:
     return range(min(grid.rows.start, half_x), min(grid.rows.stop, half_x))
 
 
-def quarter(grid: Grid, column: Any, device: Device = CPU) -> np.ndarray:
-    """``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, the rows this rank holds, on the host.
+def quarter(grid: Grid, column: Any, device: Device = CPU) -> Any:
+    """``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, the rows this rank holds, an array of
+    ``device`` (where the set-dependent forms are made from it).
 
     ``column`` is this rank's slab of ``G e_0``, the response to a unit value at pixel
     ``(0, 0)`` (an array of ``device``); by periodicity and evenness
@@ -154,7 +208,7 @@ def quarter(grid: Grid, column: Any, device: Device = CPU) -> np.ndarray:
     held = held_rows(grid)
     mine = column[: len(held), :half_y]
     if grid.comm.size == 1:
-        return np.ascontiguousarray(device.to_host(mine))
+        return device.xp.array(mine, order="C")  # a copy: column is a work field
     next_row = bool(held) and held.stop < half_x
     part = np.empty((len(held) + next_row, half_y))
     part[: len(held)] = device.to_host(mine)
@@ -176,7 +230,7 @@ def _next_row(comm: Any, held: range, part: np.ndarray) -> None:
         request.Wait()
 
 
-def response_quarter(grid: Grid, apply: Any, work: Any, device: Device = CPU) -> np.ndarray:
+def response_quarter(grid: Grid, apply: Any, work: Any, device: Device = CPU) -> Any:
     """:func:`quarter` of an operator's response to a unit value at pixel ``(0, 0)``;
     ``apply(x, out)`` applies it to this rank's slab, ``work`` is two flat field-sized
     arrays of ``device``, the first zero (it is left zero)."""
@@ -193,6 +247,8 @@ def allgather(local: np.ndarray, comm: Any) -> np.ndarray:
     return local if comm.size == 1 else np.concatenate(comm.allgather(local))
 
 
-def _fold(offset: np.ndarray, n: int) -> np.ndarray:
-    """Index of a periodic offset in the even kernel's quarter, ``min(d mod n, -d mod n)``."""
-    return np.minimum(offset % n, -offset % n)
+def _fold(offset: Any, n: int) -> Any:
+    """Index of a periodic offset in the even kernel's quarter, ``min(d mod n, -d mod n)``
+    (an integer array of any array module)."""
+    up, down = offset % n, -offset % n
+    return (up + down - abs(up - down)) // 2

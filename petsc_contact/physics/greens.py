@@ -8,15 +8,18 @@ wavevectors this is exact for a single sine wave.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..conventions.grid import fft_order
 from ..conventions.validation import per_axis, positive
 
 
-def periodic_stiffness(q: np.ndarray, modulus: float) -> np.ndarray:
-    """Stiffness kernel ``E* |q| / 2`` (pressure per displacement), 0 at ``q = 0``."""
-    return 0.5 * modulus * np.asarray(q, dtype=float)
+def periodic_stiffness(q: Any, modulus: float) -> Any:
+    """Stiffness kernel ``E* |q| / 2`` (pressure per displacement), 0 at ``q = 0``; ``q`` a
+    float or a float array of any array module (the kernel is made where it is)."""
+    return 0.5 * modulus * q
 
 
 def periodic_compliance(q: np.ndarray | float, modulus: float, q_zero: float) -> np.ndarray:

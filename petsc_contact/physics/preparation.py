@@ -15,6 +15,8 @@ Pure numpy on the whole map (the rank that reads it holds it before the grid's s
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 DETREND_MODES = ("none", "height", "slope", "curvature")
@@ -139,23 +141,45 @@ def detrend(heights: np.ndarray, spacing: tuple[float, float], mode: str = "slop
     return out
 
 
-def rms_slope(heights: np.ndarray, spacing: tuple[float, float]) -> float:
-    """The rms slope from forward differences inside the map (its edges not wrapped)."""
-    return slope_rms(*slope_squares(heights, spacing), heights.shape)
+def rms_slope(
+    heights: Any, spacing: tuple[float, float], steps: tuple[float, float] | None = None
+) -> float:
+    """The rms slope from forward differences inside the map (its edges not wrapped);
+    ``steps``: the map's :func:`step_squares` where already summed."""
+    return slope_rms(*slope_squares(heights, spacing, steps=steps), heights.shape)
 
 
 def slope_squares(
-    rows: np.ndarray, spacing: tuple[float, float], below: np.ndarray | None = None
+    rows: Any,
+    spacing: tuple[float, float],
+    below: Any = None,
+    steps: tuple[float, float] | None = None,
 ) -> tuple[float, float]:
     """The sums of the squared forward-difference slopes inside ``rows`` along ``x`` and
     ``y``; with ``below`` (the row after the last) the ``x`` slopes down to it too: a slab's
-    share of :func:`rms_slope`."""
-    sx = np.diff(rows, axis=0) / spacing[0]
-    sy = np.diff(rows, axis=1) / spacing[1]
-    along_x = float(np.sum(sx**2))
-    if below is not None and len(rows):
-        along_x += float(np.sum(((below - rows[-1]) / spacing[0]) ** 2))
-    return along_x, float(np.sum(sy**2))
+    share of :func:`rms_slope` (from ``steps``, the :func:`step_squares`, where given)."""
+    along_x, along_y = step_squares(rows, below) if steps is None else steps
+    return along_x / spacing[0] ** 2, along_y / spacing[1] ** 2
+
+
+def step_squares(rows: Any, below: Any = None) -> tuple[float, float]:
+    """The sums of the squared steps between neighbours inside ``rows`` along ``x`` and
+    ``y`` (and from the last row down to ``below``, where given): :data:`_CHUNK` rows at a
+    time (each with the next block's first row), so that the temporaries stay small;
+    ``rows`` of any array module (NumPy's or CuPy's: the map is checked where it lives)."""
+    along_x = along_y = 0.0
+    count = len(rows)
+    for start in range(0, count, _CHUNK):
+        block = rows[start : min(start + _CHUNK + 1, count)].astype(float, copy=False)
+        step = block[1:] - block[:-1]
+        along_x += float((step * step).sum())
+        own = block[: min(_CHUNK, count - start)]
+        step = own[:, 1:] - own[:, :-1]
+        along_y += float((step * step).sum())
+    if below is not None and count:
+        step = below - rows[-1].astype(float, copy=False)
+        along_x += float((step * step).sum())
+    return along_x, along_y
 
 
 def slope_rms(along_x: float, along_y: float, shape: tuple[int, ...]) -> float:
@@ -164,13 +188,19 @@ def slope_rms(along_x: float, along_y: float, shape: tuple[int, ...]) -> float:
     return float(np.sqrt(along_x / ((nx - 1) * ny) + along_y / (nx * (ny - 1))))
 
 
-def edge_mismatch(heights: np.ndarray) -> float:
+def edge_mismatch(heights: Any, steps: tuple[float, float] | None = None) -> float:
     """The step at the periodic seam over the typical neighbour step, the larger of the two
-    axes: about 1 for a periodic map, large for a map whose opposite edges differ."""
+    axes: about 1 for a periodic map, large for a map whose opposite edges differ.
+    ``steps``: the map's :func:`step_squares` where already summed; ``heights`` of any
+    array module."""
+    nx, ny = heights.shape
+    along_x, along_y = step_squares(heights) if steps is None else steps
     ratios = []
-    for axis in (0, 1):
-        h = np.moveaxis(np.asarray(heights, dtype=float), axis, 0)
-        inside = np.sqrt(np.mean(np.diff(h, axis=0) ** 2))
-        seam = np.sqrt(np.mean((h[0] - h[-1]) ** 2))
-        ratios.append(seam / inside if inside > 0 else (0.0 if seam == 0 else np.inf))
+    for inside_sum, inside_count, seam in (
+        (along_x, (nx - 1) * ny, heights[0].astype(float, copy=False) - heights[-1]),
+        (along_y, nx * (ny - 1), heights[:, 0].astype(float, copy=False) - heights[:, -1]),
+    ):
+        inside = np.sqrt(inside_sum / inside_count) if inside_count else 0.0
+        seam_rms = np.sqrt(float((seam * seam).mean()))
+        ratios.append(seam_rms / inside if inside > 0 else (0.0 if seam_rms == 0 else np.inf))
     return float(max(ratios))

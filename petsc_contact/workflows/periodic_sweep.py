@@ -243,9 +243,11 @@ def _periodic_problem(
     array: np.ndarray, sides: tuple[float, float], modulus: float, comm: Any, device: Device
 ) -> PeriodicProblem:
     """:func:`periodic_contact`'s problem: the map scattered on its grid, with the FFT of
-    ``device``; the map checked as a run's scene checks it (:func:`check_map`)."""
+    ``device``; the map checked as a run's scene checks it (:func:`check_map`), where it
+    lives: on a GPU on the device (the array devices run on one rank, whose slab is the map).
+    """
     grid = grid_for(array.shape, sides, comm)
-    local = grid.scatter(array)
+    local = device.asarray(grid.scatter(array))
     check_finite(grid, local)
-    check_map(array, grid, periodic=True)
+    check_map(local if grid.comm.size == 1 else array, grid, periodic=True)
     return PeriodicProblem(grid, device.fft(grid), local, modulus)

@@ -364,7 +364,8 @@ def check_map(full: np.ndarray, grid: Grid, periodic: bool, detrended: str = "no
     Parameters
     ----------
     full
-        The whole map (as prepared: filled, detrended, in the lengths' unit).
+        The whole map (as prepared: filled, detrended, in the lengths' unit), on the host
+        or on the device (where it lives: nothing but sums crosses).
     grid
         The map's grid: its pixel's sides, and the run's communicator.
     periodic
@@ -373,11 +374,18 @@ def check_map(full: np.ndarray, grid: Grid, periodic: bool, detrended: str = "no
         What was removed from the map (``none``, ``center``, ``slope``, ``curvature``): the
         remedy named for mismatched edges.
     """
-    from ..physics.preparation import EDGE_MISMATCH_LIMIT, SLOPE_RANGE, edge_mismatch, rms_slope
+    from ..physics.preparation import (
+        EDGE_MISMATCH_LIMIT,
+        SLOPE_RANGE,
+        edge_mismatch,
+        rms_slope,
+        step_squares,
+    )
 
     if grid.comm.rank != 0:  # only the run's first rank speaks: the others skip the passes
         return float("nan")
-    slope = rms_slope(full, grid.spacing)
+    steps = step_squares(full)  # once, for both checks
+    slope = rms_slope(full, grid.spacing, steps)
     if slope > 0 and not SLOPE_RANGE[0] <= slope <= SLOPE_RANGE[1]:
         warnings.warn(
             f"the map's rms slope (finite differences inside the map) is {slope:.3g}, outside "
@@ -386,7 +394,7 @@ def check_map(full: np.ndarray, grid: Grid, periodic: bool, detrended: str = "no
             DoubtfulMap,
             stacklevel=3,
         )
-    mismatch = edge_mismatch(full)
+    mismatch = edge_mismatch(full, steps)
     if periodic and mismatch > EDGE_MISMATCH_LIMIT:
         done = detrended in ("slope", "curvature")
         remedy = (

@@ -130,3 +130,28 @@ def test_study_data_folder_is_checked_before_it_is_made(tmp_path, listed):
     _refused(cli("study", "--data", str(tmp_path / "file"), *listed), "is not a folder")
     _refused(cli("study", "--shrink", "0", "--data", str(tmp_path / "new"), *listed), "--shrink")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]  # no folder made
+
+
+def test_a_study_goes_on_with_pieces_of_an_earlier_version(tmp_path):
+    """A complete piece and an interrupted one written before some options were recorded
+    (``RECORDED_SINCE``: their parameters lack them) are this study's pieces where the
+    study's values are those the earlier runs had; a piece recording another value is not."""
+    from petsc_contact.io.store import RECORDED_SINCE
+
+    data = tmp_path / "d"
+    r = _killed("after:commit:2", STUDY, "--shrink", "128", "--data", str(data))
+    assert r.returncode == -signal.SIGKILL, r.stderr
+    files = sorted(data.rglob("*.h5")) + sorted(data.rglob("*.h5.partial"))
+    assert any(p.suffix == ".partial" for p in files)
+
+    def rewrite(path: Path, change) -> None:
+        with h5py.File(path, "r+") as f:
+            parameters = json.loads(f.attrs["parameters"])
+            f.attrs["parameters"] = json.dumps(change(parameters))
+
+    for path in files:  # as an earlier version wrote them
+        rewrite(path, lambda p: {k: v for k, v in p.items() if k not in RECORDED_SINCE})
+    assert cli(*STUDY.split(), "--shrink", "128", "--data", str(data)).returncode == 0
+    done = sorted(data.rglob("*.h5"))
+    rewrite(done[0], lambda p: p | {"options_prefix": "a_"})
+    _refused(cli(*STUDY.split(), "--shrink", "128", "--data", str(data)), "options_prefix")

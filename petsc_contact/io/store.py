@@ -277,11 +277,27 @@ RESUME_FREE = ("resume", "overwrite", "quiet", "stop_after", "device")
 a run paused on a GPU goes on on the CPU; the ``resumed`` list records each part's)."""
 
 
+RECORDED_SINCE = {
+    "cut_from": 1,
+    "flat_stiffness": "grid",
+    "footprint": "square",
+    "options_prefix": "",
+    "override_metadata": False,
+    "skip_memory_check": False,
+}
+"""Parameters that files of earlier versions do not record, each with the value every run of
+those versions had (each option came with that behaviour as its default): a file without one
+is compared as if it recorded that value, so a study or a resume goes on across an upgrade,
+and a run that sets another value is still refused."""
+
+
 def check_same_run(partial: str, theirs: dict[str, Any], mine: dict[str, Any]) -> None:
     """``ValueError`` unless an unfinished file's ``parameters`` are this run's (apart from
-    :data:`RESUME_FREE`): a resume never mixes two runs."""
+    :data:`RESUME_FREE`; one that predates :data:`RECORDED_SINCE`'s has their values): a
+    resume never mixes two runs."""
     a = json.loads(json.dumps({k: v for k, v in mine.items() if k not in RESUME_FREE}))
-    b = {k: v for k, v in theirs.items() if k not in RESUME_FREE}
+    earlier = {k: v for k, v in RECORDED_SINCE.items() if k in a}  # where theirs lacks them
+    b = {k: v for k, v in (earlier | theirs).items() if k not in RESUME_FREE}
     changed = sorted(k for k in set(a) | set(b) if not _same(a.get(k), b.get(k)))
     if changed:
         raise ValueError(

@@ -56,3 +56,22 @@ def test_large_bound_sets_keep_the_fourier_form():
     assert not pre.adapt(pre.schur_max + 1, free)
     assert pre.schur is None and pre.mean_mode >= pre.base_mean_mode > 0
     assert schur_limit(512**2) < schur_limit(2048**2) <= 4096
+
+
+def test_a_schur_form_that_cannot_be_factorised_is_not_used(petsc):
+    """Where ``G_BB`` is not positive definite (here ``G``'s column negated: rounding could
+    do it only for a bound set close to the whole grid) the form is dropped, not applied:
+    the preconditioner keeps the Fourier form, whose ``q = 0`` entry follows the count."""
+    grid, pb = problem()
+    pre = pb.preconditioner
+    pre._exact_compliance()
+    pre._quarter *= -1.0
+    free = np.ones(grid.size, dtype=bool)
+    free[::97] = False
+    count = int((~free).sum())
+    assert 0 < count <= pre.schur_max
+    assert not pre.adapt(count, free)
+    assert pre.schur is None and pre.mean_mode >= pre.base_mean_mode > 0
+    r = np.random.default_rng(1).standard_normal(grid.size) * free
+    z = pre.apply_array(r, np.empty_like(r))
+    assert np.all(np.isfinite(z)) and float(r @ z) > 0

@@ -486,6 +486,8 @@ class CoarseSpace:
         The block side used.
     factorised
         Whether ``E`` was positive definite (otherwise :meth:`solve` must not be used).
+    system
+        The :class:`~petsc_contact.numerics.schur.BorderedSystem` of ``E``.
     """
 
     def __init__(
@@ -498,7 +500,8 @@ class CoarseSpace:
         self.local, self.labels, self.block = built.local, built.labels, built.block
         self.size = int(built.sizes.size)
         self.system = BorderedSystem(built.matrix, device.asarray(built.sizes), device)
-        self.factorised = self.system.factorised  # E not positive definite: no coarse space
+        # E not positive definite: no coarse space (alike on every rank, which all factorise E)
+        self.factorised = bool(grid.min(float(self.system.factorised)))
 
     def solve(self, g_r: Any, r_sum: float) -> tuple[Any, float]:
         """``(W a on this rank's bound pixels, c)`` for ``G r`` (local slab) and ``sum(r)``."""

@@ -125,7 +125,7 @@ class SpectralOperator(ShellInterface):
 
     def _weighted_sum(self, grid: Grid) -> float:
         """The multiplier summed over the full spectrum of ``grid`` (the FFT's grid), all ranks:
-        the operator's diagonal entry (summed on the device: one scalar crosses)."""
+        the operator's diagonal entry (summed on the device: one scalar comes back)."""
         w = self.fft.device.asarray(half_spectrum_weights(grid, self.fft))
         return float(grid.sum((w * self.spectrum).sum())[0])
 

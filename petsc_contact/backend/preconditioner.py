@@ -4,6 +4,8 @@ stiffness, with the exact Schur form on a few contact pixels and the two-level f
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..conventions.grid import Grid
@@ -69,7 +71,7 @@ class MeanModePreconditioner(FourierOperator):
         self.builds = 0  # coarse spaces built since the last invert
         self._last_count = 0  # the bound count of the last adapt
         self._built_free: np.ndarray | None = None  # the free set the coarse space was built on
-        self._quarter: np.ndarray | None = None  # G's quarter, made when the Schur form starts
+        self._quarter: Any = None  # G's quarter (of the device), made by a set-dependent form
         self._spread: np.ndarray | None = None  # work fields of the set-dependent forms
         self._reactions: np.ndarray | None = None  # the Schur form's, of the last application
 
@@ -127,12 +129,12 @@ class MeanModePreconditioner(FourierOperator):
         """Adapt to ``bound_count`` variables at their bound (``free``: this rank's free mask).
 
         Returns whether the operator changed with the set (the same on every rank): always
-        in the Schur form, on every build of the two-level form and when leaving it;
+        in the Schur form, on every build of the two-level form and when leaving either;
         otherwise only its ``q = 0`` entry followed the count (or an older coarse space is
-        kept).
+        kept).  The Schur form needs a free pixel (``G_BB`` is singular on the whole grid).
         """
         last, self._last_count = self._last_count, bound_count
-        if 0 < bound_count <= self.schur_max:
+        if 0 < bound_count <= min(self.schur_max, self.grid.size - 1):
             bound = (~free).reshape(self.grid.local_shape)  # on the device: made there
             schur = ContactSchur(self.grid, self._exact_compliance(), bound, self.device)
             if schur.factorised:
@@ -144,7 +146,7 @@ class MeanModePreconditioner(FourierOperator):
                 return False  # an older coarse space is kept until the set has settled
             if settled and self._build(free):
                 return True
-        leaving = self.coarse is not None
+        leaving = self.correction is not None  # the Schur or the two-level form
         self.correction = self._spread = self._built_free = None
         if self._filled != self.support:
             self._fill(self.support)
@@ -159,7 +161,7 @@ class MeanModePreconditioner(FourierOperator):
         quarter of ``G`` and :meth:`work_fields` are kept."""
         self.correction = self._built_free = self._reactions = None
 
-    def _exact_compliance(self) -> np.ndarray:
+    def _exact_compliance(self) -> Any:
         """Become ``G = 1/K`` with a zero ``q = 0`` entry (the set-dependent forms); returns
         its quarter (:func:`~petsc_contact.numerics.schur.quarter`)."""
         if self._filled != 0.0:
@@ -171,7 +173,7 @@ class MeanModePreconditioner(FourierOperator):
             )
         return self._quarter
 
-    def compliance_quarter(self, scale: float) -> np.ndarray | None:
+    def compliance_quarter(self, scale: float) -> Any:
         """The quarter of ``G = 1/K`` (zero ``q = 0`` entry) for the Hessian ``scale K`` this
         preconditioner inverts, from the column of ``1/(scale K)`` it keeps (rescaled with the
         Hessian at every :meth:`invert`); ``None`` before a set-dependent form made it."""
@@ -257,7 +259,8 @@ def set_mean_mode(op: FourierOperator, value: float) -> None:
 def schur_limit(size: int) -> int:
     """Largest bound set for the Schur preconditioner on a grid of ``size = n^2`` points.
 
-    Its dense LU (``~1.8e-11 m^3`` s here) should cost at most about ten FFT round trips
+    Its dense factorisation (measured as an LU, ``~1.8e-11 m^3`` s here; the Cholesky factor
+    used now has half its flops) should cost at most about ten FFT round trips
     (``~2.7e-10 n^2 log2(n^2)`` s): ``m <= (150 n^2 log2 n^2)^(1/3)``, 880 at 512^2 and
     2400 at 2048^2, and never more than :data:`SCHUR_MAX`.
     """

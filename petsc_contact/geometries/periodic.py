@@ -248,7 +248,7 @@ class PeriodicProblem:
         """
         pre = self.preconditioner
         (m,) = self.grid.sum(self.device.xp.count_nonzero(contact))
-        exact = pre.options.enabled and 0 < m <= pre.schur_max
+        exact = pre.options.enabled and 0 < m <= min(pre.schur_max, self.grid.size - 1)
         if not (exact or (m > 0 and pre.options.covers(int(m), self.grid.size))):
             return self.held_compliance(self.interfacial_stiffness)
         compliance = self._compliance(0.0)

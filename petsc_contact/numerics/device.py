@@ -224,9 +224,10 @@ class Device:
 
         try:
             with cupyx.errstate(linalg="raise"):  # CuPy ignores a failed potrf by default
-                return self.xp.linalg.cholesky(matrix), True
+                lower = self.xp.linalg.cholesky(matrix)  # C order
         except np.linalg.LinAlgError:
             return None
+        return lower.T, False  # the upper factor in Fortran order: solved without a copy
 
     def cho_solve(self, factor: tuple[Any, bool], b: Any) -> Any:
         """``E^-1 b`` from the ``cho_factor`` pair of ``E`` (its factor on this device,

@@ -11,7 +11,9 @@ so ``r + lambda`` must have zero sum).  ``G_BB`` is a dense ``m x m`` block of t
 compliance ``G(i - i', j - j')``, read from one column of ``G``: the operator is periodic and
 even in both offsets, so the quarter ``(nx/2 + 1) x (ny/2 + 1)`` of that column
 (:func:`quarter`) holds every entry.  ``G`` is positive semi-definite with only the constants
-in its null space, so ``G_BB`` is positive definite for any ``B`` short of the whole grid and
+in its null space, so ``G_BB`` is positive definite for any ``B`` short of the whole grid
+(its smallest eigenvalue at least ``(1 - m/N)/k_max``, ``N`` pixels and ``k_max`` the
+Hessian's largest eigenvalue) and
 the bordered system is solved by ``G_BB``'s Cholesky factor (:class:`BorderedSystem`, which
 the two-level form's coarse matrix shares), where the fields live: on a GPU, nothing but
 scalars comes to the host.  On several ranks each rank holds only the quarter's rows in its
@@ -57,7 +59,9 @@ class BorderedSystem:
     factorised
         Whether ``E`` was positive definite (otherwise :meth:`solve` must not be used).
     factor
-        SciPy's ``cho_factor`` pair of ``E`` (``None`` when it failed).
+        The ``cho_factor`` pair of ``E`` (:meth:`~petsc_contact.numerics.device.Device.
+        cho_factor`: SciPy's on the host, cuSOLVER's factor on a GPU), ``None`` when it
+        failed.
     """
 
     def __init__(self, matrix: Any, weights: Any, device: Device = CPU) -> None:
@@ -120,7 +124,7 @@ class ContactSchur:
         block = compliance_block(xp, quarter, both, grid.shape, held_rows(grid))
         self.size = len(both)
         self.system = BorderedSystem(sum_over_ranks(block, grid.comm), xp.ones(self.size), device)
-        self.factorised = self.system.factorised
+        self.factorised = bool(grid.min(float(self.system.factorised)))  # alike on every rank
 
     def solve(self, g_r: Any, r_sum: float) -> tuple[Any, float]:
         """``(lambda on this rank's bound pixels, c)`` for ``G r`` (local slab) and ``sum(r)``."""
@@ -142,7 +146,7 @@ def compliance_block(xp: Any, quarter: Any, both: Any, shape: tuple[int, int], h
 
     Filled :data:`SYSTEM_ROWS` rows at a time, so that the pixel offsets' temporaries stay
     ``SYSTEM_ROWS x m`` for ``m`` pixels; returned in Fortran order (the transpose of the
-    rows filled: the block is symmetric), which LAPACK factorises in place.
+    rows filled: the block is symmetric), which LAPACK factorises in place on the host.
     """
     m = len(both)
     whole = held.start == 0 and held.stop == shape[0] // 2 + 1

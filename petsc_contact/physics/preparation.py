@@ -10,7 +10,8 @@ Pure numpy on the whole map (the rank that reads it holds it before the grid's s
   instrument's bow are not part of the roughness;
 - :func:`edge_mismatch` and :func:`rms_slope` are the checks behind the warnings: a map that
   is not periodic has a step at its edges when treated as periodic, and an rms slope far
-  from 1e-3..1 usually means mistaken units.
+  from 1e-3..1 usually means mistaken units.  They take the map where it lives, NumPy's or
+  CuPy's (a GPU run checks it on the device), from the sums of :func:`step_squares`.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ DETREND_MODES = ("none", "height", "slope", "curvature")
 FILL_MODES = ("error", "mean", "harmonic")
 SLOPE_RANGE = (1e-3, 1.0)  # rms slopes outside this usually mean wrong units
 EDGE_MISMATCH_LIMIT = 5.0  # edge step over typical neighbour step that draws a warning
-_CHUNK = 512  # rows per pass of the detrending sums (bounds the memory at large maps)
+_CHUNK = 512  # rows per pass of the detrending and step sums (bounds the memory at large maps)
 
 
 def fill_undefined(heights: np.ndarray, mode: str = "error") -> np.ndarray:

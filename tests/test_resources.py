@@ -45,3 +45,35 @@ def test_a_run_that_does_not_fit_is_refused_in_one_line(tmp_path):
     assert r.returncode != 0 and "Traceback" not in r.stderr, r.stderr
     assert "GiB" in r.stderr and "--skip-memory-check" in r.stderr, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "o.h5").exists()
+
+
+AFTER = """
+import sys
+from petsc_contact import Run, run_contact
+from petsc_contact.conventions.resources import release_freed
+
+
+def rss():
+    with open("/proc/self/status") as f:
+        return next(int(line.split()[1]) * 1024 for line in f if line.startswith("VmRSS"))
+
+
+base = Run(hurst=0.5, rms_slope=0.1, sweep=(3, 1e-6, 1e-3), output=sys.argv[1], overwrite=True)
+run_contact(base.with_(grid=64))  # the imports and caches a run loads
+release_freed()
+before = rss()
+run_contact(base.with_(grid=1024))
+held = rss()
+release_freed()
+print(before, held, rss())
+"""
+
+
+def test_a_finished_run_gives_its_memory_back_before_the_next_check(tmp_path):
+    """A study runs its pieces in one process: what the last piece freed is given back before
+    the next piece's check reads the memory available (it held on to most of a run's peak)."""
+    r = python("-c", AFTER, str(tmp_path / "o.h5"), timeout=300)
+    assert r.returncode == 0, r.stderr
+    before, held, after = (int(v) for v in r.stdout.split()[-3:])
+    assert held - before > 0.5 * estimated_bytes(1024**2, "periodic"), (before, held)
+    assert after - before < 0.25 * (held - before), (before, held, after)

@@ -557,7 +557,7 @@ def test_plot_command(tmp_path):
 def test_study_runs_in_resumable_pieces(tmp_path):
     """The paper study at a toy size: a tiny time budget stops after the first step of the
     first piece (exit 75, its .partial kept); the next call finishes every piece; a third
-    call skips them all."""
+    call skips them all.  A piece's command from ``--list`` computes it alone."""
     data = tmp_path / "paper"
     base = ["study", "--figure", "1", "--shrink", "128", "--data", str(data), "--quiet"]
     r = cli(*base, "--minutes", "0.00001")
@@ -566,8 +566,14 @@ def test_study_runs_in_resumable_pieces(tmp_path):
     assert (data / "fig1" / "punch.h5.state.npz").exists()  # the state, beside it
     plan = cli(*base, "--list").stdout.splitlines()
     assert [line.split()[0] for line in plan] == ["1/16", "todo", "todo"]  # the punch first
+    # a listed piece's command computes that piece alone, pasted as it is: the study keeps it
+    _, path, program, *command = plan[1].split()
+    assert program == "petsc-contact" and f"--output {path}" in " ".join(command)
+    assert cli(*command, "--quiet").returncode == 0
+    pasted = os.stat(path).st_mtime_ns
     r = cli(*base, "--minutes", "10")
     assert r.returncode == 0, r.stderr
+    assert os.stat(path).st_mtime_ns == pasted
     files = sorted((data / "fig1").glob("*.h5"))
     assert [f.name for f in files] == ["periodic_r1.h5", "periodic_r8.h5", "punch.h5"]
     assert not list((data / "fig1").glob("*.npz")) and not list((data / "fig1").glob("*.partial"))
@@ -693,3 +699,17 @@ def test_resumed_file_marks_a_new_column_missing_before_it(tmp_path):
         assert list(f["contact_patches"][:]) == [-1, 3]
         assert np.isnan(f["stiffness"][0]) and f["stiffness"][1] == 2.0
         assert list(f["mean_gap"][:]) == [1.0, 0.5]
+
+
+def test_demo_on_a_small_grid(tmp_path):
+    """``demo --grid 64`` runs: the default scene's ``L/lambda_1 = 64`` is past the Nyquist
+    limit there, and becomes it; ``--help`` names the demo's default, and a cut-off given
+    past the limit is still refused in one line."""
+    out = tmp_path / "d.h5"
+    r = cli("demo", "--grid", "64", "--output", str(out), "--plot", str(tmp_path / "d.png"))
+    assert r.returncode == 0, r.stderr
+    with h5py.File(out) as f:
+        assert f.attrs["cutoff_ratio"] == 32 and f.attrs["grid"] == 64
+    assert "default 64)" in " ".join(cli("demo", "--help").stdout.split())
+    given = cli("demo", "--grid", "64", "--cutoff-ratio", "64", "--output", str(out), "--overwrite")
+    assert given.returncode == 2 and "exceeds the Nyquist limit 32" in given.stderr

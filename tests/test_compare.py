@@ -91,14 +91,33 @@ def test_the_command_line_wins_over_a_solvers_options_file(tmp_path):
 
 def test_solver_options(tmp_path, monkeypatch):
     """The package's solvers by their file, any other TAO type by name, a path as it is; a
-    missing file of the package's in one line."""
+    missing file of the package's and a name that is no bound-constrained type in one line."""
     assert solver_options("bqnkls") == ["-tao_type", "bqnkls"]
+    for name in ("python", "lmvm", "nosuch"):
+        with pytest.raises(ValueError, match=f"unknown solver '{name}'"):
+            solver_options(name)
     mine = tmp_path / "my.opts"
     mine.write_text("-tao_type bqnls\n")
     assert solver_options(str(mine)) == ["-options_file", str(mine)]
     monkeypatch.setattr(compare, "OPTIONS", tmp_path)
     with pytest.raises(OSError, match=f"solver 'tron' is missing: {tmp_path}/tron.opts"):
         solver_options("tron")
+
+
+def test_compare_reads_its_pressure_with_a_unit(tmp_path):
+    """``--pressures 1MPa --modulus 1GPa`` is ``--pressures 1e-3`` (the reference's mean gap
+    bit for bit); a list is refused in words before anything is solved."""
+    gaps = []
+    for i, load in enumerate((["1e-3"], ["1MPa", "--modulus", "1GPa"])):
+        out = tmp_path / f"u{i}.h5"
+        r = cli(*SCENE, "--pressures", *load, "--solvers", "cg", "--output", str(out), "--quiet")
+        assert r.returncode == 0, r.stderr
+        with h5py.File(out) as f:
+            gaps.append(f.attrs["reference_mean_gap"])
+    assert gaps[0] == gaps[1]
+    r = cli(*SCENE, "--pressures", "1e-3,1e-2", "--output", str(tmp_path / "l.h5"))
+    assert r.returncode == 2 and "one pressure only (compare solves one load)" in r.stderr
+    assert not list(tmp_path.glob("l*"))
 
 
 def test_compare_time_limit_and_bad_solver(tmp_path):
@@ -120,6 +139,12 @@ def test_compare_time_limit_and_bad_solver(tmp_path):
         assert not f["bncg"].attrs["converged"]
     r = cli(*SCENE, "--pressures", "3e-3", "--solvers", "no/such.opts", "--output", str(out))
     assert r.returncode == 2 and "does not exist" in r.stderr
+    # a name that is no solver is refused before the reference is solved: no file is left
+    other = tmp_path / "other.h5"
+    r = cli(*SCENE, "--pressures", "3e-3", "--solvers", "cg,nosuch", "--output", str(other))
+    assert r.returncode == 2 and "unknown solver 'nosuch'" in r.stderr, r.stderr
+    assert "bqpip" in r.stderr and "python" not in r.stderr
+    assert not list(tmp_path.glob("other*"))
 
 
 def test_compare_stall_limit(tmp_path):

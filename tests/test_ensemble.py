@@ -180,3 +180,31 @@ def test_experiment_command(tmp_path):
     assert r.returncode == 0, r.stderr
     with h5py.File(out) as f, h5py.File(out2) as g:
         assert np.array_equal(f["stiffness"][:], g["stiffness"][:])
+
+
+def test_experiment_rows_without_a_stiffness_are_said(tmp_path):
+    """A table whose pressure falls with the displacement at some rows (noise, or s of the
+    wrong sign) gives K = NaN there and one warning, not a negative stiffness; so do rows
+    where the block's own compression dominates (K* d/E' >= 1)."""
+    from petsc_contact.conventions.warnings import DoubtfulTable
+    from petsc_contact.workflows.experiment import squeeze_test
+
+    u0, d, e = 1e-4, 1e-2, 4.2e6
+    p = np.geomspace(1e3, 1e5, 30)
+    s = u0 * np.log(p / p[0]) + p * d / e
+    p[10] *= 0.5  # one bad row: K* < 0 around it
+    table = tmp_path / "ps.csv"
+    np.savetxt(table, np.column_stack([p, s]), delimiter=",")
+    with pytest.warns(DoubtfulTable, match=r"K is NaN at \d+ of 30 rows .*K\* <= 0"):
+        found = squeeze_test(str(table), e, d, str(tmp_path / "e.h5"))
+    falling = found.measured_stiffness <= 0
+    assert falling.any() and np.isnan(found.stiffness[falling]).all()
+    assert np.all(np.isnan(found.stiffness) | (found.stiffness > 0))
+    with pytest.warns(DoubtfulTable) as caught:
+        squeeze_test(str(table), e, 100 * d, str(tmp_path / "f.h5"))
+    said = [str(w.message) for w in caught]
+    assert len(said) == 2 and "the block's own compression dominates" in said[1]
+    r = cli("experiment", "--table", str(table), "--modulus", str(e), "--thickness", str(d),
+            "--output", str(tmp_path / "g.h5"))  # fmt: skip
+    assert r.returncode == 0 and "petsc-contact: warning: K is NaN at" in r.stderr
+    assert f"# wrote {tmp_path / 'g.h5'}" in r.stdout

@@ -107,8 +107,32 @@ def test_outputs_that_clash(tmp_path: Path) -> None:
             says="cannot be written as '.dat'")  # fmt: skip
 
 
+def test_a_figure_in_a_missing_folder(tmp_path: Path) -> None:
+    """--plot into a folder that does not exist is refused before the run, as --output is
+    (exit 74, one line): it was found only after every step had been solved."""
+    out, plot = str(tmp_path / "a.h5"), str(tmp_path / "nowhere" / "a.png")
+    r = cli(*PERIODIC, "--output", out, "--plot", plot)
+    assert r.returncode == 74 and r.stderr.strip().splitlines() == [
+        f"petsc-contact: error: --plot's folder '{tmp_path / 'nowhere'}' does not exist"
+    ], r.stderr
+    assert os.listdir(tmp_path) == []
+
+
+def test_negative_values_in_every_spelling(tmp_path: Path) -> None:
+    """A negative load or length is refused by its check in every spelling: argparse alone
+    takes ``-1e-3`` for an option (``expected one argument``)."""
+    out = str(tmp_path / "a.h5")
+    for value in ("-1e-3", "-1", "-.5", "-2E+1"):
+        refused(tmp_path, "periodic", *SURFACE, "--output", out, "--pressures", value,
+                says="--pressures must be positive")  # fmt: skip
+    refused(tmp_path, "periodic", *SURFACE, "--output", out, "--pressures", "1e-3",
+            "--length", "-2e-3", says="a length must be positive")  # fmt: skip
+
+
 def test_lists_and_solvers(tmp_path: Path) -> None:
-    """An empty item in a comma list is refused, not dropped; a solver named twice too."""
+    """An empty item in a comma list is refused, not dropped; a solver named twice too; a
+    reversed range of seeds, and ``--seed`` beside an ensemble's ``--seeds`` (it was
+    ignored without a word)."""
     out = str(tmp_path / "a.h5")
     for option, value in (
         ("--pressures", "1e-3,,2e-3"),
@@ -120,6 +144,10 @@ def test_lists_and_solvers(tmp_path: Path) -> None:
                 says="an empty item")  # fmt: skip
     refused(tmp_path, "ensemble", *SURFACE, "--pressures", "1e-3", "--seeds", "1,,2",
             "--output", out, says="an empty item")  # fmt: skip
+    ensemble = ("ensemble", *SURFACE, "--pressures", "1e-3", "--output", out)
+    refused(tmp_path, *ensemble, "--seeds", "3-1", says="a range A-B of seeds with B >= A")
+    refused(tmp_path, *ensemble, "--seeds", "0-1", "--seed", "5",
+            says="an ensemble's surfaces are its --seeds")  # fmt: skip
     compare = ("compare", *SURFACE, "--pressures", "1e-3", "--output", out)
     refused(tmp_path, *compare, "--solvers", "cg,cg", says="a solver named twice: cg")
     refused(tmp_path, *compare, "--solvers", "cg,,pk", says="an empty item")
@@ -177,6 +205,39 @@ def test_plot_of_an_unfinished_run(tmp_path: Path, run_file) -> None:
     refused(tmp_path, "plot", str(partial), says=f"its maps are in {tmp_path}/r.h5.parts")
     finished = run_file("s.h5", "periodic", nominal_pressure=np.ones(1))
     refused(tmp_path, "plot", str(finished), says="(run with --fields)")
+
+
+def test_a_study_away_from_its_data(tmp_path: Path) -> None:
+    """``study`` without ``--data`` outside the repository's root is refused in one line (it
+    would have started the whole 8192^2 study there); with ``--data`` a new folder is made."""
+    import subprocess
+    import sys
+
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    for extra in ((), ("--list",)):
+        r = subprocess.run([sys.executable, "-m", "petsc_contact.cli", "study", *extra,
+                            "--minutes", "0.001"], cwd=tmp_path, env=env, capture_output=True,
+                           text=True, timeout=120)  # fmt: skip
+        assert r.returncode == 2 and r.stderr.splitlines() == [
+            f"petsc-contact: error: no data/paper in {tmp_path}: run the study in the "
+            "repository's root, where the paper's data are, or name a folder with --data (a "
+            "new one starts the study afresh)"
+        ], r.stderr
+    assert os.listdir(tmp_path) == []
+
+
+def test_plot_of_what_no_command_plots(tmp_path: Path, heights: Path, run_file) -> None:
+    """plot of a heights file, or of a comparison (with or without --sweep), says what the
+    file is in one line (h5py's 'file signature not found'; a comparison was sent to
+    --sweep, which then found no sweep)."""
+    refused(tmp_path, "plot", str(heights), says="is not an HDF5 file: plot draws the files")
+    compared = run_file("c.h5", "periodic", cg=np.ones(1))
+    with h5py.File(compared, "a") as f:
+        f.attrs["solvers"] = json.dumps(["cg"])
+    for extra in ((), ("--sweep",)):
+        refused(tmp_path, "plot", str(compared), *extra,
+                says=f"is a solver comparison, with no maps and no load sweep: compare drew "
+                f"its figure as {tmp_path}/c.png")  # fmt: skip
 
 
 @pytest.mark.parametrize("device", ["cpu", "cpu-array"])

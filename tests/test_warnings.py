@@ -14,7 +14,12 @@ from conftest import cli
 from test_measured import _map
 
 from petsc_contact import Run, periodic_contact, run_contact
-from petsc_contact.conventions.warnings import DoubtfulMap, FilledLoad, PetscContactWarning
+from petsc_contact.conventions.warnings import (
+    DoubtfulMap,
+    FilledLoad,
+    PetscContactWarning,
+    Unconverged,
+)
 
 PREFIX = "petsc-contact: warning: "
 
@@ -95,3 +100,23 @@ def test_package_warnings_can_be_errors(tmp_path):
         warnings.simplefilter("error", PetscContactWarning)
         run_contact(Run(heights=str(path), output=str(tmp_path / "o.h5"), **options))
     assert not list(tmp_path.glob("o.h5*"))
+
+
+def test_unconverged_steps_warn_through_both_doors(tmp_path):
+    """A step TAO leaves unconverged (``-tao_max_it 1``) is kept and flagged, and said: the
+    library warns (:class:`Unconverged`, in the result and the file's ``warnings``), which
+    the command line prints as its one line before exit status 1.  ``run_contact`` gave no
+    warning before: only ``result.converged`` told."""
+    scene = {"grid": 32, "hurst": 0.7, "rms_slope": 0.1, "pressures": [1e-3, 1e-2]}
+    run = Run(**scene, options=("-tao_max_it", "1"), output=str(tmp_path / "lib.h5"))
+    with pytest.warns(Unconverged, match="2 of 2 load steps did NOT converge") as caught:
+        result = run_contact(run)
+    assert not result.converged and result.status == "complete"
+    assert result.warnings == [str(w.message) for w in caught if w.category is Unconverged]
+    assert "(first: step 1, TAO did not converge (DIVERGED_MAXITS))" in result.warnings[0]
+    assert _recorded(tmp_path / "lib.h5") == result.warnings
+    out = str(tmp_path / "cli.h5")
+    given = ("--grid", "32", "--hurst", "0.7", "--rms-slope", "0.1", "--pressures", "1e-3,1e-2")
+    r = cli("periodic", *given, "--output", out, "--quiet", "-tao_max_it", "1")
+    said = [line.removeprefix(PREFIX) for line in r.stderr.splitlines()]
+    assert r.returncode == 1 and said == [result.warnings[0].replace("lib.h5", "cli.h5")]

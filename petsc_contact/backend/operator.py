@@ -63,6 +63,49 @@ class ShellInterface:
     applyTranspose = apply
 
 
+class DiagonalShift(ShellInterface):
+    """An operator plus a diagonal that PETSc sets on its shell ``Mat`` (``MatDiagonalSet``).
+
+    TAO's interior-point type ``bqpip`` adds its barrier's diagonal to the Hessian before each
+    of its Newton solves and restores the Hessian's own diagonal after it; a shell of
+    :class:`SpectralOperator` alone cannot take that.  ``op`` is left unchanged: only the
+    ``Mat`` made of this wrapper (:func:`shell_matrix`) applies the shift.
+    """
+
+    def __init__(self, op: ShellInterface) -> None:
+        self.op, self.grid = op, op.grid
+        self.shift: np.ndarray | None = None  # this rank's entries added to the diagonal
+
+    @property
+    def applications(self) -> int:  # type: ignore[override]
+        return self.op.applications
+
+    def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
+        self.op.apply_array(x, out)
+        if self.shift is not None:
+            out += self.shift * x
+        return out
+
+    def diagonal(self) -> float:
+        return self.op.diagonal()
+
+    def getDiagonal(self, mat: Any, d: Any) -> None:
+        with d as out:
+            out[...] = self.op.diagonal() if self.shift is None else self.op.diagonal() + self.shift
+
+    def setDiagonal(self, mat: Any, d: Any, addv: Any) -> None:
+        """PETSc's ``MatDiagonalSet``: add ``d`` (``ADD_VALUES``), or make ``d`` the diagonal."""
+        values = np.array(d.array_r)
+        # petsc4py 3.18 passes whether the mode is ADD_VALUES; older ones the InsertMode
+        add = addv if isinstance(addv, bool) else addv == _petsc.petsc().InsertMode.ADD_VALUES
+        if add:
+            self.shift = values if self.shift is None else self.shift + values
+        else:
+            self.shift = values - self.op.diagonal()
+        if not self.grid.sum(float(np.abs(self.shift).max(initial=0.0)))[0]:
+            self.shift = None  # the operator's own diagonal again: no pass
+
+
 class SpectralOperator(ShellInterface):
     """An FFT round trip with a real multiplier, in two halves.
 

@@ -49,7 +49,7 @@ from ..numerics import kernels
 from ..solver.report import DEFAULT_GATOL, DEFAULT_MAX_IT, SolveInfo
 from . import _petsc
 from .cg import ContactPreconditioner, compact_bound
-from .operator import SpectralOperator, shell_matrix
+from .operator import DiagonalShift, SpectralOperator, shell_matrix
 
 BOUND_TYPES = (
     "tron",
@@ -71,6 +71,7 @@ H0_TYPES = ("blmvm", "bncg")  # given the restricted compliance as their H0
 BNCG_MATRIX = "lmvmbfgs"  # BNCG's scaling matrix: one that applies H0 (docs/solvers.md)
 KSP_TYPES = ("tron", "gpcg", "bnls", "bntr", "bntl", "bqpip")
 KSP_PC_TYPES = ("tron", "bnls", "bntr", "bntl")  # preconditioned through the Hessian's Pmat
+SHIFT_TYPES = ("bqpip",)  # shift the Hessian's diagonal (MatDiagonalSet) between its solves
 DEFAULT_TYPE = "python"
 DEFAULT_PYTHON_TYPE = "petsc_contact.backend.cg.PreconditionedCG"
 
@@ -290,7 +291,8 @@ class BoundSolver:
         self.prefix = _petsc.check_prefix(given)
         opts = _petsc.options(self.prefix)
         self.tao_type = check_tao_type(petsc, self.prefix)
-        self.hessian = shell_matrix(petsc, hessian)
+        shifted = self.tao_type in SHIFT_TYPES
+        self.hessian = shell_matrix(petsc, DiagonalShift(hessian) if shifted else hessian)
         self.x = self.hessian.createVecRight()
         self.lower = self.x.duplicate()
         self.upper = self.x.duplicate()
@@ -421,7 +423,11 @@ class BoundSolver:
         tao.setMaximumIterations(DEFAULT_MAX_IT)
         tao.setMaximumFunctionEvaluations(10 * DEFAULT_MAX_IT)
         if self.tao_type in KSP_TYPES:
-            tao.getKSP().getPC().setType("none" if self.pmat is None else "mat")
+            # bqpip's Newton matrix is H plus its barrier's diagonal, which dominates near the
+            # bounds: Jacobi on that diagonal (DiagonalShift's) takes its KSP from 1024
+            # iterations without converging to about 80 (docs/solvers.md)
+            kind = "jacobi" if self.tao_type in SHIFT_TYPES else "none"
+            tao.getKSP().getPC().setType(kind if self.pmat is None else "mat")
         opts = _petsc.options(self.prefix)
         default_matrix = self.use_h0 and self.tao_type == "bncg"
         default_matrix = default_matrix and not opts.hasName("tao_bncg_mat_type")

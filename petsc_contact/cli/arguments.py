@@ -8,7 +8,6 @@ add their own here.
 from __future__ import annotations
 
 import argparse
-import os
 import re
 import sys
 from collections.abc import Sequence
@@ -17,7 +16,15 @@ from typing import Any, NoReturn
 
 from .._version import __version__
 from ..backend._petsc import is_petsc_option
-from ..workflows.options import OPTIONS, Option, default_text, minutes, options_of
+from ..workflows.options import (
+    DEFAULT_DATA,
+    OPTIONS,
+    Option,
+    default_text,
+    minutes,
+    options_of,
+    shown,
+)
 
 DEMO: dict[str, Any] = {
     "grid": 512,
@@ -31,7 +38,19 @@ DEMO: dict[str, Any] = {
     "output": "demo.h5",
     "plot": "demo.png",
 }
-"""``demo``'s defaults: the default scene."""
+"""``demo``'s defaults: the default scene (its ``L/lambda_1`` the Nyquist limit on a grid
+given below 128 a side, :func:`demo_cutoff`)."""
+
+
+def demo_cutoff(args: argparse.Namespace, argv: Sequence[str]) -> None:
+    """``demo``'s ``L/lambda_1`` on a grid given smaller than the default scene's: 64 is past
+    the Nyquist limit below 128 pixels a side, where it becomes that limit (``None``); one
+    given with ``--cutoff-ratio`` stays as given."""
+    given = any(a.startswith("--cutoff-ratio") for a in argv)
+    sides = args.grid if isinstance(args.grid, (list, tuple)) else (args.grid,)
+    if not given and args.grid is not None and 2 * args.cutoff_ratio > min(sides):
+        args.cutoff_ratio = None
+
 
 SURFACE_GROUP = "surface (a file, or a generated self-affine surface, paper Eq. 5)"
 
@@ -63,16 +82,19 @@ def split_arguments(argv: Sequence[str]) -> tuple[list[str], list[str]]:
             ):
                 petsc.append(tokens[i + 1])
                 i += 1
+        elif (
+            tok.startswith("--")
+            and "=" not in tok
+            and i + 1 < len(tokens)
+            and _NUMBER.match(tokens[i + 1])
+        ):
+            # joined, so that argparse reads a negative value such as -1e-3 as the value
+            # (it takes only -1 and -.5 for numbers) and its check can say what is wrong
+            value = tokens[i + 1]
+            ours += [f"{tok}={value}"] if value.startswith("-") else [tok, value]
+            i += 1
         else:
             ours.append(tok)
-            if (
-                tok.startswith("--")
-                and "=" not in tok
-                and i + 1 < len(tokens)
-                and _NUMBER.match(tokens[i + 1])
-            ):
-                ours.append(tokens[i + 1])
-                i += 1
         i += 1
     return ours, petsc
 
@@ -140,12 +162,13 @@ def _ignored(target: Any, option: Option) -> None:
     )
 
 
-def _help(option: Option, default: Any) -> str:
-    """The option's ``--help`` line: its help and the default the command gives it, inside
-    the help's closing parenthesis when it has one (``(0 to 2^63 - 1; default 0)``)."""
-    text = default_text(option, default)
+def _help(option: Option, default: Any, own: bool = False) -> str:
+    """The option's ``--help`` line: its help and the default the command gives it (``own``:
+    the command's own, ``demo``'s), inside the help's closing parenthesis when it has one
+    (``(0 to 2^63 - 1; default 0)``)."""
+    text = shown(default) if own else default_text(option, default)
     if text:
-        text = f"default: {text}" if option.shown_default else f"default {text}"
+        text = f"default: {text}" if option.shown_default and not own else f"default {text}"
     line = option.help
     if text:
         line = line[:-1] + f"; {text})" if line.endswith(")") else f"{line} ({text})"
@@ -157,7 +180,7 @@ def _argument(target: Any, option: Option, defaults: dict[str, Any]) -> None:
     command's own (``demo``), which also make a required option optional."""
     default = defaults.get(option.name, option.default)
     kwargs: dict[str, Any] = {"dest": option.name, "default": default}
-    kwargs["help"] = _help(option, default)
+    kwargs["help"] = _help(option, default, own=option.name in defaults)
     if option.switch:
         kwargs["action"] = "store_true"
     else:
@@ -338,7 +361,12 @@ def _study_parser(sub: Any) -> None:
         "faces as periodic cells (default all)",
     )
     p.add_argument("--minutes", type=minutes, default=45.0, help="time budget (default 45)")
-    p.add_argument("--data", default=os.path.join("data", "paper"), help="default data/paper")
+    p.add_argument(
+        "--data",
+        default=DEFAULT_DATA,
+        help=f"default {DEFAULT_DATA}, which must exist (the repository's root); another "
+        "folder is made if it is new",
+    )
     p.add_argument("--shrink", type=int, default=1, help="divide every grid (a quick look)")
     p.add_argument(
         "--list",
@@ -413,6 +441,6 @@ def _experiment_parser(sub: Any) -> None:
         metavar="D",
         help="block thickness d (length units of s)",
     )
-    exp.add_argument("--output", required=True, metavar="OUT.h5")
+    exp.add_argument("--output", required=True, metavar="OUT.h5", help="the table, K* and K (HDF5)")
     exp.add_argument("--plot", metavar="PNG", help="K and K* against p")
     _options(exp, "experiment")

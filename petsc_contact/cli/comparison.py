@@ -6,7 +6,7 @@ import argparse
 from collections.abc import Sequence
 from typing import Any
 
-from .common import EXIT_NOT_CONVERGED, record_for, scene_for
+from .common import EXIT_NOT_CONVERGED, describe, record_for, scene_for
 
 HEADER = (
     f"{'solver':>16} {'converged':>9} {'its':>6} {'time_s':>8} {'gap_err':>9} "
@@ -16,9 +16,13 @@ HEADER = (
 
 def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) -> int:
     """``petsc-contact compare``: every solver on one scene, error against time."""
+    from ..conventions.units import pressure_value
+    from ..conventions.validation import positive
     from ..workflows.compare import check_comparison, compare_into
 
     solvers = check_comparison(args.solvers, args.time_limit, args.stall_iterations, petsc_args)
+    unit = describe(args).pressure_unit  # --modulus's
+    pressure = positive("--pressures", pressure_value(args.pressure, unit, "--pressures"))
     petsc, run, scene = scene_for(args, petsc_args)
     show = scene.grid.comm.rank == 0 and not args.quiet
     if show:
@@ -27,7 +31,7 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
         args.output,
         scene,
         run.modulus_value,
-        args.pressure,
+        pressure,
         lambda realised: record_for(run, argv, petsc, realised, scene),
         solvers,
         args.time_limit,

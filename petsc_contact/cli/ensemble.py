@@ -25,6 +25,8 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
     )
     from .runs import execute
 
+    if any(a == "--seed" or a.startswith("--seed=") for a in argv):
+        raise ValueError("an ensemble's surfaces are its --seeds; --seed names one surface")
     base = describe(args, petsc_args)
     if args.plot:
         check_writable(args.plot)

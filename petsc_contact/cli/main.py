@@ -12,15 +12,16 @@ from typing import Any
 
 from ..conventions.warnings import PetscContactWarning
 from ..io.schema import schema_markdown
-from ..io.store import StorageError, check_interrupt, forget_interrupts, interrupt
+from ..io.store import StorageError, check_interrupt, check_writable, forget_interrupts, interrupt
 from ..numerics.device import DeviceUnavailable
-from .arguments import build_parser, is_petsc_option, split_arguments
+from .arguments import build_parser, demo_cutoff, is_petsc_option, split_arguments
 from .common import (
     EXIT_BAD_INPUT,
     EXIT_INTERRUPTED,
     EXIT_STORAGE,
     EXIT_UNAVAILABLE,
     InputError,
+    command_outputs,
     describe,
     on_array_device,
     refusal,
@@ -92,6 +93,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     sys.unraisablehook = _unraisable
     warnings.showwarning = _show_warning
     try:
+        for option, path in command_outputs(args):  # a figure's folder, as the output's
+            if option == "--plot" and path:
+                check_writable(path, "--plot's")
         status = _dispatch(args, argv, petsc_args)
         _report_unused(petsc_args)
         if status != EXIT_INTERRUPTED:  # said so already
@@ -165,6 +169,8 @@ def _dispatch(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[st
         return 0
     if args.command == "study":
         return run_study(args, petsc_args)  # each piece locked: studies may share a folder
+    if args.command == "demo":
+        demo_cutoff(args, argv)
     if args.command not in LOCKED and on_array_device(args):  # no PETSc is loaded
         return execute(describe(args, petsc_args), args, argv)
     if args.command not in LOCKED:

@@ -31,4 +31,5 @@ def run_experiment(args: argparse.Namespace) -> int:
         rows = (found.pressure, found.displacement, found.measured_stiffness, found.stiffness)
         for row in zip(*rows, strict=True):
             print(" ".join(f"{v:>12.5g}" for v in row))
+        print(f"# wrote {args.output}" + (f" and {args.plot}" if args.plot else ""))
     return 0

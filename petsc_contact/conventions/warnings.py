@@ -35,6 +35,15 @@ class ResumeWarning(PetscContactWarning):
     """A resumed run computes again what its files could not give."""
 
 
+class DoubtfulTable(PetscContactWarning):
+    """A measured ``p(s)`` table whose stiffness is undefined at some of its rows."""
+
+
+class Unconverged(PetscContactWarning):
+    """Load steps that did not converge, or whose measured accuracy is beyond the package's:
+    they are in the results, flagged ``converged`` or ``accurate`` ``False``."""
+
+
 class UnusedOptions(PetscContactWarning):
     """PETSc options that nothing read (a misspelt name)."""
 

@@ -28,18 +28,18 @@ class OutputBusy(ValueError):
         return OutputBusy, (self.output, self.holder)
 
 
-def check_writable(path: str) -> None:
+def check_writable(path: str, what: str = "output") -> None:
     """Raise :class:`StorageError` with a one-line reason unless ``path`` can be created
-    (``ValueError`` for an empty name)."""
+    (``ValueError`` for an empty name); ``what`` names the file in it (``--plot's``)."""
     if not path:
         raise ValueError("give an output file name (--output is empty)")
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
-        raise StorageError(errno.ENOENT, f"output folder '{folder}' does not exist")
+        raise StorageError(errno.ENOENT, f"{what} folder '{folder}' does not exist")
     if not os.access(folder, os.W_OK):
-        raise StorageError(errno.EACCES, f"output folder '{folder}' is not writable")
+        raise StorageError(errno.EACCES, f"{what} folder '{folder}' is not writable")
     if os.path.isdir(path):
-        raise StorageError(errno.EISDIR, f"output path '{path}' is a folder")
+        raise StorageError(errno.EISDIR, f"{what} path '{path}' is a folder")
 
 
 class OutputLock:

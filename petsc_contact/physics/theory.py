@@ -405,7 +405,8 @@ def block_corrected_stiffness(
     -------
     k_star, k
         Both at the table's pressures; ``K`` is ``nan`` where ``K* d/E' >= 1`` (the block's
-        own compression dominates, the paper's "great sensitivity" region).
+        own compression dominates, the paper's "great sensitivity" region) and where
+        ``K* <= 0`` (the pressure does not rise with the displacement: no stiffness).
     """
     p = np.asarray(pressure, dtype=float)
     s = np.asarray(displacement, dtype=float)
@@ -418,7 +419,7 @@ def block_corrected_stiffness(
     k_star = np.gradient(p, s, edge_order=2)
     denom = 1.0 - k_star * thickness / block_modulus
     with np.errstate(divide="ignore", invalid="ignore"):
-        k = np.where(denom > 0, k_star / denom, np.nan)
+        k = np.where((denom > 0) & (k_star > 0), k_star / denom, np.nan)
     inverse = np.empty_like(order)
     inverse[order] = np.arange(order.size)
     return k_star[inverse], k[inverse]

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from ..backend import _petsc
-from ..backend.solve import BoundSolver, SolveInfo
+from ..backend.solve import BOUND_TYPES, BoundSolver, SolveInfo
 from ..geometries.periodic import PeriodicProblem
 from ..geometries.step import residual_verdict
 from ..io.atomic import atomic_h5, on_root, replaced, storage
@@ -61,12 +61,19 @@ package (the repository's ``options/`` links here)."""
 def solver_options(name: str) -> list[str]:
     """PETSc options that select a solver: ``-options_file`` with the package's file for a
     solver of :data:`DEFAULT_SOLVERS` or with the file ``name`` is a path to, else
-    ``-tao_type name``; ``OSError`` (one line) where that file is missing."""
+    ``-tao_type name`` for a bound-constrained TAO type; ``OSError`` (one line) where that
+    file is missing, ``ValueError`` (one line) for a name that is none of these."""
     if name.endswith(".opts") or os.sep in name:
         if not os.path.isfile(name):
             raise OSError(f"options file '{name}' does not exist")
         return ["-options_file", name]
     if name not in DEFAULT_SOLVERS:
+        if name not in BOUND_TYPES or name == "python":
+            others = [t for t in BOUND_TYPES if t not in DEFAULT_SOLVERS and t != "python"]
+            raise ValueError(
+                f"--solvers: unknown solver '{name}'; choose from "
+                f"{', '.join([*DEFAULT_SOLVERS, *others])}, or give an options file (NAME.opts)"
+            )
         return ["-tao_type", name]
     path = OPTIONS / f"{name}.opts"
     if not path.is_file():

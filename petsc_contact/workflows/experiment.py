@@ -4,11 +4,13 @@ Eq. C3), written as one HDF5 file (``petsc-contact experiment``)."""
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..conventions.validation import positive
+from ..conventions.warnings import DoubtfulTable
 from ..io.atomic import atomic_h5
 from ..io.lock import check_writable
 from ..io.results import labelled, scale
@@ -50,6 +52,18 @@ def squeeze_test(
     check_writable(output)
     p, disp = rows[:, 0], rows[:, 1]
     found = Experiment(p, disp, *block_corrected_stiffness(p, disp, modulus, thickness))
+    falling = int(np.count_nonzero(found.measured_stiffness <= 0))
+    compressed = int(np.count_nonzero(np.isnan(found.stiffness))) - falling
+    for count, why in (
+        (falling, "the pressure does not rise with the displacement (K* <= 0)"),
+        (compressed, "the block's own compression dominates (K* d/E' >= 1, Eq. C3)"),
+    ):
+        if count:
+            warnings.warn(
+                f"K is NaN at {count} of {len(p)} rows of '{table}': {why}",
+                DoubtfulTable,
+                stacklevel=2,
+            )
     with atomic_h5(output) as f:
         row = scale(f, "row", np.arange(1, len(p) + 1))
         for name in FRAMES["experiment"].columns:

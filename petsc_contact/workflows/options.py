@@ -17,6 +17,7 @@ The parsers turn an option's text into its value and raise
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import sys
 from collections.abc import Callable, Sequence
@@ -32,6 +33,9 @@ from ..numerics.device import DEVICES
 SEED_LIMIT = 2**63  # seeds are stored as 64-bit integers
 
 
+DEFAULT_DATA = os.path.join("data", "paper")  # study --data: the repository's, from its root
+
+
 def quantity(text: str) -> float | str:
     """A number (returned as a float), or a number with a unit (kept as text, converted when
     the run's units are known: ``2MPa``, ``1mN``, ``10nm``)."""
@@ -42,6 +46,15 @@ def quantity(text: str) -> float | str:
     if not text.strip() or not (text.strip()[0].isdigit() or text.strip()[0] in "+-."):
         raise argparse.ArgumentTypeError(f"expected a number with an optional unit, got '{text}'")
     return text.strip()
+
+
+def one_quantity(text: str) -> float | str:
+    """:func:`quantity`, refusing a list in words (``compare`` solves one load)."""
+    if "," in text:
+        raise argparse.ArgumentTypeError(
+            f"one pressure only (compare solves one load), got '{text}'"
+        )
+    return quantity(text)
 
 
 def _items(text: str, separator: str = ",") -> list[str]:
@@ -146,6 +159,8 @@ def seed_list(text: str) -> list[int]:
     try:
         if "-" in text.strip("-") and "," not in text:
             a, b = (int(v) for v in text.split("-", 1))
+            if b < a:
+                raise argparse.ArgumentTypeError(f"a range A-B of seeds with B >= A, got '{text}'")
             seeds = list(range(a, b + 1))
         else:
             seeds = [int(v) for v in _items(text)]
@@ -596,10 +611,10 @@ _COMPARE = (
     Option(
         "pressure",
         ("--pressures", "--pressure"),
-        "nominal pressure p0 of the scene (units of E*; one value)",
+        "nominal pressure p0 of the scene (units of E*, or with a unit: 2MPa; one value)",
         ("compare",),
         metavar="P",
-        parse=float,
+        parse=one_quantity,
         unit="pressure",
         required=True,
         section="compare",

@@ -25,6 +25,7 @@ from ..io.results import trusted
 from ..io.store import tidy
 from ..physics.surface import psd_shape
 from .description import Run
+from .options import DEFAULT_DATA
 
 T = TypeVar("T")
 
@@ -334,9 +335,21 @@ def study_pieces(data: str, figure: str = "all", shrink: int = 1) -> list[Piece]
     return sorted(todo, key=lambda p: p.grid)
 
 
+def check_default_data(data: str) -> None:
+    """``ValueError`` (one line) when ``data`` is the default folder and it is not here: run
+    elsewhere than the repository's root, a study would start the whole study afresh."""
+    if data == DEFAULT_DATA and not os.path.isdir(data):
+        raise ValueError(
+            f"no {DEFAULT_DATA} in {os.getcwd()}: run the study in the repository's root, "
+            "where the paper's data are, or name a folder with --data (a new one starts "
+            "the study afresh)"
+        )
+
+
 def study_plan(todo: Sequence[Piece], data: str) -> list[str]:
     """One line per piece: its state (``done``, ``todo``, or the steps an unfinished piece
-    has kept, ``13/25``), its file and its command line."""
+    has kept, ``13/25``), its file and the command line that computes it (or goes on with
+    it) alone, as the study does (:meth:`Piece.to_run`)."""
     lines = []
     for piece in todo:
         path = piece.path(data)
@@ -345,7 +358,8 @@ def study_plan(todo: Sequence[Piece], data: str) -> list[str]:
         else:
             kept = finished_steps(path)
             state = "todo" if kept is None else f"{kept}/{piece.steps}"
-        lines.append(f"{state:>5}  {path}  petsc-contact {' '.join(piece.run.arguments())}")
+        command = " ".join(piece.to_run(data).arguments())
+        lines.append(f"{state:>5}  {path}  petsc-contact {command}")
     return lines
 
 

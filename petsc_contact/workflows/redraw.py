@@ -38,11 +38,30 @@ class FieldMap:
     length_unit: str
 
 
-def draws_load_plot(path: str, sweep: bool) -> bool:
-    """Whether ``plot`` draws the file's load plot (``--sweep``, or a file with no maps)."""
+def results_file(path: str) -> Any:
+    """``path`` opened for reading as a results file of the package's commands; ``ValueError``
+    in one line for a file that is no HDF5 file, or a comparison (no maps, no load sweep)."""
     import h5py
 
-    with h5py.File(path, "r") as f:
+    try:
+        f = h5py.File(path, "r")
+    except OSError:
+        raise ValueError(
+            f"'{path}' is not an HDF5 file: plot draws the files the commands write (OUT.h5)"
+        ) from None
+    if "solvers" in f.attrs:
+        f.close()
+        png = path.removesuffix(".h5") + ".png"
+        raise ValueError(
+            f"'{path}' is a solver comparison, with no maps and no load sweep: compare drew "
+            f"its figure as {png}"
+        )
+    return f
+
+
+def draws_load_plot(path: str, sweep: bool) -> bool:
+    """Whether ``plot`` draws the file's load plot (``--sweep``, or a file with no maps)."""
+    with results_file(path) as f:
         return sweep or f.attrs.get("geometry") in FIGURE_FILES
 
 
@@ -55,11 +74,9 @@ def redraw(path: str, out: str | None = None) -> str:
     ValueError
         When the file holds no load sweep, or ``out`` cannot be written or is ``path``.
     """
-    import h5py
-
     out = out or f"{path.removesuffix('.h5')}_redrawn.png"
     _check_figure(out, path)
-    with h5py.File(path, "r") as f:
+    with results_file(path) as f:
         _draw_file(f, path, out)
     return out
 
@@ -72,11 +89,9 @@ def field_map(path: str, name: str, step: int) -> FieldMap:
     ------
     ValueError
         When the file has no such map (and why: no ``--fields``, an unfinished run) or the
-        step is out of range.
+        step is out of range, or the file is none of the commands' results.
     """
-    import h5py
-
-    with h5py.File(path, "r") as f:
+    with results_file(path) as f:
         if name not in f:
             raise ValueError(_missing_map(f, path, name))
         values, label = _scaled(f, name)

@@ -39,7 +39,7 @@ import numpy as np
 from ..backend import _petsc
 from ..backend.solve import Monitor
 from ..conventions.grid import world
-from ..conventions.warnings import FilledLoad, ResumeWarning, recorded
+from ..conventions.warnings import FilledLoad, ResumeWarning, Unconverged, recorded
 from ..geometries.step import FIELD_NAMES, Step
 from ..io.schema import FILE_RECORD
 from ..io.store import (
@@ -169,6 +169,7 @@ class Prepared:
                 self.driver.close()
             if status == COMPLETE:
                 self._check_filled_load(table)
+                self._check_converged(table)
                 if store is not None:
                     check_interrupt()
                     self._note(store)
@@ -223,6 +224,28 @@ class Prepared:
         if steps:
             steps[-1].take_resume()  # the one kept, on the host
         return COMPLETE
+
+    def _check_converged(self, table: list[dict[str, Any]]) -> None:
+        """Warn (:class:`Unconverged`, rank 0) when steps did not converge or are not accurate:
+        they stay in the results, flagged, and the warning says so on the screen and in the
+        file's ``warnings``."""
+        failed = [(i, s) for i, s in enumerate(table, 1) if not s["converged"]]
+        inaccurate = [
+            (i, s) for i, s in enumerate(table, 1) if s["converged"] and not s.get("accurate", True)
+        ]
+        where = f" in {self.run.output}" if self.run.output else ""
+        for steps, what, flag in (
+            (failed, "did NOT converge", "converged"),
+            (inaccurate, "are NOT accurate", "accurate"),
+        ):
+            if steps and self.scene.grid.comm.rank == 0:
+                first, scalars = steps[0]
+                warnings.warn(
+                    f"{len(steps)} of {len(table)} load steps {what} (first: step {first}, "
+                    f"{scalars['verification']}); they are flagged {flag} = False{where}",
+                    Unconverged,
+                    stacklevel=2,
+                )
 
     def _check_filled_load(self, table: list[dict[str, Any]]) -> None:
         """Warn (:class:`FilledLoad`, rank 0) when more than :data:`FILLED_LOAD` of the load

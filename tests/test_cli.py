@@ -710,6 +710,11 @@ def test_demo_on_a_small_grid(tmp_path):
     assert r.returncode == 0, r.stderr
     with h5py.File(out) as f:
         assert f.attrs["cutoff_ratio"] == 32 and f.attrs["grid"] == 64
-    assert "default 64)" in " ".join(cli("demo", "--help").stdout.split())
-    given = cli("demo", "--grid", "64", "--cutoff-ratio", "64", "--output", str(out), "--overwrite")
-    assert given.returncode == 2 and "exceeds the Nyquist limit 32" in given.stderr
+    shown = " ".join(cli("demo", "--help").stdout.split())
+    assert "default 64, or the Nyquist limit on a grid where 64 is past it)" in shown
+    for spelt in ("--cutoff-ratio", "--cutoff"):  # given (argparse's abbreviation too): kept
+        given = cli("demo", "--grid", "64", spelt, "64", "--output", str(out), "--overwrite")
+        assert given.returncode == 2 and "exceeds the Nyquist limit 32" in given.stderr
+    r = cli("demo", "--grid", "256,64", "--output", str(out), "--overwrite", "--quiet")
+    with h5py.File(out) as f:  # the longer side's Nyquist limit, 128: 64 stands
+        assert r.returncode == 0 and f.attrs["cutoff_ratio"] == 64

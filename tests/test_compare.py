@@ -90,9 +90,11 @@ def test_the_command_line_wins_over_a_solvers_options_file(tmp_path):
 
 
 def test_solver_options(tmp_path, monkeypatch):
-    """The package's solvers by their file, any other TAO type by name, a path as it is; a
+    """The package's solvers by their file (and any type with a shipped file), any other TAO
+    type by name, a path as it is; a
     missing file of the package's and a name that is no bound-constrained type in one line."""
     assert solver_options("bqnkls") == ["-tao_type", "bqnkls"]
+    assert solver_options("bqpip") == ["-options_file", str(OPTIONS / "bqpip.opts")]
     for name in ("python", "lmvm", "nosuch"):
         with pytest.raises(ValueError, match=f"unknown solver '{name}'"):
             solver_options(name)

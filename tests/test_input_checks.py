@@ -16,6 +16,7 @@ from conftest import ROOT, cli
 
 from petsc_contact import periodic_contact
 from petsc_contact.conventions.grid import Grid
+from petsc_contact.conventions.warnings import Unconverged
 from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.solver.linear import StiffnessNotConverged
@@ -130,9 +131,8 @@ def test_negative_values_in_every_spelling(tmp_path: Path) -> None:
 
 
 def test_lists_and_solvers(tmp_path: Path) -> None:
-    """An empty item in a comma list is refused, not dropped; a solver named twice too; a
-    reversed range of seeds, and ``--seed`` beside an ensemble's ``--seeds`` (it was
-    ignored without a word)."""
+    """An empty item in a comma list is refused, not dropped; a solver named twice too, and a
+    reversed range of seeds."""
     out = str(tmp_path / "a.h5")
     for option, value in (
         ("--pressures", "1e-3,,2e-3"),
@@ -146,8 +146,6 @@ def test_lists_and_solvers(tmp_path: Path) -> None:
             "--output", out, says="an empty item")  # fmt: skip
     ensemble = ("ensemble", *SURFACE, "--pressures", "1e-3", "--output", out)
     refused(tmp_path, *ensemble, "--seeds", "3-1", says="a range A-B of seeds with B >= A")
-    refused(tmp_path, *ensemble, "--seeds", "0-1", "--seed", "5",
-            says="an ensemble's surfaces are its --seeds")  # fmt: skip
     compare = ("compare", *SURFACE, "--pressures", "1e-3", "--output", out)
     refused(tmp_path, *compare, "--solvers", "cg,cg", says="a solver named twice: cg")
     refused(tmp_path, *compare, "--solvers", "cg,,pk", says="an empty item")
@@ -207,6 +205,16 @@ def test_plot_of_an_unfinished_run(tmp_path: Path, run_file) -> None:
     refused(tmp_path, "plot", str(finished), says="(run with --fields)")
 
 
+def test_an_ensemble_says_it_ignores_seed(tmp_path: Path) -> None:
+    """``ensemble --seed K`` runs its ``--seeds`` and says that ``--seed`` is ignored."""
+    out = str(tmp_path / "e.h5")
+    r = cli("ensemble", *SURFACE, "--pressures", "1e-3", "--seeds", "0-1", "--seed", "5",
+            "--output", out, "--quiet")  # fmt: skip
+    assert r.returncode == 0 and r.stderr.splitlines() == [
+        "petsc-contact: warning: --seed is ignored: an ensemble's surfaces are its --seeds"
+    ], r.stderr
+
+
 def test_a_study_away_from_its_data(tmp_path: Path) -> None:
     """``study`` without ``--data`` outside the repository's root is refused in one line (it
     would have started the whole 8192^2 study there); with ``--data`` a new folder is made."""
@@ -224,6 +232,14 @@ def test_a_study_away_from_its_data(tmp_path: Path) -> None:
             "new one starts the study afresh)"
         ], r.stderr
     assert os.listdir(tmp_path) == []
+    # a new folder named: listed, each piece's command makes its folder first
+    new = tmp_path / "my data"
+    r = cli("study", "--list", "--figure", "1", "--shrink", "128", "--data", str(new))
+    first = r.stdout.splitlines()[0]
+    assert r.returncode == 0, r.stderr
+    assert first.startswith(f" todo  '{new}/fig1/punch.h5'  mkdir -p '{new}/fig1' && ")
+    assert "&& petsc-contact punch --grid 16 " in first and not new.exists()
+    assert f"--output '{new}/fig1/punch.h5'" in first
 
 
 def test_plot_of_what_no_command_plots(tmp_path: Path, heights: Path, run_file) -> None:
@@ -242,8 +258,8 @@ def test_plot_of_what_no_command_plots(tmp_path: Path, heights: Path, run_file) 
 
 @pytest.mark.parametrize("device", ["cpu", "cpu-array"])
 def test_stiffness_solve_not_converged(device: str) -> None:
-    """A held-set solve stopped by -stiffness_ksp_max_it 1 gives a NaN stiffness and one
-    warning, not a traceback."""
+    """A held-set solve stopped by -stiffness_ksp_max_it 1 gives a NaN stiffness, its warning
+    and the step flagged not accurate, said once, not a traceback."""
     grid = Grid(32, 1.0)
     h = self_affine(grid, make_fft(grid), hurst=0.7, rolloff_ratio=2, cutoff_ratio=16, seed=5,
                     rms_slope=0.1)  # fmt: skip
@@ -258,8 +274,9 @@ def test_stiffness_solve_not_converged(device: str) -> None:
             device=device,
             options=["-stiffness_ksp_max_it", "1"],
         )
-    assert np.isnan(step.scalars["stiffness"])
-    assert [w.category for w in caught] == [StiffnessNotConverged]
+    assert np.isnan(step.scalars["stiffness"]) and not step.scalars["accurate"]
+    assert [w.category for w in caught] == [StiffnessNotConverged, Unconverged]
+    assert "1 of 1 load steps are NOT accurate" in str(caught[1].message)
 
 
 def test_library_door(tmp_path: Path, heights: Path) -> None:

@@ -155,3 +155,39 @@ def test_a_study_goes_on_with_pieces_of_an_earlier_version(tmp_path):
     done = sorted(data.rglob("*.h5"))
     rewrite(done[0], lambda p: p | {"options_prefix": "a_"})
     _refused(cli(*STUDY.split(), "--shrink", "128", "--data", str(data)), "options_prefix")
+
+
+def test_resume_on_a_complete_output_computes_nothing(tmp_path):
+    """``--resume`` on a run's complete output (no ``.partial``) solves nothing and leaves the
+    file as it was, byte for byte: its steps are the result, in the table and from
+    ``run_contact``; it solved every step again and replaced the file before.  A complete
+    output of other parameters is refused (``--overwrite`` replaces it)."""
+    from petsc_contact import Run, run_contact
+
+    out = tmp_path / "r.h5"
+    base = [
+        "periodic",
+        "--grid",
+        "32",
+        "--hurst",
+        "0.7",
+        "--rms-slope",
+        "0.1",
+        "--output",
+        str(out),
+    ]
+    assert cli(*base, "--pressures", "1e-3,1e-2", "--quiet").returncode == 0
+    before, stamp = out.read_bytes(), out.stat().st_mtime_ns
+    r = cli(*base, "--pressures", "1e-3,1e-2", "--resume")
+    assert r.returncode == 0, r.stderr
+    assert f"# {out} is complete, with this run's 2 steps: nothing to compute" in r.stdout
+    assert r.stdout.count("CONVERGED_GATOL") == 2 and "# wrote" not in r.stdout
+    run = Run(grid=32, hurst=0.7, rms_slope=0.1, pressures=[1e-3, 1e-2], output=str(out))
+    result = run_contact(run.with_(resume=True))
+    assert result.status == "complete" and result.steps == [] and result.converged
+    with h5py.File(out) as f:
+        assert [s["mean_gap"] for s in result.table] == list(f["mean_gap"][:])
+    assert out.read_bytes() == before and out.stat().st_mtime_ns == stamp
+    _refused(cli(*base, "--pressures", "1e-3,2e-2", "--resume"),
+             "different parameters (pressures)", "--overwrite replaces it")  # fmt: skip
+    assert out.read_bytes() == before

@@ -120,3 +120,13 @@ def test_unconverged_steps_warn_through_both_doors(tmp_path):
     r = cli("periodic", *given, "--output", out, "--quiet", "-tao_max_it", "1")
     said = [line.removeprefix(PREFIX) for line in r.stderr.splitlines()]
     assert r.returncode == 1 and said == [result.warnings[0].replace("lib.h5", "cli.h5")]
+    # warnings made errors: the file is whole first, then the run raises
+    strict = run.with_(output=str(tmp_path / "strict.h5"))
+    with warnings.catch_warnings(), pytest.raises(Unconverged, match="2 of 2 load steps"):
+        warnings.simplefilter("error", PetscContactWarning)
+        run_contact(strict)
+    assert _recorded(tmp_path / "strict.h5") == [result.warnings[0].replace("lib.h5", "strict.h5")]
+    assert not list(tmp_path.glob("strict.h5.*"))
+    # the sweep functions say it too
+    with pytest.warns(Unconverged, match=r"2 of 2 load steps did NOT converge \(first: step 1"):
+        periodic_contact(_map(), length=1.0, pressures=[1e-3, 1e-2], options=("-tao_max_it", "1"))

@@ -26,29 +26,48 @@ from ..workflows.options import (
     shown,
 )
 
+
+class DemoCutoff(float):
+    """``demo``'s ``L/lambda_1`` when none is given (told apart from a given 64 by identity):
+    the default scene's 64, or the Nyquist limit on a grid where 64 is past it."""
+
+    shown = "64, or the Nyquist limit on a grid where 64 is past it"
+
+
 DEMO: dict[str, Any] = {
     "grid": 512,
     "hurst": 0.7,
     "rms_slope": 0.1,
     "rolloff_ratio": 2.0,
-    "cutoff_ratio": 64.0,
+    "cutoff_ratio": DemoCutoff(64.0),
     "seed": 1,
     "modulus": 1.0,
     "pressures": [3e-5, 1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 2e-2, 3e-2],
     "output": "demo.h5",
     "plot": "demo.png",
 }
-"""``demo``'s defaults: the default scene (its ``L/lambda_1`` the Nyquist limit on a grid
-given below 128 a side, :func:`demo_cutoff`)."""
+"""``demo``'s defaults: the default scene (:class:`DemoCutoff`)."""
 
 
-def demo_cutoff(args: argparse.Namespace, argv: Sequence[str]) -> None:
-    """``demo``'s ``L/lambda_1`` on a grid given smaller than the default scene's: 64 is past
-    the Nyquist limit below 128 pixels a side, where it becomes that limit (``None``); one
-    given with ``--cutoff-ratio`` stays as given."""
-    given = any(a.startswith("--cutoff-ratio") for a in argv)
-    sides = args.grid if isinstance(args.grid, (list, tuple)) else (args.grid,)
-    if not given and args.grid is not None and 2 * args.cutoff_ratio > min(sides):
+def demo_cutoff(args: argparse.Namespace) -> None:
+    """``demo``'s ``L/lambda_1`` on a grid where the default scene's 64 is past the Nyquist
+    limit (``max(L)/(2 max(dx))``: below 128 pixels on the longer side with square pixels):
+    that limit (``None``).  One given with ``--cutoff-ratio`` stays as given."""
+    if type(args.cutoff_ratio) is not DemoCutoff or args.grid is None:
+        return
+    shape = tuple(args.grid) if isinstance(args.grid, (list, tuple)) else (args.grid,) * 2
+    from ..conventions.units import parse_lengths
+
+    try:
+        lengths = parse_lengths(args.length).values if args.length is not None else (1.0,)
+    except ValueError:
+        return  # the run's check says why
+
+    if len(lengths) == 1:  # square pixels (conventions.grid.sides)
+        nyquist = max(shape) / 2
+    else:
+        nyquist = max(lengths) / (2 * max(lengths[0] / shape[0], lengths[1] / shape[1]))
+    if args.cutoff_ratio > nyquist:
         args.cutoff_ratio = None
 
 
@@ -91,12 +110,20 @@ def split_arguments(argv: Sequence[str]) -> tuple[list[str], list[str]]:
             # joined, so that argparse reads a negative value such as -1e-3 as the value
             # (it takes only -1 and -.5 for numbers) and its check can say what is wrong
             value = tokens[i + 1]
-            ours += [f"{tok}={value}"] if value.startswith("-") else [tok, value]
+            ours += [f"{tok}={value}"] if _negative(value) else [tok, value]
             i += 1
         else:
             ours.append(tok)
         i += 1
     return ours, petsc
+
+
+def _negative(value: str) -> bool:
+    """Whether ``value`` is a negative number (``-1e-3``; not ``-1.h5``)."""
+    try:
+        return value.startswith("-") and float(value) < 0
+    except ValueError:
+        return False
 
 
 _SPELT = "deprecated_spellings"  # the parsed arguments' note of the deprecated ones used
@@ -166,7 +193,10 @@ def _help(option: Option, default: Any, own: bool = False) -> str:
     """The option's ``--help`` line: its help and the default the command gives it (``own``:
     the command's own, ``demo``'s), inside the help's closing parenthesis when it has one
     (``(0 to 2^63 - 1; default 0)``)."""
-    text = shown(default) if own else default_text(option, default)
+    if isinstance(default, DemoCutoff):
+        text: str | None = default.shown
+    else:
+        text = shown(default) if own else default_text(option, default)
     if text:
         text = f"default: {text}" if option.shown_default and not own else f"default {text}"
     line = option.help
@@ -363,9 +393,8 @@ def _study_parser(sub: Any) -> None:
     p.add_argument("--minutes", type=minutes, default=45.0, help="time budget (default 45)")
     p.add_argument(
         "--data",
-        default=DEFAULT_DATA,
-        help=f"default {DEFAULT_DATA}, which must exist (the repository's root); another "
-        "folder is made if it is new",
+        help=f"the pieces' folder, made if it is new (default {DEFAULT_DATA}, which must "
+        "exist: the repository's root)",
     )
     p.add_argument("--shrink", type=int, default=1, help="divide every grid (a quick look)")
     p.add_argument(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import warnings
 from collections.abc import Sequence
 
 from .common import EXIT_INTERRUPTED, EXIT_PAUSED, describe, on_array_device
@@ -14,7 +15,7 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
     neither: :func:`~petsc_contact.workflows.seeds.seeds_to_run`)."""
     from ..backend import _petsc
     from ..conventions.grid import world
-    from ..io.lock import check_writable
+    from ..conventions.warnings import IgnoredOption
     from ..workflows.seeds import (
         ensemble_record,
         mean_rms_height,
@@ -26,10 +27,10 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
     from .runs import execute
 
     if any(a == "--seed" or a.startswith("--seed=") for a in argv):
-        raise ValueError("an ensemble's surfaces are its --seeds; --seed names one surface")
+        warnings.warn(
+            "--seed is ignored: an ensemble's surfaces are its --seeds", IgnoredOption, stacklevel=2
+        )
     base = describe(args, petsc_args)
-    if args.plot:
-        check_writable(args.plot)
     if not on_array_device(args):
         _petsc.init(petsc_args)
     runs = seed_runs(base, args.seeds)

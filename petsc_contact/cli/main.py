@@ -10,7 +10,7 @@ import warnings
 from collections.abc import Sequence
 from typing import Any
 
-from ..conventions.warnings import PetscContactWarning
+from ..conventions.warnings import PetscContactWarning, Unconverged
 from ..io.schema import schema_markdown
 from ..io.store import StorageError, check_interrupt, check_writable, forget_interrupts, interrupt
 from ..numerics.device import DeviceUnavailable
@@ -92,6 +92,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     sys.stdout = QuietPipe(sys.stdout)
     sys.unraisablehook = _unraisable
     warnings.showwarning = _show_warning
+    warnings.simplefilter("always", Unconverged)  # flagged results are said, whatever the filters
     try:
         for option, path in command_outputs(args):  # a figure's folder, as the output's
             if option == "--plot" and path:
@@ -170,7 +171,7 @@ def _dispatch(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[st
     if args.command == "study":
         return run_study(args, petsc_args)  # each piece locked: studies may share a folder
     if args.command == "demo":
-        demo_cutoff(args, argv)
+        demo_cutoff(args)
     if args.command not in LOCKED and on_array_device(args):  # no PETSc is loaded
         return execute(describe(args, petsc_args), args, argv)
     if args.command not in LOCKED:

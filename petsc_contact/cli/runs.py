@@ -22,7 +22,7 @@ LOAD_COLUMNS = {
 }
 """The load columns of each geometry's table: (header, dataset), shown with an SI prefix."""
 STEP_COLUMNS = (
-    ("area", "area_fraction", "{:>9.4g}"),
+    ("area", "area_fraction", "{:>10.5g}"),  # 6.1035e-05 and 0.99996 alike
     ("its", "iterations", "{:>6d}"),
     ("time_s", "solve_time", "{:>8.3f}"),
     ("kkt", "kkt_residual", "{:>9.1e}"),
@@ -112,6 +112,9 @@ def execute(
 
         try:
             result = prepared.execute(progress)
+            if prepared.resumable.whole:  # nothing solved: the file's steps
+                for i, scalars in enumerate(result.table):
+                    progress(i, len(result.table), scalars)
         except RunInterrupted as exc:
             say(str(exc), "note")
             return EXIT_INTERRUPTED
@@ -124,7 +127,7 @@ def execute(
                 "note",
             )
             return EXIT_PAUSED
-    return _conclude(args, description, result, root)
+    return _conclude(args, description, result, root, wrote=not prepared.resumable.whole)
 
 
 def _introduce(command: str, description: Any, prepared: Any) -> None:
@@ -135,7 +138,13 @@ def _introduce(command: str, description: Any, prepared: Any) -> None:
         print(f"# {prepared.scene.reading}", flush=True)
     print(f"# {command} {_problem(description, prepared)}", flush=True)
     finished = prepared.resumable
-    if finished.steps:
+    if finished.whole:
+        print(
+            f"# {description.output} is complete, with this run's {finished.steps} steps: "
+            "nothing to compute (--overwrite computes them again)",
+            flush=True,
+        )
+    elif finished.steps:
         total = len(prepared.loads)
         where = partial_path(description.output)
         print(f"# resuming {where} after {finished.steps} of {total} steps", flush=True)
@@ -160,9 +169,12 @@ def _problem(description: Any, prepared: Any) -> str:
     )
 
 
-def _conclude(args: argparse.Namespace, description: Any, result: Any, root: bool) -> int:
-    """Plot, and return the exit status (:data:`EXIT_NOT_CONVERGED` where steps did not
-    converge or are not accurate: the run's warning has named them)."""
+def _conclude(
+    args: argparse.Namespace, description: Any, result: Any, root: bool, wrote: bool = True
+) -> int:
+    """Plot, say what was written (``wrote``: the output, unless it was complete already),
+    and return the exit status (:data:`EXIT_NOT_CONVERGED` where steps did not converge or
+    are not accurate: the run's warning has named them)."""
     table = result.table
     plot = getattr(args, "plot", None)
     if plot and root:
@@ -175,7 +187,8 @@ def _conclude(args: argparse.Namespace, description: Any, result: Any, root: boo
             plot_punch(plot, table, units)
         else:
             plot_sweep(plot, table, description.modulus_value, result.record["rms_height"])
-    if root and not args.quiet:
-        print(f"# wrote {description.output}" + (f" and {plot}" if plot else ""))
+    written = [description.output] if wrote else []
+    if root and not args.quiet and (written or plot):
+        print(f"# wrote {' and '.join([*written, *([plot] if plot else [])])}")
     flagged = [s for s in table if not s["converged"] or not s.get("accurate", True)]
     return EXIT_NOT_CONVERGED if flagged else 0  # the run's Unconverged warning said which

@@ -30,17 +30,17 @@ def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
     """Run the pieces of the chosen figures in order within ``--minutes``."""
     from ..backend import _petsc
     from ..workflows.drivers import on_device
-    from ..workflows.paper_study import check_default_data, run_pieces, study_pieces
+    from ..workflows.paper_study import run_pieces, study_data, study_pieces
 
-    check_default_data(args.data)
-    todo = study_pieces(args.data, args.figure, args.shrink)
+    data = study_data(args.data)
+    todo = study_pieces(data, args.figure, args.shrink)
     if args.device == "cpu":
         _petsc.init(petsc_args)  # an array device's pieces carry the options instead
 
     def piece(run: Any) -> str:
         return _piece(on_device(run, args.device, petsc_args), args.quiet)
 
-    end = run_pieces(todo, args.data, args.minutes, piece, _say)
+    end = run_pieces(todo, data, args.minutes, piece, _say)
     return STATUS[end]
 
 
@@ -61,8 +61,8 @@ def _say(line: str) -> None:
 def study_plan(args: argparse.Namespace) -> str:
     """One line per piece: its state (``done``, ``todo``, or the steps an unfinished piece
     has kept, ``13/25``), its file and its command line."""
-    from ..workflows.paper_study import check_default_data, study_pieces
+    from ..workflows.paper_study import study_data, study_pieces
     from ..workflows.paper_study import study_plan as plan
 
-    check_default_data(args.data)
-    return "\n".join(plan(study_pieces(args.data, args.figure, args.shrink), args.data))
+    data = study_data(args.data)
+    return "\n".join(plan(study_pieces(data, args.figure, args.shrink), data))

@@ -11,7 +11,7 @@ result and its file (:func:`recorded`).
 from __future__ import annotations
 
 import warnings
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import PurePath
 from typing import Any, TextIO
@@ -42,6 +42,33 @@ class DoubtfulTable(PetscContactWarning):
 class Unconverged(PetscContactWarning):
     """Load steps that did not converge, or whose measured accuracy is beyond the package's:
     they are in the results, flagged ``converged`` or ``accurate`` ``False``."""
+
+
+def flagged_steps(table: Sequence[Mapping[str, Any]], output: str | None = None) -> list[str]:
+    """The :class:`Unconverged` texts of a run's step ``table`` (each step's scalars): one for
+    the steps that did not converge, one for those converged but not accurate; none for a
+    run whose steps are all good.  ``output`` is named as the file that flags them."""
+    failed = [(i, s) for i, s in enumerate(table, 1) if not s["converged"]]
+    inaccurate = [
+        (i, s) for i, s in enumerate(table, 1) if s["converged"] and not s.get("accurate", True)
+    ]
+    where = f" in {output}" if output else ""
+    texts = []
+    for steps, what, flag in (
+        (failed, "did NOT converge", "converged"),
+        (inaccurate, "are NOT accurate", "accurate"),
+    ):
+        if steps:
+            first, scalars = steps[0]
+            texts.append(
+                f"{len(steps)} of {len(table)} load steps {what} (first: step {first}, "
+                f"{scalars['verification']}); they are flagged {flag} = False{where}"
+            )
+    return texts
+
+
+class IgnoredOption(PetscContactWarning):
+    """An option given to a command that does not use it."""
 
 
 class UnusedOptions(PetscContactWarning):

@@ -148,6 +148,7 @@ __all__ = [  # the names of the modules this one was split into stay importable 
     "part_problem",
     "partial_path",
     "parts_path",
+    "read_complete",
     "read_resume",
     "replaced",
     "state_path",
@@ -171,6 +172,7 @@ class Finished:
     held: Held | None = None  # what the sweep held beside the state (fields as row sources)
     parts: dict[str, str] = field(default_factory=dict)  # the parts' SHA-256 at their commit
     rewrite_maps: bool = False  # heights.h5 is missing or damaged: the run writes it again
+    whole: bool = False  # the steps are a complete output's: nothing to compute or write
 
     def rows(self) -> list[dict[str, Any]]:
         """The finished steps' scalars, one dict per step."""
@@ -232,6 +234,30 @@ def read_resume(path: str, parameters: dict[str, Any], grid: Grid) -> Finished:
     check_same_run(partial, theirs, parameters)
     state, held, problem = _saved_state(path, steps, grid)
     return Finished(steps, table, state, problem, held, parts)
+
+
+def read_complete(path: str, parameters: dict[str, Any]) -> Finished:
+    """A complete output ``path`` of this run, with no ``.partial`` beside it, as finished
+    steps that need no computing (``whole``); ``Finished(0)`` when there is no such file.
+    ``ValueError`` when it is a complete file of another run (``parameters`` differ, apart from
+    :data:`RESUME_FREE`): a resume never replaces another run's results."""
+    import h5py
+
+    if os.path.exists(partial_path(path)) or not os.path.isfile(path):
+        return Finished(0)
+    try:
+        with h5py.File(path, "r") as f:
+            if not f.attrs.get("complete"):
+                return Finished(0)
+            theirs = json.loads(f.attrs["parameters"])
+            table = _read_table(f)
+    except (OSError, KeyError, ValueError):
+        return Finished(0)  # not a results file: the run writes one (as without --resume)
+    try:
+        check_same_run(path, theirs, parameters)
+    except ValueError as exc:
+        raise ValueError(f"{exc}; --overwrite replaces it") from None
+    return Finished(len(table.get("converged", [])), table, whole=True)
 
 
 def _read_table(f: Any) -> dict[str, list[Any]]:

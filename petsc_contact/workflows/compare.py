@@ -59,28 +59,32 @@ package (the repository's ``options/`` links here)."""
 
 
 def solver_options(name: str) -> list[str]:
-    """PETSc options that select a solver: ``-options_file`` with the package's file for a
-    solver of :data:`DEFAULT_SOLVERS` or with the file ``name`` is a path to, else
-    ``-tao_type name`` for a bound-constrained TAO type; ``OSError`` (one line) where that
-    file is missing, ``ValueError`` (one line) for a name that is none of these."""
+    """PETSc options that select a solver: ``-options_file`` with the package's file
+    ``NAME.opts`` (every solver of :data:`DEFAULT_SOLVERS` has one; ``bqpip`` and ``tight``
+    too) or with the file ``name`` is a path to, else ``-tao_type name`` for a
+    bound-constrained TAO type; ``OSError`` (one line) where a file of
+    :data:`DEFAULT_SOLVERS` is missing, ``ValueError`` (one line) for a name that is none of
+    these."""
     if name.endswith(".opts") or os.sep in name:
         if not os.path.isfile(name):
             raise OSError(f"options file '{name}' does not exist")
         return ["-options_file", name]
-    if name not in DEFAULT_SOLVERS:
+    shipped = OPTIONS / f"{name}.opts"
+    if name not in DEFAULT_SOLVERS and not shipped.is_file():
         if name not in BOUND_TYPES or name == "python":
-            others = [t for t in BOUND_TYPES if t not in DEFAULT_SOLVERS and t != "python"]
+            files = sorted(p.stem for p in OPTIONS.glob("*.opts"))
+            known = [*DEFAULT_SOLVERS, *files, *BOUND_TYPES]
+            others = [t for i, t in enumerate(known) if t not in known[:i] and t != "python"]
             raise ValueError(
                 f"--solvers: unknown solver '{name}'; choose from "
-                f"{', '.join([*DEFAULT_SOLVERS, *others])}, or give an options file (NAME.opts)"
+                f"{', '.join(others)}, or give an options file (NAME.opts)"
             )
         return ["-tao_type", name]
-    path = OPTIONS / f"{name}.opts"
-    if not path.is_file():
+    if not shipped.is_file():
         raise OSError(
-            f"the options file of solver '{name}' is missing: {path} (reinstall the package)"
+            f"the options file of solver '{name}' is missing: {shipped} (reinstall the package)"
         )
-    return ["-options_file", str(path)]
+    return ["-options_file", str(shipped)]
 
 
 def own_options(options: Sequence[str], name: str, solvers: Sequence[str]) -> list[str]:

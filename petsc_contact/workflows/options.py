@@ -558,7 +558,9 @@ _RUN = (
         default=False,
         more="The next step starts from the last state and what the sweep held, kept beside "
         "it in `OUT.h5.state.npz` until the run ends, and equals the uninterrupted run's "
-        "(missing or damaged: from first touch, with a warning). `ensemble --resume` keeps "
+        "(missing or damaged: from first touch, with a warning). On a complete `OUT.h5` of "
+        "the same run nothing is computed or written (its steps are the result); one of "
+        "other parameters is refused (`--overwrite`). `ensemble --resume` keeps "
         "the seeds finished with this ensemble's parameters and continues an interrupted "
         "one; a seed file of other parameters is refused (`--overwrite`)",
     ),
@@ -632,7 +634,8 @@ _COMPARE = (
         field=False,
         shown_default="cg,pk,tron,bnls,bntr,bqnls,blmvm,bncg,gpcg, each with its "
         "options/NAME.opts, which the command line's PETSc options override",
-        more="The files are shipped with the package; a path runs that file instead, another "
+        more="The files are shipped with the package, as are `bqpip.opts` and `tight.opts`, "
+        "which `bqpip` and `tight` run with; a path runs that file instead, another "
         "TAO type PETSc's defaults; `-tao_type` is refused ([solvers.md](solvers.md)). Each "
         "solver's options prefix is its name: `-bncg_tao_max_it 50` reaches `bncg` alone, "
         "an unprefixed option every solver",

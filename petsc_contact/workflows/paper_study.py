@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import shlex
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -335,15 +336,19 @@ def study_pieces(data: str, figure: str = "all", shrink: int = 1) -> list[Piece]
     return sorted(todo, key=lambda p: p.grid)
 
 
-def check_default_data(data: str) -> None:
-    """``ValueError`` (one line) when ``data`` is the default folder and it is not here: run
-    elsewhere than the repository's root, a study would start the whole study afresh."""
-    if data == DEFAULT_DATA and not os.path.isdir(data):
+def study_data(data: str | None) -> str:
+    """The folder of a study's pieces: ``data``, or when none is given :data:`DEFAULT_DATA`,
+    which must exist (``ValueError``, one line): run elsewhere than the repository's root,
+    a study would start the whole study afresh."""
+    if data is not None:
+        return data
+    if not os.path.isdir(DEFAULT_DATA):
         raise ValueError(
             f"no {DEFAULT_DATA} in {os.getcwd()}: run the study in the repository's root, "
             "where the paper's data are, or name a folder with --data (a new one starts "
             "the study afresh)"
         )
+    return DEFAULT_DATA
 
 
 def study_plan(todo: Sequence[Piece], data: str) -> list[str]:
@@ -358,8 +363,11 @@ def study_plan(todo: Sequence[Piece], data: str) -> list[str]:
         else:
             kept = finished_steps(path)
             state = "todo" if kept is None else f"{kept}/{piece.steps}"
-        command = " ".join(piece.to_run(data).arguments())
-        lines.append(f"{state:>5}  {path}  petsc-contact {command}")
+        command = shlex.join(["petsc-contact", *piece.to_run(data).arguments()])
+        folder = os.path.dirname(path)
+        if not os.path.isdir(folder):  # the study makes it; a command run alone needs it
+            command = f"mkdir -p {shlex.quote(folder)} && {command}"
+        lines.append(f"{state:>5}  {shlex.quote(path)}  {command}")
     return lines
 
 

@@ -15,6 +15,7 @@ is within the package's, whatever the tolerance asked for (:mod:`petsc_contact.s
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import nullcontext
 from typing import Any
@@ -25,6 +26,7 @@ from ..backend import _petsc
 from ..backend.solve import BoundSolver, Monitor
 from ..conventions.grid import grid_for
 from ..conventions.validation import check_finite, keywords_after_first
+from ..conventions.warnings import Unconverged, flagged_steps
 from ..geometries.periodic import PeriodicProblem, verify
 from ..geometries.step import VERIFY_FACTOR, Step, collect, solve_step
 from ..io.topography import Heights, map_and_lengths
@@ -157,6 +159,16 @@ table and ``--step`` number that step ``index + 1``; a resumed run reports only 
 it solves, its earlier ones are in the result's table)."""
 
 
+def said(steps: list[Step], root: bool) -> list[Step]:
+    """``steps``, after warning (:class:`~petsc_contact.conventions.warnings.Unconverged`, on
+    the ``root`` rank) of those not converged or not accurate: a sweep never returns them
+    without a word."""
+    if root:
+        for text in flagged_steps([step.scalars for step in steps]):
+            warnings.warn(text, Unconverged, stacklevel=3)
+    return steps
+
+
 def reported(steps: Iterator[Step], total: int, progress: Progress | None) -> Iterator[Step]:
     """The steps, each reported to ``progress`` (``index`` from 0) once it is solved."""
     for i, step in enumerate(steps):
@@ -236,7 +248,7 @@ def periodic_contact(
         problem = _periodic_problem(array, sides, modulus, comm, where)
         solver = None if on_host else problem_solver(problem, _petsc.option_list(options))
         steps = sweep(problem, loads, fields, monitor, stiffness, solver=solver)
-        return collect(reported(steps, len(loads), progress))
+        return said(collect(reported(steps, len(loads), progress)), problem.grid.comm.rank == 0)
 
 
 def _periodic_problem(

@@ -26,7 +26,7 @@ from ..numerics.device import Device, get_device
 from ..physics.continuation import Held
 from ..solver.driver import ArraySettings, ArraySolver
 from ..solver.report import FORCE_ACCURACY
-from .periodic_sweep import Progress, reported
+from .periodic_sweep import Progress, reported, said
 from .scene import check_map
 
 FORCE_RTOL = 1e-6
@@ -307,7 +307,8 @@ def punch_contact(
         problem = _punch_problem(array, sides, modulus, face, comm)
         with PunchSolver(problem) as solver:
             steps = punch_sweep(solver, values, forces is not None, fields, monitor, stiffness)
-            return collect(reported(steps, len(values), progress))
+            found = collect(reported(steps, len(values), progress))
+            return said(found, problem.grid.comm.rank == 0)
 
 
 def _punch_loads(

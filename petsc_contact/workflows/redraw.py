@@ -40,15 +40,15 @@ class FieldMap:
 
 def results_file(path: str) -> Any:
     """``path`` opened for reading as a results file of the package's commands; ``ValueError``
-    in one line for a file that is no HDF5 file, or a comparison (no maps, no load sweep)."""
+    in one line for a file that is no HDF5 file, or a comparison (no maps, no load sweep);
+    h5py's ``OSError`` for a file it cannot open (missing, unreadable)."""
     import h5py
 
-    try:
-        f = h5py.File(path, "r")
-    except OSError:
+    if os.path.isfile(path) and not h5py.is_hdf5(path):
         raise ValueError(
             f"'{path}' is not an HDF5 file: plot draws the files the commands write (OUT.h5)"
-        ) from None
+        )
+    f = h5py.File(path, "r")
     if "solvers" in f.attrs:
         f.close()
         png = path.removesuffix(".h5") + ".png"

@@ -39,7 +39,7 @@ import numpy as np
 from ..backend import _petsc
 from ..backend.solve import Monitor
 from ..conventions.grid import world
-from ..conventions.warnings import FilledLoad, ResumeWarning, Unconverged, recorded
+from ..conventions.warnings import FilledLoad, ResumeWarning, Unconverged, flagged_steps, recorded
 from ..geometries.step import FIELD_NAMES, Step
 from ..io.schema import FILE_RECORD
 from ..io.store import (
@@ -52,6 +52,7 @@ from ..io.store import (
     check_nothing_lost,
     check_parts,
     check_writable,
+    read_complete,
     read_resume,
 )
 from ..numerics.device import get_device
@@ -151,6 +152,10 @@ class Prepared:
         step's commit and before and after the output is assembled: wherever it came, the
         run ends with :class:`RunInterrupted` saying what was kept.  The run's warnings are
         given as they come, and kept in the result and the file."""
+        if self.resumable.whole:  # resumed on its complete output: its steps, nothing solved
+            self.driver.close()
+            table = self.resumable.rows()
+            return RunResult(COMPLETE, table, [], self.record, self.run.output, self.warnings)
         with recorded(self.warnings):
             status, table, steps = self._run(progress, monitor)
         return RunResult(status, table, steps, self.record, self.run.output, list(self.warnings))
@@ -169,12 +174,16 @@ class Prepared:
                 self.driver.close()
             if status == COMPLETE:
                 self._check_filled_load(table)
-                self._check_converged(table)
+                flagged = flagged_steps(table, self.run.output)  # warned once the file is whole
+                self.warnings += [text for text in flagged if text not in self.warnings]
                 if store is not None:
                     check_interrupt()
                     self._note(store)
                     store.finish()
                     check_interrupt()
+                if self.scene.grid.comm.rank == 0:
+                    for text in flagged:
+                        warnings.warn(text, Unconverged, stacklevel=4)
         except StorageError as exc:
             kept = store.abandon(exc.strerror or str(exc)) if store is not None else str(exc)
             raise StorageError(exc.errno, kept) from None
@@ -224,28 +233,6 @@ class Prepared:
         if steps:
             steps[-1].take_resume()  # the one kept, on the host
         return COMPLETE
-
-    def _check_converged(self, table: list[dict[str, Any]]) -> None:
-        """Warn (:class:`Unconverged`, rank 0) when steps did not converge or are not accurate:
-        they stay in the results, flagged, and the warning says so on the screen and in the
-        file's ``warnings``."""
-        failed = [(i, s) for i, s in enumerate(table, 1) if not s["converged"]]
-        inaccurate = [
-            (i, s) for i, s in enumerate(table, 1) if s["converged"] and not s.get("accurate", True)
-        ]
-        where = f" in {self.run.output}" if self.run.output else ""
-        for steps, what, flag in (
-            (failed, "did NOT converge", "converged"),
-            (inaccurate, "are NOT accurate", "accurate"),
-        ):
-            if steps and self.scene.grid.comm.rank == 0:
-                first, scalars = steps[0]
-                warnings.warn(
-                    f"{len(steps)} of {len(table)} load steps {what} (first: step {first}, "
-                    f"{scalars['verification']}); they are flagged {flag} = False{where}",
-                    Unconverged,
-                    stacklevel=2,
-                )
 
     def _check_filled_load(self, table: list[dict[str, Any]]) -> None:
         """Warn (:class:`FilledLoad`, rank 0) when more than :data:`FILLED_LOAD` of the load
@@ -358,6 +345,8 @@ def _finished(run: Run, scene: Scene, record: dict[str, Any], total: int) -> Fin
     ``resume`` or ``overwrite``, ``ValueError`` when its output holds finished steps."""
     if run.resume and run.output is not None:
         finished = _resumable(run.output, run, scene, record["parameters"])
+        if not finished.steps:  # a complete output of this run: nothing to compute
+            finished = read_complete(run.output, record["parameters"])
         if finished.steps and finished.state is None and finished.steps < total:
             step = finished.steps + 1  # the same result, at more cost
             warnings.warn(

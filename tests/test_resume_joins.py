@@ -165,17 +165,7 @@ def test_resume_on_a_complete_output_computes_nothing(tmp_path):
     from petsc_contact import Run, run_contact
 
     out = tmp_path / "r.h5"
-    base = [
-        "periodic",
-        "--grid",
-        "32",
-        "--hurst",
-        "0.7",
-        "--rms-slope",
-        "0.1",
-        "--output",
-        str(out),
-    ]
+    base = ["periodic", *"--grid 32 --hurst 0.7 --rms-slope 0.1 --output".split(), str(out)]
     assert cli(*base, "--pressures", "1e-3,1e-2", "--quiet").returncode == 0
     before, stamp = out.read_bytes(), out.stat().st_mtime_ns
     r = cli(*base, "--pressures", "1e-3,1e-2", "--resume")

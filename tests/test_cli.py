@@ -718,3 +718,18 @@ def test_demo_on_a_small_grid(tmp_path):
     r = cli("demo", "--grid", "256,64", "--output", str(out), "--overwrite", "--quiet")
     with h5py.File(out) as f:  # the longer side's Nyquist limit, 128: 64 stands
         assert r.returncode == 0 and f.attrs["cutoff_ratio"] == 64
+
+
+def test_theory_says_its_units(tmp_path):
+    """``theory``'s lines and table are in the units of ``--length`` and ``--modulus``, and it
+    says which (they were bare numbers beside a periodic run's ``37.99 nm``)."""
+    out = str(tmp_path / "t.h5")
+    given = ("--grid", "32", "--hurst", "0.7", "--rms-slope", "0.1", "--output", out)
+    r = cli("theory", *given, "--length", "150um,100um", "--modulus", "1GPa")
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.splitlines()[0] == (
+        "# lengths (h_rms, u0, mean_gap) in um, pressures (p0, p_c) in GPa, K in GPa per um, "
+        "q in 1/um"
+    )
+    r = cli("theory", *given)
+    assert "pressures (p0, p_c) in units of E*" in r.stdout.splitlines()[0], r.stderr

@@ -43,7 +43,7 @@ def run_theory(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[s
         print(f"# {reading}", flush=True)
     write_theory(args.output, result, attributes, length_unit, run.pressure_unit or "")
     if not args.quiet:
-        _print(result)
+        _print(result, length_unit, run.pressure_unit or "")
     if args.plot:
         from ..io.plot import plot_theory
 
@@ -52,7 +52,16 @@ def run_theory(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[s
     return 0
 
 
-def _print(result: Prediction) -> None:
+def _print(result: Prediction, length_unit: str, pressure_unit: str) -> None:
+    """The prediction's lines and table, with the units of ``--length`` and ``--modulus`` (none:
+    unit-free numbers)."""
+    lengths = length_unit or "units of --length"
+    pressures = pressure_unit or "units of E*"
+    per_length = f"1/{length_unit}" if length_unit else "1/(unit of --length)"
+    print(
+        f"# lengths (h_rms, u0, mean_gap) in {lengths}, pressures (p0, p_c) in {pressures}, "
+        f"K in {pressures} per {length_unit or 'unit of --length'}, q in {per_length}"
+    )
     lo, hi = result.fit_range
     print(
         f"# h_rms = {result.rms_height:.4g}, h'_rms = {result.rms_slope:.4g}, "
@@ -68,6 +77,6 @@ def _print(result: Prediction) -> None:
         f"printed), {result.crossover_pressure_paper:.3g} (the paper's recipe: q_r h_rms with "
         "q_r = 2 pi/L, q_r L = pi, theta = 1)"
     )
-    print(f"{'p0':>12} {'mean_gap':>12} {'K':>12}")
+    print(f"{'p0':>12} {'mean_gap':>12} {'K':>12}")  # in the units above
     for row in zip(result.nominal_pressure, result.mean_gap, result.stiffness, strict=True):
         print(" ".join(f"{v:>12.5g}" for v in row))

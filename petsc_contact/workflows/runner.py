@@ -84,7 +84,9 @@ class RunResult:
         One dict of scalars per finished step (a resumed run's earlier steps included), the
         same as the output file's datasets of one entry per step.
     steps
-        The steps solved by this call (fields when ``fields``; the last keeps ``state``).
+        The steps solved by this call (fields when ``fields``; the last keeps ``state``):
+        none when ``resume=True`` found the run's complete output (the file holds its
+        fields, read with ``h5py`` or ``xarray``).
     record
         The run record (the output file's root attributes).
     output

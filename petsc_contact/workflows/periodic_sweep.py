@@ -24,7 +24,7 @@ import numpy as np
 
 from ..backend import _petsc
 from ..backend.solve import BoundSolver, Monitor
-from ..conventions.grid import grid_for
+from ..conventions.grid import Grid, grid_for
 from ..conventions.validation import check_finite, keywords_after_first
 from ..conventions.warnings import Unconverged, flagged_steps
 from ..geometries.periodic import PeriodicProblem, verify
@@ -159,11 +159,11 @@ table and ``--step`` number that step ``index + 1``; a resumed run reports only 
 it solves, its earlier ones are in the result's table)."""
 
 
-def said(steps: list[Step], root: bool) -> list[Step]:
+def said(steps: list[Step], grid: Grid) -> list[Step]:
     """``steps``, after warning (:class:`~petsc_contact.conventions.warnings.Unconverged`, on
-    the ``root`` rank) of those not converged or not accurate: a sweep never returns them
+    ``grid``'s first rank) of those not converged or not accurate: a sweep never returns them
     without a word."""
-    if root:
+    if grid.comm.rank == 0:
         for text in flagged_steps([step.scalars for step in steps]):
             warnings.warn(text, Unconverged, stacklevel=3)
     return steps
@@ -248,7 +248,7 @@ def periodic_contact(
         problem = _periodic_problem(array, sides, modulus, comm, where)
         solver = None if on_host else problem_solver(problem, _petsc.option_list(options))
         steps = sweep(problem, loads, fields, monitor, stiffness, solver=solver)
-        return said(collect(reported(steps, len(loads), progress)), problem.grid.comm.rank == 0)
+        return said(collect(reported(steps, len(loads), progress)), problem.grid)
 
 
 def _periodic_problem(

@@ -307,8 +307,7 @@ def punch_contact(
         problem = _punch_problem(array, sides, modulus, face, comm)
         with PunchSolver(problem) as solver:
             steps = punch_sweep(solver, values, forces is not None, fields, monitor, stiffness)
-            found = collect(reported(steps, len(values), progress))
-            return said(found, problem.grid.comm.rank == 0)
+            return said(collect(reported(steps, len(values), progress)), problem.grid)
 
 
 def _punch_loads(

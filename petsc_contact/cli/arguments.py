@@ -51,23 +51,20 @@ DEMO: dict[str, Any] = {
 
 def demo_cutoff(args: argparse.Namespace) -> None:
     """``demo``'s ``L/lambda_1`` on a grid where the default scene's 64 is past the Nyquist
-    limit (``max(L)/(2 max(dx))``: below 128 pixels on the longer side with square pixels):
-    that limit (``None``).  One given with ``--cutoff-ratio`` stays as given."""
+    limit (:func:`~petsc_contact.physics.surface.nyquist_ratio`): that limit (``None``).  One
+    given with ``--cutoff-ratio`` stays as given."""
     if type(args.cutoff_ratio) is not DemoCutoff or args.grid is None:
         return
-    shape = tuple(args.grid) if isinstance(args.grid, (list, tuple)) else (args.grid,) * 2
+    from ..conventions.grid import grid_for
     from ..conventions.units import parse_lengths
+    from ..physics.surface import nyquist_ratio
 
+    shape = tuple(args.grid) if isinstance(args.grid, (list, tuple)) else (args.grid,) * 2
     try:
-        lengths = parse_lengths(args.length).values if args.length is not None else (1.0,)
+        length = parse_lengths(args.length).pair if args.length is not None else 1.0
     except ValueError:
         return  # the run's check says why
-
-    if len(lengths) == 1:  # square pixels (conventions.grid.sides)
-        nyquist = max(shape) / 2
-    else:
-        nyquist = max(lengths) / (2 * max(lengths[0] / shape[0], lengths[1] / shape[1]))
-    if args.cutoff_ratio > nyquist:
+    if args.cutoff_ratio > nyquist_ratio(grid_for(shape, length)):
         args.cutoff_ratio = None
 
 

@@ -115,6 +115,9 @@ def test_unconverged_steps_warn_through_both_doors(tmp_path):
     assert result.warnings == [str(w.message) for w in caught if w.category is Unconverged]
     assert "(first: step 1, TAO did not converge (DIVERGED_MAXITS))" in result.warnings[0]
     assert _recorded(tmp_path / "lib.h5") == result.warnings
+    with pytest.warns(Unconverged, match="2 of 2 load steps"):  # resumed on its complete file
+        again = run_contact(run.with_(resume=True))
+    assert again.steps == [] and again.warnings == result.warnings
     out = str(tmp_path / "cli.h5")
     given = ("--grid", "32", "--hurst", "0.7", "--rms-slope", "0.1", "--pressures", "1e-3,1e-2")
     r = cli("periodic", *given, "--output", out, "--quiet", "-tao_max_it", "1")

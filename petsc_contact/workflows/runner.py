@@ -157,6 +157,7 @@ class Prepared:
         if self.resumable.whole:  # resumed on its complete output: its steps, nothing solved
             self.driver.close()
             table = self.resumable.rows()
+            self._say_flagged(self._flagged(table))
             return RunResult(COMPLETE, table, [], self.record, self.run.output, self.warnings)
         with recorded(self.warnings):
             status, table, steps = self._run(progress, monitor)
@@ -176,16 +177,13 @@ class Prepared:
                 self.driver.close()
             if status == COMPLETE:
                 self._check_filled_load(table)
-                flagged = flagged_steps(table, self.run.output)  # warned once the file is whole
-                self.warnings += [text for text in flagged if text not in self.warnings]
+                flagged = self._flagged(table)  # said once the file is whole
                 if store is not None:
                     check_interrupt()
                     self._note(store)
                     store.finish()
                     check_interrupt()
-                if self.scene.grid.comm.rank == 0:
-                    for text in flagged:
-                        warnings.warn(text, Unconverged, stacklevel=4)
+                self._say_flagged(flagged)
         except StorageError as exc:
             kept = store.abandon(exc.strerror or str(exc)) if store is not None else str(exc)
             raise StorageError(exc.errno, kept) from None
@@ -235,6 +233,18 @@ class Prepared:
         if steps:
             steps[-1].take_resume()  # the one kept, on the host
         return COMPLETE
+
+    def _flagged(self, table: list[dict[str, Any]]) -> list[str]:
+        """The :class:`Unconverged` texts of ``table``, added to the run's warnings."""
+        flagged = flagged_steps(table, self.run.output)
+        self.warnings += [text for text in flagged if text not in self.warnings]
+        return flagged
+
+    def _say_flagged(self, flagged: list[str]) -> None:
+        """Warn each of ``flagged`` (rank 0): the steps stay in the results, flagged."""
+        if self.scene.grid.comm.rank == 0:
+            for text in flagged:
+                warnings.warn(text, Unconverged, stacklevel=4)
 
     def _check_filled_load(self, table: list[dict[str, Any]]) -> None:
         """Warn (:class:`FilledLoad`, rank 0) when more than :data:`FILLED_LOAD` of the load

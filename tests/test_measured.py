@@ -236,7 +236,7 @@ def test_warnings_and_preparation_on_the_command_line(tmp_path):
     holes = h.copy()
     holes[5:8, 5:8] = np.nan
     np.save(tmp_path / "holes.npy", holes)
-    out = ["--pressures", "1e-3", "--quiet", "--output", str(tmp_path / "o.h5")]
+    out = ["--pressures", "1e-3", "--quiet", "--output", str(tmp_path / "o.h5"), "--overwrite"]
     r = cli("periodic", "--heights", str(tmp_path / "steep.npy"), *out)
     assert r.returncode == 0 and "rms slope" in r.stderr and "units" in r.stderr
     r = cli("periodic", "--heights", str(tmp_path / "tilted.npy"), *out)

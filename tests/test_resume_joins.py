@@ -181,3 +181,35 @@ def test_resume_on_a_complete_output_computes_nothing(tmp_path):
     _refused(cli(*base, "--pressures", "1e-3,2e-2", "--resume"),
              "different parameters (pressures)", "--overwrite replaces it")  # fmt: skip
     assert out.read_bytes() == before
+
+
+def test_a_new_run_over_an_existing_output_warns_it_is_replaced(tmp_path):
+    """A run without ``--resume`` or ``--overwrite`` over an existing output replaces it
+    (as before) and says so (``ReplacedOutput``, a ``FutureWarning``: refused from 0.3.0);
+    the warning is about the earlier file, not recorded in the new one.  ``--overwrite``
+    replaces it without a word, and so does ``compare`` with it."""
+    from petsc_contact import Run, run_contact
+    from petsc_contact.conventions.warnings import ReplacedOutput
+
+    out = tmp_path / "r.h5"
+    base = ["periodic", *"--grid 32 --hurst 0.7 --rms-slope 0.1 --quiet --output".split(), str(out)]
+    assert "replaced" not in cli(*base, "--pressures", "1e-3").stderr  # a new file
+    r = cli(*base, "--pressures", "2e-3")
+    assert r.returncode == 0, r.stderr
+    assert f"warning: '{out}' exists and is replaced when this run ends" in r.stderr
+    assert "from 0.3.0 that needs --overwrite" in r.stderr
+    with h5py.File(out) as f:
+        assert list(f["nominal_pressure"][:]) == [2e-3]
+        assert not any("replaced" in w for w in json.loads(f.attrs["warnings"]))
+    assert "replaced" not in cli(*base, "--pressures", "1e-3", "--overwrite").stderr
+    run = Run(grid=32, hurst=0.7, rms_slope=0.1, pressures=[1e-3], output=str(out))
+    with pytest.warns(ReplacedOutput, match="exists and is replaced") as caught:
+        result = run_contact(run)
+    assert issubclass(caught[0].category, FutureWarning)
+    assert not any("replaced" in w for w in result.warnings)
+    compared = tmp_path / "c.h5"
+    surface = "--grid 32 --hurst 0.7 --rms-slope 0.1 --pressures 1e-3"
+    scene = ["compare", *surface.split(), "--solvers", "cg", "--quiet", "--output", str(compared)]
+    assert cli(*scene).returncode == 0
+    assert "is replaced when this run ends" in cli(*scene).stderr
+    assert "replaced" not in cli(*scene, "--overwrite").stderr

@@ -67,6 +67,11 @@ def flagged_steps(table: Sequence[Mapping[str, Any]], output: str | None = None)
     return texts
 
 
+class ReplacedOutput(PetscContactWarning, FutureWarning):
+    """A new run's output that replaces an existing file without ``overwrite``: deprecated
+    (refused from 0.3.0, as an interrupted run's finished steps already are)."""
+
+
 class IgnoredOption(PetscContactWarning):
     """An option given to a command that does not use it."""
 

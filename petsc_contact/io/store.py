@@ -56,6 +56,7 @@ import json
 import os
 import re
 import shutil
+import warnings
 import zipfile
 from contextlib import suppress
 from dataclasses import dataclass, field
@@ -64,6 +65,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..conventions.grid import block_rows
+from ..conventions.warnings import ReplacedOutput
 from ..physics.continuation import Held
 from .atomic import (
     StorageError,
@@ -295,6 +297,18 @@ def check_nothing_lost(path: str) -> None:
         raise ValueError(
             f"'{partial}' holds {steps} finished step(s) of an interrupted run: --resume "
             "continues it, --overwrite starts afresh (deleting them)"
+        )
+
+
+def warn_replaced(path: str) -> None:
+    """A :class:`ReplacedOutput` warning when a new run (neither ``resume`` nor ``overwrite``)
+    will replace the file at output ``path`` once it ends."""
+    if os.path.exists(path):
+        warnings.warn(
+            f"'{path}' exists and is replaced when this run ends; from 0.3.0 that needs "
+            "--overwrite",
+            ReplacedOutput,
+            stacklevel=2,
         )
 
 

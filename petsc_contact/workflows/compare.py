@@ -45,7 +45,7 @@ from ..io.names import partial_path
 from ..io.plot import plot_compare
 from ..io.results import group_name, labelled, scale
 from ..io.schema import COMPARE, annotate, write_attributes
-from ..io.store import check_same_run
+from ..io.store import check_same_run, warn_replaced
 from ..physics.observables import natural_residual
 from ..physics.surface import rms_of
 from .periodic_sweep import sweep
@@ -503,6 +503,8 @@ def finished_solvers(
             f"'{partial}' holds the finished solvers of an interrupted comparison: --resume "
             "continues it, --overwrite deletes them and starts afresh"
         )
+    if not overwrite:
+        warn_replaced(path)
     on_root(world(), lambda: _remove(partial))
     return []
 

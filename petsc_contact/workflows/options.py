@@ -570,7 +570,9 @@ _RUN = (
         "(they are deleted)",
         RUNS,
         default=False,
-        more="Without it (or `--resume`) such an output is refused. `ensemble --overwrite` "
+        more="Without it (or `--resume`) such an output is refused. An existing `OUT.h5` is "
+        "replaced when the run ends; without `--overwrite` a warning says so (deprecated: "
+        "refused from 0.3.0). `ensemble --overwrite` "
         "first deletes the summary and every `OUT_seedK` file; an ensemble whose output or "
         "seed files exist needs `--resume` or `--overwrite`",
     ),

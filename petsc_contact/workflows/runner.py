@@ -54,6 +54,7 @@ from ..io.store import (
     check_writable,
     read_complete,
     read_resume,
+    warn_replaced,
 )
 from ..numerics.device import get_device
 from ..physics.continuation import Held
@@ -318,6 +319,8 @@ def prepare(run: Run, command_line: str | None = None, petsc: ModuleType | None 
 
         petsc = petsc or _petsc.init()
         default_solver = requested_type(petsc) == DEFAULT_TYPE
+    if run.output is not None and not (run.resume or run.overwrite):
+        warn_replaced(run.output)  # of the earlier file: not recorded in this run's
     texts: list[str] = []
     with recorded(texts):  # the map's warnings, what a resume computes again
         scene = prepare_scene(run, default_solver=default_solver)

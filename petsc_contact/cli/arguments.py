@@ -49,6 +49,14 @@ DEMO: dict[str, Any] = {
 """``demo``'s defaults: the default scene (:class:`DemoCutoff`)."""
 
 
+def demo_output(args: argparse.Namespace) -> None:
+    """``demo`` replaces its own earlier ``demo.h5`` as ``--overwrite`` does (without the
+    warning a new run over an existing output gives): the README's first command runs again
+    as it ran the first time.  Another ``--output``, or ``--resume``, is as given."""
+    if args.output == DEMO["output"] and not args.resume:
+        args.overwrite = True
+
+
 def demo_cutoff(args: argparse.Namespace) -> None:
     """``demo``'s ``L/lambda_1`` on a grid where the default scene's 64 is past the Nyquist
     limit (:func:`~petsc_contact.physics.surface.nyquist_ratio`): that limit (``None``).  One

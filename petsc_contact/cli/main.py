@@ -14,7 +14,7 @@ from ..conventions.warnings import PetscContactWarning, Unconverged
 from ..io.schema import schema_markdown
 from ..io.store import StorageError, check_interrupt, check_writable, forget_interrupts, interrupt
 from ..numerics.device import DeviceUnavailable
-from .arguments import build_parser, demo_cutoff, is_petsc_option, split_arguments
+from .arguments import build_parser, demo_cutoff, demo_output, is_petsc_option, split_arguments
 from .common import (
     EXIT_BAD_INPUT,
     EXIT_INTERRUPTED,
@@ -172,6 +172,7 @@ def _dispatch(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[st
         return run_study(args, petsc_args)  # each piece locked: studies may share a folder
     if args.command == "demo":
         demo_cutoff(args)
+        demo_output(args)
     if args.command not in LOCKED and on_array_device(args):  # no PETSc is loaded
         return execute(describe(args, petsc_args), args, argv)
     if args.command not in LOCKED:

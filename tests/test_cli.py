@@ -735,6 +735,11 @@ def test_demo_runs_again_over_its_own_output(tmp_path):
     for warned in (False, True):
         r = python("-c", code, str(tmp_path), "--output", "other.h5")
         assert r.returncode == 0 and ("is replaced when this run ends" in r.stderr) is warned
+    paused = python("-c", code, str(tmp_path), "--stop-after", "1e-9")
+    assert paused.returncode == 75, paused.stderr  # an interrupted demo's steps: not deleted
+    r = python("-c", code, str(tmp_path))
+    assert r.returncode == 2 and "--resume continues it" in r.stderr, r.stderr
+    assert (tmp_path / "demo.h5.partial").exists()
 
 
 def test_theory_says_its_units(tmp_path):

@@ -213,3 +213,77 @@ def test_a_new_run_over_an_existing_output_warns_it_is_replaced(tmp_path):
     assert cli(*scene).returncode == 0
     assert "is replaced when this run ends" in cli(*scene).stderr
     assert "replaced" not in cli(*scene, "--overwrite").stderr
+
+
+def test_the_replaced_output_warning_is_not_a_refusal_s_first_line(tmp_path):
+    """A run refused for its ``.partial`` (or its input) says that in one line, not first that
+    the output is replaced; with ``PYTHONWARNINGS=error`` the warning is a refusal in one line
+    (exit 2, the earlier file as it was), not a traceback."""
+    out = tmp_path / "r.h5"
+    base = ["periodic", *"--grid 32 --hurst 0.7 --rms-slope 0.1 --quiet --output".split(), str(out)]
+    assert cli(*base, "--pressures", "1e-3").returncode == 0
+    before = out.read_bytes()
+    paused = cli(*base, "--sweep", "3,1e-4,1e-2", "--stop-after", "1e-9")
+    assert paused.returncode == 75, paused.stderr
+    r = cli(*base, "--sweep", "3,1e-4,1e-2")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert "finished step(s) of an interrupted run" in r.stderr
+    r = cli(*base, "--pressures", "2e-3", "-tao_type", "nonexist")
+    assert r.returncode != 0 and "replaced" not in r.stderr
+    env_error = python(
+        "-W",
+        "error::FutureWarning",
+        "-m",
+        "petsc_contact.cli",
+        *base,
+        "--pressures",
+        "2e-3",
+        "--overwrite",
+    )
+    assert env_error.returncode == 0  # --overwrite: nothing to warn
+    strict = python(
+        "-W",
+        "error::FutureWarning",
+        "-m",
+        "petsc_contact.cli",
+        *base,
+        "--pressures",
+        "3e-3",
+        "--resume",
+    )
+    assert strict.returncode == 2 and "different parameters" in strict.stderr
+    out.unlink()
+    (tmp_path / "r.h5.partial").unlink(missing_ok=True)
+    assert cli(*base, "--pressures", "1e-3").returncode == 0
+    before = out.read_bytes()
+    strict = python(
+        "-W", "error::FutureWarning", "-m", "petsc_contact.cli", *base, "--pressures", "2e-3"
+    )
+    assert strict.returncode == 2, strict.stderr
+    assert strict.stderr.strip().splitlines() == [
+        f"petsc-contact: error: '{out}' exists and is replaced when this run ends; from 0.3.0 "
+        "that needs --overwrite"
+    ]
+    assert out.read_bytes() == before and not (tmp_path / "r.h5.partial").exists()
+
+
+def test_compare_resume_on_a_complete_output_keeps_its_solvers(tmp_path):
+    """``compare --resume`` on a complete output keeps every solver it holds (only the
+    reference is solved again: the same mean gap), and refuses one of other parameters
+    (it replaced it without a word)."""
+    out = tmp_path / "c.h5"
+    surface = "--grid 32 --hurst 0.7 --rms-slope 0.1 --solvers cg --quiet --output".split()
+    scene = ["compare", *surface, str(out)]
+    assert cli(*scene, "--pressures", "1e-3").returncode == 0
+    with h5py.File(out) as f:
+        kept = {k: f["cg"].attrs[k] for k in ("solve_time", "iterations")}
+        gap = f.attrs["reference_mean_gap"]
+    r = cli(*scene, "--pressures", "1e-3", "--resume")
+    assert r.returncode == 0 and not r.stderr, r.stderr
+    with h5py.File(out) as f:
+        assert {k: f["cg"].attrs[k] for k in kept} == kept  # not solved again
+        assert f.attrs["reference_mean_gap"] == gap
+    before = out.read_bytes()
+    r = cli(*scene, "--pressures", "2e-3", "--resume")
+    assert r.returncode == 2 and "different parameters (pressure" in r.stderr, r.stderr
+    assert "--overwrite replaces it" in r.stderr and out.read_bytes() == before

@@ -8,14 +8,17 @@ add their own here.
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import sys
-from collections.abc import Sequence
-from contextlib import suppress
+import warnings
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager, suppress
 from typing import Any, NoReturn
 
 from .._version import __version__
 from ..backend._petsc import is_petsc_option
+from ..conventions.warnings import ReplacedOutput
 from ..workflows.options import (
     DEFAULT_DATA,
     OPTIONS,
@@ -49,12 +52,17 @@ DEMO: dict[str, Any] = {
 """``demo``'s defaults: the default scene (:class:`DemoCutoff`)."""
 
 
-def demo_output(args: argparse.Namespace) -> None:
-    """``demo`` replaces its own earlier ``demo.h5`` as ``--overwrite`` does (without the
-    warning a new run over an existing output gives): the README's first command runs again
-    as it ran the first time.  Another ``--output``, or ``--resume``, is as given."""
-    if args.output == DEMO["output"] and not args.resume:
-        args.overwrite = True
+@contextmanager
+def demo_replacing_its_own(args: argparse.Namespace) -> Iterator[None]:
+    """Within the block, ``demo`` replaces its own earlier ``demo.h5`` without the warning
+    (:class:`~petsc_contact.conventions.warnings.ReplacedOutput`) that a run over an existing
+    output gives: the README's first command runs again as it ran the first time.  Another
+    ``--output``, another command, and an interrupted demo's ``.partial`` are as any run's."""
+    with warnings.catch_warnings():
+        own = os.path.abspath(DEMO["output"])
+        if args.command == "demo" and os.path.abspath(args.output) == own:
+            warnings.filterwarnings("ignore", category=ReplacedOutput)
+        yield
 
 
 def demo_cutoff(args: argparse.Namespace) -> None:

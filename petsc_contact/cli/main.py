@@ -14,7 +14,13 @@ from ..conventions.warnings import PetscContactWarning, Unconverged
 from ..io.schema import schema_markdown
 from ..io.store import StorageError, check_interrupt, check_writable, forget_interrupts, interrupt
 from ..numerics.device import DeviceUnavailable
-from .arguments import build_parser, demo_cutoff, demo_output, is_petsc_option, split_arguments
+from .arguments import (
+    build_parser,
+    demo_cutoff,
+    demo_replacing_its_own,
+    is_petsc_option,
+    split_arguments,
+)
 from .common import (
     EXIT_BAD_INPUT,
     EXIT_INTERRUPTED,
@@ -97,7 +103,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         for option, path in command_outputs(args):  # a figure's folder, as the output's
             if option == "--plot" and path:
                 check_writable(path, "--plot's")
-        status = _dispatch(args, argv, petsc_args)
+        with demo_replacing_its_own(args):
+            status = _dispatch(args, argv, petsc_args)
         _report_unused(petsc_args)
         if status != EXIT_INTERRUPTED:  # said so already
             check_interrupt()  # a signal whose exception a finaliser dropped
@@ -108,7 +115,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except StorageError as exc:
         say(exc.strerror or str(exc))
         return EXIT_STORAGE
-    except (InputError, ValueError, OSError, MemoryError) as exc:
+    except (InputError, ValueError, OSError, MemoryError, PetscContactWarning) as exc:
         say(str(exc) or type(exc).__name__)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt as exc:  # a run's says what it kept
@@ -172,7 +179,6 @@ def _dispatch(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[st
         return run_study(args, petsc_args)  # each piece locked: studies may share a folder
     if args.command == "demo":
         demo_cutoff(args)
-        demo_output(args)
     if args.command not in LOCKED and on_array_device(args):  # no PETSc is loaded
         return execute(describe(args, petsc_args), args, argv)
     if args.command not in LOCKED:

@@ -1,11 +1,12 @@
 """The package's warnings: one class for all, one per kind, and a run's record of them.
 
 Every warning the package gives about an input or a result is a
-:class:`PetscContactWarning` (a ``UserWarning``; deprecations are ``DeprecationWarning``), so
-that ``warnings.simplefilter("error", PetscContactWarning)`` turns them all into errors and
-the command line prints each as one line.  A run
-(:func:`~petsc_contact.workflows.runner.run_contact`) keeps the texts of those it gave in its
-result and its file (:func:`recorded`).
+:class:`PetscContactWarning` (a ``UserWarning``; deprecations of the API are
+``DeprecationWarning``, of the command line's behaviour also ``FutureWarning``), so that
+``warnings.simplefilter("error", PetscContactWarning)`` turns them all into errors and the
+command line prints each as one line.  A run
+(:func:`~petsc_contact.workflows.runner.run_contact`) keeps the texts of those about its
+result in its result and its file (:func:`recorded`).
 """
 
 from __future__ import annotations
@@ -14,13 +15,16 @@ import warnings
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import PurePath
-from typing import Any, TextIO
+from typing import Any, ClassVar, TextIO
 
 PACKAGE = __name__.split(".")[0]
 
 
 class PetscContactWarning(UserWarning):
     """A result the package computed, or an input it took, with a reservation."""
+
+    of_the_result: ClassVar[bool] = True
+    """Whether a run records it (:func:`recorded`): not a warning about another file."""
 
 
 class DoubtfulMap(PetscContactWarning):
@@ -71,6 +75,8 @@ class ReplacedOutput(PetscContactWarning, FutureWarning):
     """A new run's output that replaces an existing file without ``overwrite``: deprecated
     (refused from 0.3.0, as an interrupted run's finished steps already are)."""
 
+    of_the_result = False
+
 
 class IgnoredOption(PetscContactWarning):
     """An option given to a command that does not use it."""
@@ -111,7 +117,7 @@ def recorded(texts: list[str]) -> Iterator[list[str]]:
         if not issubclass(category, PetscContactWarning):
             shown(message, category, filename, lineno, file, line)
             return
-        if str(message) not in texts:
+        if category.of_the_result and str(message) not in texts:
             texts.append(str(message))
         inner = warnings.filters, warnings.showwarning
         warnings.filters, warnings.showwarning = outer, shown  # as if the block were not there

@@ -300,15 +300,16 @@ def check_nothing_lost(path: str) -> None:
         )
 
 
-def warn_replaced(path: str) -> None:
-    """A :class:`ReplacedOutput` warning when a new run (neither ``resume`` nor ``overwrite``)
-    will replace the file at output ``path`` once it ends."""
+def warn_replaced(path: str, stacklevel: int = 2) -> None:
+    """Warn (:class:`ReplacedOutput`) where a file at output ``path`` exists: a run that
+    neither resumes nor overwrites replaces it once it ends.  ``stacklevel`` as
+    ``warnings.warn``'s, counted from the caller."""
     if os.path.exists(path):
         warnings.warn(
             f"'{path}' exists and is replaced when this run ends; from 0.3.0 that needs "
             "--overwrite",
             ReplacedOutput,
-            stacklevel=2,
+            stacklevel=stacklevel + 1,
         )
 
 

@@ -488,7 +488,8 @@ def finished_solvers(
     path: str, parameters: dict[str, Any], resume: bool, overwrite: bool
 ) -> list[Trajectory]:
     """What a comparison into ``path`` starts from (the caller holds the output's lock): with
-    ``resume``, the finished solvers of its ``.partial`` file (:func:`read_partial`); with
+    ``resume``, the finished solvers of its ``.partial`` file or, without one, of its complete
+    output (:func:`read_partial`); with
     ``overwrite``, none, that file removed (by rank 0); with neither, none, and
     ``ValueError`` where that file holds finished solvers."""
     from ..conventions.grid import world
@@ -515,16 +516,22 @@ def _remove(path: str) -> None:
 
 
 def read_partial(path: str, parameters: dict[str, Any]) -> list[Trajectory]:
-    """The finished solvers of an interrupted comparison (none without a ``.partial``);
-    ``ValueError`` when it was run with other parameters or cannot be read."""
+    """The finished solvers of an interrupted comparison into ``path`` (its ``.partial``), or
+    of its complete output where no ``.partial`` is left (every solver: only the reference
+    is solved again); none without either.  ``ValueError`` when the file was run with other
+    parameters (``--overwrite`` replaces it) or cannot be read."""
     import h5py
 
     partial = partial_path(path)
-    if not os.path.exists(partial):
+    source = partial if os.path.exists(partial) else path
+    if not os.path.exists(source):
         return []
     try:
-        with h5py.File(partial, "r") as f:
-            check_same_run(partial, json.loads(f.attrs["parameters"]), parameters)
+        with h5py.File(source, "r") as f:
+            try:
+                check_same_run(source, json.loads(f.attrs["parameters"]), parameters)
+            except ValueError as exc:
+                raise ValueError(f"{exc}; --overwrite replaces it") from None
             out = []
             for name in json.loads(f.attrs["solvers"]):
                 g = f[group_name(name)]
@@ -539,7 +546,7 @@ def read_partial(path: str, parameters: dict[str, Any]) -> list[Trajectory]:
                 t.converged = bool(g.attrs["converged"])
                 out.append(t)
     except (OSError, KeyError) as exc:
-        raise ValueError(f"cannot resume '{partial}': it is damaged ({exc}); remove it") from None
+        raise ValueError(f"cannot resume '{source}': it is damaged ({exc}); remove it") from None
     return out
 
 

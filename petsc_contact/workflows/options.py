@@ -572,7 +572,7 @@ _RUN = (
         default=False,
         more="Without it (or `--resume`) such an output is refused. An existing `OUT.h5` is "
         "replaced when the run ends; without `--overwrite` a warning says so (deprecated: "
-        "refused from 0.3.0). `ensemble --overwrite` "
+        "refused from 0.3.0), except `demo`'s own `demo.h5`. `ensemble --overwrite` "
         "first deletes the summary and every `OUT_seedK` file; an ensemble whose output or "
         "seed files exist needs `--resume` or `--overwrite`",
     ),
@@ -680,7 +680,8 @@ _COMPARE = (
         default=False,
         section="compare",
         more="The rest are run, the reference solved again (same scene, `--pressures`, "
-        "`--solvers`, `--time-limit`, `--stall-iterations`; otherwise refused)",
+        "`--solvers`, `--time-limit`, `--stall-iterations`; otherwise refused). On a "
+        "complete `OUT.h5` every solver is kept and only the reference solved again",
     ),
     _option(
         "overwrite",
@@ -688,7 +689,9 @@ _COMPARE = (
         ("compare",),
         default=False,
         section="compare",
-        more="Without it (or `--resume`) such an output is refused",
+        more="Without it (or `--resume`) such an output is refused. An existing `OUT.h5` is "
+        "replaced when the comparison ends; without `--overwrite` a warning says so "
+        "(deprecated: refused from 0.3.0)",
     ),
 )
 

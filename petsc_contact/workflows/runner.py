@@ -319,8 +319,6 @@ def prepare(run: Run, command_line: str | None = None, petsc: ModuleType | None 
 
         petsc = petsc or _petsc.init()
         default_solver = requested_type(petsc) == DEFAULT_TYPE
-    if run.output is not None and not (run.resume or run.overwrite):
-        warn_replaced(run.output)  # of the earlier file: not recorded in this run's
     texts: list[str] = []
     with recorded(texts):  # the map's warnings, what a resume computes again
         scene = prepare_scene(run, default_solver=default_solver)
@@ -372,6 +370,7 @@ def _finished(run: Run, scene: Scene, record: dict[str, Any], total: int) -> Fin
         return finished
     if run.output is not None and not run.overwrite:
         check_nothing_lost(run.output)
+        warn_replaced(run.output, stacklevel=4)
     return Finished(0)
 
 

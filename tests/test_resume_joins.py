@@ -267,6 +267,21 @@ def test_the_replaced_output_warning_is_not_a_refusal_s_first_line(tmp_path):
     assert out.read_bytes() == before and not (tmp_path / "r.h5.partial").exists()
 
 
+def test_resume_and_overwrite_together_are_refused(tmp_path):
+    """``--resume`` and ``--overwrite`` together are refused by every command that takes
+    them (a run took ``--resume`` and ignored ``--overwrite``), and by ``Run``."""
+    from petsc_contact import Run
+
+    given = "--grid 32 --hurst 0.7 --rms-slope 0.1 --pressures 1e-3 --resume --overwrite"
+    for command in ("periodic", "demo", "ensemble --seeds 2", "compare"):
+        out = ["--output", str(tmp_path / "o.h5")]
+        r = cli(*command.split(), *given.split(), *out)
+        assert r.returncode == 2 and "--overwrite starts it afresh: not both" in r.stderr
+    with pytest.raises(ValueError, match="not both"):
+        Run(grid=32, hurst=0.7, rms_slope=0.1, pressures=[1e-3], resume=True, overwrite=True)
+    assert not list(tmp_path.iterdir())
+
+
 def test_compare_resume_on_a_complete_output_keeps_its_solvers(tmp_path):
     """``compare --resume`` on a complete output keeps every solver it holds (only the
     reference is solved again: the same mean gap), and refuses one of other parameters

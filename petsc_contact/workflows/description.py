@@ -184,6 +184,8 @@ class Run:
             raise ValueError(f"--cut-from must be a whole number >= 1, got {self.cut_from}")
         if self.stop_after is not None:
             non_negative("--stop-after", self.stop_after)
+        if self.resume and self.overwrite:
+            raise ValueError("--resume continues a run, --overwrite starts it afresh: not both")
         for name, units in (("pressures", PASCALS), ("approaches", METRES), ("forces", NEWTONS)):
             values = getattr(self, name)
             if values is None or self.sweep is not None:

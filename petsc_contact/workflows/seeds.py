@@ -147,8 +147,6 @@ def seeds_to_run(base: Run, runs: Sequence[Run]) -> list[Run]:
     where their ``parameters`` are this ensemble's, and any other is refused; with
     neither, an earlier ensemble's summary or seed files are refused.  Refusals are
     ``ValueError`` with one line."""
-    if base.resume and base.overwrite:
-        raise ValueError("--resume continues an ensemble, --overwrite starts it afresh: not both")
     if base.overwrite:
         on_root(world(), lambda: clear_ensemble(str(base.output)))
         return list(runs)

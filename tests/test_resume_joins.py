@@ -302,3 +302,10 @@ def test_compare_resume_on_a_complete_output_keeps_its_solvers(tmp_path):
     r = cli(*scene, "--pressures", "2e-3", "--resume")
     assert r.returncode == 2 and "different parameters (pressure" in r.stderr, r.stderr
     assert "--overwrite replaces it" in r.stderr and out.read_bytes() == before
+    damaged = bytearray(before)
+    damaged[: len(damaged) // 2] = bytes(len(damaged) // 2)  # bad bytes over its first half
+    out.write_bytes(bytes(damaged))
+    r = cli(*scene, "--pressures", "1e-3", "--resume")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert f"cannot resume '{out}': it is damaged" in r.stderr and "--overwrite" in r.stderr
+    assert out.read_bytes() == bytes(damaged) and not (tmp_path / "c.h5.partial").exists()

@@ -300,6 +300,13 @@ def check_nothing_lost(path: str) -> None:
         )
 
 
+def check_resume_or_overwrite(resume: bool, overwrite: bool) -> None:
+    """``ValueError`` for ``resume`` and ``overwrite`` together: one continues what an
+    earlier run left, the other deletes it."""
+    if resume and overwrite:
+        raise ValueError("--resume continues a run, --overwrite starts it afresh: not both")
+
+
 def warn_replaced(path: str, stacklevel: int = 2) -> None:
     """Warn (:class:`ReplacedOutput`) where a file at output ``path`` exists: a run that
     neither resumes nor overwrites replaces it once it ends.  ``stacklevel`` as

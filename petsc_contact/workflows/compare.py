@@ -45,7 +45,7 @@ from ..io.names import partial_path
 from ..io.plot import plot_compare
 from ..io.results import group_name, labelled, scale
 from ..io.schema import COMPARE, annotate, write_attributes
-from ..io.store import check_same_run, warn_replaced
+from ..io.store import check_resume_or_overwrite, check_same_run, warn_replaced
 from ..physics.observables import natural_residual
 from ..physics.surface import rms_of
 from .periodic_sweep import sweep
@@ -495,8 +495,7 @@ def finished_solvers(
     from ..conventions.grid import world
 
     partial = partial_path(path)
-    if resume and overwrite:
-        raise ValueError("--resume continues a comparison, --overwrite starts it afresh: not both")
+    check_resume_or_overwrite(resume, overwrite)
     if resume:
         return read_partial(path, parameters)
     if os.path.exists(partial) and not overwrite:
@@ -546,7 +545,9 @@ def read_partial(path: str, parameters: dict[str, Any]) -> list[Trajectory]:
                 t.converged = bool(g.attrs["converged"])
                 out.append(t)
     except (OSError, KeyError) as exc:
-        raise ValueError(f"cannot resume '{source}': it is damaged ({exc}); remove it") from None
+        raise ValueError(
+            f"cannot resume '{source}': it is damaged ({exc}); --overwrite starts afresh"
+        ) from None
     return out
 
 

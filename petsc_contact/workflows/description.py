@@ -166,7 +166,7 @@ class Run:
         heights file."""
         from ..conventions.validation import non_negative, positive
         from ..io.paths import check_input, check_outputs
-        from ..io.store import csv_path
+        from ..io.store import check_resume_or_overwrite, csv_path
 
         self._normalise()
         if self.heights_file is not None:
@@ -184,8 +184,7 @@ class Run:
             raise ValueError(f"--cut-from must be a whole number >= 1, got {self.cut_from}")
         if self.stop_after is not None:
             non_negative("--stop-after", self.stop_after)
-        if self.resume and self.overwrite:
-            raise ValueError("--resume continues a run, --overwrite starts it afresh: not both")
+        check_resume_or_overwrite(self.resume, self.overwrite)
         for name, units in (("pressures", PASCALS), ("approaches", METRES), ("forces", NEWTONS)):
             values = getattr(self, name)
             if values is None or self.sweep is not None:

@@ -257,6 +257,16 @@ def slips(folder: Path) -> tuple[int, int, list[str]]:
         r = cli(*[v if v != "0.7" else "0.3" for v in base], "--resume")
         assert r.returncode == 2 and (folder / "ens_seed0.h5").read_bytes() == before, r.stderr
 
+    def ensemble_moved_with_its_seeds() -> None:  # after ensemble_of_another_hurst
+        moved = folder / "moved"
+        moved.mkdir(exist_ok=True)
+        for p in folder.glob("ens*.h5"):
+            shutil.copy(p, moved / p.name)
+        shutil.copy(folder / "ens_seed1.h5", folder / "ens_seed0.h5")  # the originals changed
+        assert cli("plot", str(moved / "ens.h5")).returncode == 0
+        r = cli("plot", str(folder / "ens.h5"))
+        assert r.returncode == 2 and "is not the run of seed 0" in r.stderr, r.stderr
+
     def compare_at_another_pressure() -> None:
         out = folder / "cmp.h5"
         args = ["compare", *g, "--pressures", "1e-3", "--solvers", "cg,pk,bnls", "--quiet"]
@@ -288,11 +298,83 @@ def slips(folder: Path) -> tuple[int, int, list[str]]:
 
         return check
 
+    def map_changed_at_resume() -> None:
+        h = np.random.default_rng(7).standard_normal((64, 64)) * 1e-2
+        np.save(folder / "h.npy", h)
+        out = folder / "changed.h5"
+        args = ["periodic", "--heights", str(folder / "h.npy"), "--length", "1", "--sweep",
+                "4,1e-4,1e-2", "--quiet", "--output", str(out)]  # fmt: skip
+        assert cli(*args, "--stop-after", "0").returncode == 75
+        before = Path(f"{out}.partial").read_bytes()
+        np.save(folder / "h.npy", 2 * h)
+        r = cli(*args, "--resume")
+        assert r.returncode == 2 and "--overwrite" in r.stderr, (r.returncode, r.stderr[-300:])
+        assert Path(f"{out}.partial").read_bytes() == before and not out.exists()
+
+    def compare_map_changed_at_resume() -> None:
+        h = np.random.default_rng(8).standard_normal((64, 64)) * 1e-2
+        np.save(folder / "hc.npy", h)
+        out = folder / "cmp-map.h5"
+        args = ["compare", "--heights", str(folder / "hc.npy"), "--length", "1", "--pressures",
+                "1e-3", "--solvers", "cg,pk,bnls", "--quiet", "--output", str(out)]  # fmt: skip
+        cli(*args, killer="after:commit:2")
+        np.save(folder / "hc.npy", 2 * h)
+        r = cli(*args, "--resume")
+        assert r.returncode == 2 and "--overwrite" in r.stderr, (r.returncode, r.stderr[-300:])
+
+    def compare_options_changed_at_resume() -> None:
+        out = folder / "cmp-opts.h5"
+        args = ["compare", *g, "--pressures", "1e-3", "--solvers", "cg,bncg", "--quiet",
+                "--output", str(out)]  # fmt: skip
+        assert cli(*args, "-bncg_tao_max_it", "5").returncode in (0, 1)
+        r = cli(*args, "-bncg_tao_max_it", "500", "--resume")
+        assert r.returncode == 0 and "never used" not in r.stderr, (r.returncode, r.stderr)
+        with h5py.File(out) as f:
+            assert f["bncg"].attrs["converged"], "bncg kept its 5-iteration result"
+
+    def header_map_with_sides_as_written() -> None:
+        rows = np.random.default_rng(1).standard_normal((16, 32))
+        text = "x y z\n" + "\n".join(" ".join(f"{v:.6f}" for v in row) for row in rows)
+        (folder / "header.txt").write_text(text + "\n")
+        args = ["periodic", "--heights", str(folder / "header.txt"), "--pressures", "1e-3",
+                "--quiet", "--output", str(folder / "header.h5")]  # fmt: skip
+        r = cli(*args, "--length", "1,2")  # the rows as written: refused, the header said
+        assert r.returncode == 2 and "--length 2,1" in r.stderr and "header" in r.stderr, r.stderr
+        assert not (folder / "header.h5").exists()
+        assert cli(*args, "--length", "2,1").returncode == 0
+
+    def pressure_beyond_full_contact() -> None:
+        out = folder / "full.h5"
+        r = cli("periodic", *g, "--pressures", "1e-2,1", "--stiffness", "--output", str(out))
+        assert r.returncode == 0 and "<-- FULL CONTACT" in r.stdout, (r.returncode, r.stdout)
+        assert "at or beyond full contact" in r.stderr, r.stderr
+        with h5py.File(out) as f:
+            assert f["full_contact"][:].tolist() == [False, True] and np.isnan(f["stiffness"][1])
+
+    def periodic_sweep_made_a_punch() -> None:
+        code = (
+            "import warnings; from petsc_contact import Run\n"
+            "with warnings.catch_warnings(record=True) as w:\n"
+            "    warnings.simplefilter('always')\n"
+            "    punch = Run(sweep=(6, 1e4, 1e6)).with_(geometry='punch')\n"
+            "assert punch.sweep is None and punch.pressures[-1] == 1e6, punch\n"
+            "assert 'nominal pressures over its face' in str(w[0].message)\n"
+        )
+        r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=ENV)
+        assert r.returncode == 0, r.stderr
+
     checks += [
+        ("a header map's --length for its rows as written", header_map_with_sides_as_written),
+        ("--pressures beyond full contact", pressure_beyond_full_contact),
+        ("a periodic run's sweep handed to the punch", periodic_sweep_made_a_punch),
         ("the same command again without --resume", again_without_resume),
+        ("the heights file changed before --resume", map_changed_at_resume),
+        ("compare's heights changed before --resume", compare_map_changed_at_resume),
+        ("compare --resume with a solver's options changed", compare_options_changed_at_resume),
         ("step 2's part replaced by step 1's", swapped_part),
         ("the parts folder a plain file", parts_as_a_file),
         ("ensemble --resume over another H's seeds", ensemble_of_another_hurst),
+        ("the ensemble's folder moved, its seed files changed", ensemble_moved_with_its_seeds),
         ("compare --resume at another pressure", compare_at_another_pressure),
         ("-tao_grtol 0.5", loosened(["-tao_grtol", "0.5"])),
         ("-tao_gatol 1e-2", loosened(["-tao_gatol", "1e-2"])),
@@ -321,7 +403,14 @@ def bad_inputs(folder: Path) -> list[tuple[str, list[str], int]]:
     (folder / "ragged.txt").write_text("1 2 3\n4 5 6\n7 8\n")
     (folder / "worded.txt").write_text("1 2 3\n4 NA 6\n7 8 9\n")
     (folder / "noise.opts").write_bytes(rng.bytes(256))
+    nul = np.random.default_rng(1).standard_normal((16, 32))
+    text = bytearray(("\n".join(" ".join(f"{v:.6f}" for v in row) for row in nul) + "\n").encode())
+    text[40:48] = bytes(8)  # a crash's NUL padding inside the first rows
+    (folder / "nul.txt").write_bytes(bytes(text))
     (folder / "a-folder").mkdir(exist_ok=True)
+    with h5py.File(folder / "bare-run.h5", "w") as f:  # a run written with modulus=1e9: no unit
+        f.attrs.update(geometry="periodic", length_unit="", pressure_unit="")
+        f["nominal_pressure"], f["mean_gap"] = [1e6], [1e-7]
     if not (folder / "fifo").exists():
         os.mkfifo(folder / "fifo")
     if not (folder / "full").exists() and os.geteuid() == 0:  # a device node like /dev/full
@@ -401,6 +490,18 @@ def bad_inputs(folder: Path) -> list[tuple[str, list[str], int]]:
         ("punch --forces 0", ["punch", *g, "--forces", "0", *out], 2),
         ("ensemble with --heights", ["ensemble", "--heights", str(folder / "flat.npy"),
                                      "--seeds", "0-1", "--pressures", "1e-3", *out], 2),
+        ("NUL bytes in a text map", ["periodic", "--heights", str(folder / "nul.txt"),
+                                     "--length", "1", "--pressures", "1e-3", *out], 2),
+        ("--length 150um,", [*run, "--length", "150um,", *out], 2),
+        ("--output x.h5/", [*run, "--output", str(folder / "x.h5") + "/"], 2),
+        ("-tao_max_it abc", [*run, *out, "-tao_max_it", "abc"], 2),
+        ("punch --forces 1e300", ["punch", *g, "--forces", "1e300", *out], 2),
+        ("--options-prefix a_ with an unknown type", [*run, *out, "--options-prefix", "a_",
+                                                      "-a_tao_type", "nosuch"], 2),
+        ("theory --compare a unit-free run in GPa", ["theory", *g, "--modulus", "1GPa",
+                                                     "--length", "100um", "--plot",
+                                                     str(folder / "t.png"), "--compare",
+                                                     str(folder / "bare-run.h5"), *out], 2),
     ]  # fmt: skip
 
 

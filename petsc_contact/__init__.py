@@ -45,3 +45,8 @@ def __getattr__(name: str) -> Any:
 
         return getattr(importlib.import_module(f".{PUBLIC[name]}", __name__), name)
     raise AttributeError(f"module 'petsc_contact' has no attribute '{name}'")
+
+
+def __dir__() -> list[str]:
+    """The public API (``dir(petsc_contact)``), none of it loaded by being listed."""
+    return sorted(__all__)

@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -36,3 +37,15 @@ def petsc():
     from petsc_contact.backend import _petsc
 
     return _petsc.init([])
+
+
+def smooth_map(shape=(48, 32), seed=0, amplitude=1e-3):
+    """A smooth periodic map (a few Fourier modes), rms slope about 0.03 on a unit cell."""
+    rng = np.random.default_rng(seed)
+    x, y = np.meshgrid(*(np.arange(n) / n for n in shape), indexing="ij")
+    h = sum(
+        rng.standard_normal() * np.cos(2 * np.pi * (i * x + j * y) + rng.uniform(0, 2 * np.pi))
+        for i in range(1, 4)
+        for j in range(-3, 4)
+    )
+    return amplitude * h

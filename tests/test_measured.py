@@ -4,23 +4,13 @@ meets them on the command line."""
 import h5py
 import numpy as np
 import pytest
-from conftest import cli
+from conftest import cli, smooth_map
 
 from petsc_contact.conventions.units import factor, parse_lengths
 from petsc_contact.io.topography import read_topography, surface_topography_available
 from petsc_contact.physics.preparation import detrend, edge_mismatch, fill_undefined, rms_slope
 
-
-def _map(shape=(48, 32), seed=0, amplitude=1e-3):
-    """A smooth periodic map (a few Fourier modes), rms slope about 0.03 on a unit cell."""
-    rng = np.random.default_rng(seed)
-    x, y = np.meshgrid(*(np.arange(n) / n for n in shape), indexing="ij")
-    h = sum(
-        rng.standard_normal() * np.cos(2 * np.pi * (i * x + j * y) + rng.uniform(0, 2 * np.pi))
-        for i in range(1, 4)
-        for j in range(-3, 4)
-    )
-    return amplitude * h
+_map = smooth_map
 
 
 def test_units():

@@ -80,8 +80,9 @@ def theory_result() -> SimpleNamespace:
 
 
 def test_punch_plot_is_log_log_in_the_run_units(tmp_path: Path) -> None:
-    """Force against approach and stiffness against pressure on log axes, in mN and um when
-    the run has units, symbolic units otherwise."""
+    """Force against approach and stiffness against pressure on log axes, in the run's units
+    with the prefix that suits the values' typical size (approaches of 1 nm to 1 um in nm)
+    when the run has units, dimensionless otherwise."""
     png = tmp_path / "punch.png"
     units = {"length": "um", "pressure": "GPa", "force": "GPa*um^2"}
     fig = plot.plot_punch(str(png), punch_steps(), units)
@@ -89,10 +90,10 @@ def test_punch_plot_is_log_log_in_the_run_units(tmp_path: Path) -> None:
     force, stiffness = fig.axes
     for ax in fig.axes:
         assert (ax.get_xscale(), ax.get_yscale()) == ("log", "log")
-    assert "(um)" in force.get_xlabel() and "(mN)" in force.get_ylabel()
-    assert "(GPa)" in stiffness.get_xlabel() and "(GPa/um)" in stiffness.get_ylabel()
+    assert "(nm)" in force.get_xlabel() and "(µN)" in force.get_ylabel()
+    assert "(Pa)" in stiffness.get_xlabel() and "(MPa/µm)" in stiffness.get_ylabel()
     bare = plot.plot_punch(None, punch_steps()[-2:])
-    assert "units of E* length^2" in bare.axes[0].get_ylabel()
+    assert bare.axes[0].get_ylabel() == plot.P0_LABEL == bare.axes[1].get_xlabel()
     formatter = bare.axes[0].xaxis.get_major_formatter()  # less than two decades: 0.2, 0.5
     assert formatter(0.2, 0) == "0.2" and formatter(1.0, 0) == "1"
 
@@ -139,7 +140,8 @@ def test_ensemble_plot_has_visible_errors_and_a_title_per_panel(tmp_path: Path) 
 
 
 def test_compare_plot_says_what_the_grey_line_is(tmp_path: Path) -> None:
-    """The reference's natural residual is drawn on both panels and named in the legend."""
+    """The reference's natural residual is drawn on the residual's panel only (its pressure
+    error is zero by definition) and named in the legend."""
     t = np.geomspace(1e-3, 1e-1, 5)
     trajectory = SimpleNamespace(name="cg", time=t, pressure_error=t / 10,
                                  natural_residual=t / 100, converged=True)  # fmt: skip
@@ -149,9 +151,10 @@ def test_compare_plot_says_what_the_grey_line_is(tmp_path: Path) -> None:
     (legend,) = fig.legends
     labels = [t.get_text() for t in legend.get_texts()]
     assert labels == ["cg", plot.REFERENCE]
-    for ax in fig.axes:
-        grey = [line for line in ax.get_lines() if line.get_label() == plot.REFERENCE]
-        assert len(grey) == 1 and grey[0].get_ydata()[0] == 1e-12
+    error, residual = fig.axes
+    assert plot.REFERENCE not in [line.get_label() for line in error.get_lines()]
+    grey = [line for line in residual.get_lines() if line.get_label() == plot.REFERENCE]
+    assert len(grey) == 1 and grey[0].get_ydata()[0] == 1e-12
 
 
 # ``petsc-contact plot``: files made with h5py, the command run in this process
@@ -181,7 +184,7 @@ def test_plot_redraws_a_run_without_fields(tmp_path: Path, drawn: list[Any]) -> 
     punch = results_file(tmp_path / "punch.h5", "punch", punch_steps(), **units)
     assert plot_command(str(punch), "--sweep", "--output", str(tmp_path / "f.png")) == 0
     assert_picture(tmp_path / "f.png")
-    assert "(um)" in drawn[-1].axes[0].get_xlabel()
+    assert "(nm)" in drawn[-1].axes[0].get_xlabel()
     with pytest.raises(ValueError, match=r"\(run with --fields\); --sweep draws"):
         plot_command(str(sweep))
 
@@ -203,7 +206,7 @@ def test_plot_of_a_theory_file_keeps_the_theory_picture(tmp_path: Path, drawn: l
     assert picture.read_bytes() == b"the theory command's picture"
     assert_picture(tmp_path / "theory_redrawn.png")
     spectrum = drawn[-1].axes[0]
-    assert "(1/um)" in spectrum.get_xlabel() and "(um^4)" in spectrum.get_ylabel()
+    assert "(1/µm)" in spectrum.get_xlabel() and "(µm^4)" in spectrum.get_ylabel()
 
 
 def test_plot_of_an_ensemble_file(tmp_path: Path, drawn: list[Any]) -> None:

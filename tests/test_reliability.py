@@ -303,7 +303,7 @@ def test_bad_inputs_get_one_line_and_leave_nothing(tmp_path):
         "heights up to": ["periodic", "--heights", str(tmp_path / "huge.npy")],
         "more than 1e+06 E*": ["periodic", *gen, "--pressures", "1e300"],
         "below what double precision resolves": ["periodic", *gen, "--pressures", "1e-12"],
-        "Input string abc has no numeric value": ["periodic", *gen, "-tao_gatol", "abc"],
+        "-tao_gatol takes a number, not 'abc'": ["periodic", *gen, "-tao_gatol", "abc"],
         "give an output file name": ["periodic", *gen, "--output", ""],
         "unrecognized arguments: --no-such": ["periodic", *gen, "--no-such"],
     }

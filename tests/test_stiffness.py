@@ -6,6 +6,7 @@ import pytest
 from petsc_contact import periodic_contact
 from petsc_contact.backend.stiffness import sweep_stiffness
 from petsc_contact.conventions.grid import Grid
+from petsc_contact.conventions.warnings import FullContact
 from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.reference import westergaard
@@ -61,12 +62,16 @@ def test_exact_stiffness_matches_sweep_derivative():
 
 
 def test_stiffness_limits():
-    """Full contact -> inf (no open pixel to soften); too short a sweep is refused."""
+    """Full contact: no open pixel to soften, the stiffness unbounded, recorded NaN and the
+    step flagged; too short a sweep is refused."""
     x = np.arange(32) / 32
     h = np.repeat(DELTA * np.cos(2 * np.pi * x)[:, None], 32, axis=1)
-    steps = periodic_contact(h, length=1.0, modulus=MODULUS, pressures=[2 * P_STAR], stiffness=True)
+    with pytest.warns(FullContact, match="at or beyond full contact"):
+        steps = periodic_contact(
+            h, length=1.0, modulus=MODULUS, pressures=[2 * P_STAR], stiffness=True
+        )
     assert steps[0].scalars["area_fraction"] == 1.0
-    assert steps[0].scalars["stiffness"] == np.inf
+    assert steps[0].scalars["full_contact"] and np.isnan(steps[0].scalars["stiffness"])
     with pytest.raises(ValueError):
         sweep_stiffness([1.0, 2.0], [0.1, 0.05])
 

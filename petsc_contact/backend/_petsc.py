@@ -19,7 +19,7 @@ from contextvars import ContextVar
 from types import ModuleType
 from typing import Any, TypeAlias
 
-from ..conventions.warnings import UnusedOptions
+from ..conventions.warnings import UnusedOptions, user_level
 
 INSTALL_HINT = (
     "on Debian 12 run ./setup.sh (it compiles petsc4py against Debian's PETSc); elsewhere "
@@ -220,7 +220,9 @@ def scoped_options(args: OptionsArg, prefix: str = "") -> Iterator[ModuleType]:
         unused = unused_options(mine)
         if unused:
             warnings.warn(
-                f"PETSc options never used: {' '.join(unused)}", UnusedOptions, stacklevel=3
+                f"PETSc options never used: {' '.join(unused)}",
+                UnusedOptions,
+                stacklevel=user_level(),
             )
         for name, value in opts.getAll().items():
             if name not in before:

@@ -45,6 +45,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from ..conventions.grid import Grid
+from ..io.progress import IterationReport
 from ..numerics import kernels
 from ..solver.report import DEFAULT_GATOL, DEFAULT_MAX_IT, SolveInfo
 from . import _petsc
@@ -76,7 +77,7 @@ DEFAULT_TYPE = "python"
 DEFAULT_PYTHON_TYPE = "petsc_contact.backend.cg.PreconditionedCG"
 
 ObjGrad = Callable[[np.ndarray, np.ndarray], float]
-Monitor = Callable[[int, float, float], object]  # (iteration, f, gnorm); truthy stops the solve
+Monitor = IterationReport  # (iteration, f, gnorm); truthy stops the solve
 
 
 @runtime_checkable

@@ -28,10 +28,13 @@ _OPTION_LINE = re.compile(r"^\s*($|#|alias\s|-[A-Za-z_])")  # PETSc's options fi
 
 def refusal(args: argparse.Namespace, petsc_args: Sequence[str]) -> str | None:
     """Why the command line is refused before anything is read by PETSc, computed or written
-    (one line), or ``None``: its options files, its inputs, its outputs and their clashes."""
+    (one line), or ``None``: its PETSc options' values of a known type, its options files,
+    its inputs, its outputs and their clashes."""
+    from ..solver.driver import check_option_values
     from .arguments import options_files
 
     try:
+        check_option_values(petsc_args)
         for path in options_files(petsc_args):
             check_options_file(path)
         inputs = command_inputs(args)

@@ -18,12 +18,13 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
     """``petsc-contact compare``: every solver on one scene, error against time."""
     from ..conventions.units import pressure_value
     from ..conventions.validation import positive
-    from ..workflows.compare import check_comparison, compare_into
+    from ..workflows.compare import check_comparison, compare_into, shared_options
 
     solvers = check_comparison(args.solvers, args.time_limit, args.stall_iterations, petsc_args)
     unit = describe(args).pressure_unit  # --modulus's
     pressure = positive("--pressures", pressure_value(args.pressure, unit, "--pressures"))
-    petsc, run, scene = scene_for(args, petsc_args)
+    # a solver's own options (-bncg_...) reach it alone, inside the comparison
+    petsc, run, scene = scene_for(args, shared_options(petsc_args, solvers))
     show = scene.grid.comm.rank == 0 and not args.quiet
     if show:
         print(HEADER, flush=True)

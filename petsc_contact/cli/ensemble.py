@@ -18,8 +18,8 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
     from ..conventions.warnings import IgnoredOption
     from ..workflows.seeds import (
         ensemble_record,
-        mean_rms_height,
         seed_runs,
+        seed_scales,
         seeds_to_run,
         summarise,
         write_summary,
@@ -50,7 +50,7 @@ def run_ensemble(args: argparse.Namespace, argv: Sequence[str], petsc_args: list
         if args.plot:
             from ..io.plot import plot_ensemble
 
-            plot_ensemble(args.plot, summary, base.modulus_value, mean_rms_height(files))
+            plot_ensemble(args.plot, summary, base.modulus_value, *seed_scales(files))
         if not args.quiet:
             plotted = f" and {args.plot}" if args.plot else ""
             print(f"# wrote {args.output}{plotted} ({len(files)} seeds)")

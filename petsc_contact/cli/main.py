@@ -10,7 +10,7 @@ import warnings
 from collections.abc import Sequence
 from typing import Any
 
-from ..conventions.warnings import PetscContactWarning, Unconverged
+from ..conventions.warnings import FullContact, PetscContactWarning, Unconverged, command_line
 from ..io.schema import schema_markdown
 from ..io.store import StorageError, check_interrupt, check_writable, forget_interrupts, interrupt
 from ..numerics.device import DeviceUnavailable
@@ -98,12 +98,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     sys.stdout = QuietPipe(sys.stdout)
     sys.unraisablehook = _unraisable
     warnings.showwarning = _show_warning
-    warnings.simplefilter("always", Unconverged)  # flagged results are said, whatever the filters
+    for flagged in (Unconverged, FullContact):  # flagged results are said, whatever the filters
+        warnings.simplefilter("always", flagged)
     try:
         for option, path in command_outputs(args):  # a figure's folder, as the output's
             if option == "--plot" and path:
                 check_writable(path, "--plot's")
-        with demo_replacing_its_own(args):
+        with demo_replacing_its_own(args), command_line():  # warnings name its flags
             status = _dispatch(args, argv, petsc_args)
         _report_unused(petsc_args)
         if status != EXIT_INTERRUPTED:  # said so already

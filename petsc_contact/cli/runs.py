@@ -28,7 +28,7 @@ STEP_COLUMNS = (
     ("kkt", "kkt_residual", "{:>9.1e}"),
 )
 """The columns after the load columns: (header, dataset, format)."""
-WIDTH = 11  # of a load column
+WIDTH = 12  # of a load column: "346.7 kPa/um"
 Columns = tuple[tuple[str, str, str], ...]  # (header, dataset, its unit in the run)
 
 
@@ -66,11 +66,17 @@ def _header(columns: Columns) -> str:
 
 def _flag(s: dict[str, Any]) -> str:
     """The marker of a step that did not converge, or whose measured accuracy is beyond the
-    package's (:meth:`~petsc_contact.solver.report.Accuracy.assess`); '' for a good step."""
+    package's (:meth:`~petsc_contact.solver.report.Accuracy.assess`), or at full contact
+    (:func:`~petsc_contact.geometries.step.mark_full_contact`), or whose contact is not
+    resolved (``contact_resolved``); '' for a good step."""
     if not s["converged"]:
         return "   <-- NOT CONVERGED: " + s["verification"]
     if not s.get("accurate", True):  # a step resumed from an older file has no verdict
         return "   <-- NOT ACCURATE: " + s["verification"]
+    if s.get("full_contact", False):
+        return "   <-- FULL CONTACT: interfacial stiffness NaN"
+    if not s.get("contact_resolved", True):
+        return "   <-- UNRESOLVED: contact on too few pixels"
     return ""
 
 
@@ -93,11 +99,13 @@ def execute(
 ) -> int:
     """Run ``description`` (a :class:`~petsc_contact.workflows.description.Run`), printing as
     ``args`` asks (``--quiet``, ``--plot``); the exit status.  Its output is locked for the
-    run unless ``lock`` is False (the caller holds the lock)."""
+    run unless ``lock`` is False (the caller holds the lock); its solvers read their PETSc
+    options with its ``options_prefix``, as :func:`~petsc_contact.workflows.runner.run_contact`'s
+    do."""
     from ..io.store import partial_path
-    from ..workflows.runner import PAUSED, RunInterrupted, locked, prepare
+    from ..workflows.runner import PAUSED, RunInterrupted, locked, prepare, run_options
 
-    with locked(description.output) if lock else nullcontext():
+    with locked(description.output) if lock else nullcontext(), run_options(description):
         prepared = prepare(description, " ".join(["petsc-contact", *argv]))
         root = prepared.scene.grid.comm.rank == 0
         show = root and not args.quiet
@@ -180,13 +188,12 @@ def _conclude(
     if plot and root:
         from ..io.plot import plot_punch, plot_sweep
 
-        if description.geometry == "punch":
-            record = result.record
-            units = {"length": record["length_unit"], "pressure": record["pressure_unit"],
-                     "force": record["force_unit"]}  # fmt: skip
-            plot_punch(plot, table, units)
-        else:
-            plot_sweep(plot, table, description.modulus_value, result.record["rms_height"])
+        record = result.record
+        units = {"length": record["length_unit"], "pressure": record["pressure_unit"],
+                 "force": record["force_unit"]}  # fmt: skip
+        draw = plot_punch if description.geometry == "punch" else plot_sweep
+        draw(plot, table, modulus=description.modulus_value, h_rms=record["rms_height"],
+             units=units)  # fmt: skip
     written = [description.output] if wrote else []
     if root and not args.quiet and (written or plot):
         print(f"# wrote {' and '.join([*written, *([plot] if plot else [])])}")

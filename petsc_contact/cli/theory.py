@@ -27,18 +27,22 @@ def run_theory(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[s
     profile = line_scan(args.heights, args.channel)
     if profile is None:
         petsc, run, scene = scene_for(args, petsc_args)
+        length_unit = scene.resolved["length_unit"]
+    else:
+        length_unit = profile.unit or ""
+    units = {"length": length_unit, "pressure": run.pressure_unit or ""}
+    runs = compared_runs(args.compare, units)  # in the theory's units, before it is computed
+    if profile is None:
         result = predict(scene.grid, scene.fft, scene.heights, modulus, pressures)
         if scene.grid.comm.rank != 0:
             return 0
-        reading, length_unit = scene.reading, scene.resolved["length_unit"]
-        attributes = record_for(run, argv, petsc, {}, scene)
+        reading, attributes = scene.reading, record_for(run, argv, petsc, {}, scene)
     else:
         result = predict_profile(
             profile.heights, profile_length(args.length, profile), modulus, pressures
         )
-        reading, length_unit = f"{args.heights}: {profile.describe()}", profile.unit or ""
+        reading = f"{args.heights}: {profile.describe()}"
         attributes = profile_record(run, " ".join(["petsc-contact", *argv]), profile)
-    runs = compared_runs(args.compare)
     if not args.quiet and reading:
         print(f"# {reading}", flush=True)
     write_theory(args.output, result, attributes, length_unit, run.pressure_unit or "")
@@ -47,7 +51,7 @@ def run_theory(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[s
     if args.plot:
         from ..io.plot import plot_theory
 
-        plot_theory(args.plot, result, modulus, runs, {"length": length_unit})
+        plot_theory(args.plot, result, modulus, runs, units)
     print(f"# wrote {args.output}" + (f" and {args.plot}" if args.plot else ""))
     return 0
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 import ctypes
 import gc
 import os
+from typing import Any
 
 BYTES_PER_POINT = {"periodic": 330.0, "punch": 500.0}
 """Peak bytes per grid point (footprint point for the punch) of the default solver."""
@@ -59,6 +60,36 @@ def available_bytes() -> float:
     except OSError:
         pass
     return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+
+
+FEWEST_ROWS = 512
+"""Rows a rank's slab should have for more ranks to pay: two ranks gained 1.2-1.3x at 2048^2
+and 4096^2 (1024 rows or more a rank, docs/parallel.md, "Strong scaling"), and a smaller slab
+has less work to set against each transform's exchange of the whole spectrum."""
+
+
+def rank_excess(comm: Any, rows: int) -> str:
+    """Why the ``comm.size`` ranks of a grid of ``rows`` rows are more than help, in words
+    (``""`` when they are not): slabs of fewer than :data:`FEWEST_ROWS` rows, or more ranks
+    on one node than the cores they may run on (the union of their affinity masks).
+    Collective."""
+    if comm.size == 1:
+        return ""
+    from mpi4py import MPI
+
+    node = comm.Split_type(MPI.COMM_TYPE_SHARED)
+    cores = len(set().union(*node.allgather(os.sched_getaffinity(0))))
+    ranks, cores = max(comm.allgather((node.size, cores)), key=lambda rc: rc[0] - rc[1])
+    node.Free()
+    said = []
+    if rows < FEWEST_ROWS * comm.size:
+        said.append(
+            f"its {rows} rows give each rank {rows // comm.size} or so, fewer than the "
+            f"{FEWEST_ROWS} from which more ranks pay"
+        )
+    if ranks > cores:
+        said.append(f"{ranks} ranks share {cores} core{'s' * (cores > 1)} on one node")
+    return "; ".join(said)
 
 
 def check_memory(points: int, geometry: str, default_solver: bool, fields: bool) -> None:

@@ -15,7 +15,9 @@ the length unit squared.
 from __future__ import annotations
 
 import re
+import warnings
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -76,8 +78,8 @@ class Lengths:
 def parse_lengths(text: str) -> Lengths:
     """``"100um"``, ``"1.5"``, ``"100um,50um"`` or ``"100,50 um"``: one or two positive lengths
     with at most one unit.  ``ValueError`` with a one-line reason otherwise."""
-    parts = [p for p in text.split(",") if p.strip()]
-    if not 1 <= len(parts) <= 2:
+    parts = text.split(",")
+    if not 1 <= len(parts) <= 2 or not all(p.strip() for p in parts):  # 150um, is no square
         raise ValueError(f"expected L or LX,LY (with an optional unit), got '{text}'")
     values, units = [], set()
     for part in parts:
@@ -218,35 +220,75 @@ def si_unit(unit: str) -> tuple[float, str]:
 
 
 def format_quantity(value: float, unit: str | None, digits: int = 4) -> str:
-    """``value``, given in ``unit``, as people read it: in the SI unit with the prefix that
-    puts 1 to 999 in front, to ``digits`` significant digits.
+    """``value``, given in ``unit``, as people read it: in the form :func:`display_scale`
+    gives, with 1 to 999 in front, to ``digits`` significant digits.
 
     ``format_quantity(1e-3, "GPa")`` is ``"1 MPa"``, ``format_quantity(5.623e-4, "m")``
-    ``"562.3 um"`` and ``format_quantity(2.5, "GPa*um^2")`` ``"2.5 mN"``.  A unit-free
-    value (``unit`` ``None`` or ``""``) is the number alone (``"0.0001"``); zero and
-    non-finite values keep the unprefixed SI unit.  ``ValueError`` for a unit
-    :func:`si_unit` does not know.
+    ``"562.3 um"``, ``format_quantity(2.5, "GPa*um^2")`` ``"2.5 mN"`` and
+    ``format_quantity(0.01986, "GPa/um")`` ``"19.86 MPa/um"`` (a stiffness per area, in any
+    length unit, is per micrometre).  A unit-free value (``unit``
+    ``None`` or ``""``) is the number alone (``"0.0001"``); zero and non-finite values keep
+    the unprefixed unit.  ``ValueError`` for a unit :func:`si_unit` does not know.
     """
     if not unit:
         return f"{value:.{digits}g}"
+    factor, shown = display_scale(abs(value), unit)
+    if abs(float(f"{value * factor:.{digits}g}")) >= 1e3:  # 999.96 rounds up: next prefix
+        factor, shown = display_scale(1e3 / factor, unit)
+    return f"{value * factor:.{digits}g} {shown}"
+
+
+def display_scale(magnitude: float, unit: str | None) -> tuple[float, str]:
+    """The factor and unit that show values of size ``magnitude`` (in ``unit``) with 1 to 999
+    in front, in the field's customary form: a length, pressure or force in its SI unit with
+    a prefix (``2e-5 m`` as ``20 um``: factor 1e6), a stiffness per area (``GPa/um``,
+    ``GPa/m``) as a pressure with a prefix per micrometre (``0.01986 GPa/um`` and
+    ``1.986e4 GPa/m`` as ``19.86 MPa/um``), the run's other compound units (:func:`si_unit`)
+    in SI with a prefix.
+    Unit-free values (``None`` or ``""``) stay as they are: ``(1.0, "")``; zero and
+    non-finite magnitudes take no prefix."""
+    if not unit:
+        return 1.0, ""
+    per = _COMPOUND.match(unit)
+    if per and per[2] == "/" and per[1] in PASCALS and per[3] in METRES and not per[4]:
+        pascals_per_um = PASCALS[per[1]] * METRES["um"] / METRES[per[3]]
+        size, prefix = _prefix(magnitude * pascals_per_um)
+        return pascals_per_um / size, f"{prefix}Pa/um"
     scale, name = si_unit(unit)
-    si = value * scale
-    size, prefix = _prefix(abs(si))
-    if abs(float(f"{si / size:.{digits}g}")) >= 1e3 and prefix != PREFIXES[0][0]:
-        size, prefix = _prefix(1e3 * size)  # 999.96 rounds up to the next prefix
-    return f"{si / size:.{digits}g} {prefix}{name}"
+    size, prefix = _prefix(magnitude * scale)
+    return scale / size, prefix + name
 
 
 def display_unit(extent: float, unit: str | None) -> tuple[float, str]:
-    """The factor and unit to show lengths of size ``extent`` (in ``unit``) with 1 to 999 in
-    front: ``2e-5`` m is shown as ``20 um`` (factor 1e6).  Unit-free lengths stay as they are."""
-    if unit is None or not extent > 0:
-        return 1.0, unit or ""
-    size, prefix = _prefix(extent * METRES[unit])
-    return METRES[unit] / size, prefix + "m"
+    """Deprecated (until 0.3.0): :func:`display_scale` of a length ``extent`` in ``unit``."""
+    warnings.warn(
+        "conventions.units.display_unit is deprecated: use display_scale",
+        DeprecationWarning,
+        stacklevel=2,
+    )
+    return display_scale(extent, unit) if unit else (1.0, unit or "")
 
 
 def display_force(newtons: np.ndarray) -> tuple[np.ndarray, str]:
-    """Forces in newtons shown with 1 to 999 in front: ``2e-3`` N as ``2 mN``."""
-    size, prefix = _prefix(float(np.max(np.abs(newtons), initial=0.0)))
-    return newtons / size, prefix + "N"
+    """Deprecated (until 0.3.0): forces in newtons scaled by :func:`display_scale`."""
+    warnings.warn(
+        "conventions.units.display_force is deprecated: use display_scale",
+        DeprecationWarning,
+        stacklevel=2,
+    )
+    factor, name = display_scale(float(np.max(np.abs(newtons), initial=0.0)), "N")
+    return newtons * factor, name
+
+
+def typical_magnitude(values: Any) -> float:
+    """The size a figure's unit is chosen for (:func:`display_scale`): the median magnitude of
+    the finite values that are not zero (0 when there is none), so that one value at full
+    contact or one spike does not push the rest to a thousandth of the unit."""
+    v = np.abs(np.asarray(values, dtype=float))
+    v = v[np.isfinite(v) & (v > 0)]
+    return float(np.median(v)) if v.size else 0.0
+
+
+def typeset(unit: str) -> str:
+    """A unit as a figure writes it: micro as ``µ`` (``um`` is ``µm``, ``MPa/um`` ``MPa/µm``)."""
+    return re.sub(r"(?<![A-Za-z])u(?=[mN]\b)", "µ", unit)

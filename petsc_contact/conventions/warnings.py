@@ -7,17 +7,67 @@ Every warning the package gives about an input or a result is a
 command line prints each as one line.  A run
 (:func:`~petsc_contact.workflows.runner.run_contact`) keeps the texts of those about its
 result in its result and its file (:func:`recorded`).
+
+A warning is attributed to the first line outside the package (:func:`user_level`): a
+script's or notebook's call, not the package's own source; and it names an option as the door
+in use spells it (:func:`option`): ``detrend="slope"`` from Python, ``--detrend slope`` from
+the command line (within :func:`command_line`).
 """
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
 import warnings
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import PurePath
 from typing import Any, ClassVar, TextIO
 
 PACKAGE = __name__.split(".")[0]
+_FOLDER = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
+_OURS = (_FOLDER, contextlib.__file__)  # the package, and the exits of its with blocks
+_ON_COMMAND_LINE: ContextVar[bool] = ContextVar("on_command_line", default=False)
+
+
+@contextmanager
+def command_line() -> Iterator[None]:
+    """Within the block, :func:`option` names options as the command line's flags."""
+    token = _ON_COMMAND_LINE.set(True)
+    try:
+        yield
+    finally:
+        _ON_COMMAND_LINE.reset(token)
+
+
+def option(name: str, value: Any = None) -> str:
+    """The option ``name`` (a :class:`~petsc_contact.workflows.description.Run` field) set to
+    ``value`` (``None``: the option alone), as the door in use spells it: from Python the
+    keyword (``detrend="slope"``, ``length``), on the command line (:func:`command_line`) the
+    flag (``--detrend slope``, ``--length``, ``--overwrite`` for ``True``; the geometry is
+    its command, ``petsc-contact punch``)."""
+    if not _ON_COMMAND_LINE.get():
+        if value is None:
+            return name
+        return f'{name}="{value}"' if isinstance(value, str) else f"{name}={value!r}"
+    if name == "geometry":
+        return f"petsc-contact {value}"
+    flag = "--" + name.replace("_", "-")
+    return flag if value is None or value is True else f"{flag} {value}"
+
+
+def user_level() -> int:
+    """The ``stacklevel`` that attributes a warning given by the caller of this function to
+    the first frame outside the package (and ``contextlib``, through which the package's
+    ``with`` blocks end): the line of the script or notebook that called it
+    (``warnings.warn(text, Kind, stacklevel=user_level())``; Python 3.11 has no
+    ``skip_file_prefixes``)."""
+    frame, level = sys._getframe(1), 1
+    while frame.f_back is not None and frame.f_code.co_filename.startswith(_OURS):
+        frame, level = frame.f_back, level + 1
+    return level
 
 
 class PetscContactWarning(UserWarning):
@@ -71,9 +121,53 @@ def flagged_steps(table: Sequence[Mapping[str, Any]], output: str | None = None)
     return texts
 
 
+class FullContact(PetscContactWarning):
+    """Load steps at or beyond full contact: every pixel in contact, the mean gap 0 whatever
+    the load, the interfacial stiffness unbounded (NaN); they are in the results, flagged
+    ``full_contact`` ``True``."""
+
+
+def full_contact_steps(table: Sequence[Mapping[str, Any]], output: str | None = None) -> list[str]:
+    """The :class:`FullContact` text of a run's step ``table``: one for its steps at full
+    contact, none if it has none.  ``output`` is named as the file that flags them."""
+    full = [i for i, s in enumerate(table, 1) if s.get("full_contact", False)]
+    if not full:
+        return []
+    where = f" in {output}" if output else ""
+    return [
+        f"{len(full)} of {len(table)} load steps are at or beyond full contact (first: step "
+        f"{full[0]}, area fraction 1): a larger load changes no contact, and their "
+        f"interfacial stiffness is unbounded, NaN; they are flagged full_contact = True{where}"
+    ]
+
+
+def step_warnings(
+    table: Sequence[Mapping[str, Any]], output: str | None = None
+) -> list[tuple[str, type[PetscContactWarning]]]:
+    """What a run says of its flagged steps: the texts of :func:`flagged_steps` and
+    :func:`full_contact_steps`, each with its warning's class."""
+    return [
+        *((text, Unconverged) for text in flagged_steps(table, output)),
+        *((text, FullContact) for text in full_contact_steps(table, output)),
+    ]
+
+
 class ReplacedOutput(PetscContactWarning, FutureWarning):
     """A new run's output that replaces an existing file without ``overwrite``: deprecated
     (refused from 0.3.0, as an interrupted run's finished steps already are)."""
+
+    of_the_result = False
+
+
+class ConvertedLoads(PetscContactWarning):
+    """Loads that meant one quantity in the run they came from, given as the equivalent ones
+    of another geometry (a periodic sweep's nominal pressures as a punch's ``pressures``)."""
+
+
+class IdleRanks(PetscContactWarning):
+    """A run on more MPI ranks than help: its grid's slabs too thin, or more ranks on a node
+    than cores (:func:`~petsc_contact.conventions.resources.rank_excess`); the result is
+    the same, only slower."""
 
     of_the_result = False
 

@@ -24,7 +24,7 @@ import time
 from typing import Any
 
 import numpy as np
-from scipy.special import erf
+from scipy.special import erf, erfinv
 
 from ..backend.coarse import BLOCK, MAX_FRACTION, CoarseCorrected, CoarseSpace, TwoLevelOptions
 from ..backend.operator import FourierOperator, ShellInterface
@@ -47,8 +47,16 @@ from ..physics.theory import linear_stiffness
 from ..solver.driver import ArraySettings
 from ..solver.linear import held_set_solve
 from ..solver.report import Accuracy, accuracy_limit
-from .step import MeasuredSolve, Step, contact_fields, requested_stiffness_rtol, residual_verdict
+from .step import (
+    MeasuredSolve,
+    Step,
+    contact_fields,
+    mark_full_contact,
+    requested_stiffness_rtol,
+    residual_verdict,
+)
 
+IQR_PER_SIGMA = 1.349  # a Gaussian's interquartile range in units of its rms
 ROUNDING_FACTOR = 1000.0  # see PeriodicProblem.rounding_floor
 RESOLVED = 1e-4  # a load is solved only where rounding leaves its residual this far below p0
 LARGEST_LOAD = 1e6  # p0/E* beyond this is no elastic contact (strains of a million)
@@ -61,6 +69,18 @@ def verify(info: SolveInfo, obs: dict[str, float], scale_length: float) -> str:
     if obs["min_gap"] < -1e-12 * scale_length:
         return f"bound violated: min gap {obs['min_gap']:.3e}"
     return residual_verdict(obs["kkt_residual"], info.effective_tolerance)
+
+
+def _quantile(grid: Grid, values: Any, fraction: float, halvings: int = 60) -> float:
+    """The ``fraction`` quantile of a distributed field (of any device's array module), by
+    bisection on the global count at or below it: ``halvings`` reductions of one count."""
+    low = grid.min(float(values.min()) if values.size else np.inf)
+    high = grid.max(float(values.max()) if values.size else -np.inf)
+    for _ in range(halvings):
+        middle = 0.5 * (low + high)
+        below = grid.sum(int(values.size and (values <= middle).sum()))[0]
+        low, high = (middle, high) if below < fraction * grid.size else (low, middle)
+    return high
 
 
 class PeriodicProblem:
@@ -194,6 +214,7 @@ class PeriodicProblem:
         }
         if stiffness:
             scalars.update(self.held_set_stiffness(contact, verdict == "ok"))
+        mark_full_contact(scalars)
         self.accuracy().assess(scalars)
         if not fields:
             return Step(scalars)
@@ -297,6 +318,16 @@ class PeriodicProblem:
         if self.elastic_pressure_rms <= 0:
             return self.grid.size
         return int(self.grid.size * erf(p0 / (np.sqrt(2) * self.elastic_pressure_rms)))
+
+    def area_pressure(self, fraction: float) -> float:
+        """The nominal pressure at which Persson's law (:meth:`expected_contact_count`) puts
+        ``fraction`` of the pixels in contact, ``sqrt(2) sigma erfinv(fraction)``, with
+        ``sigma`` estimated from the interquartile range of ``K h`` (``IQR / 1.349``, its rms
+        for a Gaussian field): a few outlier pixels of a measured map (a dropout, a spike),
+        which set ``rms(K h)`` and the full-contact pressure, do not move it.  Collective."""
+        kh = self.stiffness.apply_array(self.heights, self.device.xp.empty(self.grid.local_shape))
+        spread = _quantile(self.grid, kh, 0.75) - _quantile(self.grid, kh, 0.25)
+        return float(np.sqrt(2) * spread / IQR_PER_SIGMA * erfinv(fraction))
 
     def pressure(self, gap: np.ndarray) -> np.ndarray:
         """Contact pressure ``p = K(g + h) + p0`` of a gap field (local slab)."""

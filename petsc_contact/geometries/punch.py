@@ -50,12 +50,19 @@ from ..conventions.validation import non_negative, positive
 from ..numerics.device import CPU, Device
 from ..numerics.kernels import compile_kernels
 from ..physics.greens import hockney_kernel
-from ..physics.observables import distributions, patch_sizes
+from ..physics.observables import contact_resolved, distributions, patch_sizes
 from ..reference import flat_punch
 from ..solver.driver import ArraySettings
 from ..solver.linear import held_set_solve
 from ..solver.report import FORCE_ACCURACY, Accuracy, accuracy_limit
-from .step import MeasuredSolve, Step, contact_fields, requested_stiffness_rtol, residual_verdict
+from .step import (
+    MeasuredSolve,
+    Step,
+    contact_fields,
+    mark_full_contact,
+    requested_stiffness_rtol,
+    residual_verdict,
+)
 
 FOOTPRINTS = ("square", "disk")
 FLAT_REFERENCES = ("grid", "analytic", "king")
@@ -142,9 +149,11 @@ def reference_beta(flat: str, beta: float, square: bool) -> float:
 def interfacial_stiffness(total: float, flat: float) -> float:
     """Springs in series (paper Eq. 2): ``1/K_int = 1/K_tot - 1/K_flat``.
 
-    ``inf`` when the punch is as stiff as the flat one (full contact), 0 without contact.
+    ``inf`` when the punch is as stiff as the flat one (full contact: a step there records
+    NaN, :func:`~petsc_contact.geometries.step.mark_full_contact`), 0 without contact, NaN
+    for the NaN ``total`` of a step that did not converge (never a plausible 0).
     """
-    if not total > 0:
+    if total == 0:
         return 0.0
     with np.errstate(divide="ignore"):
         return float(1.0 / (np.float64(1.0) / total - np.float64(1.0) / flat))
@@ -357,6 +366,7 @@ class PunchProblem:
         }
         if stiffness:
             scalars["stiffness"] = scalars["interfacial_stiffness"]
+        mark_full_contact(scalars)
         self.accuracy().assess(scalars)
         if not fields:
             return Step(scalars)
@@ -411,7 +421,7 @@ def punch_observables(
         np.vdot(r, r),
         np.where(fp, gap, 0.0).sum(),
     )
-    ell = problem.scale_length
+    ell, fp_pixels = problem.scale_length, problem.footprint_pixels
     area = grid.area
     force = grid.pixel_area * p_sum
     return {
@@ -420,6 +430,7 @@ def punch_observables(
         "nominal_pressure": force / area,
         "mean_gap": g_sum / problem.footprint_pixels,
         "area_fraction": n_contact / problem.footprint_pixels,
+        "contact_resolved": bool(contact_resolved(n_contact / fp_pixels, fp_pixels)),
         "contact_patches": sizes.size,
         "max_pressure": grid.max(float(pressure.max(initial=0.0))),
         "min_gap": grid.min(float(np.where(fp, gap, np.inf).min(initial=np.inf))),

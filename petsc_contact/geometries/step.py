@@ -85,11 +85,31 @@ class Step:
         return bool(self.scalars["converged"])
 
 
-def collect(steps: Iterable[Step]) -> list[Step]:
-    """The steps as a list, each ``state`` dropped once the next step is solved: a list of
-    a long sweep would otherwise hold one full field per step (13 GB for 25 steps of
-    8192^2).  The last step keeps its state, the one to go on from, on the host."""
-    out: list[Step] = []
+class Steps(list[Step]):
+    """A sweep's steps in order: a list, whose table :meth:`to_dataframe` gives and a
+    notebook shows (``kind``: the geometry, ``periodic`` or ``punch``, which orders the
+    columns as :func:`~petsc_contact.io.results.read_frame` does)."""
+
+    def __init__(self, steps: Iterable[Step] = (), kind: str | None = None) -> None:
+        super().__init__(steps)
+        self.kind = kind
+
+    def to_dataframe(self) -> Any:
+        """The steps' scalars as a pandas ``DataFrame``, one row per step (from 1), as
+        :meth:`~petsc_contact.workflows.runner.RunResult.to_dataframe` gives a run's."""
+        from ..io.results import table_frame
+
+        return table_frame([step.scalars for step in self], self.kind)
+
+    def _repr_html_(self) -> str:
+        return str(self.to_dataframe()._repr_html_())
+
+
+def collect(steps: Iterable[Step], kind: str | None = None) -> Steps:
+    """The steps as :class:`Steps` of ``kind``, each ``state`` dropped once the next step is
+    solved: a list of a long sweep would otherwise hold one full field per step (13 GB for
+    25 steps of 8192^2).  The last step keeps its state, the one to go on from, on the host."""
+    out = Steps(kind=kind)
     for step in steps:
         if out:
             out[-1].forget_resume()
@@ -104,6 +124,21 @@ def contact_fields(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Gap and pressure projected by the contact mask: ``g = 0`` on it, ``p = 0`` off it."""
     return np.where(contact, 0.0, gap), np.where(contact, pressure, 0.0)
+
+
+def mark_full_contact(scalars: dict[str, Any]) -> None:
+    """Flag a step whose every pixel (punch: of the footprint) is in contact,
+    ``full_contact``: its load is at or beyond full contact, where the mean gap is 0 whatever
+    the load and the interfacial stiffness ``-dp0/du_bar`` is unbounded (periodic: the
+    held-set value is infinite; punch: ``K_tot`` is the flat punch's, and paper Eq. 2
+    divides by ``1/K_tot - 1/K_flat``, zero up to rounding).  Such a step's ``stiffness``
+    and ``interfacial_stiffness`` are NaN (docs/formulation.md), never a number."""
+    full = bool(scalars["area_fraction"] >= 1.0)
+    scalars["full_contact"] = full
+    if full:
+        for name in ("stiffness", "interfacial_stiffness"):
+            if name in scalars:
+                scalars[name] = np.nan
 
 
 def residual_verdict(residual: float, tolerance: float) -> str:

@@ -62,7 +62,7 @@ def check_output(path: str, inputs: Iterable[Named] = (), option: str = "--outpu
     any of ``inputs`` (``(option, path)`` pairs; a ``None`` path is skipped)."""
     if not path:
         raise ValueError(f"give an output file name ({option} is empty)")
-    what = kind(path)
+    what = kind(path) or ("a folder" if path.endswith(("/", os.sep)) else None)  # x.h5/
     if what is not None:
         raise ValueError(f"{option} '{path}' is {what}, not a regular file")
     for name, given in inputs:

@@ -31,36 +31,69 @@ def plot_file(path: str, option: str = "--plot") -> str:
     return path
 
 
-P0_LABEL = "nominal pressure $p_0/E^*$"  # the x axis of every load plot and the theory's
+P0_LABEL = "nominal pressure $p_0/E^*$"  # every load plot's x axis, without units
 AREA_LABEL = "$A/A_0$"
 GAP_LABEL = r"$\bar u/h_\mathrm{rms}$"
 STIFFNESS_LABEL = r"$K h_\mathrm{rms}/E^*$"
+APPROACH_LABEL = r"approach $\delta/h_\mathrm{rms}$"  # a punch's, without units
+LOAD_AXES = {  # a load plot's quantities: (its name with a unit, its dimensionless label)
+    "p0": ("nominal pressure $p_0$", P0_LABEL),
+    "gap": (r"mean gap $\bar u$", GAP_LABEL),
+    "stiffness": ("stiffness per area $K$", STIFFNESS_LABEL),
+}
+
+
+def load_axis(
+    kind: str, values: Any, units: dict[str, str] | None, modulus: float, h_rms: float
+) -> tuple[float, str]:
+    """The factor and label of a load plot's axis ``kind`` (``p0``, ``gap`` or ``stiffness``)
+    drawing ``values``: in the run's ``units`` (``pressure``, ``length``) with the prefix
+    that suits their typical size (``MPa``, ``nm``, ``MPa/µm``) where the run has the units
+    the quantity needs; dimensionless (``p0/E*``, ``u_bar/h_rms``, ``K h_rms/E*``) only where
+    it has none."""
+    from ..conventions.units import display_scale, typeset, typical_magnitude
+
+    pressure, length = (units or {}).get("pressure", ""), (units or {}).get("length", "")
+    per_length = f"{pressure}/{length}" if pressure and length else ""
+    unit = {"p0": pressure, "gap": length, "stiffness": per_length}[kind]
+    name, dimensionless = LOAD_AXES[kind]
+    if unit:
+        factor, shown = display_scale(typical_magnitude(values), unit)
+        return factor, f"{name} ({typeset(shown)})"
+    h = h_rms if h_rms > 0 else 1.0
+    return {"p0": 1 / modulus, "gap": 1 / h, "stiffness": h / modulus}[kind], dimensionless
 
 
 def plot_sweep(
-    path: str | None, steps: Sequence[dict[str, Any]], modulus: float, h_rms: float
+    path: str | None,
+    steps: Sequence[dict[str, Any]],
+    modulus: float,
+    h_rms: float,
+    units: dict[str, str] | None = None,
 ) -> Any:
-    """Against ``p0/E*`` on a log axis: ``A/A0`` (log), ``u_bar/h_rms`` (linear) and, when the
-    steps have it, the exact stiffness ``K h_rms/E*`` (log), as :func:`plot_theory` draws
-    them.
+    """Against the nominal pressure on a log axis: ``A/A0`` (log), the mean gap (linear) and,
+    when the steps have it, the exact stiffness per area (log), each in the run's ``units``
+    (``pressure``, ``length``) where it has them, else as ``p0/E*``, ``u_bar/h_rms`` and
+    ``K h_rms/E*`` (:func:`load_axis`), as :func:`plot_theory` draws them.
 
     Steps that did not converge are drawn as red crosses.
     """
-    p = np.array([s["nominal_pressure"] for s in steps]) / modulus
-    scale = h_rms if h_rms > 0 else 1.0
-    ok = np.array([bool(s["converged"]) for s in steps])
-    panels = [
-        ("contact area", AREA_LABEL, [s["area_fraction"] for s in steps], "log"),
-        ("mean gap", GAP_LABEL, [s["mean_gap"] / scale for s in steps], "linear"),
-    ]
+    panels = [("contact area", "area_fraction", "log"), ("mean gap", "mean_gap", "linear")]
     if all("stiffness" in s for s in steps):
-        k = [s["stiffness"] * scale / modulus for s in steps]
-        panels.append(("interfacial stiffness", STIFFNESS_LABEL, k, "log"))
+        panels.append(("interfacial stiffness", "stiffness", "log"))
+    table = {k: np.array([s[k] for s in steps], dtype=float)
+             for k in ("nominal_pressure", *(name for _, name, _ in panels))}  # fmt: skip
+    ok = np.array([bool(s["converged"]) for s in steps])
+    px, xlabel = load_axis("p0", table["nominal_pressure"], units, modulus, h_rms)
     fig = _figure(figsize=(4.4 * len(panels), 3.8), layout="constrained")
     axes = fig.subplots(1, len(panels))
-    for ax, (title, label, values, yscale) in zip(axes, panels, strict=True):
-        _draw_steps(ax, p, np.asarray(values, dtype=float), ok)
-        ax.set(xscale="log", yscale=yscale, xlabel=P0_LABEL, ylabel=label, title=title)
+    for ax, (title, name, yscale) in zip(axes, panels, strict=True):
+        kind = {"mean_gap": "gap", "stiffness": "stiffness"}.get(name)
+        factor, label = (1.0, AREA_LABEL)
+        if kind:
+            factor, label = load_axis(kind, table[name], units, modulus, h_rms)
+        _draw_steps(ax, table["nominal_pressure"] * px, table[name] * factor, ok)
+        ax.set(xscale="log", yscale=yscale, xlabel=xlabel, ylabel=label, title=title)
     return _finish(fig, axes, path)
 
 
@@ -73,13 +106,18 @@ def _draw_steps(ax: Any, x: np.ndarray, y: np.ndarray, ok: np.ndarray) -> None:
 
 
 def plot_punch(
-    path: str | None, steps: Sequence[dict[str, Any]], units: dict[str, str] | None = None
+    path: str | None,
+    steps: Sequence[dict[str, Any]],
+    units: dict[str, str] | None = None,
+    modulus: float = 1.0,
+    h_rms: float = 0.0,
 ) -> Any:
     """Force against approach, and the interfacial stiffness per area (paper Eq. 2) against
-    the nominal pressure ``F/L_p^2``, log-log (values that are not positive are left out);
-    ``units`` (``length``, ``pressure``, ``force``) label the axes, forces in newtons and
-    lengths with an SI prefix when the length and pressure units are known."""
-    from ..conventions.units import METRES, PASCALS, display_force, display_unit
+    the nominal pressure ``F/L_p^2``, log-log (values that are not positive are left out),
+    in the run's ``units`` (``length``, ``pressure``, ``force``) with SI prefixes (``um``,
+    ``mN``, ``MPa/um``) where it has them; a run without units is drawn dimensionless as
+    the periodic load plot is (:func:`load_axis`): ``p0/E*`` against ``delta/h_rms``."""
+    from ..conventions.units import display_scale, typeset, typical_magnitude
 
     u = {"length": "", "pressure": "", "force": ""} | (units or {})
     ok = np.array([bool(s["converged"]) for s in steps])
@@ -87,29 +125,23 @@ def plot_punch(
         np.array([s[name] for s in steps], dtype=float)
         for name in ("approach", "force", "nominal_pressure", "interfacial_stiffness")
     )
-    if u["length"] and u["pressure"]:  # in newtons and lengths with SI prefixes: mN, um
-        f, u["force"] = display_force(f * PASCALS[u["pressure"]] * METRES[u["length"]] ** 2)
-        scale, u["length"] = display_unit(float(np.max(np.abs(d), initial=0.0)), u["length"])
-        d, k = d * scale, k / scale
+    scale, length = display_scale(typical_magnitude(d), u["length"])
+    if not length:
+        scale, length = 1 / (h_rms if h_rms > 0 else 1.0), ""
+    px, xlabel = load_axis("p0", p, u, modulus, h_rms)
+    left, fy, ylabel, title = p, px, xlabel, "load against approach"  # no force unit: p0
+    if u["force"]:
+        fy, shown = display_scale(typical_magnitude(f), u["force"])
+        left, ylabel, title = f, f"force $F$ ({typeset(shown)})", "force against approach"
+    kx, klabel = load_axis("stiffness", k, u, modulus, h_rms)
     fig = _figure(figsize=(9, 3.8), layout="constrained")
     ax1, ax2 = fig.subplots(1, 2)
-    _draw_steps(ax1, d, f, ok)
-    _draw_steps(ax2, p, k, ok)
-    per = f"{u['pressure']}/{u['length']}" if u["pressure"] and u["length"] else ""
-    ax1.set(
-        xscale="log",
-        yscale="log",
-        xlabel=rf"approach $\delta${_in(u['length'], 'length')}",
-        ylabel=f"force $F${_in(u['force'], 'E* length^2')}",
-        title="force against approach",
-    )
-    ax2.set(
-        xscale="log",
-        yscale="log",
-        xlabel=f"nominal pressure $p_0 = F/L_p^2${_in(u['pressure'], 'E*')}",
-        ylabel=f"$K${_in(per, 'E*/length')}",
-        title="interfacial stiffness (paper Eq. 2)",
-    )
+    _draw_steps(ax1, d * scale, left * fy, ok)
+    _draw_steps(ax2, p * px, k * kx, ok)
+    approach = rf"approach $\delta$ ({typeset(length)})" if length else APPROACH_LABEL
+    ax1.set(xscale="log", yscale="log", xlabel=approach, ylabel=ylabel, title=title)
+    ax2.set(xscale="log", yscale="log", xlabel=xlabel, ylabel=klabel,
+            title="interfacial stiffness (paper Eq. 2)")  # fmt: skip
     return _finish(fig, (ax1, ax2), path)
 
 
@@ -132,33 +164,52 @@ def plot_experiment(
 
 
 def plot_ensemble(
-    path: str | None, summary: dict[str, np.ndarray], modulus: float, h_rms: float | None = None
+    path: str | None,
+    summary: dict[str, np.ndarray],
+    modulus: float,
+    h_rms: float | Sequence[float] | np.ndarray | None = None,
+    units: dict[str, str] | None = None,
 ) -> Any:
     """The mean over seeds with its standard error (a band and error bars) and every seed
-    (grey) against ``p0/E*``, log-log: the area fraction and, when computed, the stiffness
-    per area, as ``K h_rms/E*`` with ``h_rms`` (the seeds' mean rms height; without it
-    ``K/E*``, per unit of length)."""
-    p = np.asarray(summary["nominal_pressure"]) / modulus
-    panels = [("area_fraction", 1.0, "contact area", AREA_LABEL)]
-    if "stiffness_mean" in summary:
-        label = STIFFNESS_LABEL if h_rms else "$K/E^*$ (1/length)"
-        panels.append(("stiffness", (h_rms or 1.0) / modulus, "interfacial stiffness", label))
+    (grey) against the nominal pressure, log-log: the area fraction and, when computed, the
+    stiffness per area.  In a run with ``units`` (``pressure``, ``length``) the pressures and
+    stiffnesses are in them (:func:`load_axis`); otherwise ``p0/E*`` and ``K h_rms/E*``, each
+    seed's stiffness scaled by its own rms height (``h_rms``: one per seed, or one for all;
+    without it ``K/E*``, per unit of length), the mean and its error over the scaled seeds."""
+    from .results import ensemble_statistics
+
+    p = np.asarray(summary["nominal_pressure"])
+    px, xlabel = load_axis("p0", p, units, modulus, 1.0)
+    panels: list[tuple[str, Any, str, str]] = [("area_fraction", 1.0, "contact area", AREA_LABEL)]
+    if "stiffness" in summary:
+        seeds = np.atleast_2d(summary["stiffness"])
+        kx, label = load_axis("stiffness", seeds, units, modulus, 1.0)
+        factor: float | np.ndarray = kx
+        title = "interfacial stiffness"
+        if label == STIFFNESS_LABEL:  # dimensionless: each seed by its own rms height
+            given = h_rms is not None
+            own = np.broadcast_to(np.asarray(h_rms if given else 1.0, float), seeds.shape[:1])
+            factor, label = own[:, None] / modulus, label if given else "$K/E^*$ (1/length)"
+            title += r", each seed by its own $h_\mathrm{rms}$" if given else ""
+        panels.append(("stiffness", factor, title, label))
     fig = _figure(figsize=(4.8 * len(panels), 4.0), layout="constrained")
     axes = fig.subplots(1, len(panels), squeeze=False)[0]
     for ax, (name, factor, title, label) in zip(axes, panels, strict=True):
-        _draw_ensemble(ax, p, {k: summary[f"{name}{k}"] * factor for k in ("", "_mean", "_sem")})
-        ax.set(xscale="log", yscale="log", xlabel=P0_LABEL, ylabel=label, title=title)
+        rows = np.atleast_2d(summary[name]) * factor
+        _draw_ensemble(ax, p * px, rows, ensemble_statistics(rows))
+        ax.set(xscale="log", yscale="log", xlabel=xlabel, ylabel=label, title=title)
     axes[0].legend(fontsize=8)
-    seeds = len(np.atleast_1d(summary["seeds"]))
-    fig.suptitle(f"ensemble of {seeds} seeds: mean and its standard error")
+    seeds_count = len(np.atleast_1d(summary["seeds"]))
+    fig.suptitle(f"ensemble of {seeds_count} seeds: mean and its standard error")
     return _finish(fig, axes, path)
 
 
-def _draw_ensemble(ax: Any, p: np.ndarray, values: dict[str, np.ndarray]) -> None:
-    """Every seed's line (``""``: seeds x steps), and their ``_mean`` with its ``_sem``."""
-    for i, row in enumerate(np.atleast_2d(values[""])):
+def _draw_ensemble(ax: Any, p: np.ndarray, rows: np.ndarray, stats: dict[str, Any]) -> None:
+    """Every seed's line (``rows``: seeds x steps), and their mean with its standard error
+    (``stats``: :func:`~petsc_contact.io.results.ensemble_statistics` of the rows)."""
+    for i, row in enumerate(rows):
         ax.plot(p, row, "-", color="0.6", lw=0.8, label="each seed" if i == 0 else None)
-    mean, sem = values["_mean"], values["_sem"]
+    mean, sem = stats["mean"], stats["sem"]
     ax.fill_between(p, mean - sem, mean + sem, color="C0", alpha=0.25, lw=0)
     ax.errorbar(p, mean, yerr=sem, fmt="o-", color="C0", capsize=4, label="mean, +- s.e.m.")
 
@@ -172,33 +223,43 @@ def plot_theory(
 ) -> Any:
     """The map's spectrum with its fitted power law, and Persson's mean gap ``u_bar(p)`` and
     stiffness ``K(p)`` with the finite-size crossover ``p_c`` marked, as printed (paper
-    Eq. 13) and in the recipe of the paper's quoted values (``crossover_pressure_paper``).
+    Eq. 13) and in the recipe of the paper's quoted values (``crossover_pressure_paper``),
+    where it lies among the pressures drawn (the legend names only what is in view).
 
-    ``runs`` are simulations to draw beside the theory: ``(label, table)`` with the arrays
-    ``nominal_pressure``, ``mean_gap`` and, if computed, ``stiffness`` (a run's file).
-    ``units`` (``length``) label the spectrum's axes.
+    ``runs`` are simulations to draw beside the theory, in its units: ``(label, table)``
+    with the arrays ``nominal_pressure``, ``mean_gap`` and, if computed, ``stiffness``.
+    ``units`` (``length``, ``pressure``) label the axes as :func:`load_axis` does: in them
+    where the theory has them, dimensionless where it has none.
     """
-    h = result.rms_height if result.rms_height > 0 else 1.0
+    h = result.rms_height
     fig = _figure(figsize=(13, 3.8), layout="constrained")
     ax1, ax2, ax3 = fig.subplots(1, 3)
+    ax2.set_xscale("log")
+    ax3.set(xscale="log", yscale="log")
     _draw_spectrum(ax1, result, (units or {}).get("length", ""))
-    p = result.nominal_pressure / modulus
-    ax2.plot(p, result.mean_gap / h, "-", label="Persson")
-    ax3.plot(p, result.stiffness * h / modulus, "-", label="Persson")
+    scales = {kind: load_axis(kind, values, units, modulus, h)
+              for kind, values in (("p0", result.nominal_pressure), ("gap", result.mean_gap),
+                                   ("stiffness", result.stiffness))}  # fmt: skip
+    (px, xlabel), (gx, glabel), (kx, klabel) = scales.values()
+    p = result.nominal_pressure * px
+    ax2.plot(p, result.mean_gap * gx, "-", label="Persson")
+    ax3.plot(p, result.stiffness * kx, "-", label="Persson")
     for label, table in runs:
-        sim_p = np.asarray(table["nominal_pressure"]) / modulus
-        ax2.plot(sim_p, np.asarray(table["mean_gap"]) / h, "o", mfc="none", label=label)
+        sim_p = np.asarray(table["nominal_pressure"]) * px
+        ax2.plot(sim_p, np.asarray(table["mean_gap"]) * gx, "o", mfc="none", label=label)
         if "stiffness" in table:
-            sim_k = np.asarray(table["stiffness"]) * h / modulus
+            sim_k = np.asarray(table["stiffness"]) * kx
             ax3.plot(sim_p, sim_k, "o", mfc="none", label=label)
+    low, high = ax3.get_xlim()
     for value, style, name in (
         (result.crossover_pressure, "--", "$p_c$ (Eq. 13 as printed)"),
         (result.crossover_pressure_paper, ":", r"$p_c$ (the paper's recipe)"),
     ):
-        ax3.axvline(value / modulus, color="k", ls=style, label=name)
-    ax2.set(xscale="log", xlabel=P0_LABEL, ylabel=GAP_LABEL, title="mean gap")
-    ax3.set(xscale="log", yscale="log", xlabel=P0_LABEL, ylabel=STIFFNESS_LABEL,
-            title="interfacial stiffness")  # fmt: skip
+        if low <= value * px <= high:
+            ax3.axvline(value * px, color="k", ls=style, label=name)
+    ax3.set_xlim(low, high)
+    ax2.set(xlabel=xlabel, ylabel=glabel, title="mean gap")
+    ax3.set(xlabel=xlabel, ylabel=klabel, title="interfacial stiffness")
     ax2.legend(fontsize=8)
     ax3.legend(fontsize=8)
     return _finish(fig, (ax1, ax2, ax3), path)
@@ -206,6 +267,8 @@ def plot_theory(
 
 def _draw_spectrum(ax: Any, result: Any, length: str) -> None:
     """The map's radial spectrum and its fitted power law, in ``length`` (``""``: unit-free)."""
+    from ..conventions.units import typeset
+
     ax.loglog(result.wavevector, result.psd, ".", ms=3, label="map")
     lo, hi = result.fit_range
     q = np.geomspace(lo, hi, 20)
@@ -213,9 +276,10 @@ def _draw_spectrum(ax: Any, result: Any, length: str) -> None:
     slope = 2 + 2 * result.hurst_fit
     anchor = np.exp(np.mean(np.log(result.psd[inside] * result.wavevector[inside] ** slope)))
     ax.loglog(q, anchor * q**-slope, "k-", label=f"fit, H = {result.hurst_fit:.2f}")
+    shown = typeset(length)
     ax.set(
-        xlabel=f"wavevector $q${_in(f'1/{length}' if length else '', '1/length')}",
-        ylabel=f"$C(q)${_in(f'{length}^4' if length else '', 'length^4')}",
+        xlabel=f"wavevector $q${_in(f'1/{shown}' if length else '', '1/length')}",
+        ylabel=f"$C(q)${_in(f'{shown}^4' if length else '', 'length^4')}",
         title="spectrum",
     )
     ax.legend()
@@ -263,10 +327,10 @@ def plot_map(
     """
     from matplotlib.colors import LogNorm
 
-    from ..conventions.units import display_unit
+    from ..conventions.units import display_scale, typeset
 
     lx, ly = lengths
-    factor, unit = display_unit(max(lx, ly), length_unit or None)
+    factor, unit = display_scale(max(lx, ly), length_unit)
     fig = _figure(figsize=(5.8, 4.8), layout="constrained")
     ax = fig.subplots()
     extent = (0.0, lx * factor, 0.0, ly * factor)
@@ -279,10 +343,10 @@ def plot_map(
         image = ax.imshow(data.T, cmap=cmap, norm=norm, **show)
         log = " (log scale)" if isinstance(norm, LogNorm) else ""
         fig.colorbar(image, ax=ax, label=label + log, shrink=0.9, extend=_beyond(data, norm))
-    suffix = f" ({unit})" if unit else " (unit of --length)"
+    suffix = f" ({typeset(unit)})" if unit else " (unit of --length)"
     ax.set(xlabel="x" + suffix, ylabel="y" + suffix, title=title)
     if path is not None:
-        fig.savefig(path, dpi=110)
+        save(fig, path)
     return fig
 
 
@@ -352,8 +416,9 @@ REFERENCE = "reference solve's\nnatural residual"
 
 def plot_compare(path: str | None, trajectories: Sequence[Any], reference: dict[str, Any]) -> Any:
     """Pressure error and natural residual against wall time, log-log, one line per solver
-    (:class:`~petsc_contact.workflows.compare.Trajectory`), and in grey the natural residual
-    of the reference they are measured against: how far that solve itself is from exact."""
+    (:class:`~petsc_contact.workflows.compare.Trajectory`), and in grey, on the residual's
+    panel only, the natural residual of the reference they are measured against: how far
+    that solve itself is from exact (its pressure error is zero by definition)."""
     fig = _figure(figsize=(11.5, 4), layout="constrained")
     ax1, ax2 = fig.subplots(1, 2)
     for t in trajectories:
@@ -361,8 +426,7 @@ def plot_compare(path: str | None, trajectories: Sequence[Any], reference: dict[
         style = "-" if t.converged else ":"
         ax1.loglog(tm, np.maximum(t.pressure_error, 1e-17), style, label=t.name)
         ax2.loglog(tm, np.maximum(t.natural_residual, 1e-17), style, label=t.name)
-    for ax in (ax1, ax2):
-        ax.axhline(reference["natural_residual"], color="gray", lw=0.8, label=REFERENCE)
+    ax2.axhline(reference["natural_residual"], color="gray", lw=0.8, label=REFERENCE)
     ax1.set(
         xlabel="wall time (s)",
         ylabel=r"$\|p - p_\mathrm{ref}\| / \|p_\mathrm{ref}\|$",
@@ -371,6 +435,18 @@ def plot_compare(path: str | None, trajectories: Sequence[Any], reference: dict[
     ax2.set(xlabel="wall time (s)", ylabel=r"rms$(\min(k g, p))/p_0$", title="natural residual")
     fig.legend(*ax2.get_legend_handles_labels(), loc="outside right upper", fontsize=8)
     return _finish(fig, (ax1, ax2), path)
+
+
+def save(fig: Any, path: str) -> None:
+    """Write ``fig`` to ``path`` (:func:`plot_file`'s: ``X`` is ``X.png``) whole
+    (:func:`~petsc_contact.io.atomic.replaced`: a full disk leaves no torn figure), its
+    format named by the extension; a failure to write is one
+    :class:`~petsc_contact.io.atomic.StorageError`."""
+    from .atomic import replaced, storage
+
+    path = plot_file(path)
+    with storage(path), replaced(path) as temporary:
+        fig.savefig(temporary, dpi=110, format=os.path.splitext(path)[1][1:].lower())
 
 
 def _figure(**options: Any) -> Any:
@@ -387,7 +463,7 @@ def _finish(fig: Any, axes: Sequence[Any], path: str | None) -> Any:
         _few_decades(ax.xaxis, ax.get_xlim())
         _few_decades(ax.yaxis, ax.get_ylim())
     if path is not None:
-        fig.savefig(path, dpi=110)
+        save(fig, path)
     return fig
 
 

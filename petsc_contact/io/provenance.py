@@ -1,5 +1,5 @@
 """What reproduces a result: the versions of everything that shapes it, the source commit,
-PETSc's options and the digest of an input file."""
+PETSc's options and the digest of an input map."""
 
 from __future__ import annotations
 
@@ -10,6 +10,8 @@ import sys
 from importlib import metadata
 from typing import Any
 
+import numpy as np
+
 from .._version import __version__
 
 
@@ -19,6 +21,20 @@ def file_digest(path: str) -> str:
     with open(path, "rb") as f:
         for block in iter(lambda: f.read(1 << 20), b""):
             sha.update(block)
+    return sha.hexdigest()
+
+
+def input_digest(heights: Any) -> str:
+    """SHA-256 of a height map as a run is given it: its file's bytes for a path, else its
+    array's type, shape and values (a ``Topography``'s heights, a masked array's masked points
+    NaN), so that a changed map, in a file or in memory, is told from the one a result holds."""
+    if isinstance(heights, (str, os.PathLike)):
+        return file_digest(os.fspath(heights))
+    from .topography import as_topography
+
+    values = np.ascontiguousarray(as_topography(heights).heights)
+    sha = hashlib.sha256(f"{values.dtype.str} {values.shape} ".encode())
+    sha.update(values.data)
     return sha.hexdigest()
 
 

@@ -132,3 +132,25 @@ def _compare_frame(f: Any) -> Any:
             {name: group[name][...] for name in documented if name in group}, index=index
         )
     return pd.concat(parts, names=["solver"]) if parts else pd.DataFrame(columns=documented)
+
+
+def ensemble_statistics(values: np.ndarray) -> dict[str, np.ndarray]:
+    """Mean, standard deviation (ddof 1) and standard error over axis 0 (the seeds).
+
+    Non-finite entries (e.g. a step that did not converge) are left out per column.
+    """
+    v = np.asarray(values, dtype=float)
+    ok = np.isfinite(v)
+    count = ok.sum(axis=0)
+    mean = np.where(ok, v, 0.0).sum(axis=0) / np.maximum(count, 1)
+    dev = np.where(ok, v - mean, 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        std = np.sqrt((dev * dev).sum(axis=0) / (count - 1))
+        sem = std / np.sqrt(count)
+    mean = np.where(count > 0, mean, np.nan)
+    return {
+        "mean": mean,
+        "std": np.where(count > 1, std, np.nan),
+        "sem": np.where(count > 1, sem, np.nan),
+        "count": count,
+    }

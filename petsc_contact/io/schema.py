@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from ..physics.observables import MIN_CONTACT_PIXELS
+
 
 def write_attributes(obj: Any, attributes: dict[str, Any]) -> None:
     """HDF5 attributes of a file or group: dicts and lists as JSON, ``None`` as ``''``."""
@@ -135,6 +137,17 @@ SOLVE_COLUMNS = _entries(
     max_pressure=("pressure", "largest contact pressure"),
     min_gap=("length", "smallest gap (negative: the bound is violated)"),
     area_fraction=("1", "fraction of the pixels in contact (punch: of the footprint)"),
+    contact_resolved=(
+        "bool",
+        f"at least {MIN_CONTACT_PIXELS} pixels in contact (the package's resolution rule): "
+        "false marks a contact of a few pixels, whose area and stiffness the grid does not "
+        "resolve (the printed table marks it UNRESOLVED)",
+    ),
+    full_contact=(
+        "bool",
+        "every pixel (punch: of the footprint) in contact: the load is at or beyond full "
+        "contact, the run warns, and the interfacial stiffness there is NaN (docs/formulation.md)",
+    ),
     contact_patches=(
         "count",
         "contact patches: clusters of contact pixels joined through their edges "
@@ -181,14 +194,21 @@ PERIODIC_COLUMNS = _entries(
         "pressure/length",
         "interfacial stiffness estimate the preconditioner was held by (path, not answer)",
     ),
-    stiffness=("pressure/length", "exact -dp0/du_bar with the contact set held fixed"),
+    stiffness=(
+        "pressure/length",
+        "exact -dp0/du_bar with the contact set held fixed (NaN at full contact: unbounded)",
+    ),
 )
 PUNCH_COLUMNS = _entries(
     approach=("length", "rigid approach beyond first touch"),
     force=("pressure*length^2", "total force F"),
     mean_gap=("length", "mean gap u_bar over the footprint (-dp/du_bar: K without paper Eq. 2)"),
     total_stiffness=("pressure*length", "dF/d delta with the contact set held fixed"),
-    interfacial_stiffness=("pressure/length", "interfacial stiffness per area (paper Eq. 2)"),
+    interfacial_stiffness=(
+        "pressure/length",
+        "interfacial stiffness per area (paper Eq. 2; NaN at full contact, unbounded, and "
+        "where the step did not converge)",
+    ),
     flat_punch_stiffness=(
         "pressure*length",
         "K_flat, the flat punch's stiffness used in paper Eq. 2: the same grid's flat punch "
@@ -210,7 +230,10 @@ PUNCH_COLUMNS = _entries(
         "beyond 1e-4 not converged)",
     ),
     newton_iterations=("count", "Newton steps on the approach (load control)"),
-    stiffness=("pressure/length", "the interfacial stiffness per area (--stiffness)"),
+    stiffness=(
+        "pressure/length",
+        "the interfacial stiffness per area (--stiffness; NaN as interfacial_stiffness)",
+    ),
 )
 COORDINATES = _entries(
     step=("count", "load step, counted from 1 as the printed table counts"),
@@ -460,17 +483,19 @@ def _dataset_tables(lines: list[str]) -> None:
         "ensemble summary",
         "Each quantity also has `_mean`, `_std`, `_sem` and `_count` over seeds. Attributes: "
         "`geometry`, `command_line`, `parameters` (the pressures resolved), `petsc_options`, "
-        "`versions`, `mpi_size`, `seed_files`, `complete`.",
+        "`versions`, `mpi_size`, `seed_files` (relative to the file's folder), `seed_created` "
+        "(each seed file's `created` stamp: a replaced seed file is refused), `complete`.",
         ENSEMBLE,
     )
     _table(
         lines,
         "compare",
         "One group per solver, one entry per TAO iteration (`iteration`, each group's "
-        "dimension scale); root attribute `solvers` lists "
-        "them in order, each committed to `OUT.h5.partial` as it finishes (`compare "
-        "--resume` keeps them). Group attributes: `reason`, "
-        "`converged`, `iterations`, `solve_time`, `verification`, `petsc_options` and, for an "
+        "dimension scale); root attribute `solvers` lists them in order, each committed to "
+        "`OUT.h5.partial` as it finishes (`compare --resume` keeps them, and solves again one "
+        "whose options changed). Group attributes: `reason`, `converged`, `iterations`, "
+        "`solve_time`, `verification`, `petsc_options` (the options that solver ran with: its "
+        "own, then the command line's unprefixed ones and those with its prefix) and, for an "
         "options file, `options_file_text`. Root attributes add `reference_mean_gap`, "
         "`reference_natural_residual`, `reference_tolerance`, `reference_iterations`.",
         COMPARE,

@@ -65,7 +65,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..conventions.grid import block_rows
-from ..conventions.warnings import ReplacedOutput
+from ..conventions.warnings import ReplacedOutput, ResumeWarning, option, user_level
 from ..physics.continuation import Held
 from .atomic import (
     StorageError,
@@ -139,6 +139,7 @@ __all__ = [  # the names of the modules this one was split into stay importable 
     "check_nothing_lost",
     "check_parts",
     "check_room",
+    "check_same_input",
     "check_same_run",
     "check_writable",
     "committed_steps",
@@ -208,14 +209,17 @@ class Finished:
         )
 
 
-def read_resume(path: str, parameters: dict[str, Any], grid: Grid) -> Finished:
+def read_resume(
+    path: str, parameters: dict[str, Any], grid: Grid, digest: str | None = None
+) -> Finished:
     """The finished steps of an interrupted run ``path + '.partial'``, its scalars, and the
     state to go on from, of which each rank of ``grid`` checks and reads only the slabs that
     hold its rows (collective).
 
     Returns ``Finished(0)`` when there is nothing to resume.  Raises ``ValueError`` when the
     partial file belongs to a different run (its ``parameters`` differ, apart from
-    :data:`RESUME_FREE`), so a resume never mixes two runs, or when it
+    :data:`RESUME_FREE`, or its map is not the one of digest ``digest``:
+    :func:`check_same_input`), so a resume never mixes two runs, or when it
     cannot be read (damaged by something else than a run: the run itself replaces it whole).
     """
     import h5py
@@ -226,6 +230,7 @@ def read_resume(path: str, parameters: dict[str, Any], grid: Grid) -> Finished:
     try:
         with h5py.File(partial, "r") as f:
             theirs = json.loads(f.attrs["parameters"])
+            recorded = f.attrs.get("heights_sha256")
             parts = json.loads(f.attrs.get("parts", "{}"))  # none in earlier versions' files
             table = _read_table(f)
             steps = len(table.get("converged", []))
@@ -234,15 +239,17 @@ def read_resume(path: str, parameters: dict[str, Any], grid: Grid) -> Finished:
             f"cannot resume '{partial}': it is damaged ({_reason(exc)}); --overwrite starts afresh"
         ) from None
     check_same_run(partial, theirs, parameters)
+    check_same_input(partial, recorded, digest)
     state, held, problem = _saved_state(path, steps, grid)
     return Finished(steps, table, state, problem, held, parts)
 
 
-def read_complete(path: str, parameters: dict[str, Any]) -> Finished:
+def read_complete(path: str, parameters: dict[str, Any], digest: str | None = None) -> Finished:
     """A complete output ``path`` of this run, with no ``.partial`` beside it, as finished
     steps that need no computing (``whole``); ``Finished(0)`` when there is no such file.
     ``ValueError`` when it is a complete file of another run (``parameters`` differ, apart from
-    :data:`RESUME_FREE`): a resume never replaces another run's results."""
+    :data:`RESUME_FREE`, or its map is not the one of digest ``digest``:
+    :func:`check_same_input`): a resume never replaces another run's results."""
     import h5py
 
     if os.path.exists(partial_path(path)) or not os.path.isfile(path):
@@ -252,6 +259,7 @@ def read_complete(path: str, parameters: dict[str, Any]) -> Finished:
             if not f.attrs.get("complete"):
                 return Finished(0)
             theirs = json.loads(f.attrs["parameters"])
+            recorded = f.attrs.get("heights_sha256")
             table = _read_table(f)
     except (OSError, KeyError, ValueError):
         return Finished(0)  # not a results file: the run writes one (as without --resume)
@@ -259,6 +267,7 @@ def read_complete(path: str, parameters: dict[str, Any]) -> Finished:
         check_same_run(path, theirs, parameters)
     except ValueError as exc:
         raise ValueError(f"{exc}; --overwrite replaces it") from None
+    check_same_input(path, recorded, digest)
     return Finished(len(table.get("converged", [])), table, whole=True)
 
 
@@ -314,7 +323,7 @@ def warn_replaced(path: str, stacklevel: int = 2) -> None:
     if os.path.exists(path):
         warnings.warn(
             f"'{path}' exists and is replaced when this run ends; from 0.3.0 that needs "
-            "--overwrite",
+            f"{option('overwrite', True)}",
             ReplacedOutput,
             stacklevel=stacklevel + 1,
         )
@@ -352,6 +361,29 @@ def check_same_run(partial: str, theirs: dict[str, Any], mine: dict[str, Any]) -
             f"cannot resume '{partial}': it was run with different parameters "
             f"({', '.join(changed)})"
         )
+
+
+def check_same_input(path: str, recorded: Any, digest: str | None) -> None:
+    """``ValueError`` (one line, naming ``--overwrite``) unless the map of the run that file
+    ``path`` holds, whose SHA-256 it records (``recorded``, its ``heights_sha256``), is the one
+    of digest ``digest`` (:func:`~petsc_contact.io.provenance.input_digest`; ``None`` for a
+    generated surface, which its parameters describe): a resume never mixes two maps.  A file
+    that records no digest of its map (an array's, before this was recorded) is joined with
+    a :class:`ResumeWarning` saying that the map is not compared."""
+    if digest is None or recorded == digest:
+        return
+    if not recorded:
+        warnings.warn(
+            f"'{path}' records no digest of its height map: that the map is the same is not "
+            "checked",
+            ResumeWarning,
+            stacklevel=user_level(),
+        )
+        return
+    raise ValueError(
+        f"cannot resume '{path}': its height map has changed since it was run (SHA-256 "
+        f"{str(recorded)[:12]}... then, {digest[:12]}... now); --overwrite starts afresh"
+    )
 
 
 def _values(dataset: Any) -> np.ndarray:
@@ -429,7 +461,7 @@ def _read_slabs(
     arrays: dict[str, list[tuple[int, np.ndarray]]] = {}
     for k in needed or [0]:
         try:
-            after, members = _read_slab(files[k], spans[k].stop - spans[k].start)
+            after, members = _read_slab(files[k], spans[k].stop - spans[k].start, (k, len(files)))
         except _Damaged as exc:
             problem = (k, str(exc))
             break
@@ -457,10 +489,12 @@ def _verdict(files: list[str], said: list[tuple[tuple[int, str] | None, set[int]
     return afters.pop()
 
 
-def _read_slab(where: str, rows: int) -> tuple[int, dict[str, np.ndarray]]:
+def _read_slab(where: str, rows: int, slab: tuple[int, int]) -> tuple[int, dict[str, np.ndarray]]:
     """The step the state slab ``where`` ends and its arrays, memory-mapped (``held``'s
     whole); every member's CRC checked, streamed.  :class:`_Damaged` when it is missing or
-    cannot be used, or its state has not ``rows`` rows."""
+    cannot be used, its state has not ``rows`` rows, or it was written by another rank than
+    ``slab`` (``(rank, size)``: the slabs swapped or renamed; a slab of an earlier version
+    records none)."""
     if not os.path.exists(where):
         raise _Damaged(f"{where} is missing")
     try:
@@ -470,8 +504,14 @@ def _read_slab(where: str, rows: int) -> tuple[int, dict[str, np.ndarray]]:
             raise ValueError(f"{bad} fails its CRC")
         with np.load(where) as saved:
             after = int(saved["after_step"])
-            names = [m for m in saved.files if m != "after_step"]
+            writer = tuple(int(v) for v in saved["slab"]) if "slab" in saved.files else slab
+            names = [m for m in saved.files if m not in ("after_step", "slab")]
             members = {"held": saved["held"]} if "held" in names else {}
+        if writer != slab:
+            raise ValueError(
+                f"it holds the rows of rank {writer[0]} of {writer[1]}, not of rank {slab[0]} "
+                "(swapped or renamed)"
+            )
         members.update({m: mapped(where, m) for m in names if m != "held"})
         if len(members["state"]) != rows:
             raise ValueError(f"its state has {len(members['state'])} rows, not {rows}")
@@ -649,10 +689,11 @@ class StepStore:
             kept["held"] = np.asarray(held.scalars, dtype=float)
             kept.update({f"held_field_{i}": slab for i, slab in enumerate(held.fields)})
         where = slab_name(state_path(self.path), comm.rank, comm.size)
+        writer = np.array([comm.rank, comm.size])  # a swapped slab is known by it
 
         def save() -> None:
             with storage(where), replaced(where) as tmp, open(tmp, "wb") as f:
-                np.savez(f, **kept, state=state, after_step=step - 1)
+                np.savez(f, **kept, state=state, after_step=step - 1, slab=writer)
 
         on_every(comm, save)
         if self.fresh_state:

@@ -28,7 +28,9 @@ A text file is checked before any reader reads it (see :func:`text_rows`): a UTF
 UTF-16 byte-order mark is removed (readers would take the first row for a header), any line
 ends are read; rows of different lengths, a row with a value that is no number (a decimal
 comma, ``NA``, ``-``) and a file with no row of numbers are refused in one line that names
-the line.  ``nan``, ``inf``, ``bad`` and an empty ``.csv`` cell are undefined heights (NaN).
+the line, and so is a text with bytes that are no text (NUL: a file damaged or padded
+after a crash), which a reader would read with a row dropped as a header.  ``nan``, ``inf``,
+``bad`` and an empty ``.csv`` cell are undefined heights (NaN).
 """
 
 from __future__ import annotations
@@ -47,6 +49,7 @@ import numpy as np
 
 from ..conventions.grid import sides
 from ..conventions.units import unit_name
+from ..conventions.warnings import DoubtfulMap, option, user_level
 from .paths import check_input
 
 TEXT = (".txt", ".dat", ".csv", ".asc")
@@ -68,6 +71,15 @@ the codec that removes them."""
 
 UNDEFINED = ("nan", "bad", "inf", "infinite")
 """The words SurfaceTopography's text reader reads as undefined heights (in any case)."""
+
+CONTROL = re.compile(rb"[\x00-\x08\x0e-\x1f\x7f]")
+"""Bytes that are in no text: NUL and the control characters but the white space ones."""
+TEXT_BYTES = np.zeros(256, dtype=bool)
+TEXT_BYTES[[9, 10, 11, 12, 13, *range(32, 127)]] = True
+TEXT_SHARE = 0.9
+"""A file with :data:`CONTROL` bytes whose other bytes (NULs aside) are at least this share
+printable ASCII or white space is a damaged text, not a binary file (an instrument's binary
+``.dat`` has about 0.65)."""
 
 DECIMAL_COMMA = re.compile(r"[-+]?\d*,\d+(?:[eE][-+]?\d+)?")
 
@@ -134,6 +146,11 @@ class Topography:
         Names of all the file's channels (one entry for a single map).
     default_channel
         Whether the channel read is the file's default (none was asked for).
+    guessed
+        The header line (``line 1: 'x c1 c2'``) after which its orientation is a guess: a
+        text file whose header gave no sides and no unit, read as SurfaceTopography reads
+        it (its columns as ``x``, the transpose of its rows as written); sides given for it
+        are checked (:func:`check_guessed_sides`).  ``""``: no guess.
     """
 
     heights: np.ndarray
@@ -144,6 +161,7 @@ class Topography:
     channel_index: int = 0
     channels: tuple[str, ...] = ("",)
     default_channel: bool = True
+    guessed: str = ""
 
     @property
     def undefined(self) -> int:
@@ -263,20 +281,31 @@ def map_and_lengths(
         Undefined points, no sides, or sides that contradict the map's.
     """
     topo = as_topography(heights)
-    if topo.reader != "array" and topo.undefined:
+    check_given(topo, length)
+    if topo.lengths is None:
+        check_guessed_sides(topo, length)
+        return topo.heights, sides(topo.heights.shape, length), topo.unit
+    return topo.heights, topo.lengths, topo.unit
+
+
+def check_given(topo: Topography, length: Any, fill: str = "error", override: bool = False) -> None:
+    """``ValueError`` for what the Python API refuses of a map and the sides given with it:
+    undefined points of a topography or file unless ``fill`` says how to fill them (an
+    array's are left to the solvers' check), no sides (the map has none, none given), and
+    sides (numbers) that contradict the map's own unless ``override`` replaces them."""
+    if topo.reader != "array" and topo.undefined and fill == "error":
         raise ValueError(
             f"the map has {topo.undefined} undefined points: fill them first "
-            "(petsc_contact.physics.preparation.fill_undefined, or SurfaceTopography's "
+            "(fill_undefined='mean' or 'harmonic', "
+            "petsc_contact.physics.preparation.fill_undefined, or SurfaceTopography's "
             "interpolate_undefined_data())"
         )
-    shape = topo.heights.shape
-    if topo.lengths is None:
-        if length is None:
-            raise ValueError("the map has no sides of its own: give length=L or length=(Lx, Ly)")
-        return topo.heights, sides(shape, length), topo.unit
-    if length is not None and not np.allclose(sides(shape, length), topo.lengths, rtol=1e-6):
+    if topo.lengths is None and length is None:
+        raise ValueError("the map has no sides of its own: give length=L or length=(Lx, Ly)")
+    if topo.lengths is None or length is None or isinstance(length, str) or override:
+        return
+    if not np.allclose(sides(topo.heights.shape, length), topo.lengths, rtol=1e-6):
         raise ValueError(f"length={length} contradicts the map's own sides {topo.lengths}")
-    return topo.heights, topo.lengths, topo.unit
 
 
 @dataclass(frozen=True)
@@ -372,7 +401,9 @@ def read_topography(path: str, channel: Channel = None) -> Topography:
         except Exception as exc:  # a reader's own failure: the next reader may parse it
             reasons.append(f"{name}: {_flat(exc)}")
             continue
-        return _checked(topo, path)
+        if _checked(topo, path).guessed:
+            _say_guessed(topo, path)
+        return topo
     if not surface_topography_available():
         reasons.append(f"SurfaceTopography is not installed ({INSTALL_HINT})")
     raise ValueError(f"cannot read heights from '{path}': " + "; ".join(reasons))
@@ -445,10 +476,14 @@ def text_rows(path: str) -> TextRows | None:
     NotAMap
         Rows of different lengths in one block of rows; a row of numbers with a value that is
         none (a decimal comma, ``NA``, a comment), which a reader would take for a header line
-        and drop (see ``_refuse_broken_row``); a file with no number at all.
+        and drop (see ``_refuse_broken_row``); a file with no number at all; a text whose
+        bytes are not all text (NUL, control characters: ``_refuse_damaged_text``).
     """
     with open(path, "rb") as f:
-        text, marked = _decoded(f.read())
+        data = f.read()
+    text, marked = _decoded(data)
+    if not marked:  # UTF-16's NULs are its own
+        _refuse_damaged_text(path, data)
     if text is None:
         return None
     csv = path.lower().endswith(".csv")
@@ -489,6 +524,31 @@ def _decoded(data: bytes) -> tuple[str | None, bool]:
         return data.decode("utf-8"), False
     except UnicodeDecodeError:
         return None, False
+
+
+def _refuse_damaged_text(path: str, data: bytes) -> None:
+    """``NotAMap`` naming the first byte that is no text (NUL, another control character) in
+    a file whose other bytes are text (at least :data:`TEXT_SHARE` of those that are not NUL):
+    a text file damaged, padded with NULs after a crash, or UTF-16 without a byte-order mark,
+    which a reader would read with a row lost or dropped as a header.  A binary file (an
+    instrument's) and a text in another encoding (Latin-1's ``µ``) pass: the readers decide."""
+    found = CONTROL.search(data)
+    if found is None:
+        return
+    codes = np.frombuffer(data, dtype=np.uint8)
+    codes = codes[codes != 0]
+    if np.count_nonzero(TEXT_BYTES[codes]) < TEXT_SHARE * codes.size:
+        return
+    at = found.start()
+    line, column = data.count(b"\n", 0, at) + 1, at - data.rfind(b"\n", 0, at)
+    byte = data[at]
+    raise NotAMap(
+        f"'{path}' line {line}, byte {column}: 0x{byte:02x}{' (NUL)' if byte == 0 else ''} is "
+        f"not text ({len(CONTROL.findall(data))} such bytes in all): a damaged text file, one "
+        "padded with "
+        "NULs after a crash, or UTF-16 without a byte-order mark; repair it or save it again "
+        "as UTF-8 text"
+    )
 
 
 def _fields(line: str, csv: bool) -> list[str]:
@@ -609,10 +669,51 @@ def _text_with_metadata(path: str, channel: Channel) -> Topography:
         try:
             bare = _bare(rows, path, channel)
         except Unparsable:
-            return read
+            return _guessed(read, rows)
         if bare.heights.shape == read.heights.T.shape:
             return bare
     return read
+
+
+def _guessed(read: Topography, rows: TextRows) -> Topography:
+    """``read`` (a text file with no sides and no unit, as SurfaceTopography reads it)
+    marked ``guessed`` with its header line, if it has one."""
+    header = rows.problem.startswith("line ")
+    return replace(read, guessed=rows.problem) if header else read
+
+
+def _say_guessed(topo: Topography, path: str) -> None:
+    """A :class:`DoubtfulMap` warning that the orientation of ``topo`` is a guess."""
+    nx, ny = topo.heights.shape
+    warnings.warn(
+        f"'{path}' {topo.guessed} is no row of numbers: it is skipped as a header, and the map "
+        f"is read as SurfaceTopography reads a text file with a header, its columns as x: "
+        f"{nx} x {ny}, the transpose of the rows as written (without the header line, a bare "
+        f"matrix's rows are x); sides given ({option('length')}) are for the map as read",
+        DoubtfulMap,
+        stacklevel=user_level(),
+    )
+
+
+def check_guessed_sides(topo: Topography, length: Any) -> None:
+    """``ValueError`` in one line when ``length`` (``(LX, LY)``) fits the transpose of a map
+    whose orientation is a guess (:attr:`Topography.guessed`) better than the map as read:
+    its pixels' aspect ratio is further from square as read than on the rows as written, so
+    the sides were most likely meant for those (docs/measured.md).  One side (square pixels),
+    equal sides, a square map and a map read as written pass."""
+    values = np.atleast_1d(np.asarray(length, dtype=float))
+    if not topo.guessed or values.size != 2:
+        return
+    (nx, ny), (lx, ly) = topo.heights.shape, values
+    as_read, written = abs(np.log(lx * ny / (ly * nx))), abs(np.log(lx * nx / (ly * ny)))
+    if written < as_read:
+        raise ValueError(
+            f"{option('length', f'{lx:g},{ly:g}')} fits the rows as written ({ny} x {nx}: "
+            f"pixels {lx / ny:.3g} x {ly / nx:.3g}), not the map as read after its header line "
+            f"({nx} x {ny}, columns as x: pixels {lx / nx:.3g} x {ly / ny:.3g}); give "
+            f"{option('length', f'{ly:g},{lx:g}')} for the map as read, or remove the header "
+            "line"
+        )
 
 
 def _pick(arrays: dict[str, Any], channel: Channel, path: str, reader: str) -> Topography:

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import integrate, special
 
+from ..conventions.warnings import user_level
 from ..reference import hertz
 
 Values = np.ndarray | float  # one value, or an array of them (the result has its shape)
@@ -141,7 +142,7 @@ def _reading(convention: str | Reading) -> Reading:
             "the paper's recipe gives for a surface's own h_rms: use \"paper\" (the recipe "
             'of its quoted p_c) or "printed"; "appendix" will be removed in 0.3.0',
             DeprecationWarning,
-            stacklevel=3,
+            stacklevel=user_level(),
         )
     return READINGS[convention]
 

@@ -116,6 +116,36 @@ class ArraySettings:
         return settings
 
 
+PETSC_WORDS = ("default", "petsc_default", "decide", "petsc_decide", "determine",
+               "petsc_determine", "unlimited", "petsc_unlimited")  # fmt: skip
+"""Words PETSc takes for a number option's value, whatever its case."""
+
+
+def check_option_values(options: Sequence[str]) -> None:
+    """``ValueError`` in one line where an option whose type the package knows (a number of
+    :attr:`ArraySettings.READS`, with any prefix: ``-a_tao_max_it``, ``-bncg_tao_gatol``) has
+    a value that is not one (``-tao_max_it abc``): said before PETSc reads it mid-run."""
+    numbers = {key: kind for key, (_, kind) in ArraySettings.READS.items() if kind is not _flag}
+    for i, name in enumerate(options):
+        value = options[i + 1] if i + 1 < len(options) else None
+        key = name.lstrip("-") if _is_option(name) else ""
+        known = next((k for k in numbers if key == k or key.endswith("_" + k)), None)
+        if known is None or value is None or _is_option(value):
+            continue
+        if value.lower() not in PETSC_WORDS and not _reads_as(value, numbers[known]):
+            what = "a whole number" if numbers[known] is int else "a number"
+            raise ValueError(f"{name} takes {what}, not '{value}'")
+
+
+def _reads_as(value: str, kind: Callable[[Any], Any]) -> bool:
+    """Whether ``value`` is a number of ``kind`` (``int``: digits alone, as PETSc reads it)."""
+    try:
+        kind(value)
+    except ValueError:
+        return False
+    return True
+
+
 def _prefixed(items: list[str], prefix: str) -> list[str]:
     """The options of ``items`` that carry ``prefix`` (with their values), the prefix taken
     off: ``-a_tao_gatol 1e-9`` is ``-tao_gatol 1e-9`` for the prefix ``a_``."""

@@ -13,7 +13,7 @@ import warnings
 from typing import Any
 
 from ..conventions.grid import Grid
-from ..conventions.warnings import PetscContactWarning
+from ..conventions.warnings import PetscContactWarning, user_level
 from ..numerics.device import Device
 
 
@@ -28,7 +28,7 @@ def unconverged(y: Any, reason: str) -> Any:
         f"the exact stiffness's held-set solve did not converge ({reason}; "
         "-stiffness_ksp_max_it and -stiffness_ksp_rtol set its limits): that stiffness is NaN",
         StiffnessNotConverged,
-        stacklevel=3,
+        stacklevel=user_level(),
     )
     y[...] = float("nan")
     return y

@@ -38,6 +38,7 @@ import numpy as np
 
 from ..backend import _petsc
 from ..backend.solve import BOUND_TYPES, BoundSolver, SolveInfo
+from ..conventions.warnings import user_level
 from ..geometries.periodic import PeriodicProblem
 from ..geometries.step import residual_verdict
 from ..io.atomic import atomic_h5, on_root, replaced, storage
@@ -45,7 +46,7 @@ from ..io.names import partial_path
 from ..io.plot import plot_compare
 from ..io.results import group_name, labelled, scale
 from ..io.schema import COMPARE, annotate, write_attributes
-from ..io.store import check_resume_or_overwrite, check_same_run, warn_replaced
+from ..io.store import check_resume_or_overwrite, check_same_input, check_same_run, warn_replaced
 from ..physics.observables import natural_residual
 from ..physics.surface import rms_of
 from .periodic_sweep import sweep
@@ -103,6 +104,27 @@ def own_options(options: Sequence[str], name: str, solvers: Sequence[str]) -> li
         elif keep:
             own.append(token)
     return own
+
+
+def run_options(name: str, solvers: Sequence[str], options: Sequence[str]) -> list[str]:
+    """The PETSc options solver ``name`` of a comparison of ``solvers`` runs with: its own
+    (:func:`solver_options`) then its share of the command line's ``options``
+    (:func:`own_options`), which therefore win."""
+    return solver_options(name) + own_options(options, name, solvers)
+
+
+def shared_options(options: Sequence[str], solvers: Sequence[str]) -> list[str]:
+    """The command line's PETSc ``options`` that name no solver of ``solvers`` (every
+    solver's); those with a solver's prefix reach that solver alone (:func:`own_options`)."""
+    return own_options(options, "", solvers)
+
+
+def unchanged(
+    done: Sequence[Trajectory], solvers: Sequence[str], options: Sequence[str]
+) -> list[Trajectory]:
+    """The solvers of ``done`` (an interrupted comparison's) that ran with the options they
+    would run with now (:func:`run_options`); one whose options changed is solved again."""
+    return [t for t in done if t.options == run_options(t.name, solvers, options)]
 
 
 def check_solvers(solvers: Sequence[str]) -> None:
@@ -261,8 +283,9 @@ def compare(
     (:func:`own_options`: those of every solver and those with its prefix, ``-bncg_...``),
     which therefore win over its options file; both are recorded (:attr:`Trajectory.options`).
 
-    The solvers of ``done`` (an interrupted comparison's, :func:`read_partial`) are kept as
-    they are and not run again; the reference is solved again (the same solve, so the same
+    The solvers of ``done`` (an interrupted comparison's, :func:`read_partial`) that ran with
+    the options they would run with now are kept as they are and not run again
+    (:func:`unchanged`); the reference is solved again (the same solve, so the same
     reference).  ``reference_ready(scalars)`` is called once the reference is solved.
 
     A solver is stopped (``DIVERGED_USER``, with the cause in its reason) after
@@ -282,13 +305,13 @@ def compare(
     reference = reference_solve(problem, pressure)
     if reference_ready is not None:
         reference_ready(reference.scalars())
-    kept = {t.name: t for t in done}
+    kept = {t.name: t for t in unchanged(done, solvers, extra_options)}
     out = []
     for name in solvers:
         if name in kept:
             out.append(kept[name])
             continue
-        opts = solver_options(name) + own_options(extra_options, name, solvers)
+        opts = run_options(name, solvers, extra_options)
         traj = _trajectory(problem, reference, pressure, Trajectory(name, opts), time_limit,
                            stall_iterations)  # fmt: skip
         out.append(traj)
@@ -379,8 +402,9 @@ def compare_into(
     ``record(realised)`` is the run record of the scene for the realised ``rms_height`` and
     ``pressure``; the comparison's own parameters are added to it.  An interrupted
     comparison goes on with ``resume`` or starts afresh with ``overwrite``
-    (:func:`finished_solvers`).  ``report(trajectory)`` is called with each finished
-    solver: first those an interrupted comparison kept, then each as it is committed.
+    (:func:`finished_solvers`); a finished solver whose options changed is solved again.
+    ``report(trajectory)`` is called with each finished solver: first those an interrupted
+    comparison kept, then each as it is committed.
     """
     grid, fft, heights = scene.grid, scene.fft, scene.heights
     problem = PeriodicProblem(grid, fft, heights, modulus)
@@ -393,7 +417,10 @@ def compare_into(
         "time_limit": time_limit,
         "stall_iterations": stall_iterations,
     }
-    done = finished_solvers(output, attrs["parameters"], resume, overwrite)
+    finished = finished_solvers(
+        output, attrs["parameters"], resume, overwrite, attrs.get("heights_sha256")
+    )
+    done = unchanged(finished, solvers, extra_options)  # those whose options changed run again
     if report is not None:
         for trajectory in done:
             report(trajectory)
@@ -452,13 +479,16 @@ def write_compare(
     attributes: dict[str, Any],
 ) -> tuple[str, str]:
     """HDF5 (one group per solver), a CSV table and a PNG of error against time; the
-    comparison's ``.partial`` file is removed once they are written.
+    comparison's ``.partial`` file is removed once the HDF5 file is written (a failure to
+    write the table or the plot then leaves the whole comparison, which ``--resume`` draws
+    again, and no stale ``.partial`` beside it).
 
     Returns the CSV and PNG paths (next to ``path``).
     """
     stem = path[:-3] if path.endswith(".h5") else path
     with atomic_h5(path) as f:
         _write_groups(f, reference, trajectories, {**attributes, "complete": True})
+    _remove(partial_path(path))
     csv = stem + ".csv"
     with storage(csv), replaced(csv) as temporary, open(temporary, "w") as f:
         f.write(
@@ -469,7 +499,6 @@ def write_compare(
             f.write(",".join(str(v) for v in row) + "\n")
     png = stem + ".png"
     plot_compare(png, trajectories, reference)
-    _remove(partial_path(path))
     return csv, png
 
 
@@ -485,11 +514,12 @@ def commit_partial(
 
 
 def finished_solvers(
-    path: str, parameters: dict[str, Any], resume: bool, overwrite: bool
+    path: str, parameters: dict[str, Any], resume: bool, overwrite: bool, digest: str | None = None
 ) -> list[Trajectory]:
     """What a comparison into ``path`` starts from (the caller holds the output's lock): with
     ``resume``, the finished solvers of its ``.partial`` file or, without one, of its complete
-    output (:func:`read_partial`); with
+    output, measured against a reference of the same map (of digest ``digest``;
+    :func:`read_partial`); with
     ``overwrite``, none, that file removed (by rank 0); with neither, none, and
     ``ValueError`` where that file holds finished solvers."""
     from ..conventions.grid import world
@@ -497,14 +527,14 @@ def finished_solvers(
     partial = partial_path(path)
     check_resume_or_overwrite(resume, overwrite)
     if resume:
-        return read_partial(path, parameters)
+        return read_partial(path, parameters, digest)
     if os.path.exists(partial) and not overwrite:
         raise ValueError(
             f"'{partial}' holds the finished solvers of an interrupted comparison: --resume "
             "continues it, --overwrite deletes them and starts afresh"
         )
     if not overwrite:
-        warn_replaced(path)
+        warn_replaced(path, stacklevel=user_level())
     on_root(world(), lambda: _remove(partial))
     return []
 
@@ -514,11 +544,14 @@ def _remove(path: str) -> None:
         os.remove(path)
 
 
-def read_partial(path: str, parameters: dict[str, Any]) -> list[Trajectory]:
+def read_partial(
+    path: str, parameters: dict[str, Any], digest: str | None = None
+) -> list[Trajectory]:
     """The finished solvers of an interrupted comparison into ``path`` (its ``.partial``), or
     of its complete output where no ``.partial`` is left (every solver: only the reference
     is solved again); none without either.  ``ValueError`` when the file was run with other
-    parameters (``--overwrite`` replaces it) or cannot be read."""
+    parameters or on another map than the one of digest ``digest`` (its solvers' errors are
+    against that map's reference; ``--overwrite`` replaces it), or cannot be read."""
     import h5py
 
     partial = partial_path(path)
@@ -531,6 +564,7 @@ def read_partial(path: str, parameters: dict[str, Any]) -> list[Trajectory]:
                 check_same_run(source, json.loads(f.attrs["parameters"]), parameters)
             except ValueError as exc:
                 raise ValueError(f"{exc}; --overwrite replaces it") from None
+            check_same_input(source, f.attrs.get("heights_sha256"), digest)
             out = []
             for name in json.loads(f.attrs["solvers"]):
                 g = f[group_name(name)]

@@ -18,13 +18,16 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Sequence
+import warnings
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
 
-from ..conventions.units import METRES, NEWTONS, PASCALS, parse_quantity
+from ..conventions.units import METRES, NEWTONS, PASCALS, parse_quantity, pressure_value
+from ..conventions.validation import log_range
+from ..conventions.warnings import ConvertedLoads, user_level
 
 GEOMETRIES = ("periodic", "punch")
 LOADS = ("pressures", "sweep", "approaches", "forces")
@@ -41,6 +44,23 @@ def _listed(value: Any) -> Any:
     if isinstance(value, np.ndarray):
         return tuple(value.ravel().tolist())
     return value
+
+
+def swept(
+    spec: Sequence[float | str],
+    low: float,
+    high: float,
+    value: Callable[[float | str], float] = float,
+) -> list[float]:
+    """The loads of a sweep ``(N,)`` or ``(N, MIN, MAX)``: ``N`` log-spaced, by default from
+    ``low`` to ``high``; ``value`` turns a bound given with a unit (``"1kPa"``) into the run's
+    units."""
+    if len(spec) == 3:
+        n, lo, hi = float(spec[0]), value(spec[1]), value(spec[2])
+        log_range("the sweep", n, (lo, hi))
+    else:
+        n, lo, hi = float(spec[0]), low, high
+    return [float(v) for v in np.geomspace(lo, hi, int(n))]
 
 
 def _grid(value: Any) -> int | tuple[int, int]:
@@ -90,10 +110,12 @@ class Run:
         are in its unit).
     pressures, sweep, approaches, forces
         The loads: nominal pressures (periodic; the punch: over its face), approaches or
-        forces (punch), or a sweep ``(N,)`` or ``(N, min, max)`` of log-spaced ones (default
-        range: see the CLI).  A value may carry its unit: ``"2MPa"``, ``"10nm"``, ``"1mN"``;
-        one load (``pressures=1e-3``) or a sweep's count alone (``sweep=4``) needs no tuple,
-        and text with commas is read as the command line reads it (``"1e-3,2MPa"``).
+        forces (punch), or a sweep ``(N,)`` or ``(N, min, max)`` of log-spaced ones: nominal
+        pressures on a periodic run, approaches on the punch (default range: see the CLI;
+        :meth:`with_` keeps a sweep's meaning across geometries).  A value may carry its
+        unit: ``"2MPa"``, ``"10nm"``, ``"1mN"``; one load (``pressures=1e-3``) or a sweep's
+        count alone (``sweep=4``) needs no tuple, and text with commas is read as the
+        command line reads it (``"1e-3,2MPa"``).
     footprint, flat_stiffness, stiffness
         The punch's outline (``square``, ``disk``) and its flat-punch reference (``grid``,
         ``analytic``: the exact continuum value, ``king``: King's estimate for a square);
@@ -212,6 +234,9 @@ class Run:
             from ..backend._petsc import option_list
 
             object.__setattr__(self, "options", tuple(option_list(self.options)))
+        from ..solver.driver import check_option_values
+
+        check_option_values(self.options)  # -tao_max_it abc: refused before anything runs
 
     @property
     def modulus_value(self) -> float:
@@ -234,8 +259,36 @@ class Run:
         return self.heights if isinstance(self.heights, str) else None
 
     def with_(self, **changes: Any) -> Run:
-        """A copy with some fields changed (``run.with_(seed=3, output="s3.h5")``)."""
-        return replace(self, **changes)
+        """A copy with some fields changed (``run.with_(seed=3, output="s3.h5")``).
+
+        A load keeps its meaning across a change of ``geometry`` that gives no load: a
+        periodic run's ``sweep=(N, MIN, MAX)``, nominal pressures, becomes on the punch
+        (which sweeps approaches) those ``pressures``, nominal pressures over its face, with
+        a :class:`~petsc_contact.conventions.warnings.ConvertedLoads` note; a punch's,
+        approaches, is refused on a periodic run (``ValueError`` naming what to give).  A
+        sweep's count alone, ``sweep=N``, is the new geometry's default sweep."""
+        new = replace(self, **changes)
+        sweep = self.sweep
+        kept = new.geometry == self.geometry or any(k in changes for k in LOADS)
+        if sweep is None or len(sweep) != 3 or kept:
+            return new
+        if new.geometry == "periodic":
+            raise ValueError(
+                f"the punch's sweep={sweep!r} is of approaches, which a periodic run does "
+                "not take: give its nominal pressures with the geometry, "
+                "run.with_(geometry='periodic', sweep=...) or pressures=..."
+            )
+        unit = new.pressure_unit
+        pressures = swept(sweep, 0.0, 0.0, lambda v: pressure_value(v, unit, "--sweep"))
+        warnings.warn(
+            f"the periodic run's sweep={sweep!r} is of nominal pressures, the punch's of "
+            f"approaches: the punch takes its {len(pressures)} pressures ({pressures[0]:g} to "
+            f"{pressures[-1]:g}) as pressures=, nominal pressures over its face (give a load "
+            "with geometry= to choose another)",
+            ConvertedLoads,
+            stacklevel=user_level(),
+        )
+        return replace(new, sweep=None, pressures=tuple(pressures))
 
     def parameters(self) -> dict[str, Any]:
         """What a results file records as ``parameters`` (JSON values; an array or a
@@ -249,6 +302,17 @@ class Run:
                 value = "array" if isinstance(value, np.ndarray) else type(value).__name__
             out[f.name] = list(value) if isinstance(value, (tuple, np.ndarray)) else value
         return out
+
+    def _repr_html_(self) -> str:
+        """A notebook's display: the fields that differ from their defaults (as
+        :meth:`parameters` records them) and the PETSc options."""
+        from ..io.tables import html_table
+
+        defaults = Run().parameters()
+        given = {k: v for k, v in self.parameters().items() if k != "command" and v != defaults[k]}
+        if self.options:
+            given["options"] = " ".join(self.options)
+        return html_table(f"Run ({self.geometry})", given)
 
     def arguments(self) -> list[str]:
         """The command line that describes this run (``periodic --grid 512 ...``): every

@@ -18,21 +18,21 @@ along approaches or forces (:func:`~petsc_contact.workflows.punch_sweep.punch_sw
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from typing import Any, Protocol
 
 import numpy as np
 
 from ..backend.solve import BoundSolver, Monitor
 from ..conventions.units import force_value, format_quantity, length_value, pressure_value
-from ..conventions.validation import log_range
-from ..geometries.periodic import PeriodicProblem
+from ..geometries.periodic import LARGEST_LOAD, PeriodicProblem
 from ..geometries.punch import PunchProblem, footprint_mask
 from ..geometries.step import Step
 from ..numerics.device import get_device
 from ..physics.continuation import Held
+from ..physics.observables import MIN_CONTACT_PIXELS
 from ..solver.driver import ArraySettings, ArraySolver
-from .description import Run
+from .description import Run, swept
 from .periodic_sweep import problem_solver, sweep
 from .punch_sweep import PunchSolver, punch_sweep
 from .scene import Scene
@@ -85,34 +85,17 @@ def driver_for(run: Run, scene: Scene) -> Driver:
     return PunchDriver(run, scene) if run.geometry == "punch" else PeriodicDriver(run, scene)
 
 
-def swept(
-    spec: Sequence[float | str],
-    low: float,
-    high: float,
-    value: Callable[[float | str], float] = float,
-) -> list[float]:
-    """The loads of a sweep ``(N,)`` or ``(N, MIN, MAX)``: ``N`` log-spaced, by default from
-    ``low`` to ``high``; ``value`` turns a bound given with a unit (``"1kPa"``) into the run's
-    units."""
-    if len(spec) == 3:
-        n, lo, hi = float(spec[0]), value(spec[1]), value(spec[2])
-        log_range("the sweep", n, (lo, hi))
-    else:
-        n, lo, hi = float(spec[0]), low, high
-    return [float(v) for v in np.geomspace(lo, hi, int(n))]
-
-
 class PeriodicDriver:
     """The periodic geometry's driver: nominal pressures swept with continuation.
 
-    The pressures (``run.pressures`` or a ``run.sweep`` up to ``0.9`` of full contact) are
+    The pressures (``run.pressures`` or a ``run.sweep``, by default over :func:`sweep_range`) are
     checked against what the surface resolves (:meth:`PeriodicProblem.check_pressure`)."""
 
     def __init__(self, run: Run, scene: Scene) -> None:
         problem = PeriodicProblem(scene.grid, scene.fft, scene.heights, run.modulus_value)
         problem.filled = scene.filled
         p_full = problem.full_contact_pressure()
-        self.loads, self.resolved = _pressures(run, p_full)
+        self.loads, self.resolved = _pressures(run, problem)
         if run.approaches is not None or run.forces is not None:
             raise ValueError(
                 "a periodic run takes --pressures or --sweep, not approaches or forces"
@@ -139,12 +122,32 @@ class PeriodicDriver:
         self.solver.close()
 
 
-def _pressures(run: Run, p_full: float) -> tuple[list[float], dict[str, Any]]:
-    """The nominal pressures of a periodic ``run`` (full contact at ``p_full``), in its
-    pressure unit, and what its record adds: a sweep's pressures, or those given with units."""
+HALF_AREA = 0.5  # a measured map's default sweep ends where Persson's law puts half in contact
+
+
+def sweep_range(run: Run, problem: PeriodicProblem) -> tuple[float, float]:
+    """The default range of a periodic ``run``'s sweep (collective): a generated surface's
+    from ``1e-4`` to ``0.9`` times full contact; a measured map's from its first resolved
+    contact (:data:`~petsc_contact.physics.observables.MIN_CONTACT_PIXELS` pixels) to about
+    half the area (:data:`HALF_AREA`), both by Persson's area law
+    (:meth:`~petsc_contact.geometries.periodic.PeriodicProblem.area_pressure`), and below
+    ``0.9`` of full contact: a measured map's full contact is set by its deepest pixel (an
+    outlier, a dropout), often orders of magnitude above the rest of its loads."""
+    p_full = problem.full_contact_pressure()
+    if not run.measured:
+        return 1e-4 * p_full, 0.9 * p_full
+    high = min(problem.area_pressure(HALF_AREA), 0.9 * p_full)
+    low = problem.area_pressure(MIN_CONTACT_PIXELS / problem.grid.size)
+    return min(low, 0.1 * high), high
+
+
+def _pressures(run: Run, problem: PeriodicProblem) -> tuple[list[float], dict[str, Any]]:
+    """The nominal pressures of a periodic ``run`` (a sweep's default range:
+    :func:`sweep_range`), in its pressure unit, and what its record adds: a sweep's
+    pressures, or those given with units."""
     unit = run.pressure_unit
     if run.sweep is not None:
-        low, high = 1e-4 * p_full, 0.9 * p_full
+        low, high = sweep_range(run, problem)
         pressures = swept(run.sweep, low, high, lambda v: pressure_value(v, unit, "--sweep"))
         return pressures, {"pressures": pressures, "sweep": None}  # the file records the loads
     if run.pressures is None:
@@ -177,6 +180,8 @@ class PunchDriver:
             raise ValueError("give one of --approaches, --forces, --pressures and --sweep")
         self.by_force = run.forces is not None or run.pressures is not None
         self.loads, self.resolved = _punch_loads(run, problem, scene.resolved["length_unit"])
+        if self.by_force:
+            _check_forces(self.loads, problem, run)
         self.run, self.solver = run, PunchSolver(problem)
         length_unit = scene.resolved["length_unit"]
         unit = f"{run.pressure_unit}*{length_unit}" if run.pressure_unit and length_unit else ""
@@ -197,6 +202,21 @@ class PunchDriver:
     def close(self) -> None:
         """Release the solver."""
         self.solver.close()
+
+
+def _check_forces(forces: list[float], problem: PunchProblem, run: Run) -> None:
+    """``ValueError`` in one line, before anything is solved, for a force whose nominal
+    pressure over the punch's face is above :data:`~petsc_contact.geometries.periodic.LARGEST_LOAD`
+    ``E*``: no elastic contact (the solver would overflow)."""
+    area = problem.footprint_pixels * problem.grid.pixel_area
+    option = "--forces" if run.forces is not None else "--pressures"
+    for force in forces:
+        pressure = force / area / run.modulus_value
+        if not pressure <= LARGEST_LOAD:  # inf and NaN too
+            raise ValueError(
+                f"{option}: a force of {force:.3g} is a nominal pressure of {pressure:.3g} E* "
+                f"over the punch's face, more than {LARGEST_LOAD:g} E*: no elastic contact"
+            )
 
 
 def _punch_loads(

@@ -1,8 +1,9 @@
 """Ensembles over surface realisations and power-law fits of K(p) (pure numpy on results).
 
-:func:`ensemble_statistics` reduces per-seed sweeps (arrays ``seeds x steps``) to mean,
-standard deviation and standard error; :func:`power_law_fit` fits ``K = c p^alpha`` to the
-lowest points of a stiffness curve, as the paper does with four points (Figs. 3-4).
+:func:`~petsc_contact.io.results.ensemble_statistics` reduces per-seed sweeps (arrays
+``seeds x steps``) to mean, standard deviation and standard error; :func:`power_law_fit`
+fits ``K = c p^alpha`` to the lowest points of a stiffness curve, as the paper does with four
+points (Figs. 3-4).
 """
 
 from __future__ import annotations
@@ -10,6 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from ..io.results import ensemble_statistics as ensemble_statistics  # importable here too
 
 
 @dataclass
@@ -46,25 +49,3 @@ def power_law_fit(pressure: np.ndarray, stiffness: np.ndarray, points: int = 4) 
     else:
         error = float("nan")
     return PowerLaw(slope, error, float(np.exp(intercept)), points)
-
-
-def ensemble_statistics(values: np.ndarray) -> dict[str, np.ndarray]:
-    """Mean, standard deviation (ddof 1) and standard error over axis 0 (the seeds).
-
-    Non-finite entries (e.g. a step that did not converge) are left out per column.
-    """
-    v = np.asarray(values, dtype=float)
-    ok = np.isfinite(v)
-    count = ok.sum(axis=0)
-    mean = np.where(ok, v, 0.0).sum(axis=0) / np.maximum(count, 1)
-    dev = np.where(ok, v - mean, 0.0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        std = np.sqrt((dev * dev).sum(axis=0) / (count - 1))
-        sem = std / np.sqrt(count)
-    mean = np.where(count > 0, mean, np.nan)
-    return {
-        "mean": mean,
-        "std": np.where(count > 1, std, np.nan),
-        "sem": np.where(count > 1, sem, np.nan),
-        "count": count,
-    }

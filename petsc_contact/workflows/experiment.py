@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..conventions.validation import positive
-from ..conventions.warnings import DoubtfulTable
+from ..conventions.warnings import DoubtfulTable, user_level
 from ..io.atomic import atomic_h5
 from ..io.lock import check_writable
 from ..io.results import labelled, scale
@@ -62,7 +62,7 @@ def squeeze_test(
             warnings.warn(
                 f"K is NaN at {count} of {len(p)} rows of '{table}': {why}",
                 DoubtfulTable,
-                stacklevel=2,
+                stacklevel=user_level(),
             )
     with atomic_h5(output) as f:
         row = scale(f, "row", np.arange(1, len(p) + 1))

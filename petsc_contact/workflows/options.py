@@ -407,7 +407,8 @@ _PERIODIC_LOADS = (
     _option(
         "sweep",
         "N log-spaced pressures from PMIN to PMAX, with an optional unit (12,1kPa,10MPa; "
-        "default: 1e-4 and 0.9 times the full-contact pressure -min(K h))",
+        "default: 1e-4 and 0.9 times the full-contact pressure -min(K h); a measured map's: "
+        "from its first resolved contact to about half the area, by Persson's area law)",
         PERIODIC,
         metavar="N[,PMIN,PMAX]",
         unit="pressure",
@@ -539,9 +540,12 @@ _RUN = (
         metavar="PNG",
         field=False,
         more="A periodic run: area, mean gap and (with `--stiffness`) `K` against pressure; a "
-        "punch: force and interfacial stiffness, in newtons and SI prefixes when the units "
-        "are known; an ensemble: the mean area fraction and stiffness with their standard "
-        "errors",
+        "punch: force and interfacial stiffness; an ensemble: the mean area fraction and "
+        "stiffness with their standard errors. Each axis is in the run's units with the prefix "
+        "that suits its values (MPa, nm, µN; `K` in MPa/µm, a pressure per "
+        "micrometre), and dimensionless (`p0/E*`, `u_bar/h_rms`, `K h_rms/E*`, a punch's "
+        "`delta/h_rms`) only where the run has no unit: both geometries alike. A unit-free "
+        "ensemble scales each seed's `K` by its own `h_rms`",
     ),
     _option(
         "quiet",
@@ -592,7 +596,8 @@ _RUN = (
         RUNS,
         default="",
         metavar="PREFIX",
-        more="Unprefixed options are then not the run's",
+        more="Unprefixed options are then not the run's (said to be never used), on the "
+        "command line as from Python (`Run(options_prefix=...)`)",
     ),
     _option(
         "scalars_only",
@@ -640,7 +645,8 @@ _COMPARE = (
         "which `bqpip` and `tight` run with; a path runs that file instead, another "
         "TAO type PETSc's defaults; `-tao_type` is refused ([solvers.md](solvers.md)). Each "
         "solver's options prefix is its name: `-bncg_tao_max_it 50` reaches `bncg` alone, "
-        "an unprefixed option every solver",
+        "an unprefixed option every solver; each solver's group records the options it ran "
+        "with (`petsc_options`), and `--resume` solves again a solver whose options changed",
     ),
     _option(
         "time_limit",
@@ -720,13 +726,16 @@ _THEORY = (
     ),
     _option(
         "compare",
-        "with --plot: draw these periodic runs' mean gap and stiffness beside the theory",
+        "with --plot: draw these periodic runs' mean gap and stiffness beside the theory, in "
+        "its units",
         ("theory",),
         metavar="RUN.h5",
         nargs="+",
         section="theory",
         field=False,
-        more="Without `--plot`, or given another geometry's file, it is refused",
+        more="Without `--plot`, given another geometry's file, or a run with a unit (lengths, "
+        "pressures) where the theory has none or the other way round, it is refused (exit 2, "
+        "before the theory is computed)",
     ),
 )
 

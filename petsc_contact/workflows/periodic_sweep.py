@@ -18,6 +18,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import nullcontext
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -26,9 +27,10 @@ from ..backend import _petsc
 from ..backend.solve import BoundSolver, Monitor
 from ..conventions.grid import Grid, grid_for
 from ..conventions.validation import check_finite, keywords_after_first
-from ..conventions.warnings import Unconverged, flagged_steps
+from ..conventions.warnings import step_warnings, user_level
 from ..geometries.periodic import PeriodicProblem, verify
-from ..geometries.step import VERIFY_FACTOR, Step, collect, solve_step
+from ..geometries.step import VERIFY_FACTOR, Step, Steps, collect, solve_step
+from ..io.progress import StepReport, reporting
 from ..io.topography import Heights, map_and_lengths
 from ..numerics.device import Device, get_device
 from ..physics.continuation import ConvergedStep, Held, LoadPath
@@ -153,19 +155,21 @@ def _resumed_path(held: Held, x: Any, ell: float, device: Any) -> LoadPath:
     )
 
 
-Progress = Callable[[int, int, dict[str, Any]], None]
+Progress = StepReport
 """Called as ``progress(index, total, scalars)`` after each step (``index`` from 0; the
 table and ``--step`` number that step ``index + 1``; a resumed run reports only the steps
-it solves, its earlier ones are in the result's table)."""
+it solves, its earlier ones are in the result's table).  Where a run takes it, ``True``
+(the default) is a progress bar where a person watches, ``False`` or ``None`` nothing
+(:func:`~petsc_contact.io.progress.reporting`)."""
 
 
-def said(steps: list[Step], grid: Grid) -> list[Step]:
-    """``steps``, after warning (:class:`~petsc_contact.conventions.warnings.Unconverged`, on
-    ``grid``'s first rank) of those not converged or not accurate: a sweep never returns them
-    without a word."""
+def said(steps: Steps, grid: Grid) -> Steps:
+    """``steps``, after warning (:func:`~petsc_contact.conventions.warnings.step_warnings`, on
+    ``grid``'s first rank) of those not converged, not accurate or at full contact: a sweep
+    never returns them without a word."""
     if grid.comm.rank == 0:
-        for text in flagged_steps([step.scalars for step in steps]):
-            warnings.warn(text, Unconverged, stacklevel=3)
+        for text, kind in step_warnings([step.scalars for step in steps]):
+            warnings.warn(text, kind, stacklevel=user_level())
     return steps
 
 
@@ -175,6 +179,23 @@ def reported(steps: Iterator[Step], total: int, progress: Progress | None) -> It
         if progress is not None:
             progress(i, total, step.scalars)
         yield step
+
+
+def solved(
+    solve: Callable[..., Iterator[Step]],
+    total: int,
+    kind: str,
+    progress: Progress | bool | None,
+    monitor: Monitor | None,
+    grid: Grid,
+) -> Steps:
+    """The ``total`` steps of geometry ``kind`` that ``solve(monitor=...)`` gives, each
+    reported to ``progress`` (``True``: a bar where a person watches, which shows the
+    iterations too: :func:`~petsc_contact.io.progress.reporting`), collected
+    (:func:`~petsc_contact.geometries.step.collect`) and said (:func:`said`)."""
+    with reporting(progress, monitor, total, shown=grid.comm.rank == 0) as (report, watch):
+        steps = collect(reported(solve(monitor=watch), total, report), kind)
+    return said(steps, grid)
 
 
 @keywords_after_first(
@@ -198,11 +219,11 @@ def periodic_contact(
     options: _petsc.OptionsArg = None,
     fields: bool = False,
     stiffness: bool = False,
-    progress: Progress | None = None,
+    progress: Progress | bool | None = True,
     monitor: Monitor | None = None,
     comm: Any = None,
     device: str = "cpu",
-) -> list[Step]:
+) -> Steps:
     """Solve the periodic contact of ``heights`` for each nominal pressure.
 
     The parameters after ``heights`` are keywords, named as ``Run``'s fields and the command
@@ -227,18 +248,18 @@ def periodic_contact(
         Keep the local ``gap`` and ``pressure`` slabs of every step; add the exact
         incremental ``stiffness`` to every step (see :func:`sweep`).
     progress, monitor, comm
-        Called as ``progress(index, total, scalars)`` after each step (``index`` from 0: the
-        step numbered ``index + 1`` in the table and by ``--step``), as
-        ``monitor(iteration, f, gnorm)`` at every TAO iteration (``True`` stops); the mpi4py
-        communicator (default ``COMM_WORLD``).
+        ``progress(index, total, scalars)`` is told of each step (``index`` from 0: step
+        ``index + 1`` of the table; default ``True``: a bar where a person watches, ``False``:
+        nothing), ``monitor(iteration, f, gnorm)`` of every TAO iteration (``True`` stops); the
+        mpi4py communicator (default ``COMM_WORLD``).
     device
         ``cpu`` (TAO), ``gpu`` (the package's solver on CuPy) or ``cpu-array`` (its code on
         NumPy), on one rank without petsc4py, reading the options ``ArraySettings`` reads.
 
     Returns
     -------
-    list of Step
-        One per load, in order; only the last keeps ``state``, the field to go on from.
+    Steps
+        A list, one per load in order (``to_dataframe()``: a table); the last keeps ``state``.
     """
     array, sides, _ = map_and_lengths(heights, length)
     loads = check_pressures(np.atleast_1d(pressures).tolist())
@@ -247,8 +268,8 @@ def periodic_contact(
     with _petsc.scoped_options(options) if on_host else nullcontext():
         problem = _periodic_problem(array, sides, modulus, comm, where)
         solver = None if on_host else problem_solver(problem, _petsc.option_list(options))
-        steps = sweep(problem, loads, fields, monitor, stiffness, solver=solver)
-        return said(collect(reported(steps, len(loads), progress)), problem.grid)
+        solve = partial(sweep, problem, loads, fields, stiffness=stiffness, solver=solver)
+        return solved(solve, len(loads), "periodic", progress, monitor, problem.grid)
 
 
 def _periodic_problem(

@@ -23,8 +23,8 @@ import numpy as np
 
 from ..conventions.grid import Grid, grid_for, self_comm
 from ..conventions.validation import keywords_after_first
-from ..conventions.warnings import PetscContactWarning
-from ..io.topography import Heights, map_and_lengths
+from ..conventions.warnings import PetscContactWarning, user_level
+from ..io.topography import Channel, Heights, as_topography, check_given
 from ..numerics.fft import FFT, SerialFFT
 from ..physics import theory
 from ..physics.surface import radial_psd, rms_of
@@ -78,6 +78,14 @@ class Prediction:
             "crossover_pressure_paper": self.crossover_pressure_paper,
             "crossover_pressure_appendix": self.crossover_pressure_appendix,
         }
+
+    def _repr_html_(self) -> str:
+        """A notebook's display: the single numbers and the loads predicted."""
+        from ..io.tables import html_table
+
+        p = self.nominal_pressure
+        loads = f"{len(p)} nominal pressures" + (f", {p[0]:.3g} to {p[-1]:.3g}" if len(p) else "")
+        return html_table("Prediction", {**self.scalars(), "loads": loads})
 
 
 def hurst_from_spectrum(
@@ -219,7 +227,7 @@ def _check_fit(hurst: float, window: tuple[float, float], r2: float) -> None:
             f"{HURST_RANGE[1]:g}: the spectrum is no power law of a self-affine surface between "
             f"q = {window[0]:.3g} and {window[1]:.3g}; p_c, which needs H, is not meaningful",
             TheoryWarning,
-            stacklevel=4,
+            stacklevel=user_level(),
         )
     elif r2 < GOOD_FIT:
         warnings.warn(
@@ -227,7 +235,7 @@ def _check_fit(hurst: float, window: tuple[float, float], r2: float) -> None:
             f"{window[0]:.3g} and {window[1]:.3g} (a good fit: above {GOOD_FIT}): H = "
             f"{hurst:.3g} and p_c are doubtful",
             TheoryWarning,
-            stacklevel=4,
+            stacklevel=user_level(),
         )
 
 
@@ -254,7 +262,7 @@ def _resolved_loads(
             f"from p0 = {first:.3g}: the {np.count_nonzero(~valid)} loads from there are left "
             "out, their values would be rounding",
             TheoryWarning,
-            stacklevel=4,
+            stacklevel=user_level(),
         )
     return gap, stiffness, valid
 
@@ -263,39 +271,59 @@ def _resolved_loads(
 def predict_map(
     heights: Heights,
     *,
-    length: float | tuple[float, float] | None = None,
-    modulus: float = 1.0,
+    length: float | tuple[float, float] | str | None = None,
+    modulus: float | str = 1.0,
     pressures: float | Sequence[float] | None = None,
+    channel: Channel = None,
+    height_unit: str | None = None,
+    override_metadata: bool = False,
+    fill_undefined: str = "error",
+    detrend: str = "none",
 ) -> Prediction:
     """Persson's theory and the finite-size estimates for a whole map, in one process.
 
     The parameters after ``heights`` are keywords, named as
     :class:`~petsc_contact.workflows.description.Run`'s fields (given by position they still
-    work until 0.3.0, with a ``DeprecationWarning``).
+    work until 0.3.0, with a ``DeprecationWarning``).  The map is prepared as a run prepares
+    it (:func:`~petsc_contact.workflows.scene.measured`: filled, detrended, put in the unit of
+    its sides, with the same warnings about its slope and edges); lengths of the prediction
+    are in the unit of its sides, pressures in the modulus's.
 
     Parameters
     ----------
     heights
         The ``nx x ny`` map in any form (:func:`~petsc_contact.io.topography.as_topography`):
-        an array (prepared: no undefined points),
-        :func:`~petsc_contact.io.topography.read_topography`'s result, a SurfaceTopography
-        ``Topography`` or a file's path.  A map with sides of its own gives them.
+        an array, :func:`~petsc_contact.io.topography.read_topography`'s result, a
+        SurfaceTopography ``Topography`` or a file's path.  A map with sides of its own gives
+        them.
     length
-        The sides (``L`` or ``(Lx, Ly)``); optional for a map with sides.
+        The sides (``L``, ``(Lx, Ly)`` or text with a unit, ``"100um"``); optional for a map
+        with sides.
     modulus
-        The contact modulus ``E*``; pressures are in its unit.
+        The contact modulus ``E*`` (``1e9``, or ``"1GPa"``); pressures are in its unit.
     pressures
         Nominal pressures for ``u_bar(p)`` and ``K(p)`` (default: 25 from 1e-7 to 1e-1 E*).
+    channel, height_unit, override_metadata, fill_undefined, detrend
+        The map's preparation, as :class:`~petsc_contact.workflows.description.Run`'s fields
+        of those names.
     """
-    array, sides, _ = map_and_lengths(heights, length)
-    grid = grid_for(array.shape, sides)
-    if grid.comm.size > 1:
-        grid = grid_for(array.shape, sides, self_comm())
-    lo, hi, n = DEFAULT_LOADS
-    p = np.geomspace(lo * modulus, hi * modulus, n) if pressures is None else pressures
-    values = np.asarray(array, dtype=float)
-    if not np.all(np.isfinite(values)):
-        raise ValueError("the map has undefined heights: fill them first")
-    return predict(
-        grid, SerialFFT(grid), values, modulus, np.atleast_1d(np.asarray(p, dtype=float))
+    from .description import Run
+    from .scene import given_lengths, measured
+
+    topo = as_topography(heights, channel)
+    check_given(topo, length, fill_undefined, override_metadata)
+    run = Run(
+        heights=topo,
+        length=length,
+        modulus=modulus,
+        height_unit=height_unit,
+        override_metadata=override_metadata,
+        fill_undefined=fill_undefined,
+        detrend=detrend,
     )
+    full, lengths, _, _ = measured(run, given_lengths(run), self_comm())
+    grid = grid_for(full.shape, lengths.pair, self_comm())
+    (lo, hi, n), modulus_value = DEFAULT_LOADS, run.modulus_value
+    p = np.geomspace(lo * modulus_value, hi * modulus_value, n) if pressures is None else pressures
+    loads = np.atleast_1d(np.asarray(p, dtype=float))
+    return predict(grid, SerialFFT(grid), np.asarray(full, float), modulus_value, loads)

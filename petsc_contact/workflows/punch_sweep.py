@@ -11,6 +11,7 @@ import warnings
 from collections.abc import Iterator, Sequence
 from contextlib import nullcontext
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -20,13 +21,13 @@ from ..backend.solve import BoundSolver, Monitor
 from ..conventions.grid import grid_for
 from ..conventions.validation import check_finite, keywords_after_first, positive
 from ..geometries.punch import PunchProblem, footprint_mask
-from ..geometries.step import Step, collect, solve_step
+from ..geometries.step import Step, Steps, solve_step
 from ..io.topography import Heights, map_and_lengths
 from ..numerics.device import Device, get_device
 from ..physics.continuation import Held
 from ..solver.driver import ArraySettings, ArraySolver
 from ..solver.report import FORCE_ACCURACY
-from .periodic_sweep import Progress, reported, said
+from .periodic_sweep import Progress, solved
 from .scene import check_map
 
 FORCE_RTOL = 1e-6
@@ -258,7 +259,7 @@ def punch_contact(
     options: _petsc.OptionsArg = None,
     fields: bool = False,
     stiffness: bool = False,
-    progress: Progress | None = None,
+    progress: Progress | bool | None = True,
     monitor: Monitor | None = None,
     footprint: str | np.ndarray | None = None,
     flat_stiffness: str = "grid",
@@ -266,7 +267,7 @@ def punch_contact(
     comm: Any = None,
     flat: str | None = None,
     device: str = "cpu",
-) -> list[Step]:
+) -> Steps:
     """Press a rigid punch with face ``heights`` into a free elastic half-space.
 
     The parameters after ``heights`` are keywords, named as ``Run``'s fields and the command
@@ -297,17 +298,17 @@ def punch_contact(
 
     Returns
     -------
-    list of Step
-        One per load, in order; only the last keeps ``state``, the field to go on from.
+    Steps
+        A list, one per load in order (``to_dataframe()``: a table); the last keeps ``state``.
     """
     face = _PunchFace(footprint, _renamed_flat(flat, flat_stiffness), beta, *_on(device, options))
-    values = _punch_loads(approaches, forces)
+    values, by_force = _punch_loads(approaches, forces), forces is not None
     array, sides, _ = map_and_lengths(heights, length)
     with _petsc.scoped_options(options) if face.settings is None else nullcontext():
         problem = _punch_problem(array, sides, modulus, face, comm)
         with PunchSolver(problem) as solver:
-            steps = punch_sweep(solver, values, forces is not None, fields, monitor, stiffness)
-            return said(collect(reported(steps, len(values), progress)), problem.grid)
+            solve = partial(punch_sweep, solver, values, by_force, fields, stiffness=stiffness)
+            return solved(solve, len(values), "punch", progress, monitor, problem.grid)
 
 
 def _punch_loads(

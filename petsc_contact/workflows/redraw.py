@@ -17,7 +17,7 @@ import numpy as np
 from ..io.lock import check_writable
 from ..io.paths import check_output
 
-FIGURE_FILES = ("theory", "periodic ensemble")  # no maps: their figure is their plot
+FIGURE_FILES = ("theory", "periodic ensemble", "experiment")  # no maps: their figure is their plot
 LOAD_PLOTS = {
     "periodic": ("nominal_pressure", "area_fraction", "mean_gap", "converged"),
     "punch": ("approach", "force", "nominal_pressure", "interfacial_stiffness", "converged"),
@@ -129,17 +129,17 @@ def draw_map(
 
 def _scaled(f: Any, name: str) -> tuple[np.ndarray, str]:
     """Dataset ``name`` of ``f`` (all its steps) and its colour bar's label, in the file's
-    units (lengths with an SI prefix)."""
-    from ..conventions.units import METRES, display_unit
+    units with the prefix that suits its typical value (a gap in nm, a pressure in MPa)."""
+    from ..conventions.units import display_scale, typeset, typical_magnitude
     from ..io.schema import ENTRIES, in_unit
 
     data = f[name][...]
     units = in_unit(ENTRIES[name], str(f.attrs.get("length_unit", "")),
                     str(f.attrs.get("pressure_unit", "")))  # fmt: skip
     symbolic = {"length": "unit of --length", "pressure": "unit of --modulus"}
-    if ENTRIES[name].units == "length" and units.units in METRES:  # with an SI prefix: nm
-        scale, shown = display_unit(float(np.max(np.abs(data))), units.units)
-        return data * scale, f"{name} ({shown})"
+    if units.units != ENTRIES[name].units and units.units not in symbolic:  # with a prefix
+        scale, shown = display_scale(typical_magnitude(data), units.units)
+        return data * scale, f"{name} ({typeset(shown)})"
     return data, f"{name} ({symbolic.get(units.units, units.units)})"
 
 
@@ -193,15 +193,17 @@ def _draw_file(f: Any, path: str, out: str) -> None:
     geometry = str(f.attrs.get("geometry", ""))
     if geometry == "theory":
         _plot_theory_file(f, out)
+    elif geometry == "experiment":
+        from ..io.plot import plot_experiment
+
+        plot_experiment(out, *(f[k][...] for k in ("pressure", "measured_stiffness", "stiffness")))
     elif geometry == "periodic ensemble":
         _plot_ensemble_file(f, path, out)
-    elif geometry == "punch":
-        plot_punch(out, _steps(f, path, LOAD_PLOTS["punch"]), _units(f))
-    elif geometry == "periodic":
-        rms_height = float(f.attrs.get("rms_height", 0.0))
-        plot_sweep(
-            out, _steps(f, path, LOAD_PLOTS["periodic"]), float(f.attrs["modulus"]), rms_height
-        )
+    elif geometry in LOAD_PLOTS:
+        draw = plot_punch if geometry == "punch" else plot_sweep
+        modulus, rms_height = float(f.attrs["modulus"]), float(f.attrs.get("rms_height", 0.0))
+        steps = _steps(f, path, LOAD_PLOTS[geometry])
+        draw(out, steps, modulus=modulus, h_rms=rms_height, units=_units(f))
     else:
         raise ValueError(f"'{path}' holds no load sweep to draw (geometry '{geometry}')")
 
@@ -221,21 +223,19 @@ def _units(f: Any) -> dict[str, str]:
 
 
 def _plot_ensemble_file(f: Any, path: str, out: str) -> None:
-    """An ensemble's statistics, the stiffness scaled by its seeds' mean rms height (their
-    files, which the ensemble names, give it and the modulus)."""
+    """An ensemble's statistics, in its seeds' units or, unit-free, each seed's stiffness
+    scaled by its own rms height (their files, which the ensemble names, give them and the
+    modulus)."""
     import h5py
 
     from ..io.plot import plot_ensemble
-    from .seeds import mean_rms_height
+    from .seeds import seed_files, seed_scales
 
-    seeds = json.loads(f.attrs["seed_files"])
-    absent = [name for name in seeds if not os.path.exists(name)]
-    if absent:
-        raise ValueError(f"'{path}': its seeds' files are needed, and {absent[0]} is missing")
+    seeds = seed_files(path, f)
     with h5py.File(seeds[0], "r") as seed:
         modulus = float(seed.attrs["modulus"])  # the same for every seed
     summary = {name: f[name][...] for name in f}
-    plot_ensemble(out, summary, modulus, mean_rms_height(seeds))
+    plot_ensemble(out, summary, modulus, *seed_scales(seeds))
 
 
 def _plot_theory_file(f: Any, out: str) -> None:
@@ -254,5 +254,4 @@ def _plot_theory_file(f: Any, out: str) -> None:
         crossover_pressure_paper=float(f.attrs.get("crossover_pressure_paper", 2 * appendix)),
         fit_range=tuple(json.loads(f.attrs["fit_range"])),
     )
-    units = {"length": str(f.attrs.get("length_unit", ""))}
-    plot_theory(out, result, float(f.attrs.get("modulus", 1.0)), units=units)
+    plot_theory(out, result, float(f.attrs.get("modulus", 1.0)), units=_units(f))

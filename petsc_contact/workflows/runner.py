@@ -39,8 +39,17 @@ import numpy as np
 from ..backend import _petsc
 from ..backend.solve import Monitor
 from ..conventions.grid import world
-from ..conventions.warnings import FilledLoad, ResumeWarning, Unconverged, flagged_steps, recorded
+from ..conventions.warnings import (
+    FilledLoad,
+    PetscContactWarning,
+    ResumeWarning,
+    option,
+    recorded,
+    step_warnings,
+    user_level,
+)
 from ..geometries.step import FIELD_NAMES, Step
+from ..io.progress import reporting
 from ..io.schema import FILE_RECORD
 from ..io.store import (
     Finished,
@@ -122,6 +131,21 @@ class RunResult:
 
         return table_frame(self.table, str(self.record.get("geometry", "")))
 
+    def _repr_html_(self) -> str:
+        """A notebook's display: the status, the output, the warnings and the step table."""
+        from ..io.tables import html_table
+
+        about: dict[str, Any] = {
+            "status": self.status,
+            "steps": len(self.table),
+            "converged": self.converged,
+            "accurate": self.accurate,
+            "output": self.output or "none (in memory)",
+        }
+        about |= {f"warning {i}": text for i, text in enumerate(self.warnings, 1)}
+        caption = f"{self.record.get('geometry', '')} run".strip()
+        return html_table(caption, about) + str(self.to_dataframe().to_html(max_rows=30))
+
 
 @dataclass
 class Prepared:
@@ -147,21 +171,27 @@ class Prepared:
         return self.driver.intro
 
     def execute(
-        self, progress: Progress | None = None, monitor: Monitor | None = None
+        self, progress: Progress | bool | None = True, monitor: Monitor | None = None
     ) -> RunResult:
         """Solve every load not yet finished; commit each step to the output (if any).
 
         A signal (see :func:`~petsc_contact.io.store.interrupt`) is checked after each
         step's commit and before and after the output is assembled: wherever it came, the
         run ends with :class:`RunInterrupted` saying what was kept.  The run's warnings are
-        given as they come, and kept in the result and the file."""
+        given as they come, and kept in the result and the file.  ``progress`` and
+        ``monitor`` as :func:`run_contact` takes them."""
         if self.resumable.whole:  # resumed on its complete output: its steps, nothing solved
             self.driver.close()
             table = self.resumable.rows()
             self._say_flagged(self._flagged(table))
             return RunResult(COMPLETE, table, [], self.record, self.run.output, self.warnings)
-        with recorded(self.warnings):
-            status, table, steps = self._run(progress, monitor)
+        shown = self.scene.grid.comm.rank == 0
+        total, done = len(self.loads), self.resumable.steps
+        with (
+            reporting(progress, monitor, total, done, shown) as (report, watch),
+            recorded(self.warnings),
+        ):
+            status, table, steps = self._run(report, watch)
         return RunResult(status, table, steps, self.record, self.run.output, list(self.warnings))
 
     def _run(
@@ -235,17 +265,18 @@ class Prepared:
             steps[-1].take_resume()  # the one kept, on the host
         return COMPLETE
 
-    def _flagged(self, table: list[dict[str, Any]]) -> list[str]:
-        """The :class:`Unconverged` texts of ``table``, added to the run's warnings."""
-        flagged = flagged_steps(table, self.run.output)
-        self.warnings += [text for text in flagged if text not in self.warnings]
+    def _flagged(self, table: list[dict[str, Any]]) -> list[tuple[str, type[PetscContactWarning]]]:
+        """The texts of ``table``'s flagged steps with their classes (:class:`Unconverged`,
+        :class:`FullContact`: :func:`step_warnings`), added to the run's warnings."""
+        flagged = step_warnings(table, self.run.output)
+        self.warnings += [text for text, _ in flagged if text not in self.warnings]
         return flagged
 
-    def _say_flagged(self, flagged: list[str]) -> None:
+    def _say_flagged(self, flagged: list[tuple[str, type[PetscContactWarning]]]) -> None:
         """Warn each of ``flagged`` (rank 0): the steps stay in the results, flagged."""
         if self.scene.grid.comm.rank == 0:
-            for text in flagged:
-                warnings.warn(text, Unconverged, stacklevel=4)
+            for text, kind in flagged:
+                warnings.warn(text, kind, stacklevel=user_level())
 
     def _check_filled_load(self, table: list[dict[str, Any]]) -> None:
         """Warn (:class:`FilledLoad`, rank 0) when more than :data:`FILLED_LOAD` of the load
@@ -255,10 +286,10 @@ class Prepared:
         if share > FILLED_LOAD and self.scene.grid.comm.rank == 0:
             warnings.warn(
                 f"{share:.0%} of the load rests on filled heights at step {step} "
-                f"(--fill-undefined {self.run.fill_undefined}): the answer depends on how "
-                "they were filled (the output's 'filled' map and filled_load_fraction)",
+                f"({option('fill_undefined', self.run.fill_undefined)}): the answer depends on "
+                "how they were filled (the output's 'filled' map and filled_load_fraction)",
                 FilledLoad,
-                stacklevel=2,
+                stacklevel=user_level(),
             )
 
     def _note(self, store: StepStore) -> None:
@@ -322,6 +353,7 @@ def prepare(run: Run, command_line: str | None = None, petsc: ModuleType | None 
     texts: list[str] = []
     with recorded(texts):  # the map's warnings, what a resume computes again
         scene = prepare_scene(run, default_solver=default_solver)
+        _hint_ranks(scene)
         driver = driver_for(run, scene)
         try:
             record = _record(run, command_line, petsc, scene, driver) | {"warnings": texts}
@@ -330,6 +362,28 @@ def prepare(run: Run, command_line: str | None = None, petsc: ModuleType | None 
             driver.close()
             raise
     return Prepared(run, scene, driver, record, finished, texts)
+
+
+_HINTED: set[str] = set()  # the rank hints this process gave: each once (an ensemble's seeds)
+
+
+def _hint_ranks(scene: Scene) -> None:
+    """Say once, on rank 0, that the run has more MPI ranks than help (:class:`IdleRanks`,
+    :func:`~petsc_contact.conventions.resources.rank_excess`; collective)."""
+    from ..conventions.resources import rank_excess
+    from ..conventions.warnings import IdleRanks
+
+    grid = scene.grid
+    excess = rank_excess(grid.comm, grid.shape[0])
+    if excess and grid.comm.rank == 0 and excess not in _HINTED:
+        _HINTED.add(excess)
+        (nx, ny), ranks = grid.shape, grid.comm.size
+        warnings.warn(
+            f"{ranks} MPI ranks are more than this {nx}x{ny} grid can use: {excess}; fewer "
+            "ranks give the same result, likely sooner",
+            IdleRanks,
+            stacklevel=user_level(),
+        )
 
 
 def _record(
@@ -357,45 +411,48 @@ def _finished(run: Run, scene: Scene, record: dict[str, Any], total: int) -> Fin
     resumes; a :class:`ResumeWarning` when its next step starts from first touch); without
     ``resume`` or ``overwrite``, ``ValueError`` when its output holds finished steps."""
     if run.resume and run.output is not None:
-        finished = _resumable(run.output, run, scene, record["parameters"])
+        finished = _resumable(run.output, run, scene, record)
         if not finished.steps:  # a complete output of this run: nothing to compute
-            finished = read_complete(run.output, record["parameters"])
+            finished = read_complete(run.output, record["parameters"], record.get("heights_sha256"))
         if finished.steps and finished.state is None and finished.steps < total:
             step = finished.steps + 1  # the same result, at more cost
             warnings.warn(
                 f"{finished.state_problem}: step {step} starts from first touch",
                 ResumeWarning,
-                stacklevel=4,
+                stacklevel=user_level(),
             )
         return finished
     if run.output is not None and not run.overwrite:
         check_nothing_lost(run.output)
-        warn_replaced(run.output, stacklevel=4)
+        warn_replaced(run.output, stacklevel=user_level())
     return Finished(0)
 
 
-def _resumable(output: str, run: Run, scene: Scene, parameters: dict[str, Any]) -> Finished:
-    """What an interrupted ``run`` left in ``output``'s files to go on from, less what its
-    part files cannot give (computed again, with a warning saying what); rank 0 reads the
-    parts; each rank checks the state's slabs that hold its rows."""
-    finished = read_resume(output, parameters, scene.grid)
+def _resumable(output: str, run: Run, scene: Scene, record: dict[str, Any]) -> Finished:
+    """What an interrupted ``run`` of record ``record`` left in ``output``'s files to go on
+    from (none of another run or another map), less what its part files cannot give (computed
+    again, with a warning saying what); rank 0 reads the parts; each rank checks the state's
+    slabs that hold its rows."""
+    finished = read_resume(output, record["parameters"], scene.grid, record.get("heights_sha256"))
     comm = scene.grid.comm
     maps = any(m is not None for m in _maps(run, scene))
     mine = check_parts(output, finished, maps, run.fields) if comm.rank == 0 else None
     check: PartsCheck = comm.bcast(mine, root=0)
     if check.problem:
-        warnings.warn(check.problem, ResumeWarning, stacklevel=4)
+        warnings.warn(check.problem, ResumeWarning, stacklevel=user_level())
     return finished.redo(check, output)
 
 
 def run_contact(
     run: Run,
-    progress: Progress | None = None,
+    progress: Progress | bool | None = True,
     monitor: Monitor | None = None,
     command_line: str | None = None,
 ) -> RunResult:
     """Run ``run`` (see :class:`~petsc_contact.workflows.description.Run`): its output locked
-    for the whole run, its PETSc options for this call only.
+    for the whole run, its PETSc options for this call only.  ``SIGTERM``, as ``Ctrl-C``,
+    raises :class:`RunInterrupted` (the finished steps kept for ``resume``) where the caller
+    has no handler of its own (:func:`~petsc_contact.io.interrupts.interruptible`).
 
     Parameters
     ----------
@@ -403,19 +460,24 @@ def run_contact(
         The run.
     progress
         Called as ``progress(index, total, scalars)`` after each step, ``index`` from 0
-        (:data:`Progress`; the table and ``--step`` number that step ``index + 1``).
+        (:data:`Progress`; the table and ``--step`` number that step ``index + 1``), in place
+        of the default ``True``: a progress bar where a person watches (a terminal, a
+        notebook; the iterations of the step under way too), nothing where the output is
+        captured; ``False`` or ``None``: nothing.
     monitor
         Called as ``monitor(iteration, f, gnorm)`` at every TAO iteration; ``True`` stops.
     command_line
         What to record as the command line (default: the arguments that describe ``run``).
     """
-    with locked(run.output), _scoped(run) as petsc:
+    from ..io.interrupts import interruptible
+
+    with interruptible(), locked(run.output), run_options(run) as petsc:
         return prepare(run, command_line, petsc).execute(progress, monitor)
 
 
-def _scoped(run: Run) -> AbstractContextManager[ModuleType | None]:
-    """PETSc with ``run``'s options for the ``cpu`` device; nothing for an array device (its
-    solver reads ``run.options`` itself)."""
+def run_options(run: Run) -> AbstractContextManager[ModuleType | None]:
+    """PETSc with ``run``'s options and its ``options_prefix`` for the ``cpu`` device;
+    nothing for an array device (its solver reads ``run.options`` itself)."""
     if run.device == "cpu":
         return _petsc.scoped_options(list(run.options), run.options_prefix)
     return nullcontext(None)
@@ -472,7 +534,7 @@ def run_record(
     """What reproduces the run: its description (defaults resolved), versions, PETSc options
     (an array device's run, with ``petsc`` None: the options it was given), its device."""
     from ..conventions.units import force_unit
-    from ..io.provenance import file_digest
+    from ..io.provenance import input_digest
 
     params = run.parameters() | {k: v for k, v in resolved.items() if k not in FILE_RECORD}
     lengths, unit = resolved["length"], resolved["length_unit"]
@@ -502,7 +564,7 @@ def run_record(
     if run.measured:
         if run.heights_file is not None:
             attrs["heights_file"] = os.path.abspath(run.heights_file)
-            attrs["heights_sha256"] = file_digest(run.heights_file)
+        attrs["heights_sha256"] = input_digest(run.heights)  # a resume joins only this map
         attrs.update({k: resolved[k] for k in FILE_RECORD})
     else:
         attrs.update(

@@ -27,8 +27,8 @@ import numpy as np
 from ..conventions.grid import Grid, block_rows, grid_for, world
 from ..conventions.units import Lengths, factor, parse_lengths, unit_name
 from ..conventions.validation import check_finite
-from ..conventions.warnings import DoubtfulMap
-from ..io.topography import Topography, as_topography
+from ..conventions.warnings import DoubtfulMap, option, user_level
+from ..io.topography import Topography, as_topography, check_guessed_sides
 from ..numerics.device import get_device
 from .description import Run
 
@@ -280,7 +280,7 @@ def measured(
             f"({run.fill_undefined}): the contact may sit on filled points; the output's "
             "'filled' map and filled_contact_fraction say where and how much",
             DoubtfulMap,
-            stacklevel=2,
+            stacklevel=user_level(),
         )
     full = detrend(full, grid.spacing, run.detrend)
     if scale != 1.0:
@@ -325,6 +325,8 @@ def _units(run: Run, topo: Topography, lengths: Lengths | None) -> tuple[Lengths
             )
         overridden.append("height_unit")
     heights_unit = given or topo.unit
+    if lengths is not None:
+        check_guessed_sides(topo, lengths.values)
     if lengths is None:
         lengths = Lengths(topo.lengths, topo.unit) if topo.lengths else Lengths((1.0,), None)
     elif topo.lengths:
@@ -389,25 +391,25 @@ def check_map(full: np.ndarray, grid: Grid, periodic: bool, detrended: str = "no
     if slope > 0 and not SLOPE_RANGE[0] <= slope <= SLOPE_RANGE[1]:
         warnings.warn(
             f"the map's rms slope (finite differences inside the map) is {slope:.3g}, outside "
-            f"{SLOPE_RANGE[0]:g}..{SLOPE_RANGE[1]:g}: are the units right (--length, "
-            "--height-unit)?",
+            f"{SLOPE_RANGE[0]:g}..{SLOPE_RANGE[1]:g}: are the units right ({option('length')}, "
+            f"{option('height_unit')})?",
             DoubtfulMap,
-            stacklevel=3,
+            stacklevel=user_level(),
         )
     mismatch = edge_mismatch(full, steps)
     if periodic and mismatch > EDGE_MISMATCH_LIMIT:
         done = detrended in ("slope", "curvature")
         remedy = (
-            "the free-boundary geometry (petsc-contact punch) needs no periodicity"
+            f"the free-boundary geometry ({option('geometry', 'punch')}) needs no periodicity"
             if done
-            else "consider --detrend slope, or the free-boundary geometry (petsc-contact "
-            "punch), which needs no periodicity"
+            else f"consider {option('detrend', 'slope')}, or the free-boundary geometry "
+            f"({option('geometry', 'punch')}), which needs no periodicity"
         )
         warnings.warn(
             f"the map's opposite edges differ by {mismatch:.3g} times its typical neighbour "
-            f"step{f' after --detrend {detrended}' if done else ''}, so treated as periodic it "
-            f"has a step at its edges; {remedy}",
+            f"step{' after ' + option('detrend', detrended) if done else ''}, so treated as "
+            f"periodic it has a step at its edges; {remedy}",
             DoubtfulMap,
-            stacklevel=3,
+            stacklevel=user_level(),
         )
     return slope

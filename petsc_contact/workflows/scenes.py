@@ -20,6 +20,7 @@ from ..io.results import trusted
 from ..io.schema import write_attributes
 from ..numerics.fft import make_fft
 from ..physics import theory
+from ..physics.observables import MIN_CONTACT_PIXELS, contact_resolved
 from ..physics.surface import psd_shape, rms_of, self_affine
 from .periodic_sweep import periodic_contact
 from .punch_sweep import punch_contact
@@ -106,24 +107,6 @@ def with_sweep_stiffness(col: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
             col["nominal_pressure"][good], col["mean_gap"][good]
         )
     return col
-
-
-MIN_CONTACT_PIXELS = 16
-
-
-def contact_resolved(
-    area_fraction: np.ndarray, points_per_map: int, min_contact_pixels: int = MIN_CONTACT_PIXELS
-) -> np.ndarray:
-    """Steps whose contact is resolved: at least ``min_contact_pixels``
-    (:data:`MIN_CONTACT_PIXELS`) of the map's ``points_per_map`` pixels in contact.
-
-    A contact of a few pixels does not resolve its own stiffness: the flat punch's grid
-    stiffness converges like ``1/n`` (docs/figures.md), so a spot a few pixels wide is off by
-    tens of percent, and a single asperity of 16 pixels (radius about 2.3 pixels) already by
-    a few.  Unresolved steps are drawn apart in the figures and never fitted.
-    """
-    pixels = np.rint(np.asarray(area_fraction, dtype=float) * points_per_map)  # its count
-    return pixels >= min_contact_pixels
 
 
 def resolved(area_fraction: np.ndarray, n: int) -> np.ndarray:

@@ -20,6 +20,7 @@ import json
 import os
 import re
 import shutil
+import warnings
 from collections.abc import Sequence
 from contextlib import suppress
 from dataclasses import dataclass
@@ -239,32 +240,90 @@ def summarise(seeds: Sequence[int], files: Sequence[str]) -> dict[str, np.ndarra
     return summary
 
 
-def mean_rms_height(files: Sequence[str]) -> float:
-    """The seeds' mean rms height (their files' ``rms_height``): what an ensemble's stiffness
-    is scaled by, ``K h_rms/E*``."""
+def seed_scales(files: Sequence[str]) -> tuple[np.ndarray, dict[str, str]]:
+    """Each seed's rms height (its file's ``rms_height``: what a unit-free ensemble's figure
+    scales that seed's stiffness by, ``K h_rms/E*``) and the seeds' units (``length``,
+    ``pressure``; ``""`` where they have none), as
+    :func:`~petsc_contact.io.plot.plot_ensemble` takes them."""
     import h5py
 
-    heights = []
+    heights, units = [], {"length": "", "pressure": ""}
     for path in files:
         with h5py.File(path, "r") as f:
             heights.append(float(f.attrs["rms_height"]))
-    return float(np.mean(heights))
+            units = {k: str(f.attrs.get(f"{k}_unit", "")) for k in ("length", "pressure")}
+    return np.array(heights), units
+
+
+def mean_rms_height(files: Sequence[str]) -> float:
+    """Deprecated (until 0.3.0): the seeds' mean rms height; :func:`seed_scales` gives each
+    seed's, which an ensemble's figure scales that seed by."""
+    warnings.warn(
+        "workflows.seeds.mean_rms_height is deprecated: use seed_scales",
+        DeprecationWarning,
+        stacklevel=2,
+    )
+    return float(np.mean(seed_scales(files)[0]))
 
 
 def write_summary(
     path: str, summary: dict[str, np.ndarray], files: Sequence[str], record: dict[str, Any]
 ) -> None:
-    """The ensemble's ``OUT.h5``: the summary, the seeds' files and the record (atomically),
-    every dataset on the dimensions ``seed`` (the seeds) and ``step`` (from 1)."""
+    """The ensemble's ``OUT.h5``: the summary, the seeds' files (relative to its folder, with
+    each one's ``created`` stamp) and the record (atomically), every dataset on the
+    dimensions ``seed`` (the seeds) and ``step`` (from 1)."""
+    folder = os.path.dirname(os.path.abspath(path))
     with atomic_h5(path) as out:
         write_attributes(out, {"geometry": "periodic ensemble", **record})
-        out.attrs["seed_files"] = json.dumps([os.path.abspath(p) for p in files])
+        out.attrs["seed_files"] = json.dumps([os.path.relpath(p, folder) for p in files])
+        out.attrs["seed_created"] = json.dumps([_identity(p)[0] for p in files])
         seed = scale(out, "seed", summary["seeds"])
         step = scale(out, "step", np.arange(1, len(summary["nominal_pressure"]) + 1))
         for name, values in summary.items():
             labelled(out, name, values, [seed] if name == "seeds" else [seed, step][-values.ndim :])
         out.attrs["complete"] = True
         annotate(out, ensemble_entry)
+
+
+def seed_files(path: str, ensemble: Any) -> list[str]:
+    """The seeds' files of the open ensemble file ``ensemble`` at ``path``, found from its
+    folder: its ``seed_files`` are relative to it (those of an earlier version, absolute: the
+    file of that name beside it, else that path).  ``ValueError`` (one line) when one is
+    missing, or is not the run the ensemble summarised: not of its seed, or not with the
+    ``created`` stamp the ensemble recorded (``seed_created``; an earlier version's file
+    records none)."""
+    folder = os.path.dirname(os.path.abspath(path))
+    names = json.loads(ensemble.attrs["seed_files"])
+    found = []
+    for name in names:
+        beside = os.path.join(folder, os.path.basename(name) if os.path.isabs(name) else name)
+        seed = beside if os.path.exists(beside) or not os.path.isabs(name) else name
+        if not os.path.exists(seed):
+            raise ValueError(f"'{path}': its seeds' files are needed, and {seed} is missing")
+        found.append(seed)
+    stamps = json.loads(ensemble.attrs.get("seed_created", "null"))
+    for seed, stamp, k in zip(found, stamps or (), ensemble["seeds"][...], strict=False):
+        created, theirs = _identity(seed)
+        if (created, theirs) != (stamp, int(k)):
+            raise ValueError(
+                f"'{path}': {seed} is not the run of seed {k} it summarises (seed {theirs}, "
+                f"created {created or '?'}; the ensemble's was created {stamp}): the "
+                "ensemble's --resume summarises the seed files there again"
+            )
+    return found
+
+
+def _identity(path: str) -> tuple[str, int | None]:
+    """The ``created`` stamp and the seed of run file ``path`` (``""`` and ``None`` where it
+    records none or cannot be read)."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as f:
+            seed = json.loads(f.attrs.get("parameters", "{}")).get("seed")
+            return str(f.attrs.get("created", "")), seed
+    except (OSError, ValueError):
+        return "", None
 
 
 def ensemble_record(
@@ -283,7 +342,7 @@ def ensemble_record(
 
 
 def run_ensemble(
-    base: Run, seeds: Sequence[int], progress: Progress | None = None
+    base: Run, seeds: Sequence[int], progress: Progress | bool | None = True
 ) -> EnsembleResult:
     """Run ``base`` for every seed (each resumable; with ``base.resume`` the seeds whose files
     are complete are not run again; what an earlier ensemble left: :func:`seeds_to_run`),

@@ -87,10 +87,45 @@ def check_compared(paths: Sequence[str] | None, plot: str | None) -> None:
             raise ValueError(f"--compare takes periodic runs; '{path}' is not one ({what})")
 
 
-def compared_runs(paths: Sequence[str] | None) -> list[tuple[str, dict[str, np.ndarray]]]:
+def compared_runs(
+    paths: Sequence[str] | None, units: dict[str, str]
+) -> list[tuple[str, dict[str, np.ndarray]]]:
     """Each run to draw beside the theory: its file's name and its trusted steps' loads,
-    mean gaps and stiffnesses."""
-    return [(os.path.basename(path), _run_table(path)) for path in paths or ()]
+    mean gaps and stiffnesses, converted into the theory's ``units`` (``length``,
+    ``pressure``; ``""`` where it has none).
+
+    Raises
+    ------
+    ValueError
+        When a run and the theory do not both have a unit (or both none) for lengths and for
+        pressures: a bare number cannot be converted.
+    """
+    return [(os.path.basename(path), _in_units(path, units)) for path in paths or ()]
+
+
+def _in_units(path: str, units: dict[str, str]) -> dict[str, np.ndarray]:
+    """The run ``path``'s table (:func:`_run_table`) in the theory's ``units``."""
+    from ..conventions.units import METRES, PASCALS
+
+    table, given = _run_table(path)
+    factors = {}
+    for kind, table_of_units in (("length", METRES), ("pressure", PASCALS)):
+        theirs, ours = given[kind], units.get(kind, "")
+        if bool(theirs) != bool(ours):
+            raise ValueError(
+                f"--compare: '{path}' has {_unit_words(kind, theirs)} and the theory has "
+                f"{_unit_words(kind, ours)}: a bare number cannot be converted; give both "
+                "units (--modulus 1GPa, --length 100um), or neither"
+            )
+        factors[kind] = table_of_units[theirs] / table_of_units[ours] if ours else 1.0
+    scales = {"nominal_pressure": factors["pressure"], "mean_gap": factors["length"],
+              "stiffness": factors["pressure"] / factors["length"]}  # fmt: skip
+    return {name: values * scales[name] for name, values in table.items()}
+
+
+def _unit_words(kind: str, unit: str) -> str:
+    """``pressures in GPa``, or ``unit-free pressures``."""
+    return f"{kind}s in {unit}" if unit else f"unit-free {kind}s"
 
 
 def _geometry(path: str) -> str:
@@ -104,8 +139,9 @@ def _geometry(path: str) -> str:
         raise ValueError(f"--compare: '{path}' is not an HDF5 results file") from None
 
 
-def _run_table(path: str) -> dict[str, np.ndarray]:
-    """A simulation's loads, mean gaps and stiffnesses, to draw beside the theory."""
+def _run_table(path: str) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+    """A simulation's loads, mean gaps and stiffnesses, to draw beside the theory, and the
+    units its file records (``length``, ``pressure``; ``""`` for none)."""
     import h5py
 
     try:
@@ -113,8 +149,9 @@ def _run_table(path: str) -> dict[str, np.ndarray]:
             table = {k: f[k][...] for k in ("nominal_pressure", "mean_gap", "stiffness") if k in f}
             if "converged" in f:
                 table = {k: v[trusted(f)] for k, v in table.items()}
+            units = {k: str(f.attrs.get(f"{k}_unit", "")) for k in ("length", "pressure")}
     except OSError as exc:
         raise OSError(f"--compare: cannot read '{path}' ({exc})") from None
     if "mean_gap" not in table:
         raise ValueError(f"--compare: '{path}' is not a periodic run's file (no mean_gap)")
-    return table
+    return table, units

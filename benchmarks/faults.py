@@ -9,7 +9,8 @@ comparison, the study at a toy size): an uninterrupted run, then one run killed 
 each point of ``tests/kill_at.py``'s write path and ``--random`` runs killed at random
 instants, each followed by ``--resume`` (the study: run again).  A fault is survived when the
 resumed run exits 0 with every step equal to the uninterrupted run's: to rounding when it went
-on from the saved state, else to the solver's tolerance (``kill_at.same_result``).  The sweep
+on from the saved state, else to the solver's tolerance (``kill_at.same_result``), and no
+temporary file of a killed writer is left.  The sweep
 and the punch are also sent SIGTERM at points of the write path (and from inside a
 finaliser), which must end them with exit 130 and one note, and get a part file damaged,
 which must stop the assembly with exit 74 and one line; ``--resume`` then completes them.
@@ -145,10 +146,13 @@ def _kept(what: str, check: Callable[[], None], failures: list[str]) -> bool:
 
 
 def _resumed(args: list[str], whole: Path, out: Path, same: Callable[[Path, Path], None]) -> None:
-    """Run ``args`` (a resume) and assert that it ends ``out`` equal to ``whole``."""
+    """Run ``args`` (a resume) and assert that it ends ``out`` equal to ``whole``, with no
+    temporary file of a killed writer left beside it."""
     again = cli(*args)
     assert again.returncode == 0, again.stderr
     same(whole, out)
+    left = sorted(p.name for p in out.parent.glob(f"{out.stem}.*.tmp"))
+    assert not left, f"left behind: {left}"
 
 
 SIGNALS = ["before:commit:3:TERM", "after:commit:2:TERM", "after:state:2:TERM",

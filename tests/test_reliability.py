@@ -110,6 +110,18 @@ def test_compare_keeps_its_finished_solvers(tmp_path):
     assert _leftovers(out) == [] and (tmp_path / "cmp.csv").exists()
 
 
+def test_compare_resume_removes_a_killed_writers_temporary_file(tmp_path):
+    """A comparison killed while its second solver's commit was half written leaves that
+    temporary file; the resume that completes it removes it."""
+    command = "compare --grid 48 --hurst 0.7 --rms-slope 0.1 --pressures 1e-3 --solvers cg,pk"
+    out = tmp_path / "cmp.h5"
+    assert _killed("during:commit:2", command, out).returncode == -signal.SIGKILL
+    assert [p.name for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
+    r = cli(*command.split(), "--output", str(out), "--resume")
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cmp.csv", "cmp.h5", "cmp.png"]
+
+
 def test_ensemble_and_study_come_back_whole(tmp_path):
     """An ensemble killed while its second seed commits, and a study killed inside its first
     piece: --resume (the study: run again) ends with every seed and every piece, the killed

@@ -973,6 +973,13 @@ def _leftover_table(path: str) -> dict[str, list[Any]] | None:
         return None
 
 
+def remove_temporaries(path: str) -> None:
+    """Remove the temporary files that writers of output ``path`` killed mid-write left
+    (``OUT.h5.PID.tmp``, ``OUT.h5.partial.PID.tmp``, the table's); the caller holds the
+    output's lock."""
+    _clear(path, keep_steps=True)
+
+
 def _clear(path: str, keep_steps: bool) -> None:
     """Remove what runs on output ``path`` left: temporary files of killed writers always
     (the step table's too),

@@ -46,7 +46,13 @@ from ..io.names import partial_path
 from ..io.plot import plot_compare
 from ..io.results import group_name, labelled, scale
 from ..io.schema import COMPARE, annotate, write_attributes
-from ..io.store import check_resume_or_overwrite, check_same_input, check_same_run, warn_replaced
+from ..io.store import (
+    check_resume_or_overwrite,
+    check_same_input,
+    check_same_run,
+    remove_temporaries,
+    warn_replaced,
+)
 from ..physics.observables import natural_residual
 from ..physics.surface import rms_of
 from .periodic_sweep import sweep
@@ -499,6 +505,7 @@ def write_compare(
             f.write(",".join(str(v) for v in row) + "\n")
     png = stem + ".png"
     plot_compare(png, trajectories, reference)
+    remove_temporaries(path)  # of writers killed before this one
     return csv, png
 
 

@@ -2,10 +2,17 @@
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
+import importlib
 import os
 import shutil
+import signal
 import subprocess
 import sys
+import tempfile
+import traceback
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -14,9 +21,109 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def cli(*args: str, mpi: int = 0, timeout: float = 300) -> subprocess.CompletedProcess:
-    """Run ``petsc-contact ARGS`` (under ``mpiexec -n mpi`` if ``mpi``) with this interpreter."""
-    return python("-m", "petsc_contact.cli", *args, mpi=mpi, timeout=timeout)
+def cli(
+    *args: str, mpi: int = 0, process: bool = False, timeout: float = 300
+) -> subprocess.CompletedProcess:
+    """Run ``petsc-contact ARGS``: in this process by default (:func:`cli_in_process`), in a
+    fresh interpreter with ``process=True`` (a test of the process: signals, pipes, the
+    environment, what a start loads, the exit), under ``mpiexec -n mpi`` if ``mpi``."""
+    if mpi or process:
+        return python("-m", "petsc_contact.cli", *args, mpi=mpi, timeout=timeout)
+    return cli_in_process(*args)
+
+
+def cli_in_process(*args: str) -> subprocess.CompletedProcess:
+    """``petsc_contact.cli.main.main(ARGS)`` in this process, as a subprocess would report it:
+    the exit status and the text written on file descriptors 1 and 2 (PETSc's too), with the
+    process's state restored afterwards (signal handlers, standard streams, hooks, warning
+    filters, the environment, the working directory, PETSc's options database)."""
+    from petsc_contact.backend import _petsc
+
+    entry = importlib.import_module("petsc_contact.cli.main")  # the module, not the function
+
+    petsc = _petsc.init([])  # initialised once, so that a call's options are inserted, not kept
+    database = petsc.Options()
+    options_before = database.getAll()
+    handlers = {s: signal.getsignal(s) for s in (signal.SIGTERM, signal.SIGINT, signal.SIGPIPE)}
+    streams = (sys.stdout, sys.stderr, sys.stdin)
+    hook = sys.unraisablehook
+    environ = dict(os.environ)
+    cwd = os.getcwd()
+    done_kernels = _kernels_done()
+    saved_fds = (os.dup(1), os.dup(2))
+    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os.dup2(out.fileno(), 1)
+        os.dup2(err.fileno(), 2)
+        try:
+            with warnings.catch_warnings(), contextlib.ExitStack() as files:
+                os.environ.pop("PETSC_DIR", None)  # the package must find PETSc by itself
+                text = {"encoding": "utf-8", "closefd": False, "buffering": 1}
+                sys.stdout = files.enter_context(open(1, "w", **text))
+                sys.stderr = files.enter_context(open(2, "w", **text))
+                sys.stdin = files.enter_context(open(os.devnull))
+                try:
+                    status = entry.main(list(args))
+                except SystemExit as exc:
+                    code = exc.code
+                    status = code if isinstance(code, int) else (0 if code is None else 1)
+                    if code is not None and not isinstance(code, int):
+                        print(code, file=sys.stderr)
+                except BaseException:  # as the interpreter reports an uncaught exception
+                    traceback.print_exc()
+                    status = 1
+                for stream in (sys.stdout, sys.stderr):
+                    with contextlib.suppress(Exception):
+                        stream.flush()
+                _libc_flush()
+        finally:
+            sys.stdout, sys.stderr, sys.stdin = streams
+            os.dup2(saved_fds[0], 1)
+            os.dup2(saved_fds[1], 2)
+            for fd in saved_fds:
+                os.close(fd)
+            for signum, handler in handlers.items():
+                signal.signal(signum, handler)
+            sys.unraisablehook = hook
+            os.environ.clear()
+            os.environ.update(environ)
+            os.chdir(cwd)
+            _restore_options(database, options_before)
+            _kernels_done(done_kernels)
+        out.seek(0)
+        err.seek(0)
+        stdout = out.read().decode("utf-8", "replace")
+        stderr = err.read().decode("utf-8", "replace")
+    return subprocess.CompletedProcess(["petsc-contact", *args], int(status or 0), stdout, stderr)
+
+
+def _restore_options(database, before: dict) -> None:
+    """PETSc's options database as it was: a call's options deleted, changed ones reset."""
+    for name, value in database.getAll().items():
+        if name not in before:
+            database.delValue(name)
+        elif before[name] != value:
+            database.setValue(name, before[name])
+    for name, value in before.items():
+        if not database.hasName(name):
+            database.setValue(name, value)
+
+
+def _libc_flush() -> None:
+    """Flush C's ``stdout`` and ``stderr`` (PETSc's monitors print there), buffered in a file."""
+    libc = ctypes.CDLL(None)
+    libc.fflush(None)
+
+
+def _kernels_done(value: bool | None = None) -> bool:
+    """Whether the numba kernels were compiled in this process (set with ``value``): a fresh
+    process compiles (or loads) them, and says so on a cold cache."""
+    from petsc_contact.numerics import kernels
+
+    if value is not None:
+        kernels._done = value
+    return kernels._done
 
 
 def python(*args: str, mpi: int = 0, timeout: float = 300) -> subprocess.CompletedProcess:

@@ -58,7 +58,7 @@ def test_setup_compiles_every_kernel_and_runs_compile_nothing(setup_cache, monke
         ("punch", "--approaches", "0.01", "--footprint", "disk", "-tao_type", "blmvm"),
     ]
     for i, run in enumerate(runs):
-        r = cli(*run, *SCENE, "--output", str(cache.parent / f"run{i}.h5"))
+        r = cli(*run, *SCENE, "--output", str(cache.parent / f"run{i}.h5"), process=True)
         assert r.returncode == 0, r.stderr
         assert kernels.COLD_CACHE not in r.stderr, run
         assert _cached(cache) == compiled, f"{run} compiled a kernel for other types"
@@ -79,7 +79,7 @@ def test_a_cold_cache_says_so_once_and_no_step_times_it(setup_cache, tmp_path, m
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))
     run = ("periodic", "--pressures", "1e-2,2e-2", "-petsc_contact_two_level_max_fraction", "0.9")
     for name in ("cold", "warm"):
-        r = cli(*run, *SCENE, "--output", str(tmp_path / f"{name}.h5"))
+        r = cli(*run, *SCENE, "--output", str(tmp_path / f"{name}.h5"), process=True)
         assert r.returncode == 0, r.stderr
         with h5py.File(tmp_path / f"{name}.h5") as f:
             first = float(f["solve_time"][0])

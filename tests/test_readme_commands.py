@@ -159,7 +159,7 @@ def test_the_readme_command_runs(argv, folder, monkeypatch):
     monkeypatch.chdir(folder)  # the subprocess runs here: README's relative paths
     before = _h5_files(folder)
     pngs = {p: p.stat().st_mtime_ns for p in folder.rglob("*.png")}
-    run = cli(*args, mpi=mpi, timeout=300)
+    run = cli(*args, mpi=mpi, process=True, timeout=300)
     command = shlex.join(argv)
     assert run.returncode == 0, (
         f"{command}\nexit {run.returncode}\n{run.stdout[-3000:]}\n{run.stderr}"

@@ -178,7 +178,7 @@ def test_a_second_writer_is_refused_before_it_touches_anything(tmp_path):
         time.sleep(0.02)
     first.send_signal(signal.SIGSTOP)
     try:
-        second = cli(*slow, "--quiet", "--output", str(out))
+        second = cli(*slow, "--quiet", "--output", str(out), process=True)
     finally:
         first.send_signal(signal.SIGCONT)
     assert first.wait(timeout=300) == 0, first.stderr.read() if first.stderr else ""

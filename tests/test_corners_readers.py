@@ -190,3 +190,24 @@ def test_a_contact_of_a_few_pixels_is_flagged(tmp_path, petsc):
         assert list(f["contact_resolved"][()]) == [False, True]
     table = pd.read_csv(tmp_path / "spike.csv", comment="#")
     assert list(table["contact_resolved"]) == [False, True]
+
+
+def test_a_length_with_a_unit_beside_a_map_with_sides_is_refused_by_the_sweeps():
+    """``periodic_contact`` takes the sides as the map's numbers: ``length='1mm'`` beside a
+    map of 100 um sides is refused in one line, not dropped for the map's own sides."""
+    from petsc_contact import periodic_contact
+    from petsc_contact.io.topography import Topography
+
+    topo = Topography(heights=_map((8, 8)), lengths=(100.0, 100.0), unit="um", reader="x3p")
+    with pytest.raises(ValueError, match="length='1mm'.*numbers in the map's unit here \\(um\\)"):
+        periodic_contact(topo, length="1mm", modulus=1.0, pressures=[1e-3], progress=False)
+
+
+def test_a_dos_end_of_file_mark_is_no_damage(tmp_path):
+    """A text map ending in DOS's Ctrl-Z reads as the same map without it."""
+    h = _map((8, 8))
+    text = "\r\n".join(" ".join(f"{v:.17g}" for v in row) for row in h) + "\r\n"
+    (tmp_path / "plain.txt").write_text(text, newline="")
+    (tmp_path / "dos.txt").write_bytes(text.encode() + b"\x1a")
+    plain, dos = (read_topography(str(tmp_path / n)).heights for n in ("plain.txt", "dos.txt"))
+    assert np.array_equal(plain, dos) and plain.shape == (8, 8)

@@ -237,3 +237,46 @@ def test_more_ranks_than_the_grid_can_use_are_said_once(tmp_path):
     assert len(said) == 1 and "32 rows" in said[0], r.stderr
     assert np.all(np.isfinite(h5py.File(out)["mean_gap_mean"][...]))
     assert not os.path.exists(str(out) + ".partial")
+
+
+def test_compare_keeps_a_solver_only_while_its_options_file_says_the_same(tmp_path):
+    """A finished solver is kept by ``compare --resume`` only while its options, and what its
+    options file says, are those it ran with; options with spaces survive the file."""
+    import h5py
+
+    from petsc_contact.workflows.compare import Trajectory, _write_groups, read_partial, unchanged
+
+    folder = tmp_path / "my opts"
+    folder.mkdir()
+    opts = folder / "s.opts"
+    opts.write_text("-tao_type bncg\n")
+    name = str(opts)
+    ran = Trajectory(name, ["-options_file", name])
+    with h5py.File(tmp_path / "c.h5.partial", "w") as f:
+        _write_groups(f, {}, [ran], {"parameters": {}, "solvers": [name]})
+    (back,) = read_partial(str(tmp_path / "c.h5"), {})
+    assert back.options == ["-options_file", name]
+    assert unchanged([back], [name], []) == [back]
+    opts.write_text("-tao_type blmvm\n")  # edited since: solved again
+    assert unchanged([back], [name], []) == []
+    with h5py.File(tmp_path / "c.h5.partial") as f:  # the file records what it ran with
+        assert "bncg" in f[next(iter(f))].attrs["options_file_text"]
+
+
+def test_a_callers_own_interrupt_handler_keeps_the_signals_it_remembered():
+    """``interruptible`` under a caller that handles SIGTERM itself (as the command line
+    does) leaves the signals remembered within the block to the caller's check."""
+    import signal
+
+    from petsc_contact.io import interrupts
+
+    before = signal.signal(signal.SIGTERM, interrupts.interrupt)
+    try:
+        interrupts.forget_interrupts()
+        with interrupts.interruptible():
+            interrupts._SIGNALLED.append(signal.SIGTERM)  # as a finaliser's dropped signal
+        with pytest.raises(KeyboardInterrupt):
+            interrupts.check_interrupt()
+    finally:
+        signal.signal(signal.SIGTERM, before)
+        interrupts.forget_interrupts()

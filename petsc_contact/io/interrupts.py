@@ -42,7 +42,7 @@ def interruptible() -> Iterator[None]:
     """Within the block, ``SIGTERM`` and ``SIGINT`` are handled by :func:`interrupt` where
     their handlers are Python's defaults (``SIGTERM`` would end the process at once), so
     that a library call ends as a run does on the command line: its work kept, an exception
-    raised.  The handlers and the signals remembered are restored when the block ends; a
+    raised.  The handlers, and the signals they remembered, are restored when the block ends; a
     handler of the caller's own, and a thread other than the main one, are left alone."""
     defaults = {signal.SIGTERM: signal.SIG_DFL, signal.SIGINT: signal.default_int_handler}
     if threading.current_thread() is not threading.main_thread():
@@ -58,4 +58,5 @@ def interruptible() -> Iterator[None]:
     finally:
         for signum in taken:
             signal.signal(signum, before[signum])
-        del _SIGNALLED[remembered:]
+        # what the block's own handlers remembered; a caller's handler keeps what it did
+        _SIGNALLED[remembered:] = [s for s in _SIGNALLED[remembered:] if s not in taken]

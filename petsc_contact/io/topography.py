@@ -281,6 +281,12 @@ def map_and_lengths(
         Undefined points, no sides, or sides that contradict the map's.
     """
     topo = as_topography(heights)
+    if isinstance(length, str):  # Run and predict_map read a unit; these are the map's numbers
+        raise ValueError(
+            f"length={length!r}: give the sides as numbers in the map's unit here "
+            f"({topo.unit or 'none'}), or describe the run with Run(heights=..., "
+            "length=...), which reads a length with its unit"
+        )
     check_given(topo, length)
     if topo.lengths is None:
         check_guessed_sides(topo, length)
@@ -480,7 +486,7 @@ def text_rows(path: str) -> TextRows | None:
         bytes are not all text (NUL, control characters: ``_refuse_damaged_text``).
     """
     with open(path, "rb") as f:
-        data = f.read()
+        data = f.read().rstrip(b"\x1a")  # DOS's end-of-file mark (Ctrl-Z) is no damage
     text, marked = _decoded(data)
     if not marked:  # UTF-16's NULs are its own
         _refuse_damaged_text(path, data)

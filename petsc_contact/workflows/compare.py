@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import json
 import os
+import shlex
 import time
 from collections.abc import Callable, Sequence
 from contextlib import suppress
@@ -129,8 +130,14 @@ def unchanged(
     done: Sequence[Trajectory], solvers: Sequence[str], options: Sequence[str]
 ) -> list[Trajectory]:
     """The solvers of ``done`` (an interrupted comparison's) that ran with the options they
-    would run with now (:func:`run_options`); one whose options changed is solved again."""
-    return [t for t in done if t.options == run_options(t.name, solvers, options)]
+    would run with now (:func:`run_options`, and what their options file says); one whose
+    options changed is solved again."""
+    kept = []
+    for t in done:
+        now = run_options(t.name, solvers, options)
+        if t.options == now and t.options_file_text == options_file_text(now):
+            kept.append(t)
+    return kept
 
 
 def check_solvers(solvers: Sequence[str]) -> None:
@@ -163,6 +170,19 @@ class Trajectory:
     iterations: int = 0
     converged: bool = False
     verification: str = ""
+    options_file_text: str | None = None  # what its -options_file said when it ran
+
+    def __post_init__(self) -> None:
+        if self.options_file_text is None:
+            self.options_file_text = options_file_text(self.options)
+
+
+def options_file_text(options: Sequence[str]) -> str:
+    """What the ``-options_file`` among ``options`` says now (``""`` without one)."""
+    if "-options_file" not in options:
+        return ""
+    with open(options[list(options).index("-options_file") + 1]) as opts:
+        return opts.read()
 
 
 @dataclass
@@ -575,7 +595,10 @@ def read_partial(
             out = []
             for name in json.loads(f.attrs["solvers"]):
                 g = f[group_name(name)]
-                t = Trajectory(name, str(g.attrs["petsc_options"]).split())
+                ran = shlex.split(str(g.attrs["petsc_options"]))
+                t = Trajectory(
+                    name, ran, options_file_text=str(g.attrs.get("options_file_text", ""))
+                )
                 for k in COMPARE:
                     setattr(t, k, g[k][...].tolist())
                 t.reason, t.verification = str(g.attrs["reason"]), str(g.attrs["verification"])
@@ -606,10 +629,9 @@ def _write_groups(
         annotate(g, COMPARE.__getitem__)
         for k in ("reason", "solve_time", "iterations", "converged", "verification"):
             g.attrs[k] = getattr(t, k)
-        g.attrs["petsc_options"] = " ".join(t.options)
-        if "-options_file" in t.options:  # what the file said when it ran
-            with open(t.options[t.options.index("-options_file") + 1]) as opts:
-                g.attrs["options_file_text"] = opts.read()
+        g.attrs["petsc_options"] = shlex.join(t.options)
+        if t.options_file_text:  # what the file said when it ran
+            g.attrs["options_file_text"] = t.options_file_text
 
 
 def table_rows(trajectories: Sequence[Trajectory]) -> list[tuple[Any, ...]]:

@@ -211,3 +211,15 @@ def test_a_dos_end_of_file_mark_is_no_damage(tmp_path):
     (tmp_path / "dos.txt").write_bytes(text.encode() + b"\x1a")
     plain, dos = (read_topography(str(tmp_path / n)).heights for n in ("plain.txt", "dos.txt"))
     assert np.array_equal(plain, dos) and plain.shape == (8, 8)
+
+
+def test_a_map_smaller_than_a_resolved_contact_still_gets_a_default_sweep(tmp_path):
+    """A 4 x 3 map (fewer pixels than a resolved contact needs) sweeps finite loads, each
+    step marked unresolved."""
+    np.save(tmp_path / "tiny.npy", np.random.default_rng(2).standard_normal((4, 3)) * 1e-2)
+    result = run_contact(
+        Run(heights=str(tmp_path / "tiny.npy"), length=1.0, sweep=4), progress=False
+    )
+    loads = [s["nominal_pressure"] for s in result.table]
+    assert len(loads) == 4 and np.all(np.isfinite(loads)) and loads[0] > 0
+    assert not any(s["contact_resolved"] for s in result.table)

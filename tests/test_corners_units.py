@@ -244,3 +244,33 @@ def test_the_removed_unit_helpers_warn_and_agree_with_display_scale():
     with pytest.warns(DeprecationWarning, match="display_scale"):
         forces, unit = display_force(np.array([2e-3, 1e-3]))
     assert unit == "mN" and forces == pytest.approx([2.0, 1.0])
+
+
+def test_a_flat_punch_without_units_is_not_labelled_by_its_zero_rms_height():
+    """A flat punch (``h_rms = 0``) without units is drawn in the map's own numbers and says
+    so: no ``/h_rms`` in a label, no division by zero."""
+    from petsc_contact.io.plot import plot_punch
+
+    steps = [
+        {"approach": a, "force": f, "nominal_pressure": f, "interfacial_stiffness": k,
+         "converged": True}
+        for a, f, k in ((1e-3, 1e-3, 1.0), (2e-3, 2e-3, 1.0))
+    ]  # fmt: skip
+    fig = plot_punch(None, steps, None, modulus=1.0, h_rms=0.0)
+    labels = [ax.get_xlabel() + ax.get_ylabel() for ax in fig.axes]
+    assert "map's units" in labels[0] and not any("h_\\mathrm{rms}" in s for s in labels)
+
+
+def test_a_panel_with_nothing_to_draw_says_so(tmp_path):
+    """A flat punch is at full contact at every approach: its stiffness panel (every value
+    NaN) is drawn with a note, not a failure of the log axis."""
+    from petsc_contact import punch_contact
+    from petsc_contact.io.plot import plot_punch
+
+    with pytest.warns(Warning):
+        steps = punch_contact(
+            np.zeros((16, 16)), length=1.0, approaches=[1e-4, 1e-3], progress=False
+        )
+    fig = plot_punch(str(tmp_path / "flat.png"), [s.scalars for s in steps], None, h_rms=0.0)
+    assert (tmp_path / "flat.png").stat().st_size > 0
+    assert "no value to draw" in fig.axes[1].texts[0].get_text()

@@ -60,8 +60,12 @@ def load_axis(
     if unit:
         factor, shown = display_scale(typical_magnitude(values), unit)
         return factor, f"{name} ({typeset(shown)})"
-    h = h_rms if h_rms > 0 else 1.0
-    return {"p0": 1 / modulus, "gap": 1 / h, "stiffness": h / modulus}[kind], dimensionless
+    if kind == "p0":
+        return 1 / modulus, dimensionless
+    if h_rms > 0:
+        return (1 / h_rms if kind == "gap" else h_rms / modulus), dimensionless
+    # a flat map (h_rms = 0): lengths in the map's own numbers, a stiffness in E* per them
+    return (1.0, f"{name} (map's units)") if kind == "gap" else (1 / modulus, f"{name}$/E^*$")
 
 
 def plot_sweep(
@@ -139,6 +143,8 @@ def plot_punch(
     _draw_steps(ax1, d * scale, left * fy, ok)
     _draw_steps(ax2, p * px, k * kx, ok)
     approach = rf"approach $\delta$ ({typeset(length)})" if length else APPROACH_LABEL
+    if not length and not h_rms > 0:  # a flat punch: no h_rms to scale by
+        approach = r"approach $\delta$ (map's units)"
     ax1.set(xscale="log", yscale="log", xlabel=approach, ylabel=ylabel, title=title)
     ax2.set(xscale="log", yscale="log", xlabel=xlabel, ylabel=klabel,
             title="interfacial stiffness (paper Eq. 2)")  # fmt: skip
@@ -459,12 +465,27 @@ def _figure(**options: Any) -> Any:
 def _finish(fig: Any, axes: Sequence[Any], path: str | None) -> Any:
     """Grids, readable log ticks (:func:`_few_decades`), and the figure written to ``path``."""
     for ax in axes:
+        _say_nothing_drawn(ax)
         ax.grid(True, which="both", alpha=0.3)
         _few_decades(ax.xaxis, ax.get_xlim())
         _few_decades(ax.yaxis, ax.get_ylim())
     if path is not None:
         save(fig, path)
     return fig
+
+
+def _say_nothing_drawn(ax: Any) -> None:
+    """A panel of lines with no point it can draw (every value NaN, as the stiffness at full
+    contact, or not positive on a log axis) says so, on linear axes, instead of failing."""
+    points = [np.column_stack([line.get_xdata(), line.get_ydata()]) for line in ax.lines]
+    xy = np.concatenate(points).astype(float) if points else np.empty((0, 2))
+    for k, log in enumerate((ax.get_xscale() == "log", ax.get_yscale() == "log")):
+        if log:
+            xy = xy[xy[:, k] > 0]
+    if ax.lines and not np.isfinite(xy).all(axis=1).any():
+        ax.set(xscale="linear", yscale="linear", xticks=[], yticks=[])
+        ax.text(0.5, 0.5, "no value to draw\n(NaN: e.g. at full contact)", ha="center",
+                va="center", transform=ax.transAxes, color="0.4")  # fmt: skip
 
 
 def _few_decades(axis: Any, limits: tuple[float, float]) -> None:

@@ -137,7 +137,8 @@ def sweep_range(run: Run, problem: PeriodicProblem) -> tuple[float, float]:
     if not run.measured:
         return 1e-4 * p_full, 0.9 * p_full
     high = min(problem.area_pressure(HALF_AREA), 0.9 * p_full)
-    low = problem.area_pressure(MIN_CONTACT_PIXELS / problem.grid.size)
+    # a map of fewer pixels than a resolved contact needs starts a tenth below the half
+    low = problem.area_pressure(min(MIN_CONTACT_PIXELS / problem.grid.size, HALF_AREA))
     return min(low, 0.1 * high), high
 
 

@@ -60,6 +60,7 @@ import warnings
 import zipfile
 from contextlib import suppress
 from dataclasses import dataclass, field
+from datetime import datetime
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -278,6 +279,14 @@ def _read_table(f: Any) -> dict[str, list[Any]]:
         for k in f
         if k not in COORDINATES and f[k].ndim >= 1 and f[k].shape[0] == f["step"].shape[0]
     }
+
+
+def created_stamp() -> str:
+    """A run file's ``created`` stamp: the local time to the microsecond, with its offset
+    from UTC (ISO 8601).  It tells a run's files from another's (a leftover ``.partial`` of
+    the complete file, a seed file replaced), so two runs on one output within a second
+    must not share it."""
+    return datetime.now().astimezone().strftime("%Y-%m-%dT%H:%M:%S.%f%z")
 
 
 def committed_steps(partial: str) -> int:
@@ -579,7 +588,7 @@ class StepStore:
         filled heights are written (local slabs)."""
         store = cls(path, grid, fields)
         store.maps = heights is not None or filled is not None
-        store.attributes = {**attributes, "created": _now(), "complete": False}
+        store.attributes = {**attributes, "created": created_stamp(), "complete": False}
 
         def begin() -> None:
             _clear(path, keep_steps=False)

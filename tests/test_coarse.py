@@ -8,6 +8,7 @@ from conftest import cli, python
 from petsc_contact import periodic_contact
 from petsc_contact.backend import _petsc, coarse
 from petsc_contact.backend.coarse import DIAGONAL_INFLATION, CoarseSpace, TwoLevelOptions
+from petsc_contact.backend.tao import PetscBackend
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.geometries.periodic import PeriodicProblem
 from petsc_contact.numerics import aggregates
@@ -180,11 +181,11 @@ def test_iterations_at_1024_do_not_grow_with_the_spots():
 def test_options_switch_it(petsc):
     """``-petsc_contact_two_level*`` name its choices; a non-positive block is refused."""
     with _petsc.scoped_options("-petsc_contact_two_level 0 -petsc_contact_two_level_block 8"):
-        opts = TwoLevelOptions.from_database()
+        opts = TwoLevelOptions.from_settings(PetscBackend().settings)
     assert not opts.enabled and opts.block == 8 and not opts.covers(1, 100)
     assert TwoLevelOptions().covers(10, 100) and not TwoLevelOptions().covers(11, 100)
     with _petsc.scoped_options("-petsc_contact_two_level_block 0"), pytest.raises(ValueError):
-        TwoLevelOptions.from_database()
+        PetscBackend()
 
 
 @pytest.mark.parametrize("ranks", [2, 3])

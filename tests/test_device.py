@@ -19,7 +19,7 @@ import pytest
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.numerics.device import DeviceUnavailable, get_device
 from petsc_contact.physics.surface import self_affine
-from petsc_contact.solver.driver import ArraySettings
+from petsc_contact.solver.driver import SolveSettings
 from petsc_contact.workflows.periodic_sweep import periodic_contact
 
 LOADS = [1e-5, 1e-4, 1e-3, 1e-2, 5e-2]  # first contact to about half the area
@@ -96,10 +96,10 @@ def test_the_array_path_runs_without_petsc4py_pyfftw_or_mpi4py():
 
 def test_options_the_array_path_does_not_read_are_refused_in_one_line():
     with pytest.raises(ValueError, match="needs --device cpu"):
-        ArraySettings.from_options(["-tao_type", "bncg"], "gpu")
+        SolveSettings.from_options(["-tao_type", "bncg"], "gpu")
     with pytest.raises(ValueError, match="does not read -ksp_rtol"):
-        ArraySettings.from_options(["-ksp_rtol", "1e-3"], "cpu-array")
-    settings = ArraySettings.from_options(
+        SolveSettings.from_options(["-ksp_rtol", "1e-3"], "cpu-array")
+    settings = SolveSettings.from_options(
         ["-tao_gatol", "1e-10", "-tao_monitor", "-petsc_contact_two_level", "0"], "gpu"
     )
     assert (settings.gatol, settings.monitor, settings.two_level) == (1e-10, True, False)

@@ -18,7 +18,7 @@ import pytest
 from conftest import cli, python
 
 from petsc_contact.cli.arguments import build_parser
-from petsc_contact.solver.driver import ArraySettings
+from petsc_contact.solver.driver import SolveSettings
 from petsc_contact.solver.report import DEFAULT_MAX_IT
 from petsc_contact.workflows.description import Run
 from petsc_contact.workflows.drivers import on_device
@@ -244,10 +244,10 @@ def test_the_array_path_reads_the_run_s_prefixed_options():
     """With ``--options-prefix a_`` the array path reads ``-a_tao_gatol`` and leaves the
     unprefixed options to others, as PETSc's solvers with that prefix do."""
     options = ["-a_tao_gatol", "1e-9", "-tao_max_it", "3", "-a_tao_monitor"]
-    settings = ArraySettings.from_options(options, "cpu-array", "a_")
+    settings = SolveSettings.from_options(options, "cpu-array", "a_")
     assert (settings.gatol, settings.max_it, settings.monitor) == (1e-9, DEFAULT_MAX_IT, True)
     with pytest.raises(ValueError, match="needs --device cpu"):
-        ArraySettings.from_options(["-a_tao_type", "bncg"], "gpu", "a_")
+        SolveSettings.from_options(["-a_tao_type", "bncg"], "gpu", "a_")
 
 
 def test_a_study_runs_its_pieces_on_the_device():

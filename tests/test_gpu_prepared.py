@@ -21,7 +21,8 @@ from petsc_contact.backend.preconditioner import MeanModePreconditioner
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.geometries.periodic import PeriodicProblem
 from petsc_contact.numerics.device import CPU, Device, get_device
-from petsc_contact.solver.driver import ArraySettings, ArraySolver
+from petsc_contact.solver.backends import ArrayBackend
+from petsc_contact.solver.driver import ArraySolver, SolveSettings
 from petsc_contact.workflows.periodic_sweep import periodic_contact, sweep
 
 
@@ -53,7 +54,7 @@ def compliance_quarter(n: int) -> np.ndarray:
     """``G``'s quarter of a ``n^2`` periodic problem on the stand-in."""
     grid = Grid(n, 1.0)
     device = get_device("cpu-array")
-    problem = PeriodicProblem(grid, device.fft(grid), surface(n, 0.7, n // 2), 1.0)
+    problem = PeriodicProblem(grid, device.fft(grid), surface(n, 0.7, n // 2), 1.0, ArrayBackend())
     problem.set_pressure(1e-3)
     return problem.preconditioner._exact_compliance()
 
@@ -107,9 +108,10 @@ def test_a_step_measured_on_the_array_path_brings_no_field_to_the_host():
     n = 128
     grid = Grid(n, 1.0)
     device = RecordingDevice("cpu-array", np)
-    problem = PeriodicProblem(grid, device.fft(grid), surface(n, 0.7, 32), 1.0)
-    settings = ArraySettings()
-    problem.configure(settings)
+    settings = SolveSettings()
+    problem = PeriodicProblem(
+        grid, device.fft(grid), surface(n, 0.7, 32), 1.0, ArrayBackend(settings)
+    )
     problem.set_pressure(3e-3)
     x0 = problem.initial_gap().reshape(-1) / problem.scale_length
     problem.start(x0)
@@ -134,7 +136,7 @@ def test_a_sweep_brings_its_resume_state_to_the_host_only_when_read():
     n = 128
     grid = Grid(n, 1.0)
     device = FieldRecordingDevice("cpu-array", np)
-    problem = PeriodicProblem(grid, device.fft(grid), surface(n, 0.7, 32), 1.0)
+    problem = PeriodicProblem(grid, device.fft(grid), surface(n, 0.7, 32), 1.0, ArrayBackend())
     steps = list(sweep(problem, [1e-3, 3e-3, 1e-2]))
     assert all(s.converged for s in steps) and n * n not in device.fields, device.fields
     state, held = steps[-1].state, steps[-1].held
@@ -207,7 +209,8 @@ def test_a_sweep_keeps_its_forms_and_checks_on_the_device(monkeypatch):
     monkeypatch.setattr(preconditioner, "ContactSchur", Counted)
     monkeypatch.setattr(preconditioner, "CoarseSpace", Built)
     device = RecordingDevice("cpu-array", np)
-    problem = _periodic_problem(surface(n, 0.7, 32), (1.0, 1.0), 1.0, Grid(n, 1.0).comm, device)
+    comm, backend = Grid(n, 1.0).comm, ArrayBackend()
+    problem = _periodic_problem(surface(n, 0.7, 32), (1.0, 1.0), 1.0, comm, device, backend)
     steps = list(sweep(problem, [1e-4, 1e-3, 1e-2], stiffness=True))
     assert all(s.converged for s in steps)
     assert max(made) > 0 > min(made), made  # both forms were used (coarse: negative)

@@ -57,7 +57,7 @@ from ..numerics.aggregates import (
 )
 from ..numerics.device import CPU, Device
 from ..numerics.schur import BorderedSystem, allgather, held_rows, sum_over_ranks
-from . import _petsc
+from ..solver.driver import SolveSettings
 from .operator import ShellInterface
 
 DIAGONAL_INFLATION = 0.2  # relative: keeps E above the exact one (monopole error ~1%; measured)
@@ -91,16 +91,12 @@ class TwoLevelOptions:
     max_fraction: float = MAX_FRACTION
 
     @classmethod
-    def from_database(cls) -> TwoLevelOptions:
-        """The options as the PETSc options database gives them."""
-        opts = _petsc.options()
-        block = opts.getInt("petsc_contact_two_level_block", BLOCK)
-        if block < 1:
-            raise ValueError(f"-petsc_contact_two_level_block must be positive, not {block}")
+    def from_settings(cls, settings: SolveSettings) -> TwoLevelOptions:
+        """The options a solve's ``settings`` give (the defaults where they are unset)."""
         return cls(
-            enabled=opts.getBool("petsc_contact_two_level", True),
-            block=block,
-            max_fraction=opts.getReal("petsc_contact_two_level_max_fraction", MAX_FRACTION),
+            enabled=settings.two_level,
+            block=settings.block or BLOCK,
+            max_fraction=MAX_FRACTION if settings.max_fraction is None else settings.max_fraction,
         )
 
     def covers(self, bound_count: int, size: int) -> bool:
@@ -495,7 +491,7 @@ class CoarseSpace:
     ) -> None:
         self.grid = grid
         self.device = device
-        build = host_coarse_matrix if device.name == "cpu" else array_coarse_matrix
+        build = host_coarse_matrix if device.compiled else array_coarse_matrix
         built = build(grid, quarter, bound, block, max_size, device)
         self.local, self.labels, self.block = built.local, built.labels, built.block
         self.size = int(built.sizes.size)

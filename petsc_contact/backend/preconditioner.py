@@ -58,10 +58,8 @@ class MeanModePreconditioner(FourierOperator):
         super().__init__(grid, fft, fft.device.xp.zeros(fft.spectrum.shape))  # filled by invert
         self._hessian = hessian
         self.schur_max = schur_max  # the Schur form's largest bound set
-        self.options = TwoLevelOptions()
+        self.options = TwoLevelOptions()  # the two-level form's: the solve's settings
         self.device = fft.device
-        # the two-level options of the array path; None: PETSc's options database at invert
-        self.given_options: TwoLevelOptions | None = None
         self.hessian_diagonal = 1.0
         self.base_mean_mode = self.mean_mode = 0.0
         self.expected_bound_count = 0  # contact pixels Persson's theory expects at this load
@@ -97,9 +95,8 @@ class MeanModePreconditioner(FourierOperator):
         is ``hessian_diagonal``), with ``mean_mode`` as its ``q = 0`` entry; ``support >= 0``
         is the interfacial stiffness in the Hessian's normalised units, and
         ``expected_bound_count`` the contact the load is expected to bring (a scale for the
-        CG's growth limit).  The two-level form's options are :attr:`given_options`, or else
-        read from the PETSc options database (:class:`~petsc_contact.backend.coarse.
-        TwoLevelOptions`).
+        CG's growth limit).  The two-level form's options are :attr:`options` (the solve's
+        settings: :class:`~petsc_contact.backend.coarse.TwoLevelOptions`).
 
         Computed in place, with no copy of the kernel kept: with ``N = n^2`` the normalised
         multipliers are ``c K/N`` for the Hessian, ``s = c K_i/N`` for the support and
@@ -116,7 +113,6 @@ class MeanModePreconditioner(FourierOperator):
         if self._quarter is not None:  # the Hessian was rescaled: so is its inverse's column
             self._quarter *= self.hessian_diagonal / hessian_diagonal
         self.hessian_diagonal = hessian_diagonal
-        self.options = self.given_options or TwoLevelOptions.from_database()
         self.correction = self._built_free = None
         self._last_count = self.builds = 0
 

@@ -40,8 +40,11 @@ def restricted_solve(
     pc: ShellInterface,
     mask: np.ndarray,
     rtol: float = STIFFNESS_RTOL,
+    prefix: str | None = None,
 ) -> tuple[np.ndarray, int]:
-    """Solve ``A_MM y = 1_M`` on the pixels of ``mask`` (local slab) by preconditioned CG.
+    """Solve ``A_MM y = 1_M`` on the pixels of ``mask`` (local slab) by preconditioned CG,
+    ``KSPCG`` reading ``-stiffness_ksp_*`` with ``prefix`` before ``stiffness_`` (default:
+    the options block's).
 
     Returns
     -------
@@ -62,7 +65,8 @@ def restricted_solve(
         ksp.setPC(pcobj)  # before the operators, which the KSP hands on to its PC
         ksp.setOperators(mat)
         ksp.setTolerances(rtol=rtol, atol=0.0, max_it=10 * grid.size)
-        ksp.setOptionsPrefix(_petsc.options_prefix() + "stiffness_")
+        given = _petsc.options_prefix() if prefix is None else prefix
+        ksp.setOptionsPrefix(given + "stiffness_")
         ksp.setFromOptions()
         b, y = mat.createVecs()
         with b as barr:

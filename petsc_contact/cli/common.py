@@ -103,18 +103,21 @@ def describe(args: argparse.Namespace, petsc_args: Sequence[str] = ()) -> Any:
     command's options that are Run's fields (:func:`~petsc_contact.workflows.options.run_fields`).
     On the ``cpu`` device its PETSc options are in the database already (the CLI gives them to
     PETSc at start); an array device's run, which has no PETSc, carries ``petsc_args``."""
+    from ..workflows.choice import uses_petsc
     from ..workflows.description import Run
     from ..workflows.options import run_fields
 
     given = {name: getattr(args, name) for name in run_fields(args.command)}
     run = Run(**given, geometry="punch" if args.command == "punch" else "periodic")
-    return run if run.device == "cpu" else run.with_(options=tuple(petsc_args))
+    return run if uses_petsc(run.device) else run.with_(options=tuple(petsc_args))
 
 
 def on_array_device(args: argparse.Namespace) -> bool:
     """Whether the command line asks for an array device (``--device gpu`` or ``cpu-array``:
     no PETSc is loaded)."""
-    return getattr(args, "device", "cpu") != "cpu"
+    from ..workflows.choice import uses_petsc
+
+    return not uses_petsc(getattr(args, "device", "cpu"))
 
 
 def scene_for(args: argparse.Namespace, petsc_args: list[str]) -> tuple[Any, Any, Any]:

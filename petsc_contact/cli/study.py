@@ -29,12 +29,13 @@ PIECE_END = {code: end for end, code in STATUS.items()}  # how a piece's run end
 def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
     """Run the pieces of the chosen figures in order within ``--minutes``."""
     from ..backend import _petsc
+    from ..workflows.choice import uses_petsc
     from ..workflows.drivers import on_device
     from ..workflows.paper_study import run_pieces, study_data, study_pieces
 
     data = study_data(args.data)
     todo = study_pieces(data, args.figure, args.shrink)
-    if args.device == "cpu":
+    if uses_petsc(args.device):
         _petsc.init(petsc_args)  # an array device's pieces carry the options instead
 
     def piece(run: Any) -> str:

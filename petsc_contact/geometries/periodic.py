@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 from scipy.special import erf, erfinv
 
-from ..backend.coarse import BLOCK, MAX_FRACTION, CoarseCorrected, CoarseSpace, TwoLevelOptions
+from ..backend.coarse import CoarseCorrected, CoarseSpace, TwoLevelOptions
 from ..backend.operator import FourierOperator, ShellInterface
 from ..backend.preconditioner import (
     MeanModePreconditioner,
@@ -35,7 +35,7 @@ from ..backend.preconditioner import (
     set_mean_mode,
 )
 from ..backend.solve import SolveInfo
-from ..backend.stiffness import periodic_stiffness_exact, restricted_solve
+from ..backend.stiffness import periodic_stiffness_exact
 from ..conventions.grid import Grid
 from ..conventions.validation import non_negative, positive
 from ..numerics.fft import FFT, wavevector_magnitude
@@ -44,15 +44,14 @@ from ..numerics.schur import response_quarter
 from ..physics.greens import mean_mode_compliance, periodic_stiffness
 from ..physics.observables import step_observables
 from ..physics.theory import linear_stiffness
-from ..solver.driver import ArraySettings
-from ..solver.linear import held_set_solve
+from ..solver.backends import SolverBackend
 from ..solver.report import Accuracy, accuracy_limit
 from .step import (
     MeasuredSolve,
     Step,
     contact_fields,
+    default_backend,
     mark_full_contact,
-    requested_stiffness_rtol,
     residual_verdict,
 )
 
@@ -95,9 +94,19 @@ class PeriodicProblem:
         on ``fft``'s device.
     modulus
         Contact modulus ``E*``.
+    backend
+        What solves it (:class:`~petsc_contact.solver.backends.SolverBackend`); default:
+        PETSc's, with the options of the block it is first used in.
     """
 
-    def __init__(self, grid: Grid, fft: FFT, heights: np.ndarray, modulus: float) -> None:
+    def __init__(
+        self,
+        grid: Grid,
+        fft: FFT,
+        heights: np.ndarray,
+        modulus: float,
+        backend: SolverBackend | None = None,
+    ) -> None:
         positive("modulus", modulus)
         compile_kernels(announce=grid.comm.rank == 0)  # before any step's timer
         self.grid = grid
@@ -121,28 +130,23 @@ class PeriodicProblem:
         self.interfacial_stiffness = np.nan
         self._s = np.nan
         self._held: FourierOperator | None = None
-        # the held-set solve of the exact stiffness: PETSc's KSPCG on the cpu device
-        self.held_set_solve: Any = restricted_solve
-        self.settings = ArraySettings()  # the array path's options (configure)
-        if self.device.name != "cpu":
-            self.held_set_solve = self._array_held_set_solve
+        self._backend = backend
 
-    def configure(self, settings: ArraySettings) -> None:
-        """Take the array path's options: the two-level form's and the stiffness solve's
-        (the PETSc path reads them from PETSc's options database)."""
-        self.settings = settings
-        self.preconditioner.given_options = TwoLevelOptions(
-            enabled=settings.two_level,
-            block=settings.block or BLOCK,
-            max_fraction=MAX_FRACTION if settings.max_fraction is None else settings.max_fraction,
-        )
+    @property
+    def backend(self) -> SolverBackend:
+        """What solves the problem (made when first asked for where none was given)."""
+        if self._backend is None:
+            self._backend = default_backend()
+        return self._backend
 
-    def _array_held_set_solve(
-        self, grid: Grid, op: Any, pc: Any, mask: np.ndarray
-    ) -> tuple[np.ndarray, int]:
-        """The array path's held-set solve (:func:`~petsc_contact.solver.linear.held_set_solve`)."""
-        s = self.settings
-        return held_set_solve(grid, op, pc, mask, s.stiffness_rtol, self.device, s.stiffness_max_it)
+    def use(self, backend: SolverBackend) -> None:
+        """Be solved by ``backend`` from now on (its settings: the two-level form's, the
+        stiffness solve's)."""
+        self._backend = backend
+
+    def held_set_solve(self, grid: Grid, op: Any, pc: Any, mask: Any) -> tuple[Any, int]:
+        """The backend's held-set solve on the problem's device."""
+        return self.backend.held_set_solve(grid, op, pc, mask, self.device)
 
     def set_pressure(self, p0: float, interfacial_stiffness: float | None = None) -> None:
         """Set the nominal pressure ``p0 > 0`` and rescale the TAO-facing operators.
@@ -165,6 +169,7 @@ class PeriodicProblem:
         c = self._s * self.scale_length
         np.multiply(self.stiffness.multiplier, c, out=self.hessian.multiplier)
         mean_compliance = mean_mode_compliance(self.modulus, self.grid.q0, k_i)
+        self.preconditioner.options = TwoLevelOptions.from_settings(self.backend.settings)
         self.preconditioner.invert(
             self.hessian.normalised(c * k_i),
             self.pixel_stiffness * c,
@@ -242,11 +247,7 @@ class PeriodicProblem:
             "stiffness_iterations": its,
             "stiffness_time": elapsed,
             "stiffness_residual": solve.residual() if converged else np.nan,
-            "stiffness_tolerance": (
-                requested_stiffness_rtol()
-                if self.device.name == "cpu"
-                else self.settings.stiffness_rtol
-            ),
+            "stiffness_tolerance": self.backend.stiffness_rtol(),
         }
 
     def stiffness_estimate(self, p0: float) -> float:

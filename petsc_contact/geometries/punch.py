@@ -44,7 +44,7 @@ import numpy as np
 
 from ..backend.operator import PaddedOperator
 from ..backend.solve import SolveInfo
-from ..backend.stiffness import punch_stiffness_exact, restricted_solve
+from ..backend.stiffness import punch_stiffness_exact
 from ..conventions.grid import Grid
 from ..conventions.validation import non_negative, positive
 from ..numerics.device import CPU, Device
@@ -52,15 +52,14 @@ from ..numerics.kernels import compile_kernels
 from ..physics.greens import hockney_kernel
 from ..physics.observables import contact_resolved, distributions, patch_sizes
 from ..reference import flat_punch
-from ..solver.driver import ArraySettings
-from ..solver.linear import held_set_solve
+from ..solver.backends import SolverBackend
 from ..solver.report import FORCE_ACCURACY, Accuracy, accuracy_limit
 from .step import (
     MeasuredSolve,
     Step,
     contact_fields,
+    default_backend,
     mark_full_contact,
-    requested_stiffness_rtol,
     residual_verdict,
 )
 
@@ -184,11 +183,10 @@ class PunchProblem:
         ``cpu`` device's are TAO's (NumPy, FFTW); ``gpu`` and ``cpu-array`` run the package's
         own CG on their arrays (one rank, no PETSc).  Heights, footprint and the fields a
         step measures stay on the host.
-    settings
-        The array path's options (:class:`~petsc_contact.solver.driver.ArraySettings`); the
-        held-set solves of the exact stiffness read ``stiffness_rtol`` and
-        ``stiffness_max_it`` from them (the flat punch's among them, solved here).  Not read
-        on the ``cpu`` device, whose solves read PETSc's options database.
+    backend
+        What solves it (:class:`~petsc_contact.solver.backends.SolverBackend`), the held-set
+        solves of the exact stiffness among them (the flat punch's, solved here); default:
+        PETSc's, with the options of the block it is made in.
     """
 
     def __init__(
@@ -201,14 +199,14 @@ class PunchProblem:
         beta: float = flat_punch.SQUARE_BETA,
         *,
         device: Device = CPU,
-        settings: ArraySettings | None = None,
+        backend: SolverBackend | None = None,
     ) -> None:
         positive("modulus", modulus)
         compile_kernels(announce=grid.comm.rank == 0)  # before any step's timer
         self.flat = flat
         self.grid = grid
         self.device = device
-        self.settings = ArraySettings() if settings is None else settings
+        self.backend = default_backend() if backend is None else backend
         self.modulus = float(modulus)
         self.filled: np.ndarray | None = None  # this rank's filled pixels (a measured map)
         self.footprint = (
@@ -230,10 +228,6 @@ class PunchProblem:
         self._footprint_flat = device.asarray(self.footprint.reshape(-1).astype(float))
         self._footprint = device.asarray(self.footprint)
         self._upper = device.asarray(np.where(self.footprint, np.inf, 0.0).reshape(-1))
-        # the held-set solve of the exact stiffness: PETSc's KSPCG on the cpu device
-        self.held_set_solve: Any = restricted_solve
-        if device.name != "cpu":
-            self.held_set_solve = self._array_held_set_solve
         area = self.footprint_pixels * grid.pixel_area
         self.k_flat_analytic = flat_punch_stiffness(self.modulus, area, beta)  # the footprint's
         self.flat_residual = 0.0  # the recomputed residual of the flat punch's held-set solve
@@ -276,13 +270,9 @@ class PunchProblem:
         self.preconditioner = self.inverse.with_spectrum(self.inverse.spectrum * self._scale)
         self.pressure_scale = self.modulus * self.scale_length / a
 
-    def _array_held_set_solve(
-        self, grid: Grid, op: Any, pc: Any, mask: np.ndarray
-    ) -> tuple[Any, int]:
-        """The array path's held-set solve (:func:`~petsc_contact.solver.linear.held_set_solve`)
-        with :attr:`settings`' tolerance and iteration limit."""
-        s = self.settings
-        return held_set_solve(grid, op, pc, mask, s.stiffness_rtol, self.device, s.stiffness_max_it)
+    def held_set_solve(self, grid: Grid, op: Any, pc: Any, mask: Any) -> tuple[Any, int]:
+        """The backend's held-set solve on the problem's device."""
+        return self.backend.held_set_solve(grid, op, pc, mask, self.device)
 
     @property
     def upper_bound(self) -> Any:
@@ -397,11 +387,7 @@ class PunchProblem:
             "stiffness_residual": (
                 max(solve.residual(), self.flat_residual) if converged else np.nan
             ),
-            "stiffness_tolerance": (
-                requested_stiffness_rtol()
-                if self.device.name == "cpu"
-                else self.settings.stiffness_rtol
-            ),
+            "stiffness_tolerance": self.backend.stiffness_rtol(),
         }
 
 

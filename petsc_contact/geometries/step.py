@@ -14,14 +14,14 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from ..backend import _petsc
 from ..backend.operator import SpectralOperator
-from ..backend.solve import BoundSolver, Monitor, SolveInfo
+from ..backend.solve import Monitor, SolveInfo
+from ..backend.tao import PetscBackend
 from ..conventions.grid import Grid
 from ..numerics.device import CPU, Device
 from ..physics.continuation import Held
-from ..solver.driver import ArraySolver
-from ..solver.report import STIFFNESS_RTOL, Accuracy
+from ..solver.backends import BoundSolver, SolverBackend
+from ..solver.report import Accuracy
 
 FIELD_NAMES = ("gap", "pressure", "contact")
 VERIFY_FACTOR = 10.0  # a step's natural residual may exceed the tolerance asked for by this
@@ -200,10 +200,10 @@ class MeasuredSolve:
         return max((held_set_residual(*a, self.device) for a in answers), default=0.0)
 
 
-def requested_stiffness_rtol() -> float:
-    """The relative tolerance the PETSc path's held-set solve is asked for
-    (``-stiffness_ksp_rtol``, on the preconditioned residual)."""
-    return float(_petsc.options().getReal("stiffness_ksp_rtol", STIFFNESS_RTOL))
+def default_backend() -> SolverBackend:
+    """What a problem made without a backend is solved by: PETSc's, with the options of the
+    block it is made in (:class:`~petsc_contact.backend.tao.PetscBackend`)."""
+    return PetscBackend()
 
 
 class ContactProblem(Protocol):
@@ -245,7 +245,7 @@ class ContactProblem(Protocol):
 
 
 def solve_step(
-    solver: BoundSolver | ArraySolver,
+    solver: BoundSolver,
     problem: ContactProblem,
     start: np.ndarray,
     monitor: Monitor | None = None,

@@ -166,10 +166,14 @@ class Device:
         ``cpu``, ``gpu`` or ``cpu-array`` (module docstring).
     xp
         The array module: ``numpy`` or ``cupy``.
+    compiled
+        Whether its whole-field passes are numba's and its transforms FFTW's (NumPy
+        arrays): the ``cpu`` device; the others run the array module's own.
     """
 
     name: str
     xp: ModuleType
+    compiled: bool = False
 
     @cached_property
     def passes(self) -> Any:
@@ -177,7 +181,7 @@ class Device:
         (:mod:`~petsc_contact.numerics.kernels`), CuPy's fused kernels on the ``gpu``
         (:class:`~petsc_contact.numerics.fused.FusedPasses`), :class:`ArrayPasses` on the
         stand-in."""
-        if self.name == "cpu":
+        if self.compiled:
             from . import kernels
 
             return kernels
@@ -255,7 +259,7 @@ class Device:
 
     def fft(self, grid: Grid) -> Any:
         """The FFT engine of ``grid`` on this device."""
-        if self.name == "cpu":
+        if self.compiled:
             from .fft import make_fft
 
             return make_fft(grid)
@@ -273,7 +277,7 @@ class Device:
         return out
 
 
-CPU = Device("cpu", np)  # the PETSc path's device
+CPU = Device("cpu", np, compiled=True)  # NumPy with numba's passes and FFTW
 
 
 def get_device(name: str = "cpu") -> Device:

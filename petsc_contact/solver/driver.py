@@ -7,7 +7,7 @@ with a :class:`~petsc_contact.solver.report.SolveInfo`.  It runs
 on the arrays of a :class:`~petsc_contact.numerics.device.Device` (``gpu``, or its CPU
 stand-in ``cpu-array``).
 
-Its options are PETSc's names for what it reads (:class:`ArraySettings`), so a command line
+Its options are PETSc's names for what it reads (:class:`SolveSettings`), so a command line
 keeps its meaning on every device; any other option is refused in one line rather than
 ignored.
 """
@@ -15,6 +15,7 @@ ignored.
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -37,8 +38,11 @@ def _flag(value: str | None) -> bool:
 
 
 @dataclass(frozen=True)
-class ArraySettings:
-    """What the array path reads of PETSc's options (the same names, the same defaults).
+class SolveSettings:
+    """One solve's settings, parsed once from the run's options (PETSc's names, PETSc's
+    defaults): all of them on the array path (:meth:`from_options`); on the PETSc path the
+    package's own (the two-level form's, the stiffness solve's tolerance), read at PETSc's
+    edge (:class:`~petsc_contact.backend.tao.PetscBackend`), TAO reading its own.
 
     Attributes
     ----------
@@ -77,7 +81,7 @@ class ArraySettings:
     }
 
     @classmethod
-    def from_options(cls, options: Sequence[str], device: str, prefix: str = "") -> ArraySettings:
+    def from_options(cls, options: Sequence[str], device: str, prefix: str = "") -> SolveSettings:
         """Parse ``["-tao_gatol", "1e-10", "-tao_monitor", ...]``; ``ValueError`` in one line
         for an option the array path does not read (``-tao_type`` among them).  With a
         ``prefix`` (``a_``) only the options that carry it are read (``-a_tao_gatol``), as
@@ -116,6 +120,18 @@ class ArraySettings:
         return settings
 
 
+def __getattr__(name: str) -> Any:
+    """``ArraySettings``, deprecated (a ``DeprecationWarning``): :class:`SolveSettings`."""
+    if name == "ArraySettings":
+        warnings.warn(
+            "solver.driver.ArraySettings is deprecated; use solver.driver.SolveSettings",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return SolveSettings
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 PETSC_WORDS = ("default", "petsc_default", "decide", "petsc_decide", "determine",
                "petsc_determine", "unlimited", "petsc_unlimited")  # fmt: skip
 """Words PETSc takes for a number option's value, whatever its case."""
@@ -123,9 +139,9 @@ PETSC_WORDS = ("default", "petsc_default", "decide", "petsc_decide", "determine"
 
 def check_option_values(options: Sequence[str]) -> None:
     """``ValueError`` in one line where an option whose type the package knows (a number of
-    :attr:`ArraySettings.READS`, with any prefix: ``-a_tao_max_it``, ``-bncg_tao_gatol``) has
+    :attr:`SolveSettings.READS`, with any prefix: ``-a_tao_max_it``, ``-bncg_tao_gatol``) has
     a value that is not one (``-tao_max_it abc``): said before PETSc reads it mid-run."""
-    numbers = {key: kind for key, (_, kind) in ArraySettings.READS.items() if kind is not _flag}
+    numbers = {key: kind for key, (_, kind) in SolveSettings.READS.items() if kind is not _flag}
     for i, name in enumerate(options):
         value = options[i + 1] if i + 1 < len(options) else None
         key = name.lstrip("-") if _is_option(name) else ""
@@ -190,7 +206,7 @@ class ArraySolver:
     """
 
     def __init__(
-        self, hessian: Any, preconditioner: Any, device: Device, settings: ArraySettings
+        self, hessian: Any, preconditioner: Any, device: Device, settings: SolveSettings
     ) -> None:
         self.hessian, self.preconditioner = hessian, preconditioner
         self.device, self.settings = device, settings

@@ -39,6 +39,7 @@ import numpy as np
 
 from ..backend import _petsc
 from ..backend.solve import BOUND_TYPES, BoundSolver, SolveInfo
+from ..backend.tao import PetscBackend
 from ..conventions.warnings import user_level
 from ..geometries.periodic import PeriodicProblem
 from ..geometries.step import residual_verdict
@@ -357,9 +358,11 @@ def _trajectory(
     """Run one solver (its options in ``traj``) from first touch, recording ``traj``."""
     x0 = problem.initial_gap().reshape(-1) / problem.scale_length
     with _petsc.scoped_options(traj.options):
+        backend = PetscBackend()  # this solver's options, its two-level form's among them
+        problem.use(backend)
         problem.set_pressure(pressure)
         problem.start(x0)
-        with BoundSolver(problem.grid, problem.hessian, problem.preconditioner) as s:
+        with backend.solver(problem) as s:
             recorder = _Recorder(
                 problem, reference, pressure, traj, s, time_limit, stall_iterations
             )

@@ -4,7 +4,7 @@ A driver holds a run's loads (checked, in the run's units), what the run resolve
 for its record, one line on its problem, and a solver kept open for the whole sweep; it
 solves a list of loads as a generator of steps, from first touch or a resumed state::
 
-    driver = driver_for(run, scene)       # PeriodicDriver or PunchDriver
+    driver = driver_for(run, scene, backend)   # PeriodicDriver or PunchDriver
     try:
         for step in driver.solve(driver.loads, None, None):
             ...
@@ -23,15 +23,15 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from ..backend.solve import BoundSolver, Monitor
+from ..backend.solve import Monitor
 from ..conventions.units import force_value, format_quantity, length_value, pressure_value
 from ..geometries.periodic import LARGEST_LOAD, PeriodicProblem
 from ..geometries.punch import PunchProblem, footprint_mask
 from ..geometries.step import Step
-from ..numerics.device import get_device
 from ..physics.continuation import Held
 from ..physics.observables import MIN_CONTACT_PIXELS
-from ..solver.driver import ArraySettings, ArraySolver
+from ..solver.backends import SolverBackend
+from .choice import uses_petsc
 from .description import Run, swept
 from .periodic_sweep import problem_solver, sweep
 from .punch_sweep import PunchSolver, punch_sweep
@@ -75,14 +75,16 @@ class Driver(Protocol):
 def on_device(run: Run, device: str, options: Sequence[str] = ()) -> Run:
     """``run`` on the array ``device`` (``gpu``, ``cpu-array``), reading ``options`` there
     (the command line's PETSc options, which PETSc reads on ``cpu``); as it is on ``cpu``."""
-    if device == "cpu":
+    if uses_petsc(device):
         return run
     return run.with_(device=device, options=(*run.options, *options))
 
 
-def driver_for(run: Run, scene: Scene) -> Driver:
-    """The driver of ``run``'s geometry on ``scene``, its loads checked (``ValueError``)."""
-    return PunchDriver(run, scene) if run.geometry == "punch" else PeriodicDriver(run, scene)
+def driver_for(run: Run, scene: Scene, backend: SolverBackend) -> Driver:
+    """The driver of ``run``'s geometry on ``scene``, solved by ``backend``, its loads
+    checked (``ValueError``)."""
+    kind = PunchDriver if run.geometry == "punch" else PeriodicDriver
+    return kind(run, scene, backend)
 
 
 class PeriodicDriver:
@@ -91,8 +93,9 @@ class PeriodicDriver:
     The pressures (``run.pressures`` or a ``run.sweep``, by default over :func:`sweep_range`) are
     checked against what the surface resolves (:meth:`PeriodicProblem.check_pressure`)."""
 
-    def __init__(self, run: Run, scene: Scene) -> None:
-        problem = PeriodicProblem(scene.grid, scene.fft, scene.heights, run.modulus_value)
+    def __init__(self, run: Run, scene: Scene, backend: SolverBackend) -> None:
+        modulus = run.modulus_value
+        problem = PeriodicProblem(scene.grid, scene.fft, scene.heights, modulus, backend)
         problem.filled = scene.filled
         p_full = problem.full_contact_pressure()
         self.loads, self.resolved = _pressures(run, problem)
@@ -103,9 +106,7 @@ class PeriodicDriver:
         for p0 in self.loads:
             problem.check_pressure(p0)  # before the output is touched
         self.run, self.problem = run, problem
-        self.solver: BoundSolver | ArraySolver = problem_solver(
-            problem, run.options, run.options_prefix
-        )
+        self.solver = problem_solver(problem)
         self.intro = f", full contact at p0 = {format_quantity(p_full, run.pressure_unit)}"
         self.backend = type(scene.fft).__name__
 
@@ -163,17 +164,12 @@ class PunchDriver:
     """The punch's driver: approaches, or forces (``forces`` or nominal pressures over the
     face) reached by Newton steps on the approach."""
 
-    def __init__(self, run: Run, scene: Scene) -> None:
-        grid, device = scene.grid, get_device(run.device)
+    def __init__(self, run: Run, scene: Scene, backend: SolverBackend) -> None:
+        grid = scene.grid
         mask, beta = footprint_mask(grid, run.footprint)
-        settings = (
-            None
-            if device.name == "cpu"
-            else ArraySettings.from_options(run.options, device.name, run.options_prefix)
-        )
         problem = PunchProblem(
             grid, scene.heights, run.modulus_value, mask, run.flat_stiffness, beta,
-            device=device, settings=settings,
+            device=scene.fft.device, backend=backend,
         )  # fmt: skip
         problem.filled = scene.filled
         given = [run.forces, run.approaches, run.pressures, run.sweep]

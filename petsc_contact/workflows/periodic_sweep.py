@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..backend import _petsc
-from ..backend.solve import BoundSolver, Monitor
+from ..backend.solve import Monitor
 from ..conventions.grid import Grid, grid_for
 from ..conventions.validation import check_finite, keywords_after_first
 from ..conventions.warnings import step_warnings, user_level
@@ -34,7 +34,8 @@ from ..io.progress import StepReport, reporting
 from ..io.topography import Heights, map_and_lengths
 from ..numerics.device import Device, get_device
 from ..physics.continuation import ConvergedStep, Held, LoadPath
-from ..solver.driver import ArraySettings, ArraySolver
+from ..solver.backends import BoundSolver, SolverBackend
+from .choice import solving
 from .scene import check_map
 
 __all__ = [
@@ -58,17 +59,10 @@ def check_pressures(pressures: Sequence[float]) -> list[float]:
     return out
 
 
-def problem_solver(
-    problem: PeriodicProblem, options: Sequence[str] = (), prefix: str = ""
-) -> BoundSolver | ArraySolver:
-    """The solver of ``problem``: TAO on the ``cpu`` device (its type validated from the
-    options database), the array path's CG on the others (``options`` are PETSc's names for
-    what it reads, read with ``prefix``: :class:`~petsc_contact.solver.driver.ArraySettings`)."""
-    if problem.device.name == "cpu":
-        return BoundSolver(problem.grid, problem.hessian, problem.preconditioner)
-    settings = ArraySettings.from_options(options, problem.device.name, prefix)
-    problem.configure(settings)
-    return ArraySolver(problem.hessian, problem.preconditioner, problem.device, settings)
+def problem_solver(problem: PeriodicProblem) -> BoundSolver:
+    """The solver of ``problem``: its backend's (TAO, or the package's CG on the device's
+    arrays: :class:`~petsc_contact.solver.backends.SolverBackend`)."""
+    return problem.backend.solver(problem)
 
 
 def sweep(
@@ -78,7 +72,7 @@ def sweep(
     monitor: Monitor | None = None,
     stiffness: bool = False,
     start: np.ndarray | None = None,
-    solver: BoundSolver | ArraySolver | None = None,
+    solver: BoundSolver | None = None,
     held: Held | None = None,
 ) -> Iterator[Step]:
     """Solve the pressures in the given order, each warm-started from the last converged steps.
@@ -254,7 +248,7 @@ def periodic_contact(
         mpi4py communicator (default ``COMM_WORLD``).
     device
         ``cpu`` (TAO), ``gpu`` (the package's solver on CuPy) or ``cpu-array`` (its code on
-        NumPy), on one rank without petsc4py, reading the options ``ArraySettings`` reads.
+        NumPy), on one rank without petsc4py, reading the options ``SolveSettings`` reads.
 
     Returns
     -------
@@ -263,17 +257,19 @@ def periodic_contact(
     """
     array, sides, _ = map_and_lengths(heights, length)
     loads = check_pressures(np.atleast_1d(pressures).tolist())
-    where = get_device(device)
-    on_host = where.name == "cpu"  # TAO, with this call's options in PETSc's database
-    with _petsc.scoped_options(options) if on_host else nullcontext():
-        problem = _periodic_problem(array, sides, modulus, comm, where)
-        solver = None if on_host else problem_solver(problem, _petsc.option_list(options))
-        solve = partial(sweep, problem, loads, fields, stiffness=stiffness, solver=solver)
+    with solving(device, options) as backend:
+        problem = _periodic_problem(array, sides, modulus, comm, get_device(device), backend)
+        solve = partial(sweep, problem, loads, fields, stiffness=stiffness)
         return solved(solve, len(loads), "periodic", progress, monitor, problem.grid)
 
 
 def _periodic_problem(
-    array: np.ndarray, sides: tuple[float, float], modulus: float, comm: Any, device: Device
+    array: np.ndarray,
+    sides: tuple[float, float],
+    modulus: float,
+    comm: Any,
+    device: Device,
+    backend: SolverBackend,
 ) -> PeriodicProblem:
     """:func:`periodic_contact`'s problem: the map scattered on its grid, with the FFT of
     ``device``; the map checked as a run's scene checks it (:func:`check_map`), where it
@@ -283,4 +279,4 @@ def _periodic_problem(
     local = device.asarray(grid.scatter(array))
     check_finite(grid, local)
     check_map(local if grid.comm.size == 1 else array, grid, periodic=True)
-    return PeriodicProblem(grid, device.fft(grid), local, modulus)
+    return PeriodicProblem(grid, device.fft(grid), local, modulus, backend)

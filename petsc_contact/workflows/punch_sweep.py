@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Iterator, Sequence
-from contextlib import nullcontext
 from dataclasses import dataclass
 from functools import partial
 from typing import Any
@@ -17,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..backend import _petsc
-from ..backend.solve import BoundSolver, Monitor
+from ..backend.solve import Monitor
 from ..conventions.grid import grid_for
 from ..conventions.validation import check_finite, keywords_after_first, positive
 from ..geometries.punch import PunchProblem, footprint_mask
@@ -25,8 +24,9 @@ from ..geometries.step import Step, Steps, solve_step
 from ..io.topography import Heights, map_and_lengths
 from ..numerics.device import Device, get_device
 from ..physics.continuation import Held
-from ..solver.driver import ArraySettings, ArraySolver
+from ..solver.backends import BoundSolver, SolverBackend
 from ..solver.report import FORCE_ACCURACY
+from .choice import solving
 from .periodic_sweep import Progress, solved
 from .scene import check_map
 
@@ -35,22 +35,17 @@ FORCE_RESOLVED = FORCE_ACCURACY  # a force further than this from its target is 
 MAX_NEWTON = 60
 
 
-def punch_solver(problem: PunchProblem) -> BoundSolver | ArraySolver:
-    """The solver of the displacement-controlled ``problem``: TAO on the ``cpu`` device, the
-    package's constrained CG on the arrays of the others, with the problem's
-    :attr:`~PunchProblem.settings`."""
-    if problem.device.name == "cpu":
-        return BoundSolver(problem.grid, problem.hessian, problem.preconditioner)
-    device = problem.device
-    return ArraySolver(problem.hessian, problem.preconditioner, device, problem.settings)
+def punch_solver(problem: PunchProblem) -> BoundSolver:
+    """The solver of the displacement-controlled ``problem``: its backend's (TAO, or the
+    package's CG on the device's arrays)."""
+    return problem.backend.solver(problem)
 
 
 class PunchSolver:
     """Displacement- and load-controlled solves of one :class:`PunchProblem` (warm-started).
 
     The load control (:meth:`at_force`) is written once around the displacement-controlled
-    solves of :func:`punch_solver`: TAO on the ``cpu`` device, the array path's CG on the
-    problem's ``gpu`` or ``cpu-array`` device.
+    solves of :func:`punch_solver`, whichever backend the problem has.
     """
 
     def __init__(self, problem: PunchProblem) -> None:
@@ -286,7 +281,7 @@ def punch_contact(
     options, fields, progress, monitor, comm, device
         As for :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact`; ``device``
         is ``cpu`` (TAO), ``gpu`` or ``cpu-array`` (the package's CG on CuPy or NumPy, on one
-        rank without petsc4py, reading the options ``ArraySettings`` reads).
+        rank without petsc4py, reading the options ``SolveSettings`` reads).
     stiffness
         Add the exact interfacial stiffness to every step, as ``Run``'s ``stiffness`` does.
     footprint
@@ -301,10 +296,11 @@ def punch_contact(
     Steps
         A list, one per load in order (``to_dataframe()``: a table); the last keeps ``state``.
     """
-    face = _PunchFace(footprint, _renamed_flat(flat, flat_stiffness), beta, *_on(device, options))
+    flat_reference = _renamed_flat(flat, flat_stiffness)
     values, by_force = _punch_loads(approaches, forces), forces is not None
     array, sides, _ = map_and_lengths(heights, length)
-    with _petsc.scoped_options(options) if face.settings is None else nullcontext():
+    with solving(device, options) as backend:
+        face = _PunchFace(footprint, flat_reference, beta, get_device(device), backend)
         problem = _punch_problem(array, sides, modulus, face, comm)
         with PunchSolver(problem) as solver:
             solve = partial(punch_sweep, solver, values, by_force, fields, stiffness=stiffness)
@@ -323,25 +319,16 @@ def _punch_loads(
     return values
 
 
-def _on(device: str, options: _petsc.OptionsArg) -> tuple[Device, ArraySettings | None]:
-    """The device called ``device`` and, on the array path, the options it reads (``None``
-    on the ``cpu`` device, whose solvers read PETSc's options database)."""
-    where = get_device(device)
-    if where.name == "cpu":
-        return where, None
-    return where, ArraySettings.from_options(_petsc.option_list(options), where.name)
-
-
 @dataclass(frozen=True)
 class _PunchFace:
     """What :func:`punch_contact` says of its punch besides the map: the footprint, the
-    flat-punch reference and its shape factor, the device and the array path's options."""
+    flat-punch reference and its shape factor, the device and the solver backend."""
 
     footprint: str | np.ndarray | None
     flat_stiffness: str
     beta: float | None
     device: Device
-    settings: ArraySettings | None
+    backend: SolverBackend
 
 
 def _punch_problem(
@@ -362,7 +349,7 @@ def _punch_problem(
         face.flat_stiffness,
         beta,
         device=face.device,
-        settings=face.settings,
+        backend=face.backend,
     )
     check_map(array, grid, periodic=False)
     return problem

@@ -29,7 +29,7 @@ import os
 import time
 import warnings
 from collections.abc import Iterator
-from contextlib import AbstractContextManager, contextmanager, nullcontext
+from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
 from types import ModuleType
 from typing import Any
@@ -67,7 +67,7 @@ from ..io.store import (
 )
 from ..numerics.device import get_device
 from ..physics.continuation import Held
-from ..solver.driver import ArraySettings
+from .choice import scoped_options, solver_backend, uses_petsc
 from .description import Run
 from .drivers import Driver, Start, driver_for
 from .drivers import swept as swept  # where scripts and the CLI import it from
@@ -342,19 +342,15 @@ def prepare(run: Run, command_line: str | None = None, petsc: ModuleType | None 
     DeviceUnavailable
         For ``device="gpu"`` where CuPy or a GPU is missing, before anything is computed.
     """
-    if run.device != "cpu":  # its options refused before the device is looked for
-        ArraySettings.from_options(run.options, run.device, run.options_prefix)
-    default_solver = True  # the array devices run the package's CG
-    if get_device(run.device).name == "cpu":
-        from ..backend.solve import DEFAULT_TYPE, requested_type
-
+    if uses_petsc(run.device):
         petsc = petsc or _petsc.init()
-        default_solver = requested_type(petsc) == DEFAULT_TYPE
+    # chosen once: its options refused before the device is looked for
+    backend = solver_backend(run.device, run.options, run.options_prefix)
     texts: list[str] = []
     with recorded(texts):  # the map's warnings, what a resume computes again
-        scene = prepare_scene(run, default_solver=default_solver)
+        scene = prepare_scene(run, default_solver=backend.runs_default_type)
         _hint_ranks(scene)
-        driver = driver_for(run, scene)
+        driver = driver_for(run, scene, backend)
         try:
             record = _record(run, command_line, petsc, scene, driver) | {"warnings": texts}
             finished = _finished(run, scene, record, len(driver.loads))
@@ -476,11 +472,9 @@ def run_contact(
 
 
 def run_options(run: Run) -> AbstractContextManager[ModuleType | None]:
-    """PETSc with ``run``'s options and its ``options_prefix`` for the ``cpu`` device;
-    nothing for an array device (its solver reads ``run.options`` itself)."""
-    if run.device == "cpu":
-        return _petsc.scoped_options(list(run.options), run.options_prefix)
-    return nullcontext(None)
+    """PETSc with ``run``'s options and its ``options_prefix`` where its solver backend is
+    PETSc's; nothing for the array backend (its settings hold ``run.options``)."""
+    return scoped_options(run.device, list(run.options), run.options_prefix)
 
 
 @contextmanager
@@ -514,7 +508,7 @@ def provenance(run: Run, petsc: Any | None = None) -> dict[str, Any]:
     initialised here for a ``cpu`` run where not given."""
     from ..io.provenance import petsc_options, versions
 
-    if petsc is None and run.device == "cpu":
+    if petsc is None and uses_petsc(run.device):
         petsc = _petsc.init()
     return {
         "petsc_options": petsc_options(petsc) if petsc is not None else " ".join(run.options),

@@ -3,8 +3,10 @@
 The folders are the layers, and imports run from the later to the earlier ones
 (docs/architecture.md): ``conventions`` (grid, units, input checks, memory estimates),
 ``numerics`` (FFT backends, numba kernels, Schur algebra, devices; no PETSc), ``reference``
-(analytic solutions), ``physics`` (pure numpy), ``solver`` (the package's own solver on
-arrays of any device), ``io`` (HDF5, height maps, plots),
+(analytic solutions), ``physics`` (pure numpy), ``substrates`` (the elastic body by its
+Green's function), ``interactions`` (the law at the surface, its bounds), ``solver`` (the
+package's own solver on arrays of any device; the solver backend), ``io`` (HDF5, height maps,
+plots),
 ``backend`` (PETSc: operators, TAO driver, the package's TAO types, preconditioners,
 stiffness solves), ``geometries`` (the contact core: periodic and punch), ``workflows``
 (runs, sweeps, compare, ensembles, figures, the paper's study) and ``cli``.  The names below

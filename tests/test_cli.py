@@ -449,6 +449,8 @@ def test_modules_import_only_from_layers_above():
         "numerics",
         "reference",
         "physics",
+        "substrates",
+        "interactions",
         "solver",
         "io",
         "backend",

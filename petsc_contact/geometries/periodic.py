@@ -38,14 +38,17 @@ from ..backend.solve import SolveInfo
 from ..backend.stiffness import periodic_stiffness_exact
 from ..conventions.grid import Grid
 from ..conventions.validation import non_negative, positive
+from ..interactions.hard_wall import HARD_WALL
+from ..interactions.protocol import Interaction
 from ..numerics.fft import FFT, wavevector_magnitude
 from ..numerics.kernels import compile_kernels
 from ..numerics.schur import response_quarter
-from ..physics.greens import mean_mode_compliance, periodic_stiffness
 from ..physics.observables import step_observables
 from ..physics.theory import linear_stiffness
 from ..solver.backends import SolverBackend
 from ..solver.report import Accuracy, accuracy_limit
+from ..substrates.half_space import PeriodicHalfSpace
+from ..substrates.protocol import PeriodicSubstrate
 from .step import (
     MeasuredSolve,
     Step,
@@ -61,12 +64,19 @@ RESOLVED = 1e-4  # a load is solved only where rounding leaves its residual this
 LARGEST_LOAD = 1e6  # p0/E* beyond this is no elastic contact (strains of a million)
 
 
-def verify(info: SolveInfo, obs: dict[str, float], scale_length: float) -> str:
-    """``'ok'`` or the reason a TAO answer cannot be used."""
+def verify(
+    info: SolveInfo,
+    obs: dict[str, float],
+    scale_length: float,
+    interaction: Interaction = HARD_WALL,
+) -> str:
+    """``'ok'`` or the reason a TAO answer cannot be used (one that breaks ``interaction``'s
+    law among them)."""
     if info.reason_code <= 0:
         return f"TAO did not converge ({info.reason})"
-    if obs["min_gap"] < -1e-12 * scale_length:
-        return f"bound violated: min gap {obs['min_gap']:.3e}"
+    broken = interaction.violation(obs["min_gap"], scale_length)
+    if broken is not None:
+        return broken
     return residual_verdict(obs["kkt_residual"], info.effective_tolerance)
 
 
@@ -97,6 +107,12 @@ class PeriodicProblem:
     backend
         What solves it (:class:`~petsc_contact.solver.backends.SolverBackend`); default:
         PETSc's, with the options of the block it is first used in.
+    substrate
+        The elastic body (:class:`~petsc_contact.substrates.protocol.PeriodicSubstrate`);
+        default: the half-space of ``modulus``, whose modulus a given one must have.
+    interaction
+        The law at the surface (:class:`~petsc_contact.interactions.protocol.Interaction`);
+        default: the hard wall.
     """
 
     def __init__(
@@ -106,8 +122,15 @@ class PeriodicProblem:
         heights: np.ndarray,
         modulus: float,
         backend: SolverBackend | None = None,
+        *,
+        substrate: PeriodicSubstrate | None = None,
+        interaction: Interaction = HARD_WALL,
     ) -> None:
         positive("modulus", modulus)
+        self.substrate = PeriodicHalfSpace(modulus) if substrate is None else substrate
+        if self.substrate.modulus != modulus:
+            raise ValueError(f"the substrate's modulus is {self.substrate.modulus}, not {modulus}")
+        self.interaction = interaction
         compile_kernels(announce=grid.comm.rank == 0)  # before any step's timer
         self.grid = grid
         self.device = fft.device
@@ -118,7 +141,7 @@ class PeriodicProblem:
         self.h_rms = grid.rms(self.heights)
         self.scale_length = self.h_rms if self.h_rms > 0 else max(grid.lengths)
         q = wavevector_magnitude(grid, fft, self.device.xp)  # on the device
-        self.stiffness = FourierOperator(grid, fft, periodic_stiffness(q, modulus))
+        self.stiffness = FourierOperator(grid, fft, self.substrate.stiffness(q))
         self.hessian = self.stiffness.scaled(1.0)
         limit = schur_limit(grid.size)
         self.preconditioner = MeanModePreconditioner(grid, fft, self.hessian, limit)
@@ -168,7 +191,7 @@ class PeriodicProblem:
         self._s = 1.0 / (np.sqrt(self.grid.size) * p0)
         c = self._s * self.scale_length
         np.multiply(self.stiffness.multiplier, c, out=self.hessian.multiplier)
-        mean_compliance = mean_mode_compliance(self.modulus, self.grid.q0, k_i)
+        mean_compliance = self.substrate.mean_mode_compliance(self.grid.q0, k_i)
         self.preconditioner.options = TwoLevelOptions.from_settings(self.backend.settings)
         self.preconditioner.invert(
             self.hessian.normalised(c * k_i),
@@ -178,6 +201,11 @@ class PeriodicProblem:
         )
 
     upper_bound = None  # the gap has no upper bound
+
+    @property
+    def lower_bound(self) -> float:
+        """The lower bound of the scaled gap: the interaction's."""
+        return self.interaction.gap_lower / self.scale_length
 
     def tolerance_floor(self) -> float:
         """The tolerance double precision can resolve at the current load."""
@@ -209,7 +237,7 @@ class PeriodicProblem:
             grid, gap, pressure, self.heights, p0, self.pixel_stiffness, filled, device
         )
         contact = obs.pop("contact")
-        verdict = verify(info, obs, ell)
+        verdict = verify(info, obs, ell, self.interaction)
         scalars = {
             "nominal_pressure": p0,
             **obs,

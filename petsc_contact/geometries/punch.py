@@ -47,13 +47,16 @@ from ..backend.solve import SolveInfo
 from ..backend.stiffness import punch_stiffness_exact
 from ..conventions.grid import Grid
 from ..conventions.validation import non_negative, positive
+from ..interactions.hard_wall import HARD_WALL
+from ..interactions.protocol import Interaction
 from ..numerics.device import CPU, Device
 from ..numerics.kernels import compile_kernels
-from ..physics.greens import hockney_kernel
 from ..physics.observables import contact_resolved, distributions, patch_sizes
 from ..reference import flat_punch
 from ..solver.backends import SolverBackend
 from ..solver.report import FORCE_ACCURACY, Accuracy, accuracy_limit
+from ..substrates.half_space import FreeHalfSpace
+from ..substrates.protocol import FreeSubstrate
 from .step import (
     MeasuredSolve,
     Step,
@@ -187,6 +190,12 @@ class PunchProblem:
         What solves it (:class:`~petsc_contact.solver.backends.SolverBackend`), the held-set
         solves of the exact stiffness among them (the flat punch's, solved here); default:
         PETSc's, with the options of the block it is made in.
+    substrate
+        The elastic body (:class:`~petsc_contact.substrates.protocol.FreeSubstrate`);
+        default: the half-space of ``modulus``, whose modulus a given one must have.
+    interaction
+        The law at the surface (:class:`~petsc_contact.interactions.protocol.Interaction`);
+        default: the hard wall.
     """
 
     def __init__(
@@ -200,8 +209,14 @@ class PunchProblem:
         *,
         device: Device = CPU,
         backend: SolverBackend | None = None,
+        substrate: FreeSubstrate | None = None,
+        interaction: Interaction = HARD_WALL,
     ) -> None:
         positive("modulus", modulus)
+        self.substrate = FreeHalfSpace(modulus) if substrate is None else substrate
+        if self.substrate.modulus != modulus:
+            raise ValueError(f"the substrate's modulus is {self.substrate.modulus}, not {modulus}")
+        self.interaction = interaction
         compile_kernels(announce=grid.comm.rank == 0)  # before any step's timer
         self.flat = flat
         self.grid = grid
@@ -227,7 +242,7 @@ class PunchProblem:
         self._recess_flat = device.asarray(self.recess.reshape(-1))
         self._footprint_flat = device.asarray(self.footprint.reshape(-1).astype(float))
         self._footprint = device.asarray(self.footprint)
-        self._upper = device.asarray(np.where(self.footprint, np.inf, 0.0).reshape(-1))
+        self._upper = device.asarray(interaction.pressure_upper(self.footprint, np).reshape(-1))
         area = self.footprint_pixels * grid.pixel_area
         self.k_flat_analytic = flat_punch_stiffness(self.modulus, area, beta)  # the footprint's
         self.flat_residual = 0.0  # the recomputed residual of the flat punch's held-set solve
@@ -260,7 +275,7 @@ class PunchProblem:
         a = np.sqrt(grid.pixel_area)  # the pixel's size for the scaling (its side if square)
         self.compliance = PaddedOperator(
             grid,
-            lambda rows: hockney_kernel(grid.shape, grid.spacing, self.modulus, rows),
+            lambda rows: self.substrate.compliance_kernel(grid.shape, grid.spacing, rows),
             device=self.device,
         )
         self.inverse = self.compliance.with_spectrum(self.compliance.inverse_spectrum())
@@ -276,9 +291,14 @@ class PunchProblem:
 
     @property
     def upper_bound(self) -> Any:
-        """Upper bound of the scaled pressure: ``inf`` on the footprint, 0 elsewhere (an
-        array of the device; the same array every time)."""
+        """Upper bound of the scaled pressure, the interaction's: for the hard wall ``inf``
+        on the footprint, 0 elsewhere (an array of the device; the same array every time)."""
         return self._upper
+
+    @property
+    def lower_bound(self) -> float:
+        """Lower bound of the scaled pressure: the interaction's."""
+        return self.interaction.pressure_lower / self.pressure_scale
 
     def set_approach(self, delta: float) -> None:
         """Prescribe the rigid approach ``δ`` (beyond first touch; ``δ >= 0``)."""

@@ -207,7 +207,8 @@ def default_backend() -> SolverBackend:
 
 
 class ContactProblem(Protocol):
-    """A contact geometry posed as a scaled bound-constrained QP (lower bound 0)."""
+    """A contact geometry posed as a scaled bound-constrained QP: a substrate and an
+    interaction (its bounds) put together."""
 
     @property
     def grid(self) -> Grid: ...
@@ -225,6 +226,11 @@ class ContactProblem(Protocol):
     @property
     def upper_bound(self) -> np.ndarray | None:
         """Local upper bounds of the unknowns, or ``None``."""
+        ...
+
+    @property
+    def lower_bound(self) -> float:
+        """The lower bound of the unknowns (the interaction's)."""
         ...
 
     def objective_gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
@@ -256,6 +262,7 @@ def solve_step(
     x, info = solver.solve(
         problem.objective_gradient,
         start,
+        lower=problem.lower_bound,
         monitor=monitor,
         upper=problem.upper_bound,
         gatol_floor=problem.tolerance_floor(),

@@ -90,11 +90,6 @@ SURFACE_GROUP = "surface (a file, or a generated self-affine surface, paper Eq. 
 _NUMBER = re.compile(r"^-?(\d|\.\d)")
 
 
-def options_files(petsc_args: Sequence[str]) -> list[str]:
-    """The files named by ``-options_file`` among PETSc's options."""
-    return [b for a, b in zip(petsc_args, petsc_args[1:], strict=False) if a == "-options_file"]
-
-
 def split_arguments(argv: Sequence[str]) -> tuple[list[str], list[str]]:
     """Split a command line into the package's arguments and PETSc's options.
 

@@ -26,12 +26,16 @@ TABLED = ("periodic", "punch", "demo", "compare")  # OUT.csv beside OUT.h5
 _OPTION_LINE = re.compile(r"^\s*($|#|alias\s|-[A-Za-z_])")  # PETSc's options file lines
 
 
+def options_files(petsc_args: Sequence[str]) -> list[str]:
+    """The files named by ``-options_file`` among PETSc's options."""
+    return [b for a, b in zip(petsc_args, petsc_args[1:], strict=False) if a == "-options_file"]
+
+
 def refusal(args: argparse.Namespace, petsc_args: Sequence[str]) -> str | None:
     """Why the command line is refused before anything is read by PETSc, computed or written
     (one line), or ``None``: its PETSc options' values of a known type, its options files,
     its inputs, its outputs and their clashes."""
     from ..solver.driver import check_option_values
-    from .arguments import options_files
 
     try:
         check_option_values(petsc_args)

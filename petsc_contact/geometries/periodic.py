@@ -39,7 +39,7 @@ from ..backend.stiffness import periodic_stiffness_exact
 from ..conventions.grid import Grid
 from ..conventions.validation import non_negative, positive
 from ..interactions.hard_wall import HARD_WALL
-from ..interactions.protocol import Interaction
+from ..interactions.interaction import Interaction
 from ..numerics.fft import FFT, wavevector_magnitude
 from ..numerics.kernels import compile_kernels
 from ..numerics.schur import response_quarter
@@ -48,7 +48,7 @@ from ..physics.theory import linear_stiffness
 from ..solver.backends import SolverBackend
 from ..solver.report import Accuracy, accuracy_limit
 from ..substrates.half_space import PeriodicHalfSpace
-from ..substrates.protocol import PeriodicSubstrate
+from ..substrates.substrate import PeriodicSubstrate
 from .step import (
     MeasuredSolve,
     Step,
@@ -108,10 +108,10 @@ class PeriodicProblem:
         What solves it (:class:`~petsc_contact.solver.backends.SolverBackend`); default:
         PETSc's, with the options of the block it is first used in.
     substrate
-        The elastic body (:class:`~petsc_contact.substrates.protocol.PeriodicSubstrate`);
+        The elastic body (:class:`~petsc_contact.substrates.substrate.PeriodicSubstrate`);
         default: the half-space of ``modulus``, whose modulus a given one must have.
     interaction
-        The law at the surface (:class:`~petsc_contact.interactions.protocol.Interaction`);
+        The law at the surface (:class:`~petsc_contact.interactions.interaction.Interaction`);
         default: the hard wall.
     """
 

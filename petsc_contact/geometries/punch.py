@@ -48,7 +48,7 @@ from ..backend.stiffness import punch_stiffness_exact
 from ..conventions.grid import Grid
 from ..conventions.validation import non_negative, positive
 from ..interactions.hard_wall import HARD_WALL
-from ..interactions.protocol import Interaction
+from ..interactions.interaction import Interaction
 from ..numerics.device import CPU, Device
 from ..numerics.kernels import compile_kernels
 from ..physics.observables import contact_resolved, distributions, patch_sizes
@@ -56,7 +56,7 @@ from ..reference import flat_punch
 from ..solver.backends import SolverBackend
 from ..solver.report import FORCE_ACCURACY, Accuracy, accuracy_limit
 from ..substrates.half_space import FreeHalfSpace
-from ..substrates.protocol import FreeSubstrate
+from ..substrates.substrate import FreeSubstrate
 from .step import (
     MeasuredSolve,
     Step,
@@ -191,10 +191,10 @@ class PunchProblem:
         solves of the exact stiffness among them (the flat punch's, solved here); default:
         PETSc's, with the options of the block it is made in.
     substrate
-        The elastic body (:class:`~petsc_contact.substrates.protocol.FreeSubstrate`);
+        The elastic body (:class:`~petsc_contact.substrates.substrate.FreeSubstrate`);
         default: the half-space of ``modulus``, whose modulus a given one must have.
     interaction
-        The law at the surface (:class:`~petsc_contact.interactions.protocol.Interaction`);
+        The law at the surface (:class:`~petsc_contact.interactions.interaction.Interaction`);
         default: the hard wall.
     """
 

@@ -18,7 +18,7 @@ BOUND_ROUNDING = 1e-12  # a gap this far below zero, relative to the scale lengt
 
 @dataclass(frozen=True)
 class HardWall:
-    """The hard wall (:class:`~petsc_contact.interactions.protocol.Interaction`)."""
+    """The hard wall (:class:`~petsc_contact.interactions.interaction.Interaction`)."""
 
     name = "hard wall"
 

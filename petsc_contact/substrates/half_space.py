@@ -15,7 +15,7 @@ from ..physics.greens import hockney_kernel, mean_mode_compliance, periodic_stif
 @dataclass(frozen=True)
 class PeriodicHalfSpace:
     """A half-space under a periodic cell: stiffness ``E* |q| / 2``, zero at ``q = 0``
-    (:class:`~petsc_contact.substrates.protocol.PeriodicSubstrate`)."""
+    (:class:`~petsc_contact.substrates.substrate.PeriodicSubstrate`)."""
 
     modulus: float
     name = "half-space"
@@ -36,7 +36,7 @@ class PeriodicHalfSpace:
 class FreeHalfSpace:
     """A half-space with a free surface around the contact: Boussinesq's pixel influence
     function on the zero-padded grid (:func:`~petsc_contact.physics.greens.hockney_kernel`;
-    :class:`~petsc_contact.substrates.protocol.FreeSubstrate`)."""
+    :class:`~petsc_contact.substrates.substrate.FreeSubstrate`)."""
 
     modulus: float
     name = "half-space"

@@ -10,11 +10,14 @@ the paper's study do for each of their runs::
                              pressures=[1e5, 1e6], output="scan.h5"))
     result.to_dataframe()             # one row per step, the scalars of the output file
 
-:func:`prepare` makes the scene and the driver (the grid, the solver, the loads; every input
-checked before the output is touched); :meth:`Prepared.execute` solves the steps, commits
-each to the output (:mod:`petsc_contact.io.store`), and stops cleanly after ``stop_after``
-minutes.  Both geometries have one driver (:class:`~petsc_contact.workflows.drivers.Driver`):
-a generator of steps from a list of loads.
+:func:`opened` is the one door every run goes through, ``run_contact``, the command line and
+the Python API's ``periodic_contact`` and ``punch_contact`` (:func:`contact_steps`) alike: it
+takes the signals, the output's lock and the run's PETSc options, and gives the run prepared
+(:func:`prepare`: the scene and the driver made, the grid, the solver, the loads; every input
+checked before the output is touched).  :meth:`Prepared.execute` solves the steps, commits
+each to the output (:mod:`petsc_contact.io.store`), gives the run's warnings and its
+progress, and stops cleanly after ``stop_after`` minutes.  Both geometries have one driver
+(:class:`~petsc_contact.workflows.drivers.Driver`): a generator of steps from a list of loads.
 
 The run's warnings (:class:`~petsc_contact.conventions.warnings.PetscContactWarning`: a
 doubtful map, much of the load on filled heights, a stiffness that did not converge) are

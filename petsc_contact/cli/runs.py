@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import re
 from collections.abc import Sequence
-from contextlib import nullcontext
 from typing import Any
 
 from ..conventions.units import format_quantity
@@ -97,16 +96,15 @@ def run(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[str]) ->
 def execute(
     description: Any, args: argparse.Namespace, argv: Sequence[str], lock: bool = True
 ) -> int:
-    """Run ``description`` (a :class:`~petsc_contact.workflows.description.Run`), printing as
-    ``args`` asks (``--quiet``, ``--plot``); the exit status.  Its output is locked for the
-    run unless ``lock`` is False (the caller holds the lock); its solvers read their PETSc
-    options with its ``options_prefix``, as :func:`~petsc_contact.workflows.runner.run_contact`'s
-    do."""
+    """Run ``description`` (a :class:`~petsc_contact.workflows.description.Run`) through the
+    door every run goes through (:func:`~petsc_contact.workflows.runner.opened`), printing as
+    ``args`` asks (``--quiet``, ``--plot``): the intro once it is prepared, a row per step
+    (its ``progress``); the exit status.  Its output is locked for the run unless ``lock`` is
+    False (the caller holds the lock)."""
     from ..io.store import partial_path
-    from ..workflows.runner import PAUSED, RunInterrupted, locked, prepare, run_options
+    from ..workflows.runner import PAUSED, RunInterrupted, opened
 
-    with locked(description.output) if lock else nullcontext(), run_options(description):
-        prepared = prepare(description, " ".join(["petsc-contact", *argv]))
+    with opened(description, " ".join(["petsc-contact", *argv]), lock) as prepared:
         root = prepared.scene.grid.comm.rank == 0
         show = root and not args.quiet
         columns = _columns(description.geometry, prepared.record, description.stiffness)

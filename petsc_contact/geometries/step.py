@@ -49,7 +49,8 @@ class Step:
     @property
     def state(self) -> np.ndarray | None:
         """The local gap (periodic) or pressure (punch) slab the next step starts from, on
-        the host; ``None`` once :func:`collect` has dropped it (it keeps the last step's)."""
+        the host; ``None`` once the run has dropped it (:meth:`forget_resume`: a list of a
+        long sweep would otherwise hold one full field per step; the last keeps its own)."""
         point = self._resume_point()
         return None if point is None else point[0]
 
@@ -103,20 +104,6 @@ class Steps(list[Step]):
 
     def _repr_html_(self) -> str:
         return str(self.to_dataframe()._repr_html_())
-
-
-def collect(steps: Iterable[Step], kind: str | None = None) -> Steps:
-    """The steps as :class:`Steps` of ``kind``, each ``state`` dropped once the next step is
-    solved: a list of a long sweep would otherwise hold one full field per step (13 GB for
-    25 steps of 8192^2).  The last step keeps its state, the one to go on from, on the host."""
-    out = Steps(kind=kind)
-    for step in steps:
-        if out:
-            out[-1].forget_resume()
-        out.append(step)
-    if out:
-        out[-1].take_resume()
-    return out
 
 
 def contact_fields(

@@ -9,8 +9,8 @@ the :class:`~petsc_contact.numerics.device.Device` and the
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
-from contextlib import AbstractContextManager, contextmanager, nullcontext
+from collections.abc import Sequence
+from contextlib import AbstractContextManager, nullcontext
 from types import ModuleType
 
 from ..backend import _petsc
@@ -50,18 +50,3 @@ def scoped_options(
     if uses_petsc(device):
         return _petsc.scoped_options(options, prefix)
     return nullcontext(None)
-
-
-@contextmanager
-def solving(
-    device: str, options: _petsc.OptionsArg = None, prefix: str = ""
-) -> Iterator[SolverBackend]:
-    """The solver backend of ``device`` with ``options`` (any form
-    :func:`~petsc_contact.backend._petsc.option_list` takes) for a ``with`` block: the
-    options checked before anything is solved, PETSc's database restored after."""
-    given = _petsc.option_list(options)
-    if not uses_petsc(device):
-        yield solver_backend(device, given, prefix)
-        return
-    with _petsc.scoped_options(given, prefix):
-        yield solver_backend(device, given, prefix)

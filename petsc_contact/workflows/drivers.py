@@ -91,12 +91,17 @@ class PeriodicDriver:
     """The periodic geometry's driver: nominal pressures swept with continuation.
 
     The pressures (``run.pressures`` or a ``run.sweep``, by default over :func:`sweep_range`) are
-    checked against what the surface resolves (:meth:`PeriodicProblem.check_pressure`)."""
+    checked against what the surface resolves (:meth:`PeriodicProblem.check_pressure`).  Its
+    problem is posed on ``scene``, or given (``problem``: the Python API's, posed from a map
+    as it is)."""
 
-    def __init__(self, run: Run, scene: Scene, backend: SolverBackend) -> None:
-        modulus = run.modulus_value
-        problem = PeriodicProblem(scene.grid, scene.fft, scene.heights, modulus, backend)
-        problem.filled = scene.filled
+    def __init__(
+        self, run: Run, scene: Scene, backend: SolverBackend, problem: PeriodicProblem | None = None
+    ) -> None:
+        if problem is None:
+            modulus = run.modulus_value
+            problem = PeriodicProblem(scene.grid, scene.fft, scene.heights, modulus, backend)
+            problem.filled = scene.filled
         p_full = problem.full_contact_pressure()
         self.loads, self.resolved = _pressures(run, problem)
         if run.approaches is not None or run.forces is not None:
@@ -108,7 +113,7 @@ class PeriodicDriver:
         self.run, self.problem = run, problem
         self.solver = problem_solver(problem)
         self.intro = f", full contact at p0 = {format_quantity(p_full, run.pressure_unit)}"
-        self.backend = type(scene.fft).__name__
+        self.backend = type(problem.stiffness.fft).__name__
 
     def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
         """The sweep of ``loads`` (:func:`~petsc_contact.workflows.periodic_sweep.sweep`)."""
@@ -162,28 +167,33 @@ def _pressures(run: Run, problem: PeriodicProblem) -> tuple[list[float], dict[st
 
 class PunchDriver:
     """The punch's driver: approaches, or forces (``forces`` or nominal pressures over the
-    face) reached by Newton steps on the approach."""
+    face) reached by Newton steps on the approach.  Its problem is posed on ``scene`` with
+    ``run``'s footprint and flat punch, or given (``problem``: the Python API's, whose
+    footprint may be a mask and its shape factor any)."""
 
-    def __init__(self, run: Run, scene: Scene, backend: SolverBackend) -> None:
-        grid = scene.grid
-        mask, beta = footprint_mask(grid, run.footprint)
-        problem = PunchProblem(
-            grid, scene.heights, run.modulus_value, mask, run.flat_stiffness, beta,
-            device=scene.fft.device, backend=backend,
-        )  # fmt: skip
-        problem.filled = scene.filled
+    def __init__(
+        self, run: Run, scene: Scene, backend: SolverBackend, problem: PunchProblem | None = None
+    ) -> None:
+        posed_here = problem is None
+        if problem is None:
+            mask, beta = footprint_mask(scene.grid, run.footprint)
+            problem = PunchProblem(
+                scene.grid, scene.heights, run.modulus_value, mask, run.flat_stiffness, beta,
+                device=scene.fft.device, backend=backend,
+            )  # fmt: skip
+            problem.filled = scene.filled
         given = [run.forces, run.approaches, run.pressures, run.sweep]
         if sum(v is not None for v in given) != 1:
             raise ValueError("give one of --approaches, --forces, --pressures and --sweep")
         self.by_force = run.forces is not None or run.pressures is not None
         self.loads, self.resolved = _punch_loads(run, problem, scene.resolved["length_unit"])
-        if self.by_force:
+        if self.by_force and posed_here:  # the Python API's solver says what it reaches
             _check_forces(self.loads, problem, run)
         self.run, self.solver = run, PunchSolver(problem)
         length_unit = scene.resolved["length_unit"]
         unit = f"{run.pressure_unit}*{length_unit}" if run.pressure_unit and length_unit else ""
         self.intro = (
-            f", K_flat = {format_quantity(self.solver.k_flat, unit, 6)} ({run.flat_stiffness};"
+            f", K_flat = {format_quantity(self.solver.k_flat, unit, 6)} ({problem.flat};"
             f" analytic {format_quantity(self.solver.k_flat_analytic, unit, 6)})"
         )
         self.backend = type(problem.compliance.fft).__name__

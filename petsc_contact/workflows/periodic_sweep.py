@@ -15,28 +15,30 @@ is within the package's, whatever the tolerance asked for (:mod:`petsc_contact.s
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import nullcontext
 from functools import partial
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..backend import _petsc
 from ..backend.solve import Monitor
-from ..conventions.grid import Grid, grid_for
+from ..conventions.grid import grid_for
 from ..conventions.validation import check_finite, keywords_after_first
-from ..conventions.warnings import step_warnings, user_level
 from ..geometries.periodic import PeriodicProblem, verify
-from ..geometries.step import VERIFY_FACTOR, Step, Steps, collect, solve_step
-from ..io.progress import StepReport, reporting
+from ..geometries.step import VERIFY_FACTOR, Step, Steps, solve_step
+from ..io.progress import StepReport
 from ..io.topography import Heights, map_and_lengths
 from ..numerics.device import Device, get_device
 from ..physics.continuation import ConvergedStep, Held, LoadPath
 from ..solver.backends import BoundSolver, SolverBackend
-from .choice import solving
-from .scene import check_map
+from .choice import uses_petsc
+from .description import Run
+from .scene import Scene, check_map
+
+if TYPE_CHECKING:
+    from .drivers import PeriodicDriver
 
 __all__ = [
     "VERIFY_FACTOR",  # re-exported with Step and verify: scripts import them from here
@@ -157,41 +159,6 @@ it solves, its earlier ones are in the result's table).  Where a run takes it, `
 (:func:`~petsc_contact.io.progress.reporting`)."""
 
 
-def said(steps: Steps, grid: Grid) -> Steps:
-    """``steps``, after warning (:func:`~petsc_contact.conventions.warnings.step_warnings`, on
-    ``grid``'s first rank) of those not converged, not accurate or at full contact: a sweep
-    never returns them without a word."""
-    if grid.comm.rank == 0:
-        for text, kind in step_warnings([step.scalars for step in steps]):
-            warnings.warn(text, kind, stacklevel=user_level())
-    return steps
-
-
-def reported(steps: Iterator[Step], total: int, progress: Progress | None) -> Iterator[Step]:
-    """The steps, each reported to ``progress`` (``index`` from 0) once it is solved."""
-    for i, step in enumerate(steps):
-        if progress is not None:
-            progress(i, total, step.scalars)
-        yield step
-
-
-def solved(
-    solve: Callable[..., Iterator[Step]],
-    total: int,
-    kind: str,
-    progress: Progress | bool | None,
-    monitor: Monitor | None,
-    grid: Grid,
-) -> Steps:
-    """The ``total`` steps of geometry ``kind`` that ``solve(monitor=...)`` gives, each
-    reported to ``progress`` (``True``: a bar where a person watches, which shows the
-    iterations too: :func:`~petsc_contact.io.progress.reporting`), collected
-    (:func:`~petsc_contact.geometries.step.collect`) and said (:func:`said`)."""
-    with reporting(progress, monitor, total, shown=grid.comm.rank == 0) as (report, watch):
-        steps = collect(reported(solve(monitor=watch), total, report), kind)
-    return said(steps, grid)
-
-
 @keywords_after_first(
     "length",
     "modulus",
@@ -255,12 +222,50 @@ def periodic_contact(
     Steps
         A list, one per load in order (``to_dataframe()``: a table); the last keeps ``state``.
     """
+    from .runner import contact_steps
+
     array, sides, _ = map_and_lengths(heights, length)
     loads = check_pressures(np.atleast_1d(pressures).tolist())
-    with solving(device, options) as backend:
-        problem = _periodic_problem(array, sides, modulus, comm, get_device(device), backend)
-        solve = partial(sweep, problem, loads, fields, stiffness=stiffness)
-        return solved(solve, len(loads), "periodic", progress, monitor, problem.grid)
+    kept = {"fields": fields, "stiffness": stiffness}
+    run = api_run(array, sides, modulus, options, device, pressures=tuple(loads), **kept)
+    posing = partial(_posed, array, sides, modulus, comm)
+    return contact_steps(run, posing, progress, monitor)
+
+
+def api_run(
+    array: np.ndarray,
+    sides: tuple[float, float],
+    modulus: float,
+    options: _petsc.OptionsArg,
+    device: str,
+    **loads: Any,
+) -> Run:
+    """The :class:`Run` (no output) of a call of the Python API on the map ``array`` of
+    ``sides``: its options in any form (:func:`~petsc_contact.backend._petsc.option_list`),
+    its ``device`` and ``modulus`` checked first, as its problem checks them, and its
+    ``loads`` (its geometry, loads and what it keeps, as ``Run`` takes them)."""
+    given = tuple(_petsc.option_list(options))
+    uses_petsc(device)  # an unknown device named as the API names it
+    positive("modulus", modulus)
+    return Run(heights=array, length=sides, modulus=modulus, device=device, options=given, **loads)
+
+
+def _posed(
+    array: np.ndarray,
+    sides: tuple[float, float],
+    modulus: float,
+    comm: Any,
+    run: Run,
+    backend: SolverBackend,
+) -> tuple[Scene, PeriodicDriver]:
+    """:func:`periodic_contact`'s scene and driver: its problem (:func:`_periodic_problem`) on
+    ``run``'s device."""
+    from .drivers import PeriodicDriver
+    from .runner import posed_scene
+
+    problem = _periodic_problem(array, sides, modulus, comm, get_device(run.device), backend)
+    scene = posed_scene(problem.grid)
+    return scene, PeriodicDriver(run, scene, backend, problem)
 
 
 def _periodic_problem(

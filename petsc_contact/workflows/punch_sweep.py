@@ -11,14 +11,14 @@ import warnings
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from functools import partial
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..backend import _petsc
 from ..backend.solve import Monitor
 from ..conventions.grid import grid_for
-from ..conventions.validation import check_finite, keywords_after_first, positive
+from ..conventions.validation import check_finite, keywords_after_first, non_negative, positive
 from ..geometries.punch import PunchProblem, footprint_mask
 from ..geometries.step import Step, Steps, solve_step
 from ..io.topography import Heights, map_and_lengths
@@ -26,9 +26,12 @@ from ..numerics.device import Device, get_device
 from ..physics.continuation import Held
 from ..solver.backends import BoundSolver, SolverBackend
 from ..solver.report import FORCE_ACCURACY
-from .choice import solving
-from .periodic_sweep import Progress, solved
-from .scene import check_map
+from .description import Run
+from .periodic_sweep import Progress, api_run
+from .scene import Scene, check_map
+
+if TYPE_CHECKING:
+    from .drivers import PunchDriver
 
 FORCE_RTOL = 1e-6
 FORCE_RESOLVED = FORCE_ACCURACY  # a force further than this from its target is not converged
@@ -295,27 +298,50 @@ def punch_contact(
     Steps
         A list, one per load in order (``to_dataframe()``: a table); the last keeps ``state``.
     """
-    flat_reference = _renamed_flat(flat, flat_stiffness)
-    values, by_force = _punch_loads(approaches, forces), forces is not None
+    from .runner import contact_steps
+
+    face = (footprint, _renamed_flat(flat, flat_stiffness), beta)
+    kept = {"fields": fields, "stiffness": stiffness, **_punch_loads(approaches, forces)}
     array, sides, _ = map_and_lengths(heights, length)
-    with solving(device, options) as backend:
-        face = _PunchFace(footprint, flat_reference, beta, get_device(device), backend)
-        problem = _punch_problem(array, sides, modulus, face, comm)
-        with PunchSolver(problem) as solver:
-            solve = partial(punch_sweep, solver, values, by_force, fields, stiffness=stiffness)
-            return solved(solve, len(values), "punch", progress, monitor, problem.grid)
+    run = api_run(array, sides, modulus, options, device, geometry="punch", **kept)
+    posing = partial(_posed, array, sides, modulus, face, comm)
+    return contact_steps(run, posing, progress, monitor)
 
 
 def _punch_loads(
     approaches: float | Sequence[float] | None, forces: float | Sequence[float] | None
-) -> list[float]:
-    """The loads of :func:`punch_contact`: its approaches or its forces, exactly one of them
-    given, at least one load (``ValueError`` otherwise)."""
-    given = approaches if approaches is not None else forces
+) -> dict[str, list[float]]:
+    """The loads of :func:`punch_contact`, ``{"approaches": [...]}`` or ``{"forces": [...]}``
+    as :class:`Run` takes them: exactly one of them given, at least one load, every force
+    positive and no approach negative (``ValueError`` otherwise, as
+    :meth:`PunchSolver.at_force` and the problem say it)."""
+    given, label = (approaches, "approach") if approaches is not None else (forces, "force")
     values = [float(v) for v in np.atleast_1d(given if given is not None else [])]
     if (approaches is None) == (forces is None) or not values:
         raise ValueError("give either approaches or forces, at least one of them")
-    return values
+    for value in values:  # as the problem and the solver check them, before any is solved
+        (positive if forces is not None else non_negative)(label, value)
+    return {"approaches" if forces is None else "forces": values}
+
+
+def _posed(
+    array: np.ndarray,
+    sides: tuple[float, float],
+    modulus: float,
+    described: tuple[str | np.ndarray | None, str, float | None],
+    comm: Any,
+    run: Run,
+    backend: SolverBackend,
+) -> tuple[Scene, PunchDriver]:
+    """:func:`punch_contact`'s scene and driver: its problem (:func:`_punch_problem`) on
+    ``run``'s device, with the footprint, flat punch and shape factor ``described``."""
+    from .drivers import PunchDriver
+    from .runner import posed_scene
+
+    face = _PunchFace(*described, get_device(run.device), backend)
+    problem = _punch_problem(array, sides, modulus, face, comm)
+    scene = posed_scene(problem.grid)
+    return scene, PunchDriver(run, scene, backend, problem)
 
 
 @dataclass(frozen=True)

@@ -10,11 +10,14 @@ the paper's study do for each of their runs::
                              pressures=[1e5, 1e6], output="scan.h5"))
     result.to_dataframe()             # one row per step, the scalars of the output file
 
-:func:`prepare` makes the scene and the driver (the grid, the solver, the loads; every input
-checked before the output is touched); :meth:`Prepared.execute` solves the steps, commits
-each to the output (:mod:`petsc_contact.io.store`), and stops cleanly after ``stop_after``
-minutes.  Both geometries have one driver (:class:`~petsc_contact.workflows.drivers.Driver`):
-a generator of steps from a list of loads.
+:func:`opened` is the one door every run goes through, ``run_contact``, the command line and
+the Python API's ``periodic_contact`` and ``punch_contact`` (:func:`contact_steps`) alike: it
+takes the signals, the output's lock and the run's PETSc options, and gives the run prepared
+(:func:`prepare`: the scene and the driver made, the grid, the solver, the loads; every input
+checked before the output is touched).  :meth:`Prepared.execute` solves the steps, commits
+each to the output (:mod:`petsc_contact.io.store`), gives the run's warnings and its
+progress, and stops cleanly after ``stop_after`` minutes.  Both geometries have one driver
+(:class:`~petsc_contact.workflows.drivers.Driver`): a generator of steps from a list of loads.
 
 The run's warnings (:class:`~petsc_contact.conventions.warnings.PetscContactWarning`: a
 doubtful map, much of the load on filled heights, a stiffness that did not converge) are
@@ -28,8 +31,8 @@ import json
 import os
 import time
 import warnings
-from collections.abc import Iterator
-from contextlib import AbstractContextManager, contextmanager
+from collections.abc import Callable, Iterator
+from contextlib import AbstractContextManager, contextmanager, nullcontext
 from dataclasses import dataclass, field
 from types import ModuleType
 from typing import Any
@@ -38,7 +41,7 @@ import numpy as np
 
 from ..backend import _petsc
 from ..backend.solve import Monitor
-from ..conventions.grid import world
+from ..conventions.grid import Grid, world
 from ..conventions.warnings import (
     FilledLoad,
     PetscContactWarning,
@@ -48,7 +51,7 @@ from ..conventions.warnings import (
     step_warnings,
     user_level,
 )
-from ..geometries.step import FIELD_NAMES, Step
+from ..geometries.step import FIELD_NAMES, Step, Steps
 from ..io.progress import reporting
 from ..io.schema import FILE_RECORD
 from ..io.store import (
@@ -67,6 +70,7 @@ from ..io.store import (
 )
 from ..numerics.device import get_device
 from ..physics.continuation import Held
+from ..solver.backends import SolverBackend
 from .choice import scoped_options, solver_backend, uses_petsc
 from .description import Run
 from .drivers import Driver, Start, driver_for
@@ -324,7 +328,24 @@ def _maps(run: Run, scene: Scene) -> tuple[np.ndarray | None, np.ndarray | None]
     return (None if run.scalars_only else scene.heights), scene.filled
 
 
-def prepare(run: Run, command_line: str | None = None, petsc: ModuleType | None = None) -> Prepared:
+Posing = Callable[[Run, SolverBackend], tuple[Scene, Driver]]
+"""What poses a run's problem: its scene and driver from the run and its solver backend
+(:func:`posed`; the Python API's pose a map as it is, :func:`contact_steps`)."""
+
+
+def posed(run: Run, backend: SolverBackend) -> tuple[Scene, Driver]:
+    """``run``'s scene (:func:`~petsc_contact.workflows.scene.prepare_scene`) and the driver of
+    its geometry there (:func:`~petsc_contact.workflows.drivers.driver_for`)."""
+    scene = prepare_scene(run, default_solver=backend.runs_default_type)
+    return scene, driver_for(run, scene, backend)
+
+
+def prepare(
+    run: Run,
+    command_line: str | None = None,
+    petsc: ModuleType | None = None,
+    posing: Posing | None = None,
+) -> Prepared:
     """The scene and driver of ``run``, every input checked; the output is not touched yet.
 
     Parameters
@@ -336,6 +357,9 @@ def prepare(run: Run, command_line: str | None = None, petsc: ModuleType | None 
     petsc
         ``petsc4py.PETSc``, initialised by the caller (default: initialised here); an array
         device's run (``run.device``) uses no PETSc.
+    posing
+        What poses its problem in place of :func:`posed`: the Python API's, for a run with
+        no output, whose result keeps no record (empty).
 
     Raises
     ------
@@ -348,11 +372,12 @@ def prepare(run: Run, command_line: str | None = None, petsc: ModuleType | None 
     backend = solver_backend(run.device, run.options, run.options_prefix)
     texts: list[str] = []
     with recorded(texts):  # the map's warnings, what a resume computes again
-        scene = prepare_scene(run, default_solver=backend.runs_default_type)
-        _hint_ranks(scene)
-        driver = driver_for(run, scene, backend)
+        scene, driver = (posing or posed)(run, backend)
         try:
-            record = _record(run, command_line, petsc, scene, driver) | {"warnings": texts}
+            _hint_ranks(scene)
+            record: dict[str, Any] = {}
+            if posing is None:
+                record = _record(run, command_line, petsc, scene, driver) | {"warnings": texts}
             finished = _finished(run, scene, record, len(driver.loads))
         except BaseException:
             driver.close()
@@ -465,10 +490,45 @@ def run_contact(
     command_line
         What to record as the command line (default: the arguments that describe ``run``).
     """
+    with opened(run, command_line) as prepared:
+        return prepared.execute(progress, monitor)
+
+
+@contextmanager
+def opened(
+    run: Run, command_line: str | None = None, lock: bool = True, posing: Posing | None = None
+) -> Iterator[Prepared]:
+    """``run`` prepared (:func:`prepare`) for a ``with`` block, which executes it: the door
+    every run goes through (:func:`run_contact`, the command line, :func:`contact_steps`).
+
+    Within the block ``SIGTERM``, as ``Ctrl-C``, raises :class:`RunInterrupted` where the
+    caller has no handler of its own (:func:`~petsc_contact.io.interrupts.interruptible`),
+    the output is locked unless ``lock`` is False (the caller holds the lock:
+    :func:`locked`), and PETSc holds the run's options with its prefix
+    (:func:`run_options`).  ``command_line`` and ``posing`` as :func:`prepare` takes them."""
     from ..io.interrupts import interruptible
 
-    with interruptible(), locked(run.output), run_options(run) as petsc:
-        return prepare(run, command_line, petsc).execute(progress, monitor)
+    with interruptible(), locked(run.output) if lock else nullcontext(), run_options(run) as petsc:
+        yield prepare(run, command_line, petsc, posing)
+
+
+def contact_steps(
+    run: Run, posing: Posing, progress: Progress | bool | None, monitor: Monitor | None
+) -> Steps:
+    """The steps of ``run`` (no output) whose problem ``posing`` poses, through
+    :func:`opened` (its warnings and progress those of every run), as
+    :class:`~petsc_contact.geometries.step.Steps` of its geometry: what
+    :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact` and
+    :func:`~petsc_contact.workflows.punch_sweep.punch_contact` return."""
+    with opened(run, posing=posing) as prepared:
+        return Steps(prepared.execute(progress, monitor).steps, kind=run.geometry)
+
+
+def posed_scene(grid: Grid) -> Scene:
+    """The scene of a problem posed from a map as it is (the Python API's): its grid alone;
+    the problem holds the heights and their FFT, and no file records them."""
+    resolved = {"length": list(grid.lengths), "length_unit": ""}
+    return Scene(grid, None, np.empty((0, grid.shape[1])), resolved)
 
 
 def run_options(run: Run) -> AbstractContextManager[ModuleType | None]:
@@ -481,8 +541,11 @@ def run_options(run: Run) -> AbstractContextManager[ModuleType | None]:
 def locked(path: str | None) -> Iterator[None]:
     """Hold the exclusive right to write ``path`` (rank 0 takes it; every rank raises the same
     error when another run holds it: :class:`~petsc_contact.io.store.OutputBusy`)."""
+    if path is None:  # nothing to lock: no collective step either
+        yield
+        return
     comm = world()
-    lock = OutputLock(path) if path is not None and comm.rank == 0 else None
+    lock = OutputLock(path) if comm.rank == 0 else None
     failure: Exception | None = None
     if lock is not None:
         try:

@@ -9,10 +9,10 @@ files, :mod:`~petsc_contact.io.parts`: no rank ever holds a whole field):
     that a second run on the same output is refused at once.  The kernel drops the lock when
     the process dies, however it dies; a lock file left behind is free.
 ``OUT.h5.partial``
-    an HDF5 file with the run record and the scalars of every finished step, written whole
-    to a temporary name and renamed over the last one after each step.  A rename is atomic,
-    so whatever instant the process dies at, this file is the last step's or the one before,
-    never a torn one.  It is the commit point: a step is finished when it is in this file.
+    an HDF5 file with the run record and the scalars of every finished step, replaced whole
+    after each step (:func:`~petsc_contact.io.partial.commit`): whatever instant the process
+    dies at, this file is the last step's or the one before, never a torn one.  It is the
+    commit point: a step is finished when it is in this file.
 ``OUT.h5.parts/``
     the bulky arrays, one HDF5 file each, each written to a temporary name and renamed before
     the step is committed: ``heights.h5``, and ``step-000001.h5``, ... with a step's fields,
@@ -20,11 +20,10 @@ files, :mod:`~petsc_contact.io.parts`: no rank ever holds a whole field):
     commit records each file's SHA-256 (the ``.partial``'s attribute ``parts``); a part is
     used only when the bytes of every slab match it.
 ``OUT.h5.state.npz``
-    the solution the next step starts from (``after_step`` says which step it ends), written
-    after the commit (on ``P`` ranks, ``P`` slabs); a resume that finds it missing, damaged or
-    stale starts the next step from first touch (the same result to the solver's tolerance,
-    at a different cost).  A resume on any rank count reads each rank's rows only, and each
-    rank checks only the slabs that hold them (the ranks agree on the verdict).
+    the solution the next step starts from, written after the commit (on ``P`` ranks, ``P``
+    slabs, :mod:`~petsc_contact.io.state`); a resume that finds it missing, damaged or stale
+    starts the next step from first touch (the same result to the solver's tolerance, at a
+    different cost).
 
 When the run ends, every part is checked against its checksum, ``OUT.h5`` is assembled
 from them by rank 0, a band of rows at a time (the fields' compressed chunks copied as they
@@ -44,20 +43,21 @@ kill is at most the step being computed.  (Power loss is another matter: nothing
 The pieces this rests on have a module each: :mod:`~petsc_contact.io.names` (the files'
 names), :mod:`~petsc_contact.io.atomic` (a file written whole or not at all,
 :class:`StorageError`), :mod:`~petsc_contact.io.lock` (the output lock),
-:mod:`~petsc_contact.io.parts` (the parts' checksums) and
+:mod:`~petsc_contact.io.partial` (the ``.partial`` file: the commit, every read of it, the
+checks that what it kept is this run's), :mod:`~petsc_contact.io.parts` (the parts'
+checksums), :mod:`~petsc_contact.io.state` (the state slabs),
+:mod:`~petsc_contact.io.assemble` (the files' layout, ``OUT.h5`` assembled) and
 :mod:`~petsc_contact.io.interrupts` (signals that end a run); their names stay importable
 from here.
 """
 
 from __future__ import annotations
 
-import errno
 import json
 import os
 import re
 import shutil
 import warnings
-import zipfile
 from contextlib import suppress
 from dataclasses import dataclass, field
 from datetime import datetime
@@ -65,9 +65,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..conventions.grid import block_rows
-from ..conventions.warnings import ReplacedOutput, ResumeWarning, option, user_level
+from ..conventions.warnings import ReplacedOutput, option
 from ..physics.continuation import Held
+from .assemble import FIELD_CHUNK, assemble_output, field_layout, write_table
 from .atomic import (
     StorageError,
     _reason,
@@ -93,30 +93,23 @@ from .names import (
     state_path,
     step_part,
 )
-from .parts import (
-    PartsCheck,
-    SlabRows,
-    _steps,
-    check_parts,
-    mapped,
-    part_problem,
-    slab_name,
-    slab_of,
-    slab_rows,
-    slabs,
+from .partial import (
+    RECORDED_SINCE,
+    RESUME_FREE,
+    check_nothing_lost,
+    check_same_input,
+    check_same_run,
+    commit,
+    committed_steps,
+    discard,
+    leftover_table,
+    read_attributes,
+    read_committed,
 )
+from .parts import PartsCheck, check_parts, part_problem, slab_name, slab_of
 from .provenance import source_commit
-from .schema import (
-    COORDINATES,
-    GEOMETRIES,
-    MISSING,
-    SECOND_DIMENSION,
-    Entry,
-    describe,
-    h5_dtype,
-    in_unit,
-    write_attributes,
-)
+from .schema import GEOMETRIES, MISSING, Entry, describe, h5_dtype, in_unit
+from .state import remove_states, saved_state, write_state
 
 if TYPE_CHECKING:
     from ..conventions.grid import Grid, RowSource
@@ -127,6 +120,7 @@ __all__ = [  # the names of the modules this one was split into stay importable 
     "LOCK",
     "PARTIAL",
     "PARTS",
+    "RECORDED_SINCE",
     "RESUME_FREE",
     "STATE",
     "Finished",
@@ -161,8 +155,6 @@ __all__ = [  # the names of the modules this one was split into stay importable 
     "tidy",
     "write_csv",
 ]
-
-FIELD_CHUNK = 256  # fields are stored in (1, 256, 256) chunks, gzip level 4 with shuffle
 
 
 @dataclass
@@ -223,26 +215,20 @@ def read_resume(
     :func:`check_same_input`), so a resume never mixes two runs, or when it
     cannot be read (damaged by something else than a run: the run itself replaces it whole).
     """
-    import h5py
-
     partial = partial_path(path)
     if not os.path.exists(partial):
         return Finished(0)
     try:
-        with h5py.File(partial, "r") as f:
-            theirs = json.loads(f.attrs["parameters"])
-            recorded = f.attrs.get("heights_sha256")
-            parts = json.loads(f.attrs.get("parts", "{}"))  # none in earlier versions' files
-            table = _read_table(f)
-            steps = len(table.get("converged", []))
+        kept = read_committed(partial)
+        theirs, recorded, parts = kept.parameters, kept.digest, kept.parts
     except (OSError, KeyError, ValueError) as exc:
         raise ValueError(
             f"cannot resume '{partial}': it is damaged ({_reason(exc)}); --overwrite starts afresh"
         ) from None
     check_same_run(partial, theirs, parameters)
     check_same_input(partial, recorded, digest)
-    state, held, problem = _saved_state(path, steps, grid)
-    return Finished(steps, table, state, problem, held, parts)
+    state, held, problem = saved_state(path, kept.steps, grid)
+    return Finished(kept.steps, kept.table, state, problem, held, parts)
 
 
 def read_complete(path: str, parameters: dict[str, Any], digest: str | None = None) -> Finished:
@@ -251,17 +237,13 @@ def read_complete(path: str, parameters: dict[str, Any], digest: str | None = No
     ``ValueError`` when it is a complete file of another run (``parameters`` differ, apart from
     :data:`RESUME_FREE`, or its map is not the one of digest ``digest``:
     :func:`check_same_input`): a resume never replaces another run's results."""
-    import h5py
-
     if os.path.exists(partial_path(path)) or not os.path.isfile(path):
         return Finished(0)
     try:
-        with h5py.File(path, "r") as f:
-            if not f.attrs.get("complete"):
-                return Finished(0)
-            theirs = json.loads(f.attrs["parameters"])
-            recorded = f.attrs.get("heights_sha256")
-            table = _read_table(f)
+        kept = read_committed(path)
+        if not kept.attributes.get("complete"):
+            return Finished(0)
+        theirs, recorded = kept.parameters, kept.digest
     except (OSError, KeyError, ValueError):
         return Finished(0)  # not a results file: the run writes one (as without --resume)
     try:
@@ -269,16 +251,7 @@ def read_complete(path: str, parameters: dict[str, Any], digest: str | None = No
     except ValueError as exc:
         raise ValueError(f"{exc}; --overwrite replaces it") from None
     check_same_input(path, recorded, digest)
-    return Finished(len(table.get("converged", [])), table, whole=True)
-
-
-def _read_table(f: Any) -> dict[str, list[Any]]:
-    """The per-step datasets of a run's open HDF5 file ``f``, as lists."""
-    return {
-        k: list(_values(f[k]))
-        for k in f
-        if k not in COORDINATES and f[k].ndim >= 1 and f[k].shape[0] == f["step"].shape[0]
-    }
+    return Finished(kept.steps, kept.table, whole=True)
 
 
 def created_stamp() -> str:
@@ -287,35 +260,6 @@ def created_stamp() -> str:
     the complete file, a seed file replaced), so two runs on one output within a second
     must not share it."""
     return datetime.now().astimezone().strftime("%Y-%m-%dT%H:%M:%S.%f%z")
-
-
-def committed_steps(partial: str) -> int:
-    """The finished steps an unfinished file holds (an ``OSError`` when it cannot be read)."""
-    import h5py
-
-    with h5py.File(partial, "r") as f:
-        return int(f["converged"].shape[0]) if "converged" in f else 0
-
-
-def check_nothing_lost(path: str) -> None:
-    """``ValueError`` when a new run on output ``path`` would delete finished steps: those an
-    interrupted run kept in ``path + '.partial'`` (``--resume`` continues it, ``--overwrite``
-    deletes them), or a ``.partial`` that cannot be read.  The ``.partial`` of a finished run
-    left beside its complete ``path`` holds nothing that is not in ``path``."""
-    partial = partial_path(path)
-    if not os.path.exists(partial) or _leftover_table(path) is not None:
-        return
-    try:
-        steps = committed_steps(partial)
-    except OSError as exc:
-        raise ValueError(
-            f"'{partial}' is damaged ({_reason(exc)}): --overwrite starts afresh (deleting it)"
-        ) from None
-    if steps:
-        raise ValueError(
-            f"'{partial}' holds {steps} finished step(s) of an interrupted run: --resume "
-            "continues it, --overwrite starts afresh (deleting them)"
-        )
 
 
 def check_resume_or_overwrite(resume: bool, overwrite: bool) -> None:
@@ -336,209 +280,6 @@ def warn_replaced(path: str, stacklevel: int = 2) -> None:
             ReplacedOutput,
             stacklevel=stacklevel + 1,
         )
-
-
-RESUME_FREE = ("resume", "overwrite", "quiet", "stop_after", "device")
-"""The options a resume may change: none changes the result (a device, its rounding only:
-a run paused on a GPU goes on on the CPU; the ``resumed`` list records each part's)."""
-
-
-RECORDED_SINCE = {
-    "cut_from": 1,
-    "flat_stiffness": "grid",
-    "footprint": "square",
-    "options_prefix": "",
-    "override_metadata": False,
-    "skip_memory_check": False,
-}
-"""Parameters that files of earlier versions do not record, each with the value every run of
-those versions had (each option came with that behaviour as its default): a file without one
-is compared as if it recorded that value, so a study or a resume goes on across an upgrade,
-and a run that sets another value is still refused."""
-
-
-def check_same_run(partial: str, theirs: dict[str, Any], mine: dict[str, Any]) -> None:
-    """``ValueError`` unless an unfinished file's ``parameters`` are this run's (apart from
-    :data:`RESUME_FREE`; one that predates :data:`RECORDED_SINCE`'s has their values): a
-    resume never mixes two runs."""
-    a = json.loads(json.dumps({k: v for k, v in mine.items() if k not in RESUME_FREE}))
-    earlier = {k: v for k, v in RECORDED_SINCE.items() if k in a}  # where theirs lacks them
-    b = {k: v for k, v in (earlier | theirs).items() if k not in RESUME_FREE}
-    changed = sorted(k for k in set(a) | set(b) if not _same(a.get(k), b.get(k)))
-    if changed:
-        raise ValueError(
-            f"cannot resume '{partial}': it was run with different parameters "
-            f"({', '.join(changed)})"
-        )
-
-
-def check_same_input(path: str, recorded: Any, digest: str | None) -> None:
-    """``ValueError`` (one line, naming ``--overwrite``) unless the map of the run that file
-    ``path`` holds, whose SHA-256 it records (``recorded``, its ``heights_sha256``), is the one
-    of digest ``digest`` (:func:`~petsc_contact.io.provenance.input_digest`; ``None`` for a
-    generated surface, which its parameters describe): a resume never mixes two maps.  A file
-    that records no digest of its map (an array's, before this was recorded) is joined with
-    a :class:`ResumeWarning` saying that the map is not compared."""
-    if digest is None or recorded == digest:
-        return
-    if not recorded:
-        warnings.warn(
-            f"'{path}' records no digest of its height map: that the map is the same is not "
-            "checked",
-            ResumeWarning,
-            stacklevel=user_level(),
-        )
-        return
-    raise ValueError(
-        f"cannot resume '{path}': its height map has changed since it was run (SHA-256 "
-        f"{str(recorded)[:12]}... then, {digest[:12]}... now); --overwrite starts afresh"
-    )
-
-
-def _values(dataset: Any) -> np.ndarray:
-    values = dataset[...]
-    if values.dtype.kind == "O":
-        return np.array([v.decode() if isinstance(v, bytes) else v for v in values], dtype=object)
-    return values
-
-
-def _saved_state(path: str, steps: int, grid: Grid) -> tuple[RowSource | None, Held | None, str]:
-    """The state after step ``steps`` and what the sweep held beside it (``None`` in a state
-    file of an earlier version), as row sources whose rows are read when a rank of ``grid``
-    asks for them, or ``None`` and why not.  Of the sets of slabs left by runs on different
-    rank counts (a run killed before it removed the older set), the newest sound one; every
-    rank of ``grid`` goes through the sets rank 0 found and reaches the same verdict on each
-    (collective)."""
-    where = state_path(path)
-    if not steps:
-        return None, None, ""
-    comm = grid.comm
-    sets = comm.bcast(_state_sets(where) if comm.rank == 0 else None, root=0)
-    problem = f"{where} is missing"
-    for i, files in enumerate(sets):
-        try:
-            after, slabs_of = _read_slabs(files, grid)
-        except _Damaged as exc:
-            problem = str(exc) if i == 0 else problem
-            continue
-        if after + 1 == steps:
-            rows = grid.shape[0]
-            state = SlabRows(slabs_of.pop("state"), rows)
-            held = None
-            if "held" in slabs_of:
-                scalars = slabs_of.pop("held")[0][1]
-                fields: tuple[Any, ...] = tuple(
-                    SlabRows(slabs_of[f"held_field_{k}"], rows) for k in range(len(slabs_of))
-                )  # row sources: each rank reads its rows of each (grid.scatter)
-                held = Held(np.asarray(scalars), fields)
-            return state, held, ""
-        problem = f"{files[0]} is of step {after + 1}, not {steps}" if i == 0 else problem
-    return None, None, problem
-
-
-class _Damaged(Exception):
-    """A state slab that cannot be used: missing, truncated, foreign or failing its CRC."""
-
-
-def _state_sets(where: str) -> list[list[str]]:
-    """The files of every set of state slabs beside ``where`` (``OUT.h5.state.npz``), one
-    list per rank count, in rank order, the newest set first."""
-    folder, name = os.path.split(where)
-    times: dict[int, int] = {}  # each rank count's newest slab
-    for entry in os.listdir(folder or "."):
-        found = slab_of(name, entry)
-        if found is not None:
-            time = os.stat(os.path.join(folder, entry)).st_mtime_ns
-            times[found[1]] = max(times.get(found[1], 0), time)
-    newest = sorted(times, key=lambda size: -times[size])
-    return [[os.path.join(folder, slab_name(name, r, p)) for r in range(p)] for p in newest]
-
-
-def _read_slabs(
-    files: list[str], grid: Grid
-) -> tuple[int, dict[str, list[tuple[int, np.ndarray]]]]:
-    """The step a set of state slabs ends and, of the slabs that hold this rank's rows of
-    ``grid``, each array as ``(first row, array)``, memory-mapped (``held``'s whole, it is
-    small).  A rank opens only those slabs (a rank without rows, the first), checks each
-    member's CRC, streamed, and the ranks agree (collective): every rank raises the same
-    :class:`_Damaged`, naming the first slab of the set that any rank could not use."""
-    total, mine = grid.shape[0], grid.rows
-    spans = [block_rows(total, len(files), k) for k in range(len(files))]  # their rows
-    needed = [k for k, r in enumerate(spans) if r.start < mine.stop and r.stop > mine.start]
-    problem: tuple[int, str] | None = None
-    afters: set[int] = set()
-    arrays: dict[str, list[tuple[int, np.ndarray]]] = {}
-    for k in needed or [0]:
-        try:
-            after, members = _read_slab(files[k], spans[k].stop - spans[k].start, (k, len(files)))
-        except _Damaged as exc:
-            problem = (k, str(exc))
-            break
-        afters.add(after)
-        for member, array in members.items():
-            arrays.setdefault(member, []).append((spans[k].start, array))
-    said = grid.comm.gather((problem, afters), root=0)
-    verdict = None if said is None else _verdict(files, said)  # on rank 0
-    verdict = grid.comm.bcast(verdict, root=0)
-    if isinstance(verdict, str):
-        raise _Damaged(verdict)
-    return verdict, arrays
-
-
-def _verdict(files: list[str], said: list[tuple[tuple[int, str] | None, set[int]]]) -> int | str:
-    """The step the set of state slabs ``files`` ends, or what is wrong with it: its first
-    slab that a rank found wrong (``said``, each rank's first problem and the steps its slabs
-    end), or its slabs ending different steps."""
-    problems = sorted(problem for problem, _ in said if problem is not None)
-    if problems:
-        return problems[0][1]
-    afters = set().union(*(after for _, after in said))
-    if len(afters) != 1:
-        return f"{files[0]} and its other slabs end different steps"
-    return afters.pop()
-
-
-def _read_slab(where: str, rows: int, slab: tuple[int, int]) -> tuple[int, dict[str, np.ndarray]]:
-    """The step the state slab ``where`` ends and its arrays, memory-mapped (``held``'s
-    whole); every member's CRC checked, streamed.  :class:`_Damaged` when it is missing or
-    cannot be used, its state has not ``rows`` rows, or it was written by another rank than
-    ``slab`` (``(rank, size)``: the slabs swapped or renamed; a slab of an earlier version
-    records none)."""
-    if not os.path.exists(where):
-        raise _Damaged(f"{where} is missing")
-    try:
-        with zipfile.ZipFile(where) as archive:
-            bad = archive.testzip()
-        if bad is not None:
-            raise ValueError(f"{bad} fails its CRC")
-        with np.load(where) as saved:
-            after = int(saved["after_step"])
-            writer = tuple(int(v) for v in saved["slab"]) if "slab" in saved.files else slab
-            names = [m for m in saved.files if m not in ("after_step", "slab")]
-            members = {"held": saved["held"]} if "held" in names else {}
-        if writer != slab:
-            raise ValueError(
-                f"it holds the rows of rank {writer[0]} of {writer[1]}, not of rank {slab[0]} "
-                "(swapped or renamed)"
-            )
-        members.update({m: mapped(where, m) for m in names if m != "held"})
-        if len(members["state"]) != rows:
-            raise ValueError(f"its state has {len(members['state'])} rows, not {rows}")
-    except Exception as exc:  # a truncated or foreign file: any reader failure
-        raise _Damaged(f"{where} is damaged ({_reason(exc)})") from None
-    return after, members
-
-
-def _same(a: Any, b: Any) -> bool:
-    """Equal parameters; floats to 1e-9 relative (derived loads carry FFT rounding)."""
-    if isinstance(a, list) and isinstance(b, list):
-        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
-    if isinstance(a, float) or isinstance(b, float):
-        try:
-            return bool(np.isclose(float(a), float(b), rtol=1e-9, atol=0.0))
-        except (TypeError, ValueError):
-            return False
-    return a == b
 
 
 class StepStore:
@@ -621,16 +362,14 @@ class StepStore:
 
         ``heights`` and ``filled`` are the maps the run stores (local slabs), written again
         when ``finished.rewrite_maps`` (its ``heights.h5`` was missing or damaged)."""
-        import h5py
-
         store = cls(path, grid, fields)
         store.steps = finished.steps
         store.digests = dict(finished.parts)
         stored = any(slab_of(HEIGHTS_PART, p) is not None for p in finished.parts)
         store.maps = heights is not None or filled is not None or stored
         if store.root:
-            with h5py.File(store.partial, "r") as f:
-                store.attributes = {k: v for k, v in f.attrs.items() if k != "parts"}
+            attributes = read_attributes(store.partial)
+            store.attributes = {k: v for k, v in attributes.items() if k != "parts"}
             store.table = {k: list(v) for k, v in finished.table.items()}
         store.attributes = grid.comm.bcast(store.attributes, root=0)  # every rank's schema
         earlier = json.loads(str(store.attributes.get("resumed", "[]")) or "[]")
@@ -670,7 +409,7 @@ class StepStore:
         if fields and self.fields:
             self._write_part(step_part(step), {k: fields[k] for k in self.fields}, True)
 
-        def commit() -> None:
+        def commit_step() -> None:
             for key, value in scalars.items():
                 if key not in self.table:  # new, or new since the version a resume began with
                     self.table[key] = [_missing(value)] * self.steps
@@ -683,69 +422,33 @@ class StepStore:
                     column.pop()
                 raise
 
-        self._on_root(commit)
+        self._on_root(commit_step)
         self.steps = step
         if state is not None:
             self._write_state(state, held, step)
 
     def _write_state(self, state: np.ndarray, held: Held | None, step: int) -> None:
         """Every rank saves its rows of the state after ``step`` and of the fields ``held``
-        beside it (its slab of ``OUT.h5.state.npz``); after the first, the slabs another rank
-        count left are removed (collective)."""
+        beside it (:func:`~petsc_contact.io.state.write_state`); after the first, the slabs
+        another rank count left are removed (collective)."""
         comm = self.grid.comm
-        kept: dict[str, Any] = {}
-        if held is not None:
-            kept["held"] = np.asarray(held.scalars, dtype=float)
-            kept.update({f"held_field_{i}": slab for i, slab in enumerate(held.fields)})
-        where = slab_name(state_path(self.path), comm.rank, comm.size)
-        writer = np.array([comm.rank, comm.size])  # a swapped slab is known by it
-
-        def save() -> None:
-            with storage(where), replaced(where) as tmp, open(tmp, "wb") as f:
-                np.savez(f, **kept, state=state, after_step=step - 1, slab=writer)
-
-        on_every(comm, save)
+        write_state(self.path, comm, state, held, step)
         if self.fresh_state:
-            self._on_root(lambda: _remove_states(self.path, keep=comm.size))
+            self._on_root(lambda: remove_states(self.path, keep=comm.size))
             self.fresh_state = False
 
     def finish(self) -> None:
         """Assemble ``OUT.h5`` (complete), rename it into place, remove the rest (collective)."""
 
         def assemble() -> None:
-            self._check_parts()
-            parts = [os.path.join(self.parts, p) for p in os.listdir(self.parts)]
-            needed = sum(os.path.getsize(p) for p in [self.partial, *parts])
-            check_room(os.path.dirname(os.path.abspath(self.path)), needed, self.path)
             table = csv_path(self.path)
-            with storage(table), suppress(FileNotFoundError):
-                os.remove(table)  # an earlier run's, never left beside this run's OUT.h5
-            with atomic_h5(self.path, large=True) as f:
-                write_attributes(f, {**self.attributes, "complete": True})
-                self._write_table(f)
-                if self.maps:
-                    self._copy_maps(f)
-                for name in self.fields:
-                    self._copy_field(f, name)
-                self._label_maps(f)
+            assemble_output(self, table)
             self.assembled = True
             write_csv(table, self.table, self.steps)
             _clear(self.path, keep_steps=False)
 
         self._on_root(assemble)
         self.grid.comm.Barrier()
-
-    def _check_parts(self) -> None:
-        """:class:`StorageError` unless every part the run stores is there, as committed."""
-        checks = [(HEIGHTS_PART, "writes it again")] if self.maps else []
-        for k in range(1, self.steps + 1) if self.fields else ():
-            checks.append((step_part(k), f"computes {_steps(k, self.steps)} again"))
-        for name, redo in checks:
-            wrong = part_problem(self.parts, name, self.digests)
-            if wrong:
-                raise StorageError(
-                    errno.EIO, f"cannot assemble {self.path}: {wrong}; --resume {redo}"
-                )
 
     def discard(self) -> None:
         """Remove everything of a run that finished no step (a failure before the first)."""
@@ -768,7 +471,8 @@ class StepStore:
     def _on_root(self, work: Any) -> None:
         on_root(self.grid.comm, work)
 
-    def _entry(self, name: str) -> Entry:
+    def entry(self, name: str) -> Entry:
+        """The schema entry of dataset ``name`` of this run's files, in the run's units."""
         schema = GEOMETRIES.get(str(self.attributes.get("geometry", "")), {})
         try:
             entry = schema[name]
@@ -781,54 +485,9 @@ class StepStore:
 
     def _commit(self) -> None:
         """Replace the ``.partial`` file by one holding every finished step."""
-        with atomic_h5(self.partial) as f:
-            write_attributes(f, {**self.attributes, "parts": self.digests})
-            self._write_table(f)
-
-    def _write_table(self, f: Any) -> None:
-        """The scalars of every step, on the dimension ``step`` (1, 2, ...)."""
-        count = len(next(iter(self.table.values()), []))  # the steps committed with this table
-        # contiguous columns (the table is rewritten whole at every commit): a chunked column's
-        # index and 8 KB chunk made a study piece's file 300 KB instead of 80 KB
-        step = f.create_dataset("step", data=np.arange(1, count + 1))
-        describe(step, self._entry("step"))
-        step.make_scale("step")
-        for key, column in self.table.items():
-            dtype = h5_dtype(column[0]) if column else np.float64
-            values = np.array(column, dtype=dtype)
-            d = f.create_dataset(key, data=values)
-            describe(d, self._entry(key))
-            d.dims[0].attach_scale(step)
-            if values.ndim == 2:  # a per-step array: its second axis is a named dimension
-                d.dims[1].attach_scale(self._scale(f, SECOND_DIMENSION[key], values.shape[1]))
-
-    def _scale(self, f: Any, name: str, size: int) -> Any:
-        """The dimension scale ``name`` (bins counted from 0; patch bins by their smallest
-        size), made once."""
-        if name not in f:
-            values = 2 ** np.arange(size) if name == "patch_bin" else np.arange(size)
-            scale = f.create_dataset(name, data=values)
-            describe(scale, self._entry(name))
-            scale.make_scale(name)
-        return f[name]
-
-    def _label_maps(self, f: Any) -> None:
-        """The maps' dimensions ``x`` and ``y`` (pixel centres) and ``step``, as dimension
-        scales, so that xarray and netCDF tools read labelled arrays."""
-        maps = [name for name in ("heights", "filled") if name in f]
-        if not maps and not self.fields:
-            return
-        scales = {}
-        for name, values in zip(("x", "y"), self.grid.positions(), strict=True):
-            scales[name] = f.create_dataset(name, data=values)
-            describe(scales[name], self._entry(name))
-            scales[name].make_scale(name)
-        for map_name in maps:
-            for axis, name in enumerate("xy"):
-                f[map_name].dims[axis].attach_scale(scales[name])
-        for field_name in self.fields:
-            for axis, scale in enumerate((f["step"], scales["x"], scales["y"])):
-                f[field_name].dims[axis].attach_scale(scale)
+        commit(
+            self.path, {**self.attributes, "parts": self.digests}, lambda f: write_table(self, f)
+        )
 
     def _write_part(self, name: str, arrays: dict[str, np.ndarray], chunked: bool) -> None:
         """Every rank writes its rows of part ``name`` (``arrays``, local slabs) to its slab
@@ -841,91 +500,19 @@ class StepStore:
             with atomic_h5(slab, digests=mine) as f:
                 for key, value in arrays.items():
                     if chunked:
-                        d = f.create_dataset(key, data=value[None], **_field_layout(value.shape))
+                        d = f.create_dataset(key, data=value[None], **field_layout(value.shape))
                     else:
                         d = f.create_dataset(key, data=value)
-                    describe(d, self._entry(key))
+                    describe(d, self.entry(key))
 
         on_every(comm, write)
         for digests in comm.gather(mine, root=0) or ():
             self.digests.update(digests)
 
-    def _copy_maps(self, f: Any) -> None:
-        """The heights, and a measured map's filled mask, into ``f``: the one part copied as
-        it is, or its slabs' rows a band at a time."""
-        import h5py
-
-        files = slabs(HEIGHTS_PART, self.digests)
-        for slab in files:
-            rows = slab_rows(HEIGHTS_PART, slab, self.grid.shape[0])
-            with h5py.File(os.path.join(self.parts, slab), "r") as part:
-                for name in part:
-                    if len(files) == 1:
-                        f.copy(part[name], name)
-                        continue
-                    if name not in f:
-                        out = f.create_dataset(name, self.grid.shape, dtype=part[name].dtype)
-                        out.attrs.update(part[name].attrs)
-                    for a, b in _bands(rows):
-                        f[name][a:b] = part[name][a - rows.start : b - rows.start]
-
-    def _copy_field(self, f: Any, name: str) -> None:
-        """Stack every step's ``name`` into ``f``, slab by slab: their compressed chunks
-        copied as they are where the slab's rows are whole chunks of ``f``'s (always on one
-        rank), else a band of rows at a time."""
-        import h5py
-
-        nx, ny = self.grid.shape
-        dtype = bool if name == "contact" else np.float64
-        out = f.create_dataset(
-            name, shape=(self.steps, nx, ny), maxshape=(None, nx, ny), dtype=dtype,
-            **_field_layout((nx, ny)),
-        )  # fmt: skip
-        describe(out, self._entry(name))
-        for k in range(self.steps):  # every part checked already (_check_parts)
-            for slab in slabs(step_part(k + 1), self.digests):
-                rows = slab_rows(step_part(k + 1), slab, nx)
-                with h5py.File(os.path.join(self.parts, slab), "r") as part:
-                    source = part[name]
-                    if not _whole_chunks(source.chunks, out.chunks, rows, nx):
-                        for a, b in _bands(rows):
-                            out[k, a:b] = source[0, a - rows.start : b - rows.start]
-                        continue
-                    for i in range(source.id.get_num_chunks()):
-                        info = source.id.get_chunk_info(i)
-                        mask, data = source.id.read_direct_chunk(info.chunk_offset)
-                        first, column = info.chunk_offset[1:]
-                        out.id.write_direct_chunk((k, rows.start + first, column), data, mask)
-
-
-def _whole_chunks(chunks: tuple[int, ...], into: tuple[int, ...], rows: slice, nx: int) -> bool:
-    """Whether a slab of ``rows`` stored in ``chunks`` is whole chunks of a field stored in
-    ``into``: the same chunks, starting on one, ending on one or on the grid's last row."""
-    size = into[1]
-    ends = rows.stop == nx or rows.stop % size == 0
-    return tuple(chunks) == tuple(into) and rows.start % size == 0 and ends
-
-
-def _bands(rows: slice) -> list[tuple[int, int]]:
-    """``rows`` cut on the field chunks' row boundaries: the bands the assembly moves."""
-    cuts = range((rows.start // FIELD_CHUNK + 1) * FIELD_CHUNK, rows.stop, FIELD_CHUNK)
-    edges = [rows.start, *cuts, rows.stop]
-    return list(zip(edges[:-1], edges[1:], strict=True))
-
 
 def _maps(heights: np.ndarray | None, filled: np.ndarray | None) -> dict[str, np.ndarray]:
     """The maps a run stores (local slabs): its heights and a measured map's filled mask."""
     return {k: v for k, v in {"heights": heights, "filled": filled}.items() if v is not None}
-
-
-def _field_layout(shape: tuple[int, ...]) -> dict[str, Any]:
-    nx, ny = shape
-    return {
-        "chunks": (1, min(nx, FIELD_CHUNK), min(ny, FIELD_CHUNK)),
-        "compression": "gzip",
-        "compression_opts": 4,
-        "shuffle": True,
-    }
 
 
 def _missing(value: Any) -> Any:
@@ -959,27 +546,10 @@ def tidy(path: str) -> None:
     if not (os.path.exists(partial_path(path)) and os.path.exists(path)):
         return
     with suppress(OutputBusy), OutputLock(path):
-        table = _leftover_table(path)
+        table = leftover_table(path)
         if table is not None:
             write_csv(csv_path(path), table, len(table["converged"]))
             _clear(path, keep_steps=False)
-
-
-def _leftover_table(path: str) -> dict[str, list[Any]] | None:
-    """The step table of ``path + '.partial'`` when it is what the writer of the complete
-    ``path`` left behind (the same ``created`` stamp and steps), else ``None``."""
-    import h5py
-
-    try:
-        with h5py.File(path, "r") as done, h5py.File(partial_path(path), "r") as left:
-            if done.attrs.get("created") != left.attrs.get("created") or not done.attrs.get(
-                "complete"
-            ):
-                return None
-            table = _read_table(left)
-            return table if (len(table["converged"]),) == done["converged"].shape else None
-    except (OSError, KeyError):
-        return None
 
 
 def remove_temporaries(path: str) -> None:
@@ -1010,25 +580,14 @@ def _clear(path: str, keep_steps: bool) -> None:
                 with suppress(FileNotFoundError):
                     os.remove(os.path.join(parts, entry))
         return
-    with suppress(FileNotFoundError):
-        os.remove(partial_path(path))  # the record first
-    _remove_states(path, keep=0)
+    discard(path)  # the record first
+    remove_states(path, keep=0)
     parts = parts_path(path)
     if os.path.isdir(parts) and not os.path.islink(parts):
         shutil.rmtree(parts, ignore_errors=True)
     else:  # a plain file of that name, which no run writes
         with suppress(FileNotFoundError):
             os.remove(parts)
-
-
-def _remove_states(path: str, keep: int) -> None:
-    """Remove the state slabs of output ``path`` but those written on ``keep`` ranks."""
-    folder, name = os.path.split(os.path.abspath(state_path(path)))
-    for entry in os.listdir(folder):
-        found = slab_of(name, entry)
-        if found is not None and found[1] != keep:
-            with suppress(FileNotFoundError):
-                os.remove(os.path.join(folder, entry))
 
 
 def _make_folder(folder: str) -> None:

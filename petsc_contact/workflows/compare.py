@@ -30,7 +30,6 @@ import os
 import shlex
 import time
 from collections.abc import Callable, Sequence
-from contextlib import suppress
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -45,16 +44,11 @@ from ..geometries.periodic import PeriodicProblem
 from ..geometries.step import residual_verdict
 from ..io.atomic import atomic_h5, on_root, replaced, storage
 from ..io.names import partial_path
+from ..io.partial import check_same_input, check_same_run, commit, discard, opened
 from ..io.plot import plot_compare
 from ..io.results import group_name, labelled, scale
 from ..io.schema import COMPARE, annotate, write_attributes
-from ..io.store import (
-    check_resume_or_overwrite,
-    check_same_input,
-    check_same_run,
-    remove_temporaries,
-    warn_replaced,
-)
+from ..io.store import check_resume_or_overwrite, remove_temporaries, warn_replaced
 from ..physics.observables import natural_residual
 from ..physics.surface import rms_of
 from .periodic_sweep import sweep
@@ -439,13 +433,7 @@ def compare_into(
     problem = PeriodicProblem(grid, fft, heights, modulus)
     realised = {"rms_height": rms_of(grid, fft, heights), "pressure": pressure}  # collective
     attrs = record(realised)
-    attrs["parameters"] |= {  # what the comparison is, beyond its scene
-        "command": "compare",
-        "pressure": pressure,
-        "solvers": list(solvers),
-        "time_limit": time_limit,
-        "stall_iterations": stall_iterations,
-    }
+    attrs["parameters"] |= _parameters(pressure, solvers, time_limit, stall_iterations)
     finished = finished_solvers(
         output, attrs["parameters"], resume, overwrite, attrs.get("heights_sha256")
     )
@@ -453,52 +441,39 @@ def compare_into(
     if report is not None:
         for trajectory in done:
             report(trajectory)
-    committed = _Committer(output, attrs, list(done), grid.comm, report)
+    kept = list(done)
+    solved: dict[str, Any] = {}  # the reference's scalars, which every commit records
+
+    def committed(trajectory: Trajectory) -> None:
+        """Commit the finished solver ``trajectory`` (rank 0 writes), then report it."""
+        kept.append(trajectory)
+        on_root(grid.comm, lambda: commit_partial(output, solved, kept, attrs))
+        if report is not None:
+            report(trajectory)
+
     reference, trajectories = compare(
-        problem,
-        pressure,
-        solvers,
-        time_limit,
+        problem, pressure, solvers, time_limit,
         extra_options,  # after each solver's options file: the command line wins
-        stall_iterations=stall_iterations,
-        report=committed,
-        done=done,
-        reference_ready=committed.reference_ready,
-    )
+        stall_iterations=stall_iterations, report=committed, done=done,
+        reference_ready=solved.update,
+    )  # fmt: skip
     result = Comparison(reference, trajectories)
     if grid.comm.rank == 0:  # the verdicts come from reduced residuals: the same on every rank
         result.csv, result.png = write_compare(output, reference, trajectories, attrs)
     return result
 
 
-class _Committer:
-    """Commits each solver of a comparison to its ``.partial`` file as it finishes (rank 0
-    writes), then reports it."""
-
-    def __init__(
-        self,
-        output: str,
-        attributes: dict[str, Any],
-        finished: list[Trajectory],
-        comm: Any,
-        report: Callable[[Trajectory], None] | None,
-    ) -> None:
-        self.output, self.attributes, self.finished = output, attributes, finished
-        self.comm, self.report = comm, report
-        self.reference: dict[str, Any] = {}
-
-    def reference_ready(self, scalars: dict[str, Any]) -> None:
-        """Keep the reference's scalars, which every commit records."""
-        self.reference = scalars
-
-    def __call__(self, trajectory: Trajectory) -> None:
-        self.finished.append(trajectory)
-        on_root(
-            self.comm,
-            lambda: commit_partial(self.output, self.reference, self.finished, self.attributes),
-        )
-        if self.report is not None:
-            self.report(trajectory)
+def _parameters(
+    pressure: float, solvers: Sequence[str], time_limit: float, stall_iterations: int
+) -> dict[str, Any]:
+    """What a comparison is, beyond its scene: added to its run record's ``parameters``."""
+    return {
+        "command": "compare",
+        "pressure": pressure,
+        "solvers": list(solvers),
+        "time_limit": time_limit,
+        "stall_iterations": stall_iterations,
+    }
 
 
 def write_compare(
@@ -517,7 +492,7 @@ def write_compare(
     stem = path[:-3] if path.endswith(".h5") else path
     with atomic_h5(path) as f:
         _write_groups(f, reference, trajectories, {**attributes, "complete": True})
-    _remove(partial_path(path))
+    discard(path)
     csv = stem + ".csv"
     with storage(csv), replaced(csv) as temporary, open(temporary, "w") as f:
         f.write(
@@ -538,9 +513,10 @@ def commit_partial(
     trajectories: Sequence[Trajectory],
     attributes: dict[str, Any],
 ) -> None:
-    """Replace ``path + '.partial'`` by one holding every finished solver (atomically)."""
-    with atomic_h5(partial_path(path)) as f:
-        _write_groups(f, reference, trajectories, {**attributes, "complete": False})
+    """Replace ``path + '.partial'`` by one holding every finished solver (atomically,
+    :func:`~petsc_contact.io.partial.commit`)."""
+    record = _record(reference, trajectories, {**attributes, "complete": False})
+    commit(path, record, lambda f: _write_trajectories(f, trajectories))
 
 
 def finished_solvers(
@@ -565,13 +541,8 @@ def finished_solvers(
         )
     if not overwrite:
         warn_replaced(path, stacklevel=user_level())
-    on_root(world(), lambda: _remove(partial))
+    on_root(world(), lambda: discard(path))
     return []
-
-
-def _remove(path: str) -> None:
-    with suppress(FileNotFoundError):
-        os.remove(path)
 
 
 def read_partial(
@@ -582,14 +553,12 @@ def read_partial(
     is solved again); none without either.  ``ValueError`` when the file was run with other
     parameters or on another map than the one of digest ``digest`` (its solvers' errors are
     against that map's reference; ``--overwrite`` replaces it), or cannot be read."""
-    import h5py
-
     partial = partial_path(path)
     source = partial if os.path.exists(partial) else path
     if not os.path.exists(source):
         return []
     try:
-        with h5py.File(source, "r") as f:
+        with opened(source) as f:
             try:
                 check_same_run(source, json.loads(f.attrs["parameters"]), parameters)
             except ValueError as exc:
@@ -621,8 +590,24 @@ def read_partial(
 def _write_groups(
     f: Any, reference: dict[str, Any], trajectories: Sequence[Trajectory], attrs: dict[str, Any]
 ) -> None:
-    write_attributes(f, {**attrs, "solvers": [t.name for t in trajectories]})
-    write_attributes(f, {f"reference_{k}": v for k, v in reference.items()})
+    """A comparison's file ``f``: its record (:func:`_record`) and a group per solver."""
+    write_attributes(f, _record(reference, trajectories, attrs))
+    _write_trajectories(f, trajectories)
+
+
+def _record(
+    reference: dict[str, Any], trajectories: Sequence[Trajectory], attrs: dict[str, Any]
+) -> dict[str, Any]:
+    """A comparison file's attributes: ``attrs``, its solvers and the reference's scalars."""
+    return {
+        **attrs,
+        "solvers": [t.name for t in trajectories],
+        **{f"reference_{k}": v for k, v in reference.items()},
+    }
+
+
+def _write_trajectories(f: Any, trajectories: Sequence[Trajectory]) -> None:
+    """One group per solver in the open comparison file ``f``."""
     for t in trajectories:
         g = f.create_group(group_name(t.name))
         iteration = scale(g, "iteration", t.iteration)

@@ -22,6 +22,7 @@ from ..conventions.validation import log_range
 from ..io.atomic import storage
 from ..io.lock import OutputBusy
 from ..io.names import partial_path
+from ..io.partial import committed_steps
 from ..io.results import trusted
 from ..io.store import tidy
 from ..physics.surface import psd_shape
@@ -314,11 +315,8 @@ def finished_steps(path: str) -> int | None:
     partial = partial_path(path)
     if not os.path.exists(partial):
         return None
-    import h5py
-
     try:
-        with h5py.File(partial, "r", locking=False) as f:
-            return int(f["converged"].shape[0]) if "converged" in f else 0
+        return committed_steps(partial, locking=False)
     except (OSError, KeyError):
         return None
 

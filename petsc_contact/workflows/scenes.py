@@ -16,6 +16,7 @@ from ..backend.stiffness import sweep_stiffness
 from ..conventions.grid import Grid, fundamental_wavevector, self_comm
 from ..io.atomic import atomic_h5
 from ..io.names import is_partial
+from ..io.partial import opened
 from ..io.results import trusted
 from ..io.schema import write_attributes
 from ..numerics.fft import make_fft
@@ -247,12 +248,10 @@ def curves_from_files(paths: Sequence[str]) -> dict[str, Any]:
     then every file only over the loads they all have; files that do not sweep the same loads
     (complete ones of different lengths, or values apart by more than :data:`SAME_LOAD`
     relative) are a ``ValueError``."""
-    import h5py
-
     rows: list[dict[str, np.ndarray]] = []
     h_rms, seeds = [], []
     for path in paths:
-        with h5py.File(path, "r", locking=False) as f:  # a .partial may be open for writing
+        with opened(path, locking=False) as f:  # a .partial may be committed meanwhile
             if not (f.attrs.get("complete", False) or is_partial(path)):
                 raise ValueError(f"'{path}' is not complete")
             ok = trusted(f)

@@ -33,9 +33,10 @@ from ..conventions.units import pressure_value
 from ..io.atomic import atomic_h5, on_root
 from ..io.lock import OutputLock
 from ..io.names import partial_path
+from ..io.partial import check_same_run, read_attributes
 from ..io.results import labelled, scale, trusted
 from ..io.schema import ENSEMBLE, annotate, ensemble_entry, write_attributes
-from ..io.store import check_same_run, tidy
+from ..io.store import tidy
 from .description import Run
 from .ensemble import ensemble_statistics
 from .runner import Progress, locked, run_contact, swept
@@ -124,14 +125,11 @@ def check_kept(path: str, run: Run) -> None:
     """``ValueError`` (one line) unless the file ``path``, a run's output or its ``.partial``
     file, was written by ``run``: its ``parameters`` are the ones ``run`` records
     (:func:`recorded_parameters`, compared by
-    :func:`~petsc_contact.io.store.check_same_run`).  Where the file is kept is not compared
+    :func:`~petsc_contact.io.partial.check_same_run`).  Where the file is kept is not compared
     (it is found by its place), and the loads given with a unit are compared as given (their
     values in the run's units, ``*_resolved``, follow from them)."""
-    import h5py
-
     try:
-        with h5py.File(path, "r") as f:
-            theirs = json.loads(f.attrs["parameters"])
+        theirs = json.loads(read_attributes(path)["parameters"])
     except (OSError, KeyError, ValueError) as exc:
         raise ValueError(f"cannot read the parameters of '{path}' ({exc})") from None
     derived = {k: v for k, v in theirs.items() if k.endswith("_resolved")}

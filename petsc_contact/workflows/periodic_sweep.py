@@ -89,6 +89,11 @@ def sweep(
 
     Parameters
     ----------
+    pressures
+        Nominal pressures, checked positive where they were given
+        (:class:`~petsc_contact.workflows.description.Run`, :func:`check_pressures`) and
+        against what ``problem`` resolves (:meth:`PeriodicProblem.check_pressure`) by the
+        caller: a run's driver (before the output is touched), :func:`periodic_contact`.
     stiffness
         Add ``stiffness``, the exact ``-dp0/du_bar`` with the contact set held fixed
         (:func:`~petsc_contact.backend.stiffness.periodic_stiffness_exact`), and its CG iterations.
@@ -106,9 +111,7 @@ def sweep(
         Scalars (observables, TAO report, ``converged``, ``accurate``, ``verification``)
         and, with ``fields``, the local ``gap`` and ``pressure`` slabs.
     """
-    loads = check_pressures(pressures)
-    for p0 in loads:
-        problem.check_pressure(p0)
+    loads = [float(p) for p in pressures]
     ell, device = problem.scale_length, problem.device
     x = (problem.initial_gap() if start is None else device.asarray(start)).reshape(-1) / ell
     path = LoadPath() if held is None or start is None else _resumed_path(held, x, ell, device)
@@ -266,21 +269,30 @@ def periodic_contact(
     where = get_device(device)
     on_host = where.name == "cpu"  # TAO, with this call's options in PETSc's database
     with _petsc.scoped_options(options) if on_host else nullcontext():
-        problem = _periodic_problem(array, sides, modulus, comm, where)
+        problem = _periodic_problem(array, sides, modulus, comm, where, loads)
         solver = None if on_host else problem_solver(problem, _petsc.option_list(options))
         solve = partial(sweep, problem, loads, fields, stiffness=stiffness, solver=solver)
         return solved(solve, len(loads), "periodic", progress, monitor, problem.grid)
 
 
 def _periodic_problem(
-    array: np.ndarray, sides: tuple[float, float], modulus: float, comm: Any, device: Device
+    array: np.ndarray,
+    sides: tuple[float, float],
+    modulus: float,
+    comm: Any,
+    device: Device,
+    loads: Sequence[float] = (),
 ) -> PeriodicProblem:
     """:func:`periodic_contact`'s problem: the map scattered on its grid, with the FFT of
     ``device``; the map checked as a run's scene checks it (:func:`check_map`), where it
-    lives: on a GPU on the device (the array devices run on one rank, whose slab is the map).
+    lives: on a GPU on the device (the array devices run on one rank, whose slab is the map),
+    and ``loads`` against what it resolves (:meth:`PeriodicProblem.check_pressure`).
     """
     grid = grid_for(array.shape, sides, comm)
     local = device.asarray(grid.scatter(array))
     check_finite(grid, local)
     check_map(local if grid.comm.size == 1 else array, grid, periodic=True)
-    return PeriodicProblem(grid, device.fft(grid), local, modulus)
+    problem = PeriodicProblem(grid, device.fft(grid), local, modulus)
+    for p0 in loads:
+        problem.check_pressure(p0)
+    return problem

@@ -49,6 +49,8 @@ from ..conventions.warnings import (
     user_level,
 )
 from ..geometries.step import FIELD_NAMES, Step
+from ..io.names import csv_path
+from ..io.paths import check_input, check_outputs
 from ..io.progress import reporting
 from ..io.schema import FILE_RECORD
 from ..io.store import (
@@ -341,7 +343,11 @@ def prepare(run: Run, command_line: str | None = None, petsc: ModuleType | None 
     ------
     DeviceUnavailable
         For ``device="gpu"`` where CuPy or a GPU is missing, before anything is computed.
+    ValueError, FileNotFoundError
+        For a heights file that cannot be read or an output that cannot be written
+        (:func:`check_files`), before anything is read.
     """
+    check_files(run)
     if run.device != "cpu":  # its options refused before the device is looked for
         ArraySettings.from_options(run.options, run.device, run.options_prefix)
     default_solver = True  # the array devices run the package's CG
@@ -362,6 +368,18 @@ def prepare(run: Run, command_line: str | None = None, petsc: ModuleType | None 
             driver.close()
             raise
     return Prepared(run, scene, driver, record, finished, texts)
+
+
+def check_files(run: Run) -> None:
+    """``ValueError`` naming the option (``FileNotFoundError`` for a file that does not exist)
+    unless ``run``'s heights file is a regular, readable, non-empty file and its output (with
+    its ``OUT.csv``) a regular file or a new name that is not the heights file
+    (:mod:`~petsc_contact.io.paths`)."""
+    if run.heights_file is not None:
+        check_input(run.heights_file, "--heights")
+    if run.output is not None:
+        outputs = [("--output", run.output), ("the table of --output", csv_path(run.output))]
+        check_outputs(outputs, [("--heights", run.heights_file)])
 
 
 _HINTED: set[str] = set()  # the rank hints this process gave: each once (an ensemble's seeds)
@@ -471,6 +489,7 @@ def run_contact(
     """
     from ..io.interrupts import interruptible
 
+    check_files(run)  # before the output's lock is taken (prepare checks them for its callers)
     with interruptible(), locked(run.output), run_options(run) as petsc:
         return prepare(run, command_line, petsc).execute(progress, monitor)
 

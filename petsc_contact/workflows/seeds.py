@@ -349,8 +349,9 @@ def run_ensemble(
     then the statistics, written to ``base.output``."""
     if base.output is None:
         raise ValueError("an ensemble keeps its seeds in files: give it an output")
+    check_files(base)  # before anything is computed
     runs = seed_runs(base, seeds)
-    for run in (base, *runs):  # every file, before any lock is taken
+    for run in runs:  # before any lock is taken
         check_files(run)
     with locked(base.output):
         for run in seeds_to_run(base, runs):

@@ -12,7 +12,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
-from conftest import ROOT, cli
+from conftest import ROOT, cli, python
 
 from petsc_contact import periodic_contact
 from petsc_contact.conventions.grid import Grid
@@ -22,6 +22,7 @@ from petsc_contact.physics.surface import self_affine
 from petsc_contact.solver.linear import StiffnessNotConverged
 from petsc_contact.workflows.description import Run
 from petsc_contact.workflows.punch_sweep import FORCE_RESOLVED, FORCE_RTOL
+from petsc_contact.workflows.runner import prepare, run_contact
 
 SURFACE = ("--grid", "16", "--hurst", "0.7", "--rms-slope", "0.1")
 PERIODIC = ("periodic", *SURFACE, "--pressures", "1e-3", "--quiet")
@@ -280,13 +281,40 @@ def test_stiffness_solve_not_converged(device: str) -> None:
 
 
 def test_library_door(tmp_path: Path, heights: Path) -> None:
-    """Run refuses what the command line refuses: an output that is its heights, a device."""
-    with pytest.raises(ValueError, match="is the same file as --heights"):
-        Run(heights=str(heights), pressures=[1e-3], output=str(heights))
-    with pytest.raises(ValueError, match="is a device"):
-        Run(grid=16, hurst=0.7, rms_slope=0.1, pressures=[1e-3], output="/dev/null")
-    with pytest.raises(ValueError, match="is a folder"):
-        Run(heights=str(tmp_path), pressures=[1e-3])
+    """run_contact refuses what the command line refuses, before any file is touched (its
+    lock included): an output that is its heights, a device, heights that are a folder.  A
+    Run is only a description: it reads no file."""
+    refused = {
+        "is the same file as --heights": Run(heights=str(heights), pressures=[1e-3],
+                                             output=str(heights)),
+        "is a device": Run(grid=16, hurst=0.7, rms_slope=0.1, pressures=[1e-3],
+                           output="/dev/null"),
+        "is a folder": Run(heights=str(tmp_path), pressures=[1e-3]),
+    }  # fmt: skip
+    before = sorted(os.listdir(tmp_path))
+    for says, run in refused.items():
+        with pytest.raises(ValueError, match=says):
+            run_contact(run)
+        with pytest.raises(ValueError, match=says):
+            prepare(run)
+    assert sorted(os.listdir(tmp_path)) == before
+
+
+def test_a_run_is_a_description(tmp_path: Path) -> None:
+    """``Run(...)`` reads no file and loads no PETSc (its values are checked, its files when
+    it is prepared): a missing heights file and an output that is a device describe a run."""
+    code = (
+        "import sys\n"
+        "sys.modules['petsc4py'] = None\n"
+        "from petsc_contact import Run\n"
+        f"Run(heights={str(tmp_path / 'none.npy')!r}, pressures=1e-3, output='/dev/null',\n"
+        "    options='-tao_type bncg')\n"
+        "print('described')\n"
+    )
+    done = python("-c", code)
+    assert done.returncode == 0 and done.stdout.split() == ["described"], done.stderr
+    with pytest.raises(FileNotFoundError, match="--heights '.*none.npy' does not exist"):
+        prepare(Run(heights=str(tmp_path / "none.npy"), pressures=1e-3))
 
 
 def test_docs_state_the_force_tolerances() -> None:

@@ -226,6 +226,28 @@ def test_list_keeps_the_last_state_only(rough):
     assert steps[-1].state.mean() == pytest.approx(steps[-1].scalars["mean_gap"], rel=1e-12)
 
 
+def test_a_bad_pressure_is_refused_in_one_line(rough):
+    """periodic_contact refuses a pressure that is not positive (checked once, where it is
+    given) and one the surface does not resolve, before solving."""
+    solved: list[object] = []
+    for pressure, says in (
+        (-1e-3, "must be positive"),
+        (np.nan, "must be positive"),
+        (1e7, "no elastic contact"),
+        (1e-300, "below what double precision"),
+    ):
+        with pytest.raises(ValueError, match=says) as refused:
+            periodic_contact(
+                rough,
+                length=1.0,
+                modulus=1.0,
+                pressures=[1e-3, pressure],
+                progress=lambda *step: solved.append(step),
+            )
+        assert "\n" not in str(refused.value)
+    assert solved == []
+
+
 def test_options_forms_and_unused(rough):
     """A list, a string and a dict select the same solver; a misspelt option is reported;
     anything else is refused with the reason."""

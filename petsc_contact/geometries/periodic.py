@@ -172,14 +172,14 @@ class PeriodicProblem:
         return self.backend.held_set_solve(grid, op, pc, mask, self.device)
 
     def set_pressure(self, p0: float, interfacial_stiffness: float | None = None) -> None:
-        """Set the nominal pressure ``p0 > 0`` and rescale the TAO-facing operators.
+        """Set the nominal pressure ``p0`` (one :meth:`check_pressure` accepts) and rescale
+        the TAO-facing operators.
 
         ``interfacial_stiffness`` is an estimate of ``K = -dp0/du_bar`` at ``p0`` (per area)
         that the preconditioner is held by (:class:`MeanModePreconditioner`); it changes
         the path of the solver, never its answer.  Default: :meth:`stiffness_estimate`;
         ``0``: no support, the free compliance ``2/(E* q)`` with ``2/(E* q0)`` at ``q = 0``.
         """
-        positive("nominal pressure", p0)
         k_i = (
             self.stiffness_estimate(p0)
             if interfacial_stiffness is None
@@ -406,9 +406,12 @@ class PeriodicProblem:
     def check_pressure(self, p0: float) -> None:
         """``ValueError`` in one line for a nominal pressure this grid cannot resolve: so
         small that rounding alone exceeds :data:`RESOLVED` of it (:meth:`rounding_floor`), or
-        above :data:`LARGEST_LOAD` ``E*``."""
-        positive("nominal pressure", p0)
+        above :data:`LARGEST_LOAD` ``E*``.  Each load is checked once, before it is solved, by
+        what solves it, after it was checked positive where it was given (a run's
+        description, the periodic contact's or the comparison's arguments)."""
         smallest = ROUNDING_FACTOR * np.finfo(float).eps * self.elastic_pressure_rms / RESOLVED
+        if not np.isfinite(p0):
+            raise ValueError(f"nominal pressure {p0} is not a finite number")
         if p0 < smallest:
             rms = self.elastic_pressure_rms
             raise ValueError(

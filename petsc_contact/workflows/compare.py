@@ -201,7 +201,10 @@ class Reference:
 
 
 def reference_solve(problem: PeriodicProblem, pressure: float) -> Reference:
-    """The default solver at ``REFERENCE_GATOL`` (or the rounding floor); raises if it fails."""
+    """The default solver at ``REFERENCE_GATOL`` (or the rounding floor); raises if it fails
+    (``ValueError`` for a pressure ``problem`` does not resolve:
+    :meth:`~petsc_contact.geometries.periodic.PeriodicProblem.check_pressure`)."""
+    problem.check_pressure(pressure)
     gatol = max(REFERENCE_GATOL, problem.stiffness_rounding_floor(pressure))
     with _petsc.scoped_options(["-tao_gatol", str(gatol)]):
         (step,) = sweep(problem, [pressure], fields=True)

@@ -5,9 +5,10 @@ typed value; :func:`~petsc_contact.workflows.runner.run_contact` runs it, resume
 included, and the ensemble and the paper's study are lists of runs.  Its field names are the
 command line's options (``rms_slope`` is ``--rms-slope``), so a file's ``parameters`` record
 is the description, and :meth:`Run.arguments` gives the command line back.  Each field is
-described once as an option, with its help, unit and this default, in
-:data:`~petsc_contact.workflows.options.OPTIONS`, from which the command line and
-docs/cli.md are made.
+described once as an option, with its help, unit and default, in
+:data:`~petsc_contact.workflows.options.OPTIONS`, from which the command line, docs/cli.md
+and the fields' defaults are made.  A run is a description: it reads no file and loads no
+PETSc (:func:`~petsc_contact.workflows.runner.prepare` checks its files).
 
 A surface is generated (``grid``, ``hurst`` and ``rms_slope`` or ``rms_height``: paper Eq. 5)
 or given as ``heights``: a file of any supported format, a 2-D array, or a SurfaceTopography
@@ -17,7 +18,6 @@ or given as ``heights``: a file of any supported format, a 2-D array, or a Surfa
 from __future__ import annotations
 
 import os
-import re
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, fields, replace
@@ -26,8 +26,9 @@ from typing import Any
 import numpy as np
 
 from ..conventions.units import METRES, NEWTONS, PASCALS, parse_quantity, pressure_value
-from ..conventions.validation import log_range
+from ..conventions.validation import log_range, non_negative, positive
 from ..conventions.warnings import ConvertedLoads, user_level
+from .options import check_choices, grid_size, run_default
 
 GEOMETRIES = ("periodic", "punch")
 LOADS = ("pressures", "sweep", "approaches", "forces")
@@ -61,20 +62,6 @@ def swept(
     else:
         n, lo, hi = float(spec[0]), low, high
     return [float(v) for v in np.geomspace(lo, hi, int(n))]
-
-
-def _grid(value: Any) -> int | tuple[int, int]:
-    """``--grid`` as ``N`` or ``(NX, NY)``, from a number, a pair, or text (``"128"``,
-    ``"128,64"``, ``"128x64"``); ``ValueError`` for anything else."""
-    items = re.split(r"[,x]", value) if isinstance(value, str) else np.ravel(value).tolist()
-    try:
-        sizes = [int(v) for v in items]
-        whole = all(float(v) == n for v, n in zip(items, sizes, strict=True))
-    except (TypeError, ValueError):
-        whole = False
-    if not whole or len(sizes) not in (1, 2) or min(sizes) < 2:
-        raise ValueError(f"--grid takes N or (NX, NY), whole numbers of 2 or more: got {value!r}")
-    return sizes[0] if len(sizes) == 1 else (sizes[0], sizes[1])
 
 
 @dataclass(frozen=True)
@@ -141,66 +128,56 @@ class Run:
     """
 
     geometry: str = "periodic"
-    heights: Any = None
-    channel: str | int | None = None
-    height_unit: str | None = None
-    override_metadata: bool = False
-    fill_undefined: str = "error"
-    detrend: str = "none"
-    grid: int | tuple[int, int] | None = None
-    hurst: float | None = None
-    rms_slope: float | None = None
-    rms_height: float | None = None
-    rolloff_ratio: float = 1.0
-    cutoff_ratio: float | None = None
-    seed: int = 0
-    exact_rms: bool = False
-    cut_from: int = 1
-    length: Any = None
-    modulus: float | str = 1.0
-    pressures: Sequence[float | str] | None = None
-    sweep: Sequence[float | str] | None = None
-    approaches: Sequence[float | str] | None = None
-    forces: Sequence[float | str] | None = None
-    footprint: str = "square"
-    flat_stiffness: str = "grid"
-    stiffness: bool = False
-    output: str | None = None
-    fields: bool = False
-    scalars_only: bool = False
-    resume: bool = False
-    overwrite: bool = False
-    stop_after: float | None = None
-    skip_memory_check: bool = False
-    device: str = "cpu"
+    heights: Any = run_default("heights")
+    channel: str | int | None = run_default("channel")
+    height_unit: str | None = run_default("height_unit")
+    override_metadata: bool = run_default("override_metadata")
+    fill_undefined: str = run_default("fill_undefined")
+    detrend: str = run_default("detrend")
+    grid: int | tuple[int, int] | None = run_default("grid")
+    hurst: float | None = run_default("hurst")
+    rms_slope: float | None = run_default("rms_slope")
+    rms_height: float | None = run_default("rms_height")
+    rolloff_ratio: float = run_default("rolloff_ratio")
+    cutoff_ratio: float | None = run_default("cutoff_ratio")
+    seed: int = run_default("seed")
+    exact_rms: bool = run_default("exact_rms")
+    cut_from: int = run_default("cut_from")
+    length: Any = run_default("length")
+    modulus: float | str = run_default("modulus")
+    pressures: Sequence[float | str] | None = run_default("pressures")
+    sweep: Sequence[float | str] | None = run_default("sweep")
+    approaches: Sequence[float | str] | None = run_default("approaches")
+    forces: Sequence[float | str] | None = run_default("forces")
+    footprint: str = run_default("footprint")
+    flat_stiffness: str = run_default("flat_stiffness")
+    stiffness: bool = run_default("stiffness")
+    output: str | None = run_default("output")
+    fields: bool = run_default("fields")
+    scalars_only: bool = run_default("scalars_only")
+    resume: bool = run_default("resume")
+    overwrite: bool = run_default("overwrite")
+    stop_after: float | None = run_default("stop_after")
+    skip_memory_check: bool = run_default("skip_memory_check")
+    device: str = run_default("device")
     options: tuple[str, ...] = field(default=(), compare=False)
-    options_prefix: str = field(default="", compare=False)
+    options_prefix: str = field(default=run_default("options_prefix"), compare=False)
 
     def __post_init__(self) -> None:
-        """Put the fields in one form and check the numbers and the files (``ValueError``
-        naming the option as the command line does).
+        """Put the fields in one form and check their values (``ValueError`` naming the
+        option as the command line does); nothing is read (the files are checked when the
+        run is prepared: :func:`~petsc_contact.workflows.runner.check_files`).
 
         A path given as ``heights`` becomes its text; a single load, sweep count or grid size
         (``pressures=1e-3``, ``sweep=4``, ``grid=64``) or text with commas (``"1e-3,2MPa"``,
         ``"128,64"``) is taken as the command line takes it, and PETSc options given as one
-        string or a dict become a tuple.  A heights file must be a regular, non-empty file,
-        and the output (with its ``OUT.csv``) a regular file or a new name that is not the
-        heights file."""
-        from ..conventions.validation import non_negative, positive
-        from ..io.paths import check_input, check_outputs
-        from ..io.store import check_resume_or_overwrite, csv_path
+        string or a dict become a tuple."""
+        from ..io.store import check_resume_or_overwrite
 
         self._normalise()
-        if self.heights_file is not None:
-            check_input(self.heights_file, "--heights")
-        if self.output is not None:
-            outputs = [("--output", self.output), ("the table of --output", csv_path(self.output))]
-            check_outputs(outputs, [("--heights", self.heights_file)])
         if self.geometry not in GEOMETRIES:
             raise ValueError(f"geometry must be one of {', '.join(GEOMETRIES)}: {self.geometry}")
         positive("--modulus", self.modulus_value)
-        from .options import check_choices
-
         check_choices(lambda name: getattr(self, name))  # --device, --footprint, ...
         if self.cut_from < 1:
             raise ValueError(f"--cut-from must be a whole number >= 1, got {self.cut_from}")
@@ -227,7 +204,7 @@ class Run:
         if self.sweep is not None and len(self.sweep) not in (1, 3):
             raise ValueError(f"--sweep takes N or (N, MIN, MAX), got {self.sweep!r}")
         if self.grid is not None:
-            object.__setattr__(self, "grid", _grid(self.grid))
+            object.__setattr__(self, "grid", grid_size(self.grid))
         if not isinstance(self.length, str | None) and np.size(self.length) not in (1, 2):
             raise ValueError(f"--length takes L or (LX, LY), got {self.length!r}")
         if not isinstance(self.options, tuple):

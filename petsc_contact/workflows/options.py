@@ -6,9 +6,9 @@ flags, help, unit, default, commands and the parser of its text.  The command li
 (:func:`~petsc_contact.cli.arguments.build_parser`) is made from it, the option tables of
 docs/cli.md are rendered from it (:func:`with_tables`; ``python -m
 petsc_contact.workflows.options docs/cli.md`` writes them), and the options that are
-:class:`~petsc_contact.workflows.description.Run`'s fields (``field``) carry Run's
-defaults.  An option whose help differs between commands (``--sweep`` of pressures or of
-approaches) has one description per meaning, under the same name.
+:class:`~petsc_contact.workflows.description.Run`'s fields (``field``) give Run its
+defaults (:func:`run_default`).  An option whose help differs between commands (``--sweep``
+of pressures or of approaches) has one description per meaning, under the same name.
 
 The parsers turn an option's text into its value and raise
 :class:`argparse.ArgumentTypeError` naming what is wrong.
@@ -115,16 +115,29 @@ def minutes(text: str) -> float:
     return value
 
 
-def grid_shape(text: str) -> int | tuple[int, int]:
-    """``N`` (square) or ``NX,NY`` / ``NXxNY`` (rectangle)."""
-    parts = _items(text, "[,x]")
+def grid_size(value: Any) -> int | tuple[int, int]:
+    """``--grid`` as ``N`` or ``(NX, NY)``, from a number, a pair, or text (``"128"``,
+    ``"128,64"``, ``"128x64"``); ``ValueError`` for anything else."""
+    items = re.split(r"[,x]", value) if isinstance(value, str) else np.ravel(value).tolist()
     try:
-        sizes = [int(v) for v in parts]
-    except ValueError:
-        sizes = []
-    if len(sizes) not in (1, 2) or min(sizes) < 2:
-        raise argparse.ArgumentTypeError(f"expected N or NX,NY with at least 2, got '{text}'")
+        sizes = [int(v) for v in items]
+        whole = all(float(v) == n for v, n in zip(items, sizes, strict=True))
+    except (TypeError, ValueError):
+        whole = False
+    if not whole or len(sizes) not in (1, 2) or min(sizes) < 2:
+        raise ValueError(f"--grid takes N or (NX, NY), whole numbers of 2 or more: got {value!r}")
     return sizes[0] if len(sizes) == 1 else (sizes[0], sizes[1])
+
+
+def grid_shape(text: str) -> int | tuple[int, int]:
+    """``N`` (square) or ``NX,NY`` / ``NXxNY`` (rectangle): :func:`grid_size` of the text."""
+    _items(text, "[,x]")  # an empty item is said to be one
+    try:
+        return grid_size(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected N or NX,NY with at least 2, got '{text}'"
+        ) from None
 
 
 def sweep_spec(text: str) -> list[float | str]:
@@ -766,6 +779,16 @@ def check_choices(values: Callable[[str], Any]) -> None:
                 raise ValueError(
                     f"{option.flags[0]} must be one of {', '.join(option.choices)}, not '{value}'"
                 )
+
+
+def run_default(name: str) -> Any:
+    """The default of ``Run``'s field ``name``: its option's, the same for every command that
+    runs (``ValueError`` for a field with no such option, or with two defaults)."""
+    runs = set(RUNS)
+    defaults = [o.default for o in OPTIONS if o.field and o.name == name and runs & {*o.commands}]
+    if not defaults or any(d != defaults[0] for d in defaults):
+        raise ValueError(f"Run's field {name} needs one default among OPTIONS: {defaults}")
+    return defaults[0]
 
 
 def run_fields(command: str) -> list[str]:

@@ -441,11 +441,12 @@ class _Study:
     def piece(self, piece: Piece, heading: str, minutes: float) -> str:
         """Run ``piece`` within ``minutes`` under its lock: how it ended, or ``"elsewhere"``
         when another run holds it."""
-        from .runner import locked
+        from .runner import check_files, locked
 
         path = piece.path(self.data)
         os.makedirs(os.path.dirname(path), exist_ok=True)
         run = piece.to_run(self.data, round(minutes, 3))
+        check_files(run)  # before its lock is taken
         try:
             with locked(path):
                 if self.agreed(complete, path):  # finished by another run meanwhile

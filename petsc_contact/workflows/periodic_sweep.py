@@ -85,6 +85,11 @@ def sweep(
 
     Parameters
     ----------
+    pressures
+        Nominal pressures, checked positive where they were given
+        (:class:`~petsc_contact.workflows.description.Run`, :func:`check_pressures`) and
+        against what ``problem`` resolves (:meth:`PeriodicProblem.check_pressure`) by the
+        caller: a run's driver (before the output is touched), :func:`periodic_contact`.
     stiffness
         Add ``stiffness``, the exact ``-dp0/du_bar`` with the contact set held fixed
         (:func:`~petsc_contact.backend.stiffness.periodic_stiffness_exact`), and its CG iterations.
@@ -102,9 +107,7 @@ def sweep(
         Scalars (observables, TAO report, ``converged``, ``accurate``, ``verification``)
         and, with ``fields``, the local ``gap`` and ``pressure`` slabs.
     """
-    loads = check_pressures(pressures)
-    for p0 in loads:
-        problem.check_pressure(p0)
+    loads = [float(p) for p in pressures]
     ell, device = problem.scale_length, problem.device
     x = (problem.initial_gap() if start is None else device.asarray(start)).reshape(-1) / ell
     path = LoadPath() if held is None or start is None else _resumed_path(held, x, ell, device)

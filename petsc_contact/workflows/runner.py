@@ -52,6 +52,8 @@ from ..conventions.warnings import (
     user_level,
 )
 from ..geometries.step import FIELD_NAMES, Step, Steps
+from ..io.names import csv_path
+from ..io.paths import check_input, check_outputs
 from ..io.progress import reporting
 from ..io.schema import FILE_RECORD
 from ..io.store import (
@@ -365,7 +367,11 @@ def prepare(
     ------
     DeviceUnavailable
         For ``device="gpu"`` where CuPy or a GPU is missing, before anything is computed.
+    ValueError, FileNotFoundError
+        For a heights file that cannot be read or an output that cannot be written
+        (:func:`check_files`), before anything is read.
     """
+    check_files(run)
     if uses_petsc(run.device):
         petsc = petsc or _petsc.init()
     # chosen once: its options refused before the device is looked for
@@ -383,6 +389,18 @@ def prepare(
             driver.close()
             raise
     return Prepared(run, scene, driver, record, finished, texts)
+
+
+def check_files(run: Run) -> None:
+    """``ValueError`` naming the option (``FileNotFoundError`` for a file that does not exist)
+    unless ``run``'s heights file is a regular, readable, non-empty file and its output (with
+    its ``OUT.csv``) a regular file or a new name that is not the heights file
+    (:mod:`~petsc_contact.io.paths`)."""
+    if run.heights_file is not None:
+        check_input(run.heights_file, "--heights")
+    if run.output is not None:
+        outputs = [("--output", run.output), ("the table of --output", csv_path(run.output))]
+        check_outputs(outputs, [("--heights", run.heights_file)])
 
 
 _HINTED: set[str] = set()  # the rank hints this process gave: each once (an ensemble's seeds)
@@ -508,6 +526,7 @@ def opened(
     (:func:`run_options`).  ``command_line`` and ``posing`` as :func:`prepare` takes them."""
     from ..io.interrupts import interruptible
 
+    check_files(run)
     with interruptible(), locked(run.output) if lock else nullcontext(), run_options(run) as petsc:
         yield prepare(run, command_line, petsc, posing)
 

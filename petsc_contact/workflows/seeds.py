@@ -39,7 +39,7 @@ from ..io.schema import ENSEMBLE, annotate, ensemble_entry, write_attributes
 from ..io.store import tidy
 from .description import Run
 from .ensemble import ensemble_statistics
-from .runner import Progress, locked, run_contact, swept
+from .runner import Progress, check_files, locked, run_contact, swept
 
 QUANTITIES = tuple(k for k in ENSEMBLE if k not in ("seeds", "nominal_pressure"))
 
@@ -347,7 +347,10 @@ def run_ensemble(
     then the statistics, written to ``base.output``."""
     if base.output is None:
         raise ValueError("an ensemble keeps its seeds in files: give it an output")
+    check_files(base)  # before anything is computed
     runs = seed_runs(base, seeds)
+    for run in runs:  # before any lock is taken
+        check_files(run)
     with locked(base.output):
         for run in seeds_to_run(base, runs):
             run_contact(run, progress)

@@ -280,8 +280,8 @@ def punch_contact(
         number is one load.
     options, fields, progress, monitor, comm, device
         As for :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact`; ``device``
-        is ``cpu`` (TAO), ``gpu`` or ``cpu-array`` (the package's CG on CuPy or NumPy, on one
-        rank without petsc4py, reading the options ``SolveSettings`` reads).
+        is ``cpu`` (TAO), ``gpu`` or ``cpu-array`` (the package's CG on CuPy or NumPy without
+        petsc4py, reading the options ``SolveSettings`` reads; ``gpu`` on one rank).
     stiffness
         Add the exact interfacial stiffness to every step, as ``Run``'s ``stiffness`` does.
     footprint

@@ -279,9 +279,8 @@ def punch_contact(
         control), or total forces ``F`` (load control).  Solved in order, warm-started; one
         number is one load.
     options, fields, progress, monitor, comm, device
-        As for :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact`; ``device``
-        is ``cpu`` (TAO), ``gpu`` or ``cpu-array`` (the package's CG on CuPy or NumPy without
-        petsc4py, reading the options ``SolveSettings`` reads; ``gpu`` on one rank).
+        As for :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact` (``device``
+        too: ``cpu``, TAO; ``gpu`` or ``cpu-array``, the package's CG without petsc4py).
     stiffness
         Add the exact interfacial stiffness to every step, as ``Run``'s ``stiffness`` does.
     footprint

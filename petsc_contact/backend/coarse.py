@@ -457,8 +457,7 @@ class CoarseSpace:
         The row-slab layout.
     quarter
         ``G`` at offsets ``0 .. nx/2`` and ``0 .. ny/2``, an array of ``device``: this rank's
-        rows of it (:func:`~petsc_contact.numerics.schur.quarter`; the array devices run on
-        one rank).
+        rows of it (:func:`~petsc_contact.numerics.schur.quarter`).
     bound
         This rank's slab of the bound-set mask (``True`` on ``B``; an array of ``device`` or
         of the host); not empty on all ranks.
@@ -467,10 +466,11 @@ class CoarseSpace:
     max_size
         The most aggregates: ``b`` grows until there are at most this many.
     device
-        Where the fields it corrects live.  On the ``cpu`` device the matrix is summed by
-        the numba loops (:func:`host_coarse_matrix`); on the array devices by array
-        operations on the device (:func:`array_coarse_matrix`), where it is also
-        factorised and solved (:class:`~petsc_contact.numerics.schur.BorderedSystem`).
+        Where the fields it corrects live.  On the ``cpu`` device, and on several ranks, the
+        matrix is summed by the numba loops (:func:`host_coarse_matrix`); on the array
+        devices on one rank by array operations on the device (:func:`array_coarse_matrix`).
+        It is factorised and solved on the device
+        (:class:`~petsc_contact.numerics.schur.BorderedSystem`).
 
     Attributes
     ----------
@@ -491,7 +491,8 @@ class CoarseSpace:
     ) -> None:
         self.grid = grid
         self.device = device
-        build = host_coarse_matrix if device.compiled else array_coarse_matrix
+        several = grid.comm.size > 1  # the array build holds every bound pixel: one rank
+        build = host_coarse_matrix if device.compiled or several else array_coarse_matrix
         built = build(grid, quarter, bound, block, max_size, device)
         self.local, self.labels, self.block = built.local, built.labels, built.block
         self.size = int(built.sizes.size)

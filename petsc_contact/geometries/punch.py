@@ -184,7 +184,7 @@ class PunchProblem:
     device
         Where the solver's fields live (:class:`~petsc_contact.numerics.device.Device`): the
         ``cpu`` device's are TAO's (NumPy, FFTW); ``gpu`` and ``cpu-array`` run the package's
-        own CG on their arrays (one rank, no PETSc).  Heights, footprint and the fields a
+        own CG on their arrays (no PETSc; ``gpu`` on one rank).  Heights, footprint and the fields a
         step measures stay on the host.
     backend
         What solves it (:class:`~petsc_contact.solver.backends.SolverBackend`), the held-set

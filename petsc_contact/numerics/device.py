@@ -10,10 +10,12 @@ Three devices (``--device``, ``Run(device=...)``):
 
 - ``cpu``: NumPy arrays in PETSc Vecs, FFTW, the numba passes; every TAO type (the default);
 - ``gpu``: CuPy arrays on the current CUDA device, ``cupy.fft`` with its plan cache;
-- ``cpu-array``: the very code the GPU runs, on NumPy arrays (``numpy.fft``): a stand-in that
-  lets every machine test the GPU path's logic.
+- ``cpu-array``: the very code the GPU runs, on NumPy arrays (``numpy.fft`` on one rank,
+  FFTW's MPI transforms on several): a stand-in that lets every machine test the GPU path's
+  logic.
 
-``gpu`` and ``cpu-array`` run the package's own solver without petsc4py.
+``gpu`` and ``cpu-array`` run the package's own solver without petsc4py; ``cpu-array`` on any
+number of MPI ranks, ``gpu`` on one.
 """
 
 from __future__ import annotations
@@ -116,7 +118,8 @@ class ArrayPasses:
 
 
 class ArrayFFT:
-    """Real-to-complex 2-D FFTs of one grid with the array module's ``fft`` (one rank).
+    """Real-to-complex 2-D FFTs of one grid with the array module's ``fft`` (one rank: a
+    GPU's arrays on several are not supported yet).
 
     The interface of :mod:`~petsc_contact.numerics.fft`'s engines: buffers ``real`` (kept by
     :meth:`forward`), ``spectrum`` and ``result``; both transforms unnormalised, so
@@ -128,7 +131,7 @@ class ArrayFFT:
 
     def __init__(self, grid: Grid, device: Device) -> None:
         if grid.comm.size != 1:
-            raise ValueError(f"the {device.name} device runs on one rank")
+            raise ValueError(f"the {device.name} device runs on one MPI rank, not {grid.comm.size}")
         xp = device.xp
         self.device = device
         self.shape = grid.shape
@@ -258,11 +261,14 @@ class Device:
         return labels, int(count)
 
     def fft(self, grid: Grid) -> Any:
-        """The FFT engine of ``grid`` on this device."""
-        if self.compiled:
+        """The FFT engine of ``grid`` on this device: FFTW's (:func:`~petsc_contact.numerics.
+        fft.make_fft`) on the ``cpu`` device, and for host arrays on several ranks (its MPI
+        transforms, this device's passes on them); the array module's (:class:`ArrayFFT`,
+        one rank) otherwise."""
+        if self.compiled or (self.on_host and grid.comm.size > 1):
             from .fft import make_fft
 
-            return make_fft(grid)
+            return make_fft(grid, self)
         return ArrayFFT(grid, self)
 
     def describe(self) -> dict[str, Any]:

@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from ..conventions.grid import Grid, fft_order
-from .device import CPU, ArrayFFT
+from .device import CPU, ArrayFFT, Device
 
 PLANNER_EFFORT = "FFTW_MEASURE"
 WISDOM_VARIABLE = "PETSC_CONTACT_FFTW_WISDOM"  # a file for FFTW's wisdom, or "off"
@@ -389,11 +389,12 @@ def _aligned(size: int, dtype: Any) -> np.ndarray:
 FFT = SerialFFT | SlabFFT | FFTWMPI | ArrayFFT
 
 
-def make_fft(grid: Grid) -> FFT:
-    """The FFT backend for this grid's communicator (see the module docstring)."""
-    if grid.comm.size == 1:
-        return SerialFFT(grid)
-    return FFTWMPI.create(grid) or SlabFFT(grid)
+def make_fft(grid: Grid, device: Device = CPU) -> FFT:
+    """The FFT backend for this grid's communicator (see the module docstring), whose arrays
+    ``device`` works on (a host device: the ``cpu`` device's passes, or the array path's)."""
+    fft = SerialFFT(grid) if grid.comm.size == 1 else FFTWMPI.create(grid) or SlabFFT(grid)
+    fft.device = device
+    return fft
 
 
 def wavevectors(grid: Grid, fft: FFT) -> tuple[np.ndarray, np.ndarray]:

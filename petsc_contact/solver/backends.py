@@ -110,9 +110,10 @@ class ArrayBackend:
         self.settings = SolveSettings() if settings is None else settings
 
     def solver(self, problem: Posed) -> ArraySolver:
-        """:class:`~petsc_contact.solver.driver.ArraySolver` on ``problem``'s device."""
+        """:class:`~petsc_contact.solver.driver.ArraySolver` on ``problem``'s device, reducing
+        over its grid's ranks."""
         pre = problem.preconditioner
-        return ArraySolver(problem.hessian, pre, problem.device, self.settings)
+        return ArraySolver(problem.hessian, pre, problem.device, self.settings, problem.grid)
 
     def held_set_solve(
         self, grid: Grid, op: Any, pc: Any, mask: Any, device: Device

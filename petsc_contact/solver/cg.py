@@ -67,6 +67,8 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from ..conventions.grid import Grid
+
 REFRESH_EVERY = 50
 # STALLS confirmations in a row whose exact residual is not below STALL_RATIO times the best
 # before it: the iteration stands at the rounding floor
@@ -167,6 +169,12 @@ class Reductions:
 
     sum: Callable[..., np.ndarray]
     min: Callable[[float], float]
+
+    @classmethod
+    def over(cls, grid: Grid) -> Reductions:
+        """Over the ranks of ``grid``'s communicator (:meth:`~petsc_contact.conventions.grid.
+        Grid.sum`, :meth:`~petsc_contact.conventions.grid.Grid.min`): :data:`ONE_RANK` on one."""
+        return ONE_RANK if grid.comm.size == 1 else cls(sum=grid.sum, min=grid.min)
 
 
 ONE_RANK = Reductions(sum=lambda *v: np.array([float(x) for x in v]), min=float)

@@ -5,7 +5,7 @@ path: ``solve(objective_gradient, start, ...)`` runs one load step and returns t
 with a :class:`~petsc_contact.solver.report.SolveInfo`.  It runs
 :class:`~petsc_contact.solver.cg.ConstrainedCG` with the problem's Hessian and preconditioner
 on the arrays of a :class:`~petsc_contact.numerics.device.Device` (``gpu``, or its CPU
-stand-in ``cpu-array``).
+stand-in ``cpu-array``), its sums and minima over the grid's ranks.
 
 Its options are PETSc's names for what it reads (:class:`SolveSettings`), so a command line
 keeps its meaning on every device; any other option is refused in one line rather than
@@ -22,8 +22,17 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from ..conventions.grid import Grid
 from ..numerics.device import Device
-from .cg import MONITOR, USER, ConstrainedCG, ContactPreconditioner, ToleranceTest
+from .cg import (
+    MONITOR,
+    ONE_RANK,
+    USER,
+    ConstrainedCG,
+    ContactPreconditioner,
+    Reductions,
+    ToleranceTest,
+)
 from .report import DEFAULT_GATOL, DEFAULT_MAX_IT, REASON_CODES, STIFFNESS_RTOL, SolveInfo
 
 TYPE_NAME = "cg"  # the algorithm, as the PETSc path records it (backend.solve.PACKAGE_SOLVERS)
@@ -203,13 +212,22 @@ class ArraySolver:
         Where the arrays live.
     settings
         Tolerances and the monitor.
+    grid
+        The grid whose communicator the CG's sums and minima go over (its ranks each hold a
+        slab of the unknowns); ``None``: one rank.
     """
 
     def __init__(
-        self, hessian: Any, preconditioner: Any, device: Device, settings: SolveSettings
+        self,
+        hessian: Any,
+        preconditioner: Any,
+        device: Device,
+        settings: SolveSettings,
+        grid: Grid | None = None,
     ) -> None:
         self.hessian, self.preconditioner = hessian, preconditioner
         self.device, self.settings = device, settings
+        self.reduce = ONE_RANK if grid is None else Reductions.over(grid)
 
     def __enter__(self) -> ArraySolver:
         return self
@@ -253,6 +271,8 @@ class ArraySolver:
             ToleranceTest(gatol, settings.grtol, settings.max_it, watch),
             device.passes,
             lambda: device.xp.empty_like(x),
+            self.reduce,
+            int(self.reduce.sum(x.size)[0]),
         )
         outcome = cg.run()
         device.synchronize()

@@ -12,6 +12,8 @@ from __future__ import annotations
 import warnings
 from typing import Any
 
+import numpy as np
+
 from ..conventions.grid import Grid
 from ..conventions.warnings import PetscContactWarning, user_level
 from ..numerics.device import Device
@@ -71,7 +73,8 @@ class Restricted:
 def held_set_solve(
     grid: Grid, op: Any, pc: Any, mask: Any, rtol: float, device: Device, max_it: int = 0
 ) -> tuple[Any, int]:
-    """Solve ``A_MM y = 1_M`` on the pixels of ``mask`` by preconditioned CG (one rank).
+    """Solve ``A_MM y = 1_M`` on the pixels of ``mask`` by preconditioned CG, its dot
+    products summed over ``grid``'s ranks (each holds its slab of the fields).
 
     Parameters
     ----------
@@ -98,15 +101,15 @@ def held_set_solve(
     y, r = xp.zeros_like(b), b.copy()
     z, q = xp.empty_like(b), xp.empty_like(b)
     m.apply_array(r, z)
-    first = float(xp.linalg.norm(z))
+    zz, rz = grid.sum(xp.dot(z, z), xp.dot(r, z)).tolist()
+    first = float(np.sqrt(zz))  # ||z||, as xp.linalg.norm computes it
     if not first > 0:
         return y.reshape(grid.local_shape), 0
     p = z.copy()
-    rz = float(xp.dot(r, z))
     reason = "DIVERGED_ITS"
     for its in range(1, limit + 1):
         a.apply_array(p, q)
-        pq = float(xp.dot(p, q))
+        (pq,) = grid.sum(xp.dot(p, q)).tolist()
         if not pq > 0:  # a Hessian that is not positive definite on the set
             reason = "DIVERGED_INDEFINITE_MAT"
             break
@@ -114,9 +117,9 @@ def held_set_solve(
         y += alpha * p
         r -= alpha * q
         m.apply_array(r, z)
-        if float(xp.linalg.norm(z)) <= rtol * first:
+        zz, rz_new = grid.sum(xp.dot(z, z), xp.dot(r, z)).tolist()
+        if float(np.sqrt(zz)) <= rtol * first:
             return y.reshape(grid.local_shape), its
-        rz_new = float(xp.dot(r, z))
         p *= rz_new / rz
         p += z
         rz = rz_new

@@ -123,8 +123,8 @@ class Run:
     device
         Where the solves run (:mod:`~petsc_contact.numerics.device`): ``cpu`` (PETSc/TAO),
         ``gpu`` (the package's CG on CuPy) or ``cpu-array`` (the GPU's code on NumPy); the
-        array devices read ``options`` as :class:`~petsc_contact.solver.driver.ArraySettings`
-        does and run periodic sweeps on one rank.
+        array devices read ``options`` as :class:`~petsc_contact.solver.driver.SolveSettings`
+        does; ``cpu-array`` runs on any number of ranks, ``gpu`` on one.
     """
 
     geometry: str = "periodic"

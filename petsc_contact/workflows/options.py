@@ -524,8 +524,9 @@ _RUN = (
         default="cpu",
         choices=DEVICES,
         more="`gpu` and `cpu-array` run periodic sweeps and the punch (`--stiffness`, "
-        "`--fields`, `--resume`, ensembles, the study's pieces) on one rank without petsc4py, "
-        "reading the PETSc options they understand. The file "
+        "`--fields`, `--resume`, ensembles, the study's pieces) without petsc4py, reading the "
+        "PETSc options they understand; `cpu-array` on any number of MPI ranks, `gpu` on one. "
+        "The file "
         "records `device` (a GPU's `device_name` and `device_memory`) and each step's "
         "`solve_time`. No CuPy or no GPU: exit status 69 ([gpu.md](gpu.md))",
     ),

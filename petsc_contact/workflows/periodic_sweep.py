@@ -217,8 +217,8 @@ def periodic_contact(
         nothing), ``monitor(iteration, f, gnorm)`` of every TAO iteration (``True`` stops); the
         mpi4py communicator (default ``COMM_WORLD``).
     device
-        ``cpu`` (TAO), ``gpu`` (the package's solver on CuPy) or ``cpu-array`` (its code on
-        NumPy), on one rank without petsc4py, reading the options ``SolveSettings`` reads.
+        ``cpu`` (TAO), ``gpu`` (the package's solver on CuPy, one rank) or ``cpu-array`` (its
+        code on NumPy), without petsc4py, reading the options ``SolveSettings`` reads.
 
     Returns
     -------
@@ -281,7 +281,7 @@ def _periodic_problem(
 ) -> PeriodicProblem:
     """:func:`periodic_contact`'s problem: the map scattered on its grid, with the FFT of
     ``device``; the map checked as a run's scene checks it (:func:`check_map`), where it
-    lives: on a GPU on the device (the array devices run on one rank, whose slab is the map).
+    lives: on a GPU on the device (a GPU runs on one rank, whose slab is the map).
     """
     grid = grid_for(array.shape, sides, comm)
     local = device.asarray(grid.scatter(array))

@@ -283,7 +283,7 @@ def punch_contact(
         number is one load.
     options, fields, progress, monitor, comm, device
         As for :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact` (``device``
-        among them: ``cpu``, ``gpu``, ``cpu-array``).
+        too: ``cpu``, TAO; ``gpu`` or ``cpu-array``, the package's CG without petsc4py).
     stiffness
         Add the exact interfacial stiffness to every step, as ``Run``'s ``stiffness`` does.
     footprint

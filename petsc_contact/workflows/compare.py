@@ -51,7 +51,7 @@ from ..io.schema import COMPARE, annotate, write_attributes
 from ..io.store import check_resume_or_overwrite, remove_temporaries, warn_replaced
 from ..physics.observables import natural_residual
 from ..physics.surface import rms_of
-from .periodic_sweep import sweep
+from .periodic_steps import sweep
 
 REFERENCE_GATOL = 1e-12
 STALL_GAIN = 0.9  # a new low of the natural residual must be 10% below the best so far

@@ -33,8 +33,8 @@ from ..physics.observables import MIN_CONTACT_PIXELS
 from ..solver.backends import SolverBackend
 from .choice import uses_petsc
 from .description import Run, swept
-from .periodic_sweep import problem_solver, sweep
-from .punch_sweep import PunchSolver, punch_sweep
+from .periodic_steps import problem_solver, sweep
+from .punch_steps import PunchSolver, punch_sweep
 from .scene import Scene
 
 Start = tuple[np.ndarray, Held | None] | None

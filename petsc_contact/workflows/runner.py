@@ -77,7 +77,7 @@ from .choice import scoped_options, solver_backend, uses_petsc
 from .description import Run
 from .drivers import Driver, Start, driver_for
 from .drivers import swept as swept  # where scripts and the CLI import it from
-from .periodic_sweep import Progress
+from .periodic_steps import Progress
 from .scene import Scene, prepare_scene
 
 PAUSED, COMPLETE = "paused", "complete"

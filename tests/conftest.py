@@ -6,7 +6,6 @@ import contextlib
 import ctypes
 import importlib
 import os
-import runpy
 import shutil
 import signal
 import subprocess
@@ -39,22 +38,6 @@ def cli_in_process(*args: str) -> subprocess.CompletedProcess:
     (:func:`in_process`)."""
     entry = importlib.import_module("petsc_contact.cli.main")  # the module, not the function
     return in_process(["petsc-contact", *args], lambda: entry.main(list(args)))
-
-
-def run_script(path: Path, *args: str) -> subprocess.CompletedProcess:
-    """``python PATH ARGS`` in this process (as ``__main__``, with ``sys.argv`` set), as a
-    subprocess would report it (:func:`in_process`): for scripts whose output, files and exit
-    status a test checks, not their process."""
-
-    def run() -> None:
-        argv = sys.argv
-        sys.argv = [str(path), *args]
-        try:
-            runpy.run_path(str(path), run_name="__main__")
-        finally:
-            sys.argv = argv
-
-    return in_process([sys.executable, str(path), *args], run)
 
 
 def in_process(argv: list[str], call: Callable[[], int | None]) -> subprocess.CompletedProcess:

@@ -1,16 +1,19 @@
-"""The figure scripts run end to end at toy size and write their PNG and HDF5 files (each
-script, and the study's command line, in the tests' process: conftest's ``run_script`` and
-``cli``)."""
+"""The figure scripts run end to end at toy size and write their PNG and HDF5 files."""
 
-import os
 import subprocess
 import sys
 
 import h5py
 import pytest
-from conftest import ROOT, cli, run_script
+from conftest import ROOT
 
-EXAMPLES = ROOT / "examples"
+# a study run in a subprocess: this checkout, a plain PATH, mpiexec allowed as root
+STUDY_ENV = {
+    "PYTHONPATH": str(ROOT),
+    "PATH": "/usr/bin:/bin",
+    "OMPI_ALLOW_RUN_AS_ROOT": "1",
+    "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+}
 
 
 @pytest.mark.parametrize(
@@ -45,7 +48,14 @@ EXAMPLES = ROOT / "examples"
     ],
 )
 def test_example_runs(tmp_path, script, args):
-    r = run_script(EXAMPLES / script, *args, "--output", str(tmp_path / "fig"))
+    out = tmp_path / "fig"
+    r = subprocess.run(
+        [sys.executable, str(ROOT / "examples" / script), *args, "--output", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
+    )
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "fig.png").stat().st_size > 1000
     with h5py.File(tmp_path / "fig.h5") as f:
@@ -55,10 +65,29 @@ def test_example_runs(tmp_path, script, args):
 def test_figure_1_redraws_from_study_files(tmp_path):
     """Fig. 1 from the study's two sweeps and punch at a toy size (grids divided by 128)."""
     data = tmp_path / "paper"
-    r = cli("study", "--figure", "1", "--shrink", "128", "--data", str(data), "--quiet")
+    env = STUDY_ENV
+    study = ["-m", "petsc_contact.cli", "study", "--figure", "1", "--shrink", "128", "--data"]
+    r = subprocess.run(
+        [sys.executable, *study, str(data), "--quiet"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env=env,
+    )
     assert r.returncode == 0, r.stderr
-    r = run_script(
-        EXAMPLES / "fig1_stiffness.py", "--data", str(data), "--output", str(tmp_path / "f1")
+    r = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "examples" / "fig1_stiffness.py"),
+            "--data",
+            str(data),
+            "--output",
+            str(tmp_path / "f1"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
     )
     assert r.returncode == 0, r.stderr
     assert "64^2: 16/16 converged" in r.stdout and "punch 16^2: 16/16" in r.stdout
@@ -72,7 +101,25 @@ def test_figures_redraw_from_study_files(tmp_path):
     serves both, and the fits report how many loads lie below p_c."""
     data = tmp_path / "paper"
     for figure in ("2", "3"):
-        r = cli("study", "--figure", figure, "--shrink", "64", "--data", str(data), "--quiet")
+        r = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "petsc_contact.cli",
+                "study",
+                "--figure",
+                figure,
+                "--shrink",
+                "64",
+                "--data",
+                str(data),
+                "--quiet",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=900,
+            env=STUDY_ENV,
+        )
         assert r.returncode == 0, r.stderr
     redraws = (
         ("fig3_finite_size.py", "f2", []),
@@ -80,8 +127,20 @@ def test_figures_redraw_from_study_files(tmp_path):
         ("fig4_alpha_extrapolation.py", "f3_any", ["--min-contact-pixels", "1"]),
     )
     for script, figure, extra in redraws:
-        r = run_script(
-            EXAMPLES / script, "--data", str(data), "--output", str(tmp_path / figure), *extra
+        r = subprocess.run(
+            [
+                sys.executable,
+                str(ROOT / "examples" / script),
+                "--data",
+                str(data),
+                "--output",
+                str(tmp_path / figure),
+                *extra,
+            ],
+            capture_output=True,
+            text=True,
+            timeout=120,
+            env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
         )
         assert r.returncode == 0, r.stderr
         assert "below p_c" in r.stdout or "alpha" in r.stdout
@@ -105,7 +164,9 @@ def test_a_ratio_with_one_seed_is_drawn_but_not_fitted():
 
     import numpy as np
 
-    spec = importlib.util.spec_from_file_location("fig4", EXAMPLES / "fig4_alpha_extrapolation.py")
+    spec = importlib.util.spec_from_file_location(
+        "fig4", ROOT / "examples" / "fig4_alpha_extrapolation.py"
+    )
     fig4 = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(fig4)
     ratios = [512.0, 768.0, 2048.0, 4096.0]
@@ -195,13 +256,16 @@ def test_an_unfinished_study_is_read_over_the_loads_every_seed_has(tmp_path):
     _sweep_file(tmp_path / "shorter.h5", 1, 5, True)  # complete, but one load fewer
     with pytest.raises(ValueError, match="same loads"):
         curves_from_files([paths[0], str(tmp_path / "shorter.h5")])
-    r = run_script(
-        EXAMPLES / "fig3_finite_size.py",
-        "--data",
-        data,
-        "--with-partial",
-        "--output",
-        str(tmp_path / "f2"),
+    r = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "examples" / "fig3_finite_size.py"),
+            *("--data", data, "--with-partial", "--output", str(tmp_path / "f2")),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
     )
     assert r.returncode == 0, r.stderr
     assert "H = 0.7: unfinished pieces read, 4 loads; 4 fitted below p_c" in r.stdout
@@ -210,28 +274,22 @@ def test_an_unfinished_study_is_read_over_the_loads_every_seed_has(tmp_path):
         assert f["H0.7"]["alpha"][()] == pytest.approx(0.6, abs=1e-9)
 
 
-def test_the_gallery_draws_every_picture(tmp_path, monkeypatch):
-    """examples/gallery.py at 64^2: every command of docs/gallery.md runs and draws (the
-    script's ``subprocess.run`` of the command line runs it in this process instead)."""
-    run = subprocess.run
-
-    def cli_here(argv, cwd=None, check=False, **kwargs):
-        if argv[:3] != [sys.executable, "-m", "petsc_contact.cli"]:
-            return run(argv, cwd=cwd, check=check, **kwargs)  # git, for the provenance
-        here = os.getcwd()
-        os.chdir(cwd or here)
-        try:
-            done = cli(*argv[3:])
-        finally:
-            os.chdir(here)
-        sys.stdout.write(done.stdout)
-        sys.stderr.write(done.stderr)
-        if check:
-            done.check_returncode()
-        return done
-
-    monkeypatch.setattr(subprocess, "run", cli_here)
-    r = run_script(EXAMPLES / "gallery.py", "--grid", "64", "--output", str(tmp_path))
+def test_the_gallery_draws_every_picture(tmp_path):
+    """examples/gallery.py at 64^2: every command of docs/gallery.md runs and draws."""
+    r = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "examples" / "gallery.py"),
+            "--grid",
+            "64",
+            "--output",
+            str(tmp_path),
+        ],  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
+    )
     assert r.returncode == 0, r.stderr
     drawn = sorted(p.name for p in tmp_path.iterdir())
     documented = (ROOT / "docs" / "gallery.md").read_text()
@@ -244,10 +302,15 @@ def test_punch_figure_redraws_from_study_files(tmp_path):
     figure: every variant has its 8 seeds, -dp/du_bar stands beside Eq. 2, and each variant's
     summary over its seeds is one table row."""
     data = tmp_path / "paper"
-    r = cli("study", "--figure", "punch", "--shrink", "128", "--data", str(data), "--quiet")
+    study = ["-m", "petsc_contact.cli", "study", "--figure", "punch", "--shrink", "128"]
+    r = _run([sys.executable, *study, "--data", str(data), "--quiet"], timeout=300)
     assert r.returncode == 0, r.stderr
     out = tmp_path / "f8"
-    r = run_script(EXAMPLES / "fig8_punch.py", "--data", str(data), "--output", str(out))
+    r = _run(
+        [sys.executable, str(ROOT / "examples" / "fig8_punch.py"), "--data", str(data)]
+        + ["--output", str(out)],
+        timeout=120,
+    )
     assert r.returncode == 0, r.stderr
     lines = r.stdout.splitlines()
     assert sum(", seed " in line and "-dp/du_bar" in line for line in lines) == 32
@@ -263,22 +326,28 @@ def _punch_against_its_own_cell(data, tmp_path):
     """The cells of the punch's periodic faces: each seed's punch is compared with the cell
     of its own face (one row per ``L_p/lambda_r``, 8 seeds), and a cell whose face is not its
     punch's is refused in one line."""
-    r = cli("study", "--figure", "cells", "--shrink", "128", "--data", str(data), "--quiet")
+    cells = ["-m", "petsc_contact.cli", "study", "--figure", "cells", "--shrink", "128"]
+    r = _run([sys.executable, *cells, "--data", str(data), "--quiet"], timeout=300)
     assert r.returncode == 0, r.stderr
-    script = [EXAMPLES / "punch_own_cell.py", "--data", str(data)]
-    r = run_script(*script, "--output", str(tmp_path / "own"))
+    script = [sys.executable, str(ROOT / "examples" / "punch_own_cell.py"), "--data", str(data)]
+    r = _run([*script, "--output", str(tmp_path / "own")], timeout=120)
     assert r.returncode == 0, r.stderr
     rows = [line for line in r.stdout.splitlines() if line.startswith("| `L")]
     assert len(rows) == 4 and all(line.split(" | ")[1] == "8" for line in rows), rows
     assert (tmp_path / "own.png").stat().st_size > 5000
     with h5py.File(data / "cells" / "periodic_r8_seed3.h5", "r+") as f:  # another face
         f.attrs["rms_height"] = 1.01 * f.attrs["rms_height"]
-    r = run_script(*script, "--output", str(tmp_path / "own2"))
+    r = _run([*script, "--output", str(tmp_path / "own2")], timeout=120)
     assert r.returncode == 1 and "not the same face" in r.stderr and "seed 3" in r.stderr
     damaged = data / "cells" / "periodic_r1_seed2.h5"
     damaged.write_bytes(bytes(range(256)) * 16)  # bad bytes: named in one line
-    r = run_script(*script, "--output", str(tmp_path / "own3"))
+    r = _run([*script, "--output", str(tmp_path / "own3")], timeout=120)
     assert r.returncode == 1 and str(damaged) in r.stderr and r.stderr.count("\n") == 1, r.stderr
+
+
+def _run(argv: list[str], timeout: int) -> subprocess.CompletedProcess:
+    """``argv`` run as the study's tests run it (this checkout, a plain PATH)."""
+    return subprocess.run(argv, capture_output=True, text=True, timeout=timeout, env=STUDY_ENV)
 
 
 def test_sweeps_whose_loads_differ_by_rounding_are_one_sweep(tmp_path):
@@ -303,22 +372,24 @@ def test_the_grid_refinement_reuses_what_it_solved(tmp_path):
     binned by contact pixels; each seed's curves kept, so that a second run solves nothing."""
     import numpy as np
 
-    args = [EXAMPLES / "grid_refinement.py", "--grid", "32", "--seeds", "2", "--pressures",
-            "1e-4", "3e-2", "5", "--output", str(tmp_path / "r")]  # fmt: skip
-    first = run_script(*args)
+    script = str(ROOT / "examples" / "grid_refinement.py")
+    args = [sys.executable, script, "--grid", "32", "--seeds", "2", "--pressures", "1e-4",
+            "3e-2", "5", "--output", str(tmp_path / "r")]  # fmt: skip
+    env = {"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"}
+    first = subprocess.run(args, capture_output=True, text=True, timeout=600, env=env)
     assert first.returncode == 0, first.stderr
     assert first.stdout.count("solved") == 6 and "| contact pixels" in first.stdout
-    again = run_script(*args)
+    again = subprocess.run(args, capture_output=True, text=True, timeout=600, env=env)
     assert "solved" not in again.stdout
     assert again.stdout.splitlines()[-3:] == first.stdout.splitlines()[-3:]
     with np.load(tmp_path / "r_seed1.npz") as kept:
         assert kept["stiffness_4"].shape == (5,) and np.isfinite(kept["stiffness_4"]).all()
     # other loads with the same files: refused in one line, not a table of the old curves
     other = [*args[:-5], "1e-4", "1e-2", "5", *args[-2:]]
-    refused = run_script(*other)
+    refused = subprocess.run(other, capture_output=True, text=True, timeout=600, env=env)
     assert refused.returncode == 1 and "holds another run's curves" in refused.stderr
     (tmp_path / "r_seed2.npz").write_bytes(b"not a numpy file")  # bad bytes
-    damaged = run_script(*args)
+    damaged = subprocess.run(args, capture_output=True, text=True, timeout=600, env=env)
     assert damaged.returncode == 1 and "r_seed2.npz is damaged" in damaged.stderr
 
 
@@ -330,7 +401,9 @@ def test_the_knee_of_a_curve_is_its_crossover():
 
     import numpy as np
 
-    spec = importlib.util.spec_from_file_location("fig7", EXAMPLES / "fig7_seed_distribution.py")
+    spec = importlib.util.spec_from_file_location(
+        "fig7", ROOT / "examples" / "fig7_seed_distribution.py"
+    )
     fig7 = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(fig7)
     p = np.geomspace(1e-8, 1e-2, 25)
@@ -348,17 +421,21 @@ def test_the_eq12_trace_tabulates_and_reuses_what_it_solved(tmp_path):
     """``examples/eq12_trace.py``: the fields' measurements against Appendix B in two tables;
     Appendix B's energy gives Eq. 12 back; each seed kept (a second run with ``--figure``
     solves only the figure's loads), another run's file refused."""
-    args = [EXAMPLES / "eq12_trace.py", "--grid", "64", "--seeds", "2", "--hursts", "0.7",
+    script = str(ROOT / "examples" / "eq12_trace.py")
+    args = [sys.executable, script, "--grid", "64", "--seeds", "2", "--hursts", "0.7",
             "--pressures", "1e-4", "3e-2", "8", "--output", str(tmp_path / "t")]  # fmt: skip
-    first = run_script(*args)
+    env = {"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"}
+    first = subprocess.run(args, capture_output=True, text=True, timeout=600, env=env)
     assert first.returncode == 0, first.stderr
     assert first.stdout.count("solved") == 2 and "K over Eq. 12 1.0000" in first.stdout
     assert "| H | clusters |" in first.stdout and "| 0.7 |" in first.stdout
-    again = run_script(*args, "--figure")
+    again = subprocess.run(
+        [*args, "--figure"], capture_output=True, text=True, timeout=600, env=env
+    )
     assert again.returncode == 0, again.stderr
     assert "solved" not in again.stdout
     assert again.stdout.splitlines()[-5:-1] == first.stdout.splitlines()[-4:]
     assert (tmp_path / "t.png").stat().st_size > 5000
     other = [*args[:-5], "1e-4", "1e-2", "8", *args[-2:]]
-    refused = run_script(*other)
+    refused = subprocess.run(other, capture_output=True, text=True, timeout=600, env=env)
     assert refused.returncode == 1 and "holds another run's measurements" in refused.stderr

@@ -13,7 +13,13 @@ import sys
 import tempfile
 import traceback
 import warnings
+from collections.abc import Callable
 from pathlib import Path
+
+# as the package sets them for its command line (petsc_contact/__init__.py), before numpy is
+# imported: a threaded BLAS beside FFTW's threads slows every in-process run many times
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 import numpy as np
 import pytest
@@ -33,13 +39,19 @@ def cli(
 
 
 def cli_in_process(*args: str) -> subprocess.CompletedProcess:
-    """``petsc_contact.cli.main.main(ARGS)`` in this process, as a subprocess would report it:
-    the exit status and the text written on file descriptors 1 and 2 (PETSc's too), with the
+    """``petsc_contact.cli.main.main(ARGS)`` in this process, as a subprocess would report it
+    (:func:`in_process`)."""
+    entry = importlib.import_module("petsc_contact.cli.main")  # the module, not the function
+    return in_process(["petsc-contact", *args], lambda: entry.main(list(args)))
+
+
+def in_process(argv: list[str], call: Callable[[], int | None]) -> subprocess.CompletedProcess:
+    """``call()`` in this process, reported as the subprocess running ``argv`` would be: the
+    exit status (its return value, a ``SystemExit``'s, or 1 after an uncaught exception's
+    traceback) and the text written on file descriptors 1 and 2 (PETSc's too), with the
     process's state restored afterwards (signal handlers, standard streams, hooks, warning
     filters, the environment, the working directory, PETSc's options database)."""
     from petsc_contact.backend import _petsc
-
-    entry = importlib.import_module("petsc_contact.cli.main")  # the module, not the function
 
     petsc = _petsc.init([])  # initialised once, so that a call's options are inserted, not kept
     database = petsc.Options()
@@ -64,7 +76,7 @@ def cli_in_process(*args: str) -> subprocess.CompletedProcess:
                 sys.stderr = files.enter_context(open(2, "w", **text))
                 sys.stdin = files.enter_context(open(os.devnull))
                 try:
-                    status = entry.main(list(args))
+                    status = call()
                 except SystemExit as exc:
                     code = exc.code
                     status = code if isinstance(code, int) else (0 if code is None else 1)
@@ -95,7 +107,7 @@ def cli_in_process(*args: str) -> subprocess.CompletedProcess:
         err.seek(0)
         stdout = out.read().decode("utf-8", "replace")
         stderr = err.read().decode("utf-8", "replace")
-    return subprocess.CompletedProcess(["petsc-contact", *args], int(status or 0), stdout, stderr)
+    return subprocess.CompletedProcess(argv, int(status or 0), stdout, stderr)
 
 
 def _restore_options(database, before: dict) -> None:
@@ -137,6 +149,18 @@ def python(*args: str, mpi: int = 0, timeout: float = 300) -> subprocess.Complet
     return subprocess.run(
         cmd, capture_output=True, text=True, timeout=timeout, env=env, stdin=subprocess.DEVNULL
     )
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Under pytest-xdist (``-n 2``, ``--dist loadgroup``: pyproject.toml), the tests of a
+    module that share a module-scoped fixture run on one worker, in order: the fixture is
+    computed once, and tests that read what earlier ones wrote in its folder find it."""
+    for item in items:
+        fixtures = getattr(item, "_fixtureinfo", None)
+        if fixtures and any(
+            definitions[-1].scope == "module" for definitions in fixtures.name2fixturedefs.values()
+        ):
+            item.add_marker(pytest.mark.xdist_group(item.nodeid.split("::", 1)[0]))
 
 
 @pytest.fixture(scope="session")

@@ -131,8 +131,13 @@ def _check_converged(path: Path, args: list[str]) -> None:
 
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory) -> Path:
-    """The shared folder, holding the measured map ``h.npy`` the README's commands read."""
-    path = tmp_path_factory.mktemp("readme_commands")
+    """The shared folder, holding the measured map ``h.npy`` the README's commands read, and
+    what the commands wrote before: the same folder if the module's fixtures are set up again
+    (a worker of ``-n 2`` that ran another module's tests in between)."""
+    path = tmp_path_factory.getbasetemp() / "readme_commands"
+    if path.is_dir():
+        return path
+    path.mkdir()
     rng = np.random.default_rng(1)
     shape = (96, 64)  # 150 um x 100 um in square pixels
     q = np.hypot(np.fft.fftfreq(shape[0])[:, None], np.fft.rfftfreq(shape[1])[None, :])

@@ -151,18 +151,6 @@ def python(*args: str, mpi: int = 0, timeout: float = 300) -> subprocess.Complet
     )
 
 
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """Under pytest-xdist (``-n 2``, ``--dist loadgroup``: pyproject.toml), the tests of a
-    module that share a module-scoped fixture run on one worker, in order: the fixture is
-    computed once, and tests that read what earlier ones wrote in its folder find it."""
-    for item in items:
-        fixtures = getattr(item, "_fixtureinfo", None)
-        if fixtures and any(
-            definitions[-1].scope == "module" for definitions in fixtures.name2fixturedefs.values()
-        ):
-            item.add_marker(pytest.mark.xdist_group(item.nodeid.split("::", 1)[0]))
-
-
 @pytest.fixture(scope="session")
 def petsc():
     from petsc_contact.backend import _petsc

@@ -95,13 +95,6 @@ def _resolve(argv: list[str]) -> tuple[list[str], int]:
     return args, mpi
 
 
-def _ids() -> list[str]:
-    return [
-        f"{i + 1}-{'mpi-' if argv[0] == 'mpiexec' else ''}{_resolve(argv)[0][0]}"
-        for i, argv in enumerate(COMMANDS)
-    ]
-
-
 def _h5_files(folder: Path) -> dict[Path, float]:
     return {p: p.stat().st_mtime_ns for p in folder.rglob("*.h5")}
 
@@ -131,13 +124,8 @@ def _check_converged(path: Path, args: list[str]) -> None:
 
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory) -> Path:
-    """The shared folder, holding the measured map ``h.npy`` the README's commands read, and
-    what the commands wrote before: the same folder if the module's fixtures are set up again
-    (a worker of ``-n 2`` that ran another module's tests in between)."""
-    path = tmp_path_factory.getbasetemp() / "readme_commands"
-    if path.is_dir():
-        return path
-    path.mkdir()
+    """The shared folder, holding the measured map ``h.npy`` the README's commands read."""
+    path = tmp_path_factory.mktemp("readme_commands")
     rng = np.random.default_rng(1)
     shape = (96, 64)  # 150 um x 100 um in square pixels
     q = np.hypot(np.fft.fftfreq(shape[0])[:, None], np.fft.rfftfreq(shape[1])[None, :])
@@ -156,12 +144,21 @@ def test_the_readme_block_is_parsed():
     assert any(argv[0] == "mpiexec" for argv in COMMANDS)
 
 
-@pytest.mark.parametrize("argv", COMMANDS, ids=_ids())
-def test_the_readme_command_runs(argv, folder, monkeypatch):
+def test_the_readme_commands_run_in_order(folder, monkeypatch):
+    """Every command of the README's block, in its order, in one folder: a command reads what
+    earlier ones wrote (``theory --compare``, ``plot``), so they are one test, whichever
+    worker of ``-n 2`` runs it."""
+    monkeypatch.chdir(folder)  # the subprocesses run here: README's relative paths
+    for argv in COMMANDS:
+        _command_runs(argv, folder)
+
+
+def _command_runs(argv: list[str], folder: Path) -> None:
+    """Run one of the README's commands in ``folder`` and check what it wrote (an MPI command
+    without ``mpiexec``: nothing to run)."""
     args, mpi = _resolve(argv)
     if mpi and not shutil.which("mpiexec"):
-        pytest.skip("mpiexec is not installed")
-    monkeypatch.chdir(folder)  # the subprocess runs here: README's relative paths
+        return
     before = _h5_files(folder)
     pngs = {p: p.stat().st_mtime_ns for p in folder.rglob("*.png")}
     run = cli(*args, mpi=mpi, process=True, timeout=300)

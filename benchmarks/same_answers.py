@@ -2,7 +2,8 @@
 
 The stability matrix's scenes (``benchmarks/stability.py``) at 64^2 with every solver
 ``compare`` runs and the array solver, and a paper-bandwidth sweep of the speed table's kind
-(512^2, with the exact stiffness; the two-level form on and off): every step's scalars that
+(512^2, with the exact stiffness; the two-level form on and off), cold and warm steps of 16
+surfaces at 256^2 (H = 0.3 and 0.7, 8 seeds each): every step's scalars that
 do not measure time, written as JSON.  Run it in each commit's tree (the tree's package is
 imported) and compare the two files::
 
@@ -84,6 +85,13 @@ def answers(root: Path) -> dict[str, list[dict]]:
             h, length=1.0, modulus=1.0, pressures=loads, stiffness=True, options=options, **quiet
         )
         out[f"512^2 sweep / {label}"] = scalars(steps)
+    for hurst in (0.3, 0.7):  # cold first steps and warm ones over many seeds
+        for seed in range(1, 9):
+            surface = rough(256, hurst=hurst, seed=seed)
+            steps = periodic_contact(
+                surface, length=1.0, modulus=1.0, pressures=[1e-3, 3e-3, 1e-2], **quiet
+            )
+            out[f"256^2 H={hurst} seed {seed}"] = scalars(steps)
     steps = punch_contact(rough(64), length=1.0, modulus=1.0, forces=[1e-5, 1e-4], stiffness=True,
                           **quiet)  # fmt: skip
     out["punch 64^2 by force"] = scalars(steps)

@@ -48,7 +48,7 @@ from ..physics.theory import linear_stiffness
 from ..solver.backends import SolverBackend
 from ..solver.report import Accuracy, accuracy_limit
 from ..substrates.half_space import PeriodicHalfSpace
-from ..substrates.substrate import PeriodicSubstrate
+from ..substrates.substrate import PeriodicSubstrate, of_modulus
 from .step import (
     MeasuredSolve,
     Step,
@@ -127,9 +127,8 @@ class PeriodicProblem:
         interaction: Interaction = HARD_WALL,
     ) -> None:
         positive("modulus", modulus)
-        self.substrate = PeriodicHalfSpace(modulus) if substrate is None else substrate
-        if self.substrate.modulus != modulus:
-            raise ValueError(f"the substrate's modulus is {self.substrate.modulus}, not {modulus}")
+        body: PeriodicSubstrate = PeriodicHalfSpace(modulus) if substrate is None else substrate
+        self.substrate = of_modulus(body, modulus)
         self.interaction = interaction
         compile_kernels(announce=grid.comm.rank == 0)  # before any step's timer
         self.grid = grid

@@ -56,7 +56,7 @@ from ..reference import flat_punch
 from ..solver.backends import SolverBackend
 from ..solver.report import FORCE_ACCURACY, Accuracy, accuracy_limit
 from ..substrates.half_space import FreeHalfSpace
-from ..substrates.substrate import FreeSubstrate
+from ..substrates.substrate import FreeSubstrate, of_modulus
 from .step import (
     MeasuredSolve,
     Step,
@@ -213,9 +213,8 @@ class PunchProblem:
         interaction: Interaction = HARD_WALL,
     ) -> None:
         positive("modulus", modulus)
-        self.substrate = FreeHalfSpace(modulus) if substrate is None else substrate
-        if self.substrate.modulus != modulus:
-            raise ValueError(f"the substrate's modulus is {self.substrate.modulus}, not {modulus}")
+        body: FreeSubstrate = FreeHalfSpace(modulus) if substrate is None else substrate
+        self.substrate = of_modulus(body, modulus)
         self.interaction = interaction
         compile_kernels(announce=grid.comm.rank == 0)  # before any step's timer
         self.flat = flat

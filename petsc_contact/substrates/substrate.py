@@ -3,7 +3,7 @@ surface (docs/formulation.md)."""
 
 from __future__ import annotations
 
-from typing import Any, Protocol
+from typing import Any, Protocol, TypeVar
 
 
 class PeriodicSubstrate(Protocol):
@@ -17,8 +17,11 @@ class PeriodicSubstrate(Protocol):
         What the run's record calls it.
     """
 
-    modulus: float
-    name: str
+    @property
+    def modulus(self) -> float: ...
+
+    @property
+    def name(self) -> str: ...
 
     def stiffness(self, q: Any) -> Any:
         """The surface stiffness (pressure per displacement) at wavevector magnitudes ``q``
@@ -41,8 +44,11 @@ class FreeSubstrate(Protocol):
         As :class:`PeriodicSubstrate`'s.
     """
 
-    modulus: float
-    name: str
+    @property
+    def modulus(self) -> float: ...
+
+    @property
+    def name(self) -> str: ...
 
     def compliance_kernel(
         self, shape: tuple[int, int], spacing: tuple[float, float], rows: slice
@@ -50,3 +56,14 @@ class FreeSubstrate(Protocol):
         """The rows ``rows`` of the displacement of the ``2nx x 2ny`` padded grid under a
         unit pressure on one pixel of sides ``spacing``."""
         ...
+
+
+Given = TypeVar("Given", PeriodicSubstrate, FreeSubstrate)
+
+
+def of_modulus(substrate: Given, modulus: float) -> Given:
+    """``substrate``, after ``ValueError`` in one line unless its modulus is ``modulus`` (the
+    geometry's, in whose unit its pressures are)."""
+    if substrate.modulus != modulus:
+        raise ValueError(f"the substrate's modulus is {substrate.modulus}, not {modulus}")
+    return substrate

@@ -396,7 +396,12 @@ class PeriodicProblem:
 
     def initial_gap(self) -> np.ndarray:
         """Gap at first touch of the undeformed surfaces, ``max(h) - h``."""
-        return self.grid.max(float(self.heights.max())) - self.heights
+        return self.largest_mean_gap() - self.heights
+
+    def largest_mean_gap(self) -> float:
+        """The mean gap at first touch, ``max(h) - mean(h)`` (the heights' mean is zero): no
+        load has a larger one (collective)."""
+        return self.grid.max(float(self.heights.max()))
 
     def full_contact_pressure(self) -> float:
         """Nominal pressure at which contact becomes complete, ``-min(K h)``."""
@@ -408,7 +413,7 @@ class PeriodicProblem:
         above :data:`LARGEST_LOAD` ``E*``.  Each load is checked once, before it is solved, by
         what solves it, after it was checked positive where it was given (a run's
         description, the periodic contact's or the comparison's arguments)."""
-        smallest = ROUNDING_FACTOR * np.finfo(float).eps * self.elastic_pressure_rms / RESOLVED
+        smallest = self.smallest_pressure()
         if not np.isfinite(p0):
             raise ValueError(f"nominal pressure {p0} is not a finite number")
         if p0 < smallest:
@@ -423,6 +428,23 @@ class PeriodicProblem:
                 f"nominal pressure {p0:.3g} is more than {LARGEST_LOAD:g} E* (E* = "
                 f"{self.modulus:g}): no elastic contact; full contact is reached at "
                 f"{self.full_contact_pressure():.3g}"
+            )
+
+    def smallest_pressure(self) -> float:
+        """The smallest nominal pressure this grid resolves (:meth:`check_pressure`): where
+        rounding alone is :data:`RESOLVED` of it (:meth:`rounding_floor`)."""
+        return float(ROUNDING_FACTOR * np.finfo(float).eps * self.elastic_pressure_rms / RESOLVED)
+
+    def check_mean_gap(self, mean_gap: float) -> None:
+        """``ValueError`` in one line for a prescribed mean gap no load reaches: not below
+        the mean gap at first touch (:meth:`largest_mean_gap`, where ``p0 = 0``), or not
+        above zero (full contact, from ``p0 = -min(K h)`` on).  Checked by what solves it,
+        before the output is touched."""
+        largest = self.largest_mean_gap()
+        if not 0 < mean_gap < largest:  # NaN too
+            raise ValueError(
+                f"mean gap {mean_gap:.6g} is not between 0 (full contact) and {largest:.6g}, "
+                "the mean gap at first touch max(h) - mean(h) (p0 = 0): no load reaches it"
             )
 
     def stiffness_rounding_floor(self, p0: float) -> float:

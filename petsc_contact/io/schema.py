@@ -68,7 +68,11 @@ def _entries(**entries: tuple[str, str]) -> dict[str, Entry]:
 
 
 SOLVE_COLUMNS = _entries(
-    iterations=("count", "TAO iterations of the step (punch with forces: summed over Newton)"),
+    iterations=(
+        "count",
+        "TAO iterations of the step (punch with forces, periodic with mean gaps: summed over "
+        "Newton)",
+    ),
     solve_time=("s", "wall time of the solve, the slowest rank's"),
     converged=(
         "bool",
@@ -198,6 +202,21 @@ PERIODIC_COLUMNS = _entries(
         "pressure/length",
         "exact -dp0/du_bar with the contact set held fixed (NaN at full contact: unbounded)",
     ),
+    target_mean_gap=("length", "the prescribed mean gap (displacement control, --mean-gaps)"),
+    mean_gap_mismatch=(
+        "1",
+        "abs(mean_gap - target_mean_gap) / target_mean_gap (displacement control; beyond "
+        "1e-4 not converged)",
+    ),
+    mean_gap_tolerance=(
+        "1",
+        "the relative tolerance Newton's steps on ln p0 aimed at (displacement control)",
+    ),
+    newton_iterations=(
+        "count",
+        "Newton steps on the nominal pressure (displacement control; punch: on the approach, "
+        "load control)",
+    ),
 )
 PUNCH_COLUMNS = _entries(
     approach=("length", "rigid approach beyond first touch"),
@@ -229,7 +248,11 @@ PUNCH_COLUMNS = _entries(
         "abs(force - target_force) / target_force (load control; NaN under approach control; "
         "beyond 1e-4 not converged)",
     ),
-    newton_iterations=("count", "Newton steps on the approach (load control)"),
+    newton_iterations=(
+        "count",
+        "Newton steps on the approach (load control; periodic: on the nominal pressure, "
+        "displacement control)",
+    ),
     stiffness=(
         "pressure/length",
         "the interfacial stiffness per area (--stiffness; NaN as interfacial_stiffness)",

@@ -31,7 +31,7 @@ from ..conventions.warnings import ConvertedLoads, user_level
 from .options import check_choices, grid_size, run_default
 
 GEOMETRIES = ("periodic", "punch")
-LOADS = ("pressures", "sweep", "approaches", "forces")
+LOADS = ("pressures", "sweep", "approaches", "forces", "mean_gaps")
 
 
 def _listed(value: Any) -> Any:
@@ -71,8 +71,8 @@ class Run:
     Attributes
     ----------
     geometry
-        ``periodic`` (load controlled, a periodic cell) or ``punch`` (a rigid rough punch on
-        a free half-space, by approaches or forces).
+        ``periodic`` (a periodic cell, by nominal pressures or mean gaps) or ``punch`` (a
+        rigid rough punch on a free half-space, by approaches or forces).
     heights, channel, height_unit, override_metadata, fill_undefined, detrend
         A measured surface in any form
         (:func:`~petsc_contact.io.topography.as_topography`): a file's path, a 2-D array,
@@ -95,14 +95,17 @@ class Run:
         The sides (``"100um"``, ``"150um,100um"``, ``1.0`` or ``(Lx, Ly)``; default: the
         file's, else 1) and the contact modulus ``E*`` (``1e9``, or ``"1GPa"``: pressures
         are in its unit).
-    pressures, sweep, approaches, forces
-        The loads: nominal pressures (periodic; the punch: over its face), approaches or
-        forces (punch), or a sweep ``(N,)`` or ``(N, min, max)`` of log-spaced ones: nominal
-        pressures on a periodic run, approaches on the punch (default range: see the CLI;
+    pressures, sweep, approaches, forces, mean_gaps
+        The loads, one kind per run: nominal pressures (periodic; the punch: over its face),
+        approaches or forces (punch), mean gaps (periodic: displacement control, the nominal
+        pressure each needs found by Newton's steps), or a sweep ``(N,)`` or
+        ``(N, min, max)`` of log-spaced ones: nominal pressures on a periodic run, approaches
+        on the punch (default range: see the CLI;
         :meth:`with_` keeps a sweep's meaning across geometries).  A value may carry its
         unit: ``"2MPa"``, ``"10nm"``, ``"1mN"``; one load (``pressures=1e-3``) or a sweep's
         count alone (``sweep=4``) needs no tuple, and text with commas is read as the
-        command line reads it (``"1e-3,2MPa"``).
+        command line reads it (``"1e-3,2MPa"``); a mean gap is in the unit of ``length``
+        (``"10nm"`` where it has one).
     footprint, flat_stiffness, stiffness
         The punch's outline (``square``, ``disk``) and its flat-punch reference (``grid``,
         ``analytic``: the exact continuum value, ``king``: King's estimate for a square);
@@ -149,6 +152,7 @@ class Run:
     sweep: Sequence[float | str] | None = run_default("sweep")
     approaches: Sequence[float | str] | None = run_default("approaches")
     forces: Sequence[float | str] | None = run_default("forces")
+    mean_gaps: Sequence[float | str] | None = run_default("mean_gaps")
     footprint: str = run_default("footprint")
     flat_stiffness: str = run_default("flat_stiffness")
     stiffness: bool = run_default("stiffness")
@@ -184,15 +188,28 @@ class Run:
         if self.stop_after is not None:
             non_negative("--stop-after", self.stop_after)
         check_resume_or_overwrite(self.resume, self.overwrite)
-        for name, units in (("pressures", PASCALS), ("approaches", METRES), ("forces", NEWTONS)):
+        self._check_mean_gaps()
+        loads = (("pressures", PASCALS), ("approaches", METRES), ("forces", NEWTONS))
+        for name, units in (*loads, ("mean_gaps", METRES)):
             values = getattr(self, name)
             if values is None or self.sweep is not None:
                 continue
+            flag = "--" + name.replace("_", "-")
             if len(values) == 0:
-                raise ValueError(f"--{name} needs at least one value")
+                raise ValueError(f"{flag} needs at least one value")
             check = non_negative if name == "approaches" else positive  # an approach may be 0
             for v in values:
-                check(f"--{name}", parse_quantity(v, units, f"--{name}").value)
+                check(flag, parse_quantity(v, units, flag).value)
+
+    def _check_mean_gaps(self) -> None:
+        """``ValueError`` in one line for mean gaps on the punch, or beside another load."""
+        if self.mean_gaps is None:
+            return
+        if self.geometry != "periodic":
+            raise ValueError("--mean-gaps is a periodic run's load; the punch takes approaches")
+        others = [f"--{n}" for n in ("pressures", "sweep") if getattr(self, n) is not None]
+        if others:
+            raise ValueError(f"give one kind of load: --mean-gaps or {' or '.join(others)}")
 
     def _normalise(self) -> None:
         """Put the fields given in another natural form in the one the run uses (frozen:

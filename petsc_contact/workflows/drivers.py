@@ -12,8 +12,11 @@ solves a list of loads as a generator of steps, from first touch or a resumed st
         driver.close()
 
 :class:`PeriodicDriver` sweeps nominal pressures with continuation
-(:func:`~petsc_contact.workflows.periodic_sweep.sweep`), :class:`PunchDriver` presses the punch
-along approaches or forces (:func:`~petsc_contact.workflows.punch_sweep.punch_sweep`).
+(:func:`~petsc_contact.workflows.periodic_sweep.sweep`) or reaches prescribed mean gaps by
+Newton's steps on the pressure
+(:func:`~petsc_contact.workflows.periodic_steps.mean_gap_sweep`), :class:`PunchDriver`
+presses the punch along approaches or forces
+(:func:`~petsc_contact.workflows.punch_sweep.punch_sweep`).
 """
 
 from __future__ import annotations
@@ -33,7 +36,7 @@ from ..physics.observables import MIN_CONTACT_PIXELS
 from ..solver.backends import SolverBackend
 from .choice import uses_petsc
 from .description import Run, swept
-from .periodic_steps import problem_solver, sweep
+from .periodic_steps import mean_gap_sweep, problem_solver, sweep
 from .punch_steps import PunchSolver, punch_sweep
 from .scene import Scene
 
@@ -88,7 +91,8 @@ def driver_for(run: Run, scene: Scene, backend: SolverBackend) -> Driver:
 
 
 class PeriodicDriver:
-    """The periodic geometry's driver: nominal pressures swept with continuation.
+    """The periodic geometry's driver: nominal pressures swept with continuation, or mean
+    gaps (``run.mean_gaps``) reached by Newton's steps on the pressure.
 
     The pressures (``run.pressures`` or a ``run.sweep``, by default over :func:`sweep_range`) are
     checked against what the surface resolves (:meth:`PeriodicProblem.check_pressure`).  Its
@@ -103,13 +107,19 @@ class PeriodicDriver:
             problem = PeriodicProblem(scene.grid, scene.fft, scene.heights, modulus, backend)
             problem.filled = scene.filled
         p_full = problem.full_contact_pressure()
-        self.loads, self.resolved = _pressures(run, problem)
         if run.approaches is not None or run.forces is not None:
             raise ValueError(
-                "a periodic run takes --pressures or --sweep, not approaches or forces"
+                "a periodic run takes --pressures, --sweep or --mean-gaps, not --approaches or "
+                "--forces"
             )
-        for p0 in self.loads:
-            problem.check_pressure(p0)  # before the output is touched
+        self.by_mean_gap = run.mean_gaps is not None
+        if self.by_mean_gap:
+            self.loads, self.resolved = _mean_gaps(run, scene.resolved["length_unit"])
+        else:
+            self.loads, self.resolved = _pressures(run, problem)
+        check = problem.check_mean_gap if self.by_mean_gap else problem.check_pressure
+        for load in self.loads:
+            check(load)  # before the output is touched
         self.run, self.problem = run, problem
         self.solver = problem_solver(problem)
         self.intro = f", full contact at p0 = {format_quantity(p_full, run.pressure_unit)}"
@@ -119,6 +129,10 @@ class PeriodicDriver:
         """The sweep of ``loads`` (:func:`~petsc_contact.workflows.periodic_sweep.sweep`)."""
         state, held = start or (None, None)
         run = self.run
+        if self.by_mean_gap:
+            return mean_gap_sweep(
+                self.problem, loads, run.fields, monitor, state, self.solver, held
+            )
         return sweep(
             self.problem, loads, run.fields, monitor, run.stiffness, state, self.solver, held
         )
@@ -163,6 +177,16 @@ def _pressures(run: Run, problem: PeriodicProblem) -> tuple[list[float], dict[st
     if any(isinstance(p, str) for p in run.pressures):
         return pressures, {"pressures_resolved": pressures}  # in the run's pressure unit
     return pressures, {}
+
+
+def _mean_gaps(run: Run, length_unit: str) -> tuple[list[float], dict[str, Any]]:
+    """The prescribed mean gaps of a periodic ``run`` in its length unit (their signs checked
+    by :class:`Run`), and what its record adds: those given with units."""
+    given = run.mean_gaps or ()
+    gaps = [length_value(g, length_unit or None, "--mean-gaps") for g in given]
+    if any(isinstance(g, str) for g in given):
+        return gaps, {"mean_gaps_resolved": gaps}  # in the run's length unit
+    return gaps, {}
 
 
 class PunchDriver:

@@ -429,6 +429,20 @@ _PERIODIC_LOADS = (
         "first seed's surface, so that every seed gets the same pressures",
         **_SWEEP,
     ),
+    _option(
+        "mean_gaps",
+        "prescribed mean gaps u_bar (length units, or with a unit: 10nm), in order "
+        "(displacement control: the nominal pressure p0 is each step's result)",
+        ("periodic",),
+        metavar="G1,G2,...",
+        unit="length",
+        more="Safeguarded Newton on ln p0 with the exact derivative -du_bar/d(ln p0) = p0/K "
+        "aims at `1e-6` relative (stored: `mean_gap_tolerance`, `mean_gap_mismatch`); a "
+        "mean gap within `1e-4` relative of its target is accepted, one further off is "
+        "flagged not converged. Each must lie between 0 (full contact) and max(h) - mean(h) "
+        "(first touch); every step has the exact `stiffness`",
+        **_LOADS,
+    ),
 )
 
 _PUNCH_LOADS = (

@@ -2,13 +2,13 @@
 list of approaches or forces, each solve warm-started from the last converged pressure.
 
 Load control (``forces=``) wraps the displacement-controlled solve in a safeguarded Newton
-iteration on ``δ`` that uses the exact ``dF/dδ``; ``F(δ)`` is increasing and convex.
+iteration on ``δ`` that uses the exact ``dF/dδ`` (:mod:`~petsc_contact.workflows.newton`);
+``F(δ)`` is increasing and convex.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
-from typing import Any
 
 import numpy as np
 
@@ -19,10 +19,10 @@ from ..geometries.step import Step, solve_step
 from ..physics.continuation import Held
 from ..solver.backends import BoundSolver
 from ..solver.report import FORCE_ACCURACY
+from .newton import Bracket, check_reached, newton
 
 FORCE_RTOL = 1e-6
 FORCE_RESOLVED = FORCE_ACCURACY  # a force further than this from its target is not converged
-MAX_NEWTON = 60
 
 
 def punch_solver(problem: PunchProblem) -> BoundSolver:
@@ -123,77 +123,34 @@ class PunchSolver:
         its approach is lost in the tolerance, force 0) is not converged, and says why.
         """
         positive("force", force)
-        step, newton, iterations, solve_time = self._newton(force, fields, rtol, monitor, stiffness)
-        s = step.scalars
-        _check_reached(s, force)
+        bracket = Bracket(force, 0.0, np.inf, lambda lo: 2 * lo + self.problem.scale_length)
+        delta = bracket.start(force / self.k_flat_analytic, self.last)
+        end = newton(
+            bracket,
+            delta,
+            lambda d: self.at_approach(d, fields, monitor, stiffness),
+            lambda s: (s["force"], s["total_stiffness"]),
+            rtol,
+            "force",
+        )
+        s = end.step.scalars
+        check_reached(
+            s,
+            s["force"],
+            force,
+            FORCE_RESOLVED * force,
+            f"force {s['force']:.6g} reached, not {force:.6g}: the approach is lost in the "
+            "tolerance on the gap (a load below what this grid resolves, or a loose tolerance)",
+        )
         s.update(
             target_force=force,
             force_balance=abs(s["force"] - force) / force,
-            newton_iterations=newton,
-            iterations=iterations,
-            solve_time=solve_time,
+            newton_iterations=end.count,
+            iterations=end.iterations,
+            solve_time=end.solve_time,
         )
         self.problem.accuracy().assess(s)
-        return step
-
-    def _newton(
-        self, force: float, fields: bool, rtol: float, monitor: Monitor | None, stiffness: bool
-    ) -> tuple[Step, int, int, float]:
-        """Newton's steps on the approach toward ``force`` (:meth:`at_force`): the last step,
-        the Newton steps taken, and the TAO iterations and solve time of them all."""
-        lo, hi, delta = self._newton_start(force)
-        total_its, total_time = 0, 0.0
-        for newton in range(1, MAX_NEWTON + 1):
-            step = self.at_approach(delta, fields, monitor, stiffness)
-            s = step.scalars
-            total_its += s["iterations"]
-            total_time += s["solve_time"]
-            if not step.converged:
-                break
-            f, k = s["force"], s["total_stiffness"]
-            if abs(f - force) <= rtol * force or (newton > 1 and s["iterations"] == 0):
-                break  # on target, or as close as the solve resolves (module docstring)
-            if f < force:
-                lo = delta
-            else:
-                hi = delta
-            delta = self._next_approach(delta, force - f, k, lo, hi)
-        else:
-            s["converged"] = False
-            s["verification"] = f"force not reached in {MAX_NEWTON} Newton steps"
-        return step, newton, total_its, total_time
-
-    def _newton_start(self, force: float) -> tuple[float, float, float]:
-        """The bracket ``(lo, hi)`` of the approach that reaches ``force``, and the first
-        approach tried: the last converged step's tangent, else ``force / K_flat``."""
-        lo, hi = 0.0, np.inf
-        delta = force / self.k_flat_analytic
-        if self.last is not None:
-            d0, f0, k0 = self.last
-            lo, hi = (d0, hi) if f0 < force else (lo, d0)
-            delta = d0 + (force - f0) / k0 if k0 > 0 else delta
-        return lo, hi, delta
-
-    def _next_approach(self, delta: float, short: float, k: float, lo: float, hi: float) -> float:
-        """Newton's next approach from ``delta``, where the force is ``short`` of its target
-        and its derivative is ``k``; bisected in ``(lo, hi)`` (or past ``lo``, while no
-        approach above the root is known) when Newton leaves the bracket."""
-        guess = delta + short / k if k > 0 else np.inf
-        if lo < guess < hi:
-            return guess
-        return 2 * lo + self.problem.scale_length if not np.isfinite(hi) else 0.5 * (lo + hi)
-
-
-def _check_reached(scalars: dict[str, Any], force: float) -> None:
-    """A converged step whose force is further than :data:`FORCE_RESOLVED` from its target
-    ``force`` made not converged, saying why."""
-    if scalars["converged"] and abs(scalars["force"] - force) > FORCE_RESOLVED * force:
-        scalars["converged"] = False
-        scalars["verification"] = (
-            f"force {scalars['force']:.6g} reached, not {force:.6g}: the approach is lost in "
-            "the tolerance on the gap (a load below what this grid resolves, or a loose "
-            "tolerance)"
-        )
+        return end.step
 
 
 def punch_sweep(

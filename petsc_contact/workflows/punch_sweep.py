@@ -26,16 +26,10 @@ from ..numerics.device import Device, get_device
 from ..solver.backends import SolverBackend
 from .description import Run
 from .drivers import PunchDriver
+from .newton import MAX_NEWTON
 from .periodic_steps import Progress
 from .periodic_sweep import api_run
-from .punch_steps import (
-    FORCE_RESOLVED,
-    FORCE_RTOL,
-    MAX_NEWTON,
-    PunchSolver,
-    punch_solver,
-    punch_sweep,
-)
+from .punch_steps import FORCE_RESOLVED, FORCE_RTOL, PunchSolver, punch_solver, punch_sweep
 from .runner import contact_steps, posed_scene
 from .scene import Scene, check_map
 

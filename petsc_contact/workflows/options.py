@@ -437,10 +437,11 @@ _PERIODIC_LOADS = (
         metavar="G1,G2,...",
         unit="length",
         more="Safeguarded Newton on ln p0 with the exact derivative -du_bar/d(ln p0) = p0/K "
-        "aims at `1e-6` relative (stored: `mean_gap_tolerance`, `mean_gap_mismatch`); a "
-        "mean gap within `1e-4` relative of its target is accepted, one further off is "
-        "flagged not converged. Each must lie between 0 (full contact) and max(h) - mean(h) "
-        "(first touch); every step has the exact `stiffness`",
+        "aims at `1e-6` of the smaller of the mean gap and its approach from first touch "
+        "(stored: `mean_gap_tolerance`, `mean_gap_mismatch`); within `1e-4` of it a mean gap "
+        "is accepted, one further off is flagged not converged. Each must lie between 0 "
+        "(full contact) and max(h) - mean(h) (first touch); every step has the exact "
+        "`stiffness` (docs/formulation.md)",
         **_LOADS,
     ),
 )

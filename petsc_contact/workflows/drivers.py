@@ -172,7 +172,7 @@ def _pressures(run: Run, problem: PeriodicProblem) -> tuple[list[float], dict[st
         pressures = swept(run.sweep, low, high, lambda v: pressure_value(v, unit, "--sweep"))
         return pressures, {"pressures": pressures, "sweep": None}  # the file records the loads
     if run.pressures is None:
-        raise ValueError("give the nominal pressures (--pressures) or a --sweep")
+        raise ValueError("give the nominal pressures (--pressures), a --sweep or --mean-gaps")
     pressures = [pressure_value(p, unit, "--pressures") for p in run.pressures]  # Run checked
     if any(isinstance(p, str) for p in run.pressures):
         return pressures, {"pressures_resolved": pressures}  # in the run's pressure unit

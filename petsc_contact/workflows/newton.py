@@ -98,12 +98,11 @@ def newton(
     ``point(scalars)`` its value and exact slope.
 
     It stops on the target (``|value - target| <= rtol scale``, ``scale`` by default
-    ``|target|``), at a step that did not
-    converge, or when a solve accepts its warm start at a new ``x`` without an iteration (it
-    cannot tell the two apart: the value is as close as the solve resolves).  A step that
-    stops for another reason is made not converged, saying why: ``what`` not reached in
-    :data:`MAX_NEWTON` steps, or the root above the bracket's ceiling (``out_of_reach``).
-    """
+    ``|target|``), at a step that did not converge, or when a solve accepts its warm start at
+    a new ``x`` without an iteration (it cannot tell the two apart: the value is as close as
+    the solve resolves).  A step that stops for another reason is made not converged, saying
+    why: ``what`` not reached in :data:`MAX_NEWTON` steps, or the root above the bracket's
+    ceiling (``out_of_reach``)."""
     tolerance = rtol * (abs(bracket.target) if scale is None else scale)
     iterations, solve_time = 0, 0.0
     for count in range(1, MAX_NEWTON + 1):

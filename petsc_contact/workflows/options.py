@@ -740,8 +740,8 @@ _THEORY = (
     ),
     _option(
         "compare",
-        "with --plot: draw these periodic runs' mean gap and stiffness beside the theory, in "
-        "its units",
+        "with --plot: draw these periodic runs' mean gap, stiffness and contact area beside "
+        "the theory's, in its units",
         ("theory",),
         metavar="RUN.h5",
         nargs="+",

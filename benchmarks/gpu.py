@@ -9,7 +9,7 @@ usage (on a machine with CuPy and a CUDA GPU, in the repository's root, no netwo
 2. runs ``pytest -m gpu tests/test_gpu.py tests/test_device_punch.py`` (the device against
    its CPU stand-in: periodic sweeps at 256^2-1024^2, the punch at 128^2 and 256^2);
 3. measures the floor at each grid: a cuFFT double real round trip (``rfft2`` + ``irfft2``
-   through :class:`~petsc_contact.numerics.device.ArrayFFT`) and one fused pass
+   through :class:`~petsc_contact.numerics.fft.ArrayFFT`) and one fused pass
    (``y += a x``, an ``ElementwiseKernel``), CUDA events, median of 10;
 4. times the paper-bandwidth sweep at each grid (H = 0.7, rms slope 0.1, ``L/lambda_r = 1``,
    ``L/lambda_1 = n/2``, seed 1, 12 loads from 1e-7 to 1e-1 E*, ``--stiffness``): wall,
@@ -78,7 +78,8 @@ def floor(n: int) -> dict[str, float]:
     import cupy
 
     from petsc_contact.conventions.grid import Grid
-    from petsc_contact.numerics.device import ArrayFFT, get_device
+    from petsc_contact.numerics.device import get_device
+    from petsc_contact.numerics.fft import ArrayFFT
 
     fft = ArrayFFT(Grid(n, 1.0), get_device("gpu"))
     x = cupy.random.random((n, n))
@@ -95,10 +96,11 @@ def floor(n: int) -> dict[str, float]:
 def surface(n: int, device: str) -> Any:
     from petsc_contact.conventions.grid import Grid
     from petsc_contact.numerics.device import get_device
+    from petsc_contact.numerics.fft import make_fft
     from petsc_contact.physics.surface import self_affine
 
     grid = Grid(n, 1.0)
-    return self_affine(grid, get_device(device).fft(grid), cutoff_ratio=n / 2, **PAPER)
+    return self_affine(grid, make_fft(grid, get_device(device)), cutoff_ratio=n / 2, **PAPER)
 
 
 def sweep(n: int, loads: list[float], floors: dict[str, float] | None) -> dict[str, Any]:
@@ -165,9 +167,10 @@ def plain_passes_sweep(n: int, loads: list[float], report: dict[str, Any]) -> di
     """:func:`sweep` with the GPU's passes as :class:`ArrayPasses` (one CuPy kernel per
     operator) instead of the fused kernels: what the fusion saves, on the same surface."""
     from petsc_contact.numerics import device
+    from petsc_contact.numerics.passes import ArrayPasses
 
     fused = device.Device.__dict__["passes"]
-    device.Device.passes = property(lambda self: device.ArrayPasses(self.xp))
+    device.Device.passes = property(lambda self: ArrayPasses(self.xp))
     try:
         return sweep(n, loads, report["floor"].get(n))
     finally:

@@ -63,9 +63,10 @@ from types import ModuleType
 from mpi4py import MPI
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.numerics.device import Device
+from petsc_contact.numerics.fft import make_fft
 
 try:  # an array module that is not NumPy: a GPU's, as CuPy is
-    Device("gpu", ModuleType("cupy")).fft(Grid(32, 1.0, MPI.COMM_WORLD))
+    make_fft(Grid(32, 1.0, MPI.COMM_WORLD), Device("gpu", ModuleType("cupy")))
 except ValueError as error:
     print(error)
 """

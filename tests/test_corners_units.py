@@ -40,8 +40,8 @@ def theory_result(crossover: float = 1e-4) -> SimpleNamespace:
     q = np.geomspace(0.1, 3.0, 40)
     return SimpleNamespace(
         wavevector=q, psd=q**-3.4, nominal_pressure=P, mean_gap=1 - P, stiffness=10 * P,
-        hurst_fit=0.7, rms_height=0.5, crossover_pressure=crossover,
-        crossover_pressure_paper=4 * crossover, fit_range=(0.2, 2.0),
+        area_fraction=np.minimum(10 * P, 1.0), hurst_fit=0.7, rms_height=0.5,
+        crossover_pressure=crossover, crossover_pressure_paper=4 * crossover, fit_range=(0.2, 2.0),
     )  # fmt: skip
 
 

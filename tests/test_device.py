@@ -18,6 +18,7 @@ import pytest
 
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.numerics.device import DeviceUnavailable, get_device
+from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.solver.driver import SolveSettings
 from petsc_contact.workflows.periodic_sweep import periodic_contact
@@ -29,7 +30,7 @@ def surface(n: int, hurst: float, cutoff: float, seed: int = 1) -> np.ndarray:
     grid = Grid(n, 1.0)
     return self_affine(
         grid,
-        get_device("cpu-array").fft(grid),
+        make_fft(grid, get_device("cpu-array")),
         hurst=hurst,
         rolloff_ratio=2,
         cutoff_ratio=cutoff,

@@ -18,6 +18,7 @@ import pytest
 
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.numerics.device import DeviceUnavailable, get_device
+from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.reference import flat_punch
 from petsc_contact.workflows.punch_sweep import punch_contact
@@ -26,7 +27,7 @@ from petsc_contact.workflows.punch_sweep import punch_contact
 def face(n: int, seed: int = 3) -> np.ndarray:
     """A seeded rough punch face, roughness down to four pixels."""
     grid = Grid(n, 1.0)
-    fft = get_device("cpu-array").fft(grid)
+    fft = make_fft(grid, get_device("cpu-array"))
     return self_affine(
         grid, fft, hurst=0.7, rolloff_ratio=2, cutoff_ratio=n // 4, seed=seed, rms_slope=0.1
     )

@@ -177,6 +177,37 @@ def test_run_reads_the_natural_forms(petsc):
         Run(grid=(16, 8, 4))
 
 
+@pytest.mark.parametrize(
+    "field, value, text",
+    [
+        ("cut_from", 0, "0"),
+        ("cut_from", 1.5, "1.5"),
+        ("stop_after", float("nan"), "nan"),
+        ("stop_after", -1, "-1"),
+        ("sweep", (1,), "1"),
+        ("sweep", "4,1e-3", "4,1e-3"),
+        ("sweep", (4, 1e-3, 1e-8), "4,1e-3,1e-8"),
+    ],
+)
+def test_run_and_the_command_line_refuse_with_one_rule(field, value, text):
+    """``--cut-from``, ``--stop-after`` and ``--sweep`` are read by one rule each (their
+    option's parser): ``Run`` refuses what the command line refuses, in the same words after
+    the option's name."""
+    from conftest import cli
+
+    flag = "--" + field.replace("_", "-")
+    geometry = "punch" if field == "cut_from" else "periodic"
+    with pytest.raises(ValueError) as refused:
+        Run(geometry=geometry, grid=16, hurst=0.7, rms_slope=0.1, **{field: value})
+    loads = () if field == "sweep" else ("--approaches" if field == "cut_from" else "--pressures",
+                                         "1e-3")  # fmt: skip
+    r = cli(geometry, "--grid", "16", "--hurst", "0.7", "--rms-slope", "0.1", *loads,
+            f"{flag}={text}", "--output", "never.h5")  # fmt: skip
+    assert r.returncode == 2, r.stderr
+    said = r.stderr.strip().splitlines()[-1].split(f"argument {flag}: ", 1)[1]
+    assert said.startswith(str(refused.value).removeprefix(f"{flag}: ")), (said, refused.value)
+
+
 def test_punch_takes_run_s_footprints(petsc):
     """``footprint="disk"`` (Run's word) gives Run's disk punch, with its shape factor 1;
     a mask of the same disk gives the same answer given that factor."""

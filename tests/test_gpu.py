@@ -13,6 +13,7 @@ import pytest
 
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.numerics.device import DeviceUnavailable, get_device
+from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.workflows.periodic_sweep import periodic_contact
 
@@ -31,7 +32,7 @@ def surface(n: int) -> np.ndarray:
     grid = Grid(n, 1.0)
     return self_affine(
         grid,
-        get_device("cpu-array").fft(grid),
+        make_fft(grid, get_device("cpu-array")),
         hurst=0.7,
         rolloff_ratio=1,
         cutoff_ratio=n / 2,
@@ -73,8 +74,8 @@ def test_each_fused_pass_is_the_array_pass(gpu):
     """The GPU's fused kernels (:mod:`~petsc_contact.numerics.fused`) against the array
     module's operators on the same CuPy arrays: masks, counts and updates exactly, sums to
     rounding (1e-12), with bounds given as floats and as arrays."""
-    from petsc_contact.numerics.device import ArrayPasses
     from petsc_contact.numerics.fused import FusedPasses
+    from petsc_contact.numerics.passes import ArrayPasses
 
     xp = gpu.xp
     fused, plain = FusedPasses(xp), ArrayPasses(xp)

@@ -13,6 +13,7 @@ from typing import Any
 import h5py
 import numpy as np
 import pytest
+from conftest import cli
 
 from petsc_contact.cli.arguments import build_parser
 from petsc_contact.cli.tools import run_plot
@@ -74,8 +75,8 @@ def theory_result() -> SimpleNamespace:
     q = np.geomspace(0.1, 3.0, 40)
     return SimpleNamespace(
         wavevector=q, psd=q**-3.4, nominal_pressure=P, mean_gap=-np.log(P) / 10,
-        stiffness=10 * P, hurst_fit=0.7, rms_height=1.0, crossover_pressure=1e-4,
-        crossover_pressure_paper=4e-4, fit_range=(0.2, 2.0),
+        stiffness=10 * P, area_fraction=np.minimum(10 * P, 1.0), hurst_fit=0.7, rms_height=1.0,
+        crossover_pressure=1e-4, crossover_pressure_paper=4e-4, fit_range=(0.2, 2.0),
     )  # fmt: skip
 
 
@@ -99,20 +100,54 @@ def test_punch_plot_is_log_log_in_the_run_units(tmp_path: Path) -> None:
 
 
 def test_sweep_and_theory_put_p0_on_the_same_axis(tmp_path: Path) -> None:
-    """Every panel of the load plot and the theory's two predictions: p0/E* on a log x axis
-    with the same label; the mean gap linear, area and stiffness log, labelled alike."""
+    """Every panel of the load plot and the theory's three predictions: p0/E* on a log x
+    axis with the same label; the mean gap linear, area and stiffness log, labelled alike."""
     png = tmp_path / "sweep.png"
     sweep = plot.plot_sweep(str(png), sweep_steps(converged=False), 1.0, 1.0)
     assert_picture(png)
     theory = plot.plot_theory(str(tmp_path / "theory.png"), theory_result(), 1.0)
-    gap, stiffness = theory.axes[1:]
-    for ax in (*sweep.axes, gap, stiffness):
+    gap, stiffness, area = theory.axes[1:]
+    for ax in (*sweep.axes, gap, stiffness, area):
         assert ax.get_xscale() == "log" and ax.get_xlabel() == plot.P0_LABEL
     assert [ax.get_yscale() for ax in sweep.axes] == ["log", "linear", "log"]
-    assert (gap.get_yscale(), stiffness.get_yscale()) == ("linear", "log")
+    assert [ax.get_yscale() for ax in (area, gap, stiffness)] == ["log", "linear", "log"]
+    assert sweep.axes[0].get_ylabel() == area.get_ylabel() == plot.AREA_LABEL
     assert sweep.axes[1].get_ylabel() == gap.get_ylabel() == plot.GAP_LABEL
     assert sweep.axes[2].get_ylabel() == stiffness.get_ylabel() == plot.STIFFNESS_LABEL
     assert "NOT converged" in [t.get_text() for t in sweep.axes[0].get_legend().get_texts()]
+
+
+def test_theory_draws_persson_s_area_beside_the_run_s(tmp_path: Path, drawn: list[Any]) -> None:
+    """``theory --compare``: Persson's contact area is a column of the table and a dataset of
+    the file (``area_fraction``, unit 1), and its panel draws it beside the run's own
+    ``area_fraction`` at the run's loads (``A/A0`` on log axes, as the load plot draws it);
+    the file drawn again (``plot``) has the panel, a file without the area (written before
+    it was computed) the three panels it had."""
+    surface = ("--grid", "64", "--hurst", "0.7", "--rms-slope", "0.1", "--seed", "3")
+    run, out, png = tmp_path / "run.h5", tmp_path / "t.h5", tmp_path / "t.png"
+    r = cli("periodic", *surface, "--pressures", "5e-3,2e-2", "--output", str(run), "--quiet")
+    assert r.returncode == 0, r.stderr
+    r = cli("theory", *surface, "--sweep", "4,1e-4,5e-2", "--output", str(out),
+            "--plot", str(png), "--compare", str(run))  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.splitlines()[5].split() == ["p0", "mean_gap", "K", "A/A0"], r.stdout
+    assert_picture(png)
+    with h5py.File(out, "r") as f, h5py.File(run, "r") as g:
+        theory, simulated = f["area_fraction"][...], g["area_fraction"][...]
+        assert f["area_fraction"].attrs["units"] == "1"
+        last = float(theory[-1])
+    assert np.all(np.diff(theory) > 0) and 0 < theory[0] < last < 1
+    area = drawn[-1].axes[3]
+    assert area.get_title() == "contact area" and area.get_ylabel() == plot.AREA_LABEL
+    assert (area.get_xscale(), area.get_yscale()) == ("log", "log")
+    persson, points = area.get_lines()
+    assert persson.get_label() == plot.PERSSON_AREA and points.get_label() == "run.h5"
+    np.testing.assert_array_equal(persson.get_ydata(), theory)
+    np.testing.assert_array_equal(points.get_ydata(), simulated)
+    assert plot_command(str(out)) == 0 and len(drawn[-1].axes) == 4
+    with h5py.File(out, "a") as f:
+        del f["area_fraction"]
+    assert plot_command(str(out)) == 0 and len(drawn[-1].axes) == 3
 
 
 def test_ensemble_plot_has_visible_errors_and_a_title_per_panel(tmp_path: Path) -> None:

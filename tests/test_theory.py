@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from scipy import special
 
 from petsc_contact.physics import theory
 
@@ -393,3 +394,54 @@ def test_the_periodic_cells_hertz_limit():
     r[320, 320] = np.inf
     lattice = (np.exp(-((r / 40) ** 2)) / r).sum() - np.pi**1.5 * 40
     assert -lattice / np.pi == pytest.approx(hertz.PERIODIC_SELF, rel=2e-4)
+
+
+def test_persson_area_at_small_and_large_loads(spectrum):
+    """``A/A0 = erf(sqrt(2) p/(E* h'_rms))``: at small loads the linear law
+    ``sqrt(8/pi) p/(E* h'_rms)``, with ``h'_rms^2 = 2 pi int q^3 C dq`` in closed form for the
+    fixture's spectrum (a plateau to ``2 q0``, then ``q^-3.4``; the quadrature's error on 6000
+    geometric points is below 1e-7); rising monotonically to 1; and Persson's ``P(q1) =
+    erf(w(q1) p/E*)`` in the ``w`` of his mean gap."""
+    q, c = spectrum
+    q0, c0 = q[0], c[0]
+    plateau = ((2 * q0) ** 4 - q0**4) / 4
+    tail = (2 * q0) ** 3.4 * ((64 * q0) ** 0.6 - (2 * q0) ** 0.6) / 0.6  # int q^3 q^-3.4
+    slope = np.sqrt(2 * np.pi * c0 * (plateau + tail))
+    assert theory.spectrum_rms_slope(q, c) == pytest.approx(slope, rel=1e-6)
+    modulus = 3.0
+    small = 1e-6 * modulus * slope  # erf(x) = 2x/sqrt(pi) (1 - x^2/3): 1e-12 off the line
+    assert theory.persson_area(small, q, c, modulus) / small == pytest.approx(
+        np.sqrt(8 / np.pi) / (modulus * slope), rel=1e-6
+    )
+    p = np.geomspace(1e-6, 5.0, 60) * modulus * slope
+    area = theory.persson_area(p, q, c, modulus)
+    assert np.all(np.diff(area[area < 1.0]) > 0) and np.all(area <= 1.0)
+    assert area[-1] == pytest.approx(1.0, abs=1e-12)  # erf(5 sqrt 2)
+    w1 = theory.persson_w(q, c)[-1]
+    assert np.allclose(area, special.erf(w1 * p / modulus), rtol=1e-12)
+
+
+def test_persson_area_against_a_periodic_simulation():
+    """The simulated area of a periodic 256^2 map (H = 0.7, L = lambda_r, L/lambda_1 = 32,
+    rms slope 0.1) against ``predict_map``'s Persson area on the map's own spectrum, at
+    ``p0/E*`` = 0.01 and 0.02 (``A/A0`` about 0.2 and 0.37).  Simulations find more area
+    than Persson's theory: ``kappa ~ 2`` against his ``sqrt(8/pi) = 1.6`` at small loads
+    (Hyun et al. 2004; Prodanov et al. 2014), the ratio falling towards 1 at full contact.
+    Measured here: 1.27 and 1.20 (seed 1; 1.27-1.35 and 1.20-1.25 over seeds 1-3 and
+    128^2 and 256^2 maps), so the bounds 1.1-1.45.  A slip by 2 in the spectrum's
+    normalisation, or by sqrt(2) in the width of the pressure distribution, puts the ratio
+    at 0.9 or below, or at 1.6 or above."""
+    from petsc_contact import periodic_contact, predict_map
+    from petsc_contact.conventions.grid import Grid
+    from petsc_contact.numerics.fft import make_fft
+    from petsc_contact.physics.surface import self_affine
+
+    grid = Grid(256, 1.0)
+    h = self_affine(grid, make_fft(grid), hurst=0.7, rolloff_ratio=1, cutoff_ratio=32,
+                    seed=1, rms_slope=0.1)  # fmt: skip
+    p = [0.01, 0.02]
+    steps = periodic_contact(h, length=1.0, pressures=p, progress=False)
+    simulated = np.array([s.scalars["area_fraction"] for s in steps])
+    persson = predict_map(h, length=1.0, pressures=p).area_fraction
+    ratio = simulated / persson
+    assert np.all((ratio > 1.1) & (ratio < 1.45)), ratio

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..conventions.grid import Grid, block_rows
 from ..numerics.device import CPU, Device
-from ..numerics.fft import FFT, half_spectrum_weights, single_entries
+from ..numerics.fft import FFT, half_spectrum_weights, make_fft, single_entries
 from . import _petsc
 
 
@@ -260,7 +260,7 @@ class PaddedOperator(SpectralOperator):
     ) -> None:
         self.grid = grid
         self.padded = grid.padded()
-        self.fft = fft if fft is not None else device.fft(self.padded)
+        self.fft = fft if fft is not None else make_fft(self.padded, device)
         where = self.fft.device
         self.fft.real[...] = where.asarray(kernel_rows(self.padded.rows))
         self.fft.forward()

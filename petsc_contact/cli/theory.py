@@ -81,6 +81,11 @@ def _print(result: Prediction, length_unit: str, pressure_unit: str) -> None:
         f"printed), {result.crossover_pressure_paper:.3g} (the paper's recipe: q_r h_rms with "
         "q_r = 2 pi/L, q_r L = pi, theta = 1)"
     )
-    print(f"{'p0':>12} {'mean_gap':>12} {'K':>12}")  # in the units above
-    for row in zip(result.nominal_pressure, result.mean_gap, result.stiffness, strict=True):
+    print(
+        f"# Persson's contact area A/A0 = erf(sqrt(2) p0 / (E* h'_rms)) with the spectrum's "
+        f"h'_rms = {result.spectrum_rms_slope:.4g} (q up to {result.wavevector[-1]:.3g})"
+    )
+    print(f"{'p0':>12} {'mean_gap':>12} {'K':>12} {'A/A0':>12}")  # in the units above
+    columns = (result.nominal_pressure, result.mean_gap, result.stiffness, result.area_fraction)
+    for row in zip(*columns, strict=True):
         print(" ".join(f"{v:>12.5g}" for v in row))

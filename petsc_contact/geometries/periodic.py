@@ -24,7 +24,7 @@ import time
 from typing import Any
 
 import numpy as np
-from scipy.special import erf, erfinv
+from scipy.special import erfinv
 
 from ..backend.coarse import CoarseCorrected, CoarseSpace, TwoLevelOptions
 from ..backend.operator import FourierOperator, ShellInterface
@@ -44,7 +44,7 @@ from ..numerics.fft import FFT, wavevector_magnitude
 from ..numerics.kernels import compile_kernels
 from ..numerics.schur import response_quarter
 from ..physics.observables import step_observables
-from ..physics.theory import linear_stiffness
+from ..physics.theory import area_fraction, linear_stiffness
 from ..solver.backends import SolverBackend
 from ..solver.report import Accuracy, accuracy_limit
 from ..substrates.half_space import PeriodicHalfSpace
@@ -337,7 +337,8 @@ class PeriodicProblem:
         return self._compliance(self.stiffness.normalised(interfacial_stiffness))
 
     def expected_contact_count(self, p0: float) -> int:
-        """Contact pixels at ``p0`` in Persson's theory, ``n^2 erf(p0 / (sqrt(2) sigma))``.
+        """Contact pixels at ``p0`` in Persson's theory, ``n^2 erf(p0 / (sqrt(2) sigma))``
+        (:func:`~petsc_contact.physics.theory.area_fraction`).
 
         ``sigma = rms(K h)`` is the rms pressure of full contact (``E* h'_rms / 2``); for small
         ``p0`` this is the linear law ``A/A0 = sqrt(8/pi) p0 / (E* h'_rms)``.  Simulations find
@@ -345,7 +346,7 @@ class PeriodicProblem:
         """
         if self.elastic_pressure_rms <= 0:
             return self.grid.size
-        return int(self.grid.size * erf(p0 / (np.sqrt(2) * self.elastic_pressure_rms)))
+        return int(self.grid.size * area_fraction(p0, self.elastic_pressure_rms))
 
     def area_pressure(self, fraction: float) -> float:
         """The nominal pressure at which Persson's law (:meth:`expected_contact_count`) puts

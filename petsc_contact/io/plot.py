@@ -33,6 +33,7 @@ def plot_file(path: str, option: str = "--plot") -> str:
 
 P0_LABEL = "nominal pressure $p_0/E^*$"  # every load plot's x axis, without units
 AREA_LABEL = "$A/A_0$"
+PERSSON_AREA = r"Persson, $\mathrm{erf}(\sqrt{2}\,p_0/(E^* h'_\mathrm{rms}))$"
 GAP_LABEL = r"$\bar u/h_\mathrm{rms}$"
 STIFFNESS_LABEL = r"$K h_\mathrm{rms}/E^*$"
 APPROACH_LABEL = r"approach $\delta/h_\mathrm{rms}$"  # a punch's, without units
@@ -227,48 +228,68 @@ def plot_theory(
     runs: Sequence[tuple[str, dict[str, np.ndarray]]] = (),
     units: dict[str, str] | None = None,
 ) -> Any:
-    """The map's spectrum with its fitted power law, and Persson's mean gap ``u_bar(p)`` and
+    """The map's spectrum with its fitted power law, and Persson's mean gap ``u_bar(p)``,
     stiffness ``K(p)`` with the finite-size crossover ``p_c`` marked, as printed (paper
     Eq. 13) and in the recipe of the paper's quoted values (``crossover_pressure_paper``),
-    where it lies among the pressures drawn (the legend names only what is in view).
+    where it lies among the pressures drawn (the legend names only what is in view), and
+    contact area ``A(p)/A0`` (``result.area_fraction``; ``None``, as in a theory file
+    written before it was computed: a row of three panels without it).
 
     ``runs`` are simulations to draw beside the theory, in its units: ``(label, table)``
-    with the arrays ``nominal_pressure``, ``mean_gap`` and, if computed, ``stiffness``.
-    ``units`` (``length``, ``pressure``) label the axes as :func:`load_axis` does: in them
-    where the theory has them, dimensionless where it has none.
+    with the arrays ``nominal_pressure``, ``mean_gap`` and, if computed, ``stiffness`` and
+    ``area_fraction``.  ``units`` (``length``, ``pressure``) label the axes as
+    :func:`load_axis` does: in them where the theory has them, dimensionless where it has
+    none.
     """
     h = result.rms_height
-    fig = _figure(figsize=(13, 3.8), layout="constrained")
-    ax1, ax2, ax3 = fig.subplots(1, 3)
-    ax2.set_xscale("log")
-    ax3.set(xscale="log", yscale="log")
+    area = result.area_fraction is not None
+    fig = _figure(figsize=(10, 7.4) if area else (13, 3.8), layout="constrained")
+    axes = list(fig.subplots(2, 2).ravel() if area else fig.subplots(1, 3))
+    ax1, ax2, ax3 = axes[:3]
     _draw_spectrum(ax1, result, (units or {}).get("length", ""))
     scales = {kind: load_axis(kind, values, units, modulus, h)
               for kind, values in (("p0", result.nominal_pressure), ("gap", result.mean_gap),
                                    ("stiffness", result.stiffness))}  # fmt: skip
     (px, xlabel), (gx, glabel), (kx, klabel) = scales.values()
-    p = result.nominal_pressure * px
-    ax2.plot(p, result.mean_gap * gx, "-", label="Persson")
-    ax3.plot(p, result.stiffness * kx, "-", label="Persson")
+    panels = [(ax2, "mean_gap", result.mean_gap * gx, "linear", glabel, "mean gap", "Persson"),
+              (ax3, "stiffness", result.stiffness * kx, "log", klabel, "interfacial stiffness",
+               "Persson")]  # fmt: skip
+    if area:
+        panels.append((axes[3], "area_fraction", result.area_fraction, "log", AREA_LABEL,
+                       "contact area", PERSSON_AREA))  # fmt: skip
+    factors = {"mean_gap": gx, "stiffness": kx, "area_fraction": 1.0}
+    for ax, name, values, yscale, ylabel, title, label in panels:
+        ax.set(xscale="log", yscale=yscale, xlabel=xlabel, ylabel=ylabel, title=title)
+        ax.plot(result.nominal_pressure * px, values, "-", label=label)
+        _draw_runs(ax, runs, name, px, factors[name])
+    _mark_crossovers(ax3, result, px)
+    for ax in axes[1:]:
+        ax.legend(fontsize=8)
+    return _finish(fig, axes, path)
+
+
+def _draw_runs(
+    ax: Any, runs: Sequence[tuple[str, dict[str, np.ndarray]]], name: str, px: float, factor: float
+) -> None:
+    """Each simulation's ``name`` against its nominal pressures (scaled by ``px`` and
+    ``factor``) as open circles, where its table has it."""
     for label, table in runs:
-        sim_p = np.asarray(table["nominal_pressure"]) * px
-        ax2.plot(sim_p, np.asarray(table["mean_gap"]) * gx, "o", mfc="none", label=label)
-        if "stiffness" in table:
-            sim_k = np.asarray(table["stiffness"]) * kx
-            ax3.plot(sim_p, sim_k, "o", mfc="none", label=label)
-    low, high = ax3.get_xlim()
+        if name in table:
+            x = np.asarray(table["nominal_pressure"]) * px
+            ax.plot(x, np.asarray(table[name]) * factor, "o", mfc="none", label=label)
+
+
+def _mark_crossovers(ax: Any, result: Any, px: float) -> None:
+    """``p_c`` as printed and in the paper's recipe, each where it lies among the pressures
+    drawn, the axis kept to the loads' range."""
+    low, high = ax.get_xlim()
     for value, style, name in (
         (result.crossover_pressure, "--", "$p_c$ (Eq. 13 as printed)"),
         (result.crossover_pressure_paper, ":", r"$p_c$ (the paper's recipe)"),
     ):
         if low <= value * px <= high:
-            ax3.axvline(value * px, color="k", ls=style, label=name)
-    ax3.set_xlim(low, high)
-    ax2.set(xlabel=xlabel, ylabel=glabel, title="mean gap")
-    ax3.set(xlabel=xlabel, ylabel=klabel, title="interfacial stiffness")
-    ax2.legend(fontsize=8)
-    ax3.legend(fontsize=8)
-    return _finish(fig, (ax1, ax2, ax3), path)
+            ax.axvline(value * px, color="k", ls=style, label=name)
+    ax.set_xlim(low, high)
 
 
 def _draw_spectrum(ax: Any, result: Any, length: str) -> None:

@@ -317,6 +317,11 @@ THEORY = _entries(
     nominal_pressure=("pressure", "nominal pressures of the predictions"),
     mean_gap=("length", "Persson's mean separation u_bar(p) from the map's spectrum"),
     stiffness=("pressure/length", "Persson's interfacial stiffness K(p) = -dp/du_bar"),
+    area_fraction=(
+        "1",
+        "Persson's relative contact area A/A0 = erf(sqrt(2) p / (E* h'_rms)), h'_rms^2 = "
+        "2 pi int q^3 C dq over the spectrum (docs/formulation.md)",
+    ),
 )
 ENTRIES = {
     **COORDINATES,
@@ -532,11 +537,11 @@ def _dataset_tables(lines: list[str]) -> None:
     _table(
         lines,
         "theory",
-        "Persson's theory from a map's spectrum. Attributes: the run record (as above) and "
-        "`u0`, `beta` (p = beta E* exp(-u_bar/u0)), `hurst_fit`, `fit_range`, "
-        "`crossover_pressure` (paper Eq. 13 as printed), `crossover_pressure_paper` (the recipe of "
-        "the paper's quoted values), `crossover_pressure_appendix` (deprecated reading, half of "
-        "`crossover_pressure_paper`).",
+        "Persson's theory from a map's spectrum. Attributes: the run record (as above) and `u0`, "
+        "`beta` (p = beta E* exp(-u_bar/u0)), `hurst_fit`, `fit_range`, `crossover_pressure` "
+        "(paper Eq. 13 as printed), `crossover_pressure_paper` (the recipe of the paper's quoted "
+        "values), `crossover_pressure_appendix` (deprecated reading, half of "
+        "`crossover_pressure_paper`), `spectrum_rms_slope` (the h'_rms `area_fraction` takes).",
         THEORY,
     )
 

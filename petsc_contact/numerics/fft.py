@@ -1,6 +1,7 @@
 """Real-to-complex 2-D FFTs on the row-slab layout, planned once and reused.
 
-One interface, three backends chosen by the communicator size:
+One interface, four backends chosen by the device and the communicator size
+(:func:`make_fft`):
 
 - one rank: FFTW through Debian's ``pyfftw``, measured plan, one thread per core (faster
   than scipy's and numpy's FFTs; docs/performance.md);
@@ -12,7 +13,9 @@ One interface, three backends chosen by the communicator size:
   the last; :func:`~petsc_contact.conventions.grid.block_rows` spreads the remainder, e.g.
   22/21/21 rows
   for n = 64 on 3 ranks), or without ``libfftw3_mpi``: the slab-decomposed parallel FFT of
-  Debian's ``mpi4py-fft`` (FFTW underneath).
+  Debian's ``mpi4py-fft`` (FFTW underneath);
+- a device of the array path (``gpu``, ``cpu-array``) on one rank: the array module's own
+  transforms (:class:`ArrayFFT`: ``numpy.fft``, or cuFFT through ``cupy.fft``).
 
 A backend's ``transposed`` attribute says how its spectrum block is stored: ``False`` for
 (rows ``qx``, columns ``qy``), ``True`` for (``qy``, ``qx``).  Spectral multipliers built
@@ -40,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from ..conventions.grid import Grid, fft_order
-from .device import CPU, ArrayFFT, Device
+from .device import CPU, Device
 
 PLANNER_EFFORT = "FFTW_MEASURE"
 WISDOM_VARIABLE = "PETSC_CONTACT_FFTW_WISDOM"  # a file for FFTW's wisdom, or "off"
@@ -379,6 +382,48 @@ class FFTWMPI:
         out.reshape(self.result.shape)[...] = self._plans.padded
 
 
+class ArrayFFT:
+    """Real-to-complex 2-D FFTs of one grid with the array module's ``fft`` (one rank: a
+    GPU's arrays on several are not supported yet).
+
+    The interface of :mod:`~petsc_contact.numerics.fft`'s engines: buffers ``real`` (kept by
+    :meth:`forward`), ``spectrum`` and ``result``; both transforms unnormalised, so
+    ``backward(forward(x)) = nx ny x``.  CuPy keeps the cuFFT plans of a shape in its plan
+    cache, so every transform after the first reuses them.
+    """
+
+    transposed = False
+
+    def __init__(self, grid: Grid, device: Device) -> None:
+        if grid.comm.size != 1:
+            raise ValueError(f"the {device.name} device runs on one MPI rank, not {grid.comm.size}")
+        xp = device.xp
+        self.device = device
+        self.shape = grid.shape
+        nx, m = grid.shape[0], grid.half
+        self.real = xp.zeros(grid.shape)
+        self.spectrum = xp.zeros((nx, m), dtype=complex)
+        self.result = xp.zeros(grid.shape)
+        self.spectral_index = (slice(0, nx), slice(0, m))
+
+    def forward(self) -> None:
+        """``spectrum <- FFT(real)``."""
+        self.forward_from(self.real)
+
+    def backward(self) -> None:
+        """``result <- IFFT(spectrum)`` without the ``1/(nx ny)``."""
+        self.backward_into(self.result)
+
+    def forward_from(self, x: Any) -> None:
+        """``spectrum <- FFT(x)`` for an array of the grid's size."""
+        self.spectrum[...] = self.device.xp.fft.rfft2(x.reshape(self.shape))
+
+    def backward_into(self, out: Any) -> None:
+        """``out <- IFFT(spectrum)`` (unnormalised)."""
+        fft = self.device.xp.fft
+        out.reshape(self.shape)[...] = fft.irfft2(self.spectrum, s=self.shape, norm="forward")
+
+
 def _aligned(size: int, dtype: Any) -> np.ndarray:
     """A zeroed 1-D array of ``size`` items whose data is 64-byte aligned (SIMD-friendly)."""
     raw = np.zeros(size * np.dtype(dtype).itemsize + 64, dtype=np.uint8)
@@ -390,8 +435,12 @@ FFT = SerialFFT | SlabFFT | FFTWMPI | ArrayFFT
 
 
 def make_fft(grid: Grid, device: Device = CPU) -> FFT:
-    """The FFT backend for this grid's communicator (see the module docstring), whose arrays
-    ``device`` works on (a host device: the ``cpu`` device's passes, or the array path's)."""
+    """The FFT engine of ``grid`` on ``device``: FFTW's for this grid's communicator (the
+    module docstring) on the ``cpu`` device, and for host arrays on several ranks (its MPI
+    transforms, the device's passes on them); the array module's (:class:`ArrayFFT`, one
+    rank) otherwise."""
+    if not (device.compiled or (device.on_host and grid.comm.size > 1)):
+        return ArrayFFT(grid, device)
     fft = SerialFFT(grid) if grid.comm.size == 1 else FFTWMPI.create(grid) or SlabFFT(grid)
     fft.device = device
     return fft

@@ -275,7 +275,7 @@ class ConstrainedCG:
     convergence
         Told every iteration; says when to stop (:class:`Convergence`).
     passes
-        The device's element-wise passes (:class:`~petsc_contact.numerics.device.ArrayPasses`).
+        The device's element-wise passes (:class:`~petsc_contact.numerics.passes.ArrayPasses`).
     vector
         ``vector()`` returns a new work vector like ``x``.
     reduce

@@ -28,7 +28,7 @@ import numpy as np
 from ..conventions.units import METRES, NEWTONS, PASCALS, parse_quantity, pressure_value
 from ..conventions.validation import log_range, non_negative, positive
 from ..conventions.warnings import ConvertedLoads, user_level
-from .options import check_choices, grid_size, run_default
+from .options import check_choices, check_rules, grid_size, run_default
 
 GEOMETRIES = ("periodic", "punch")
 LOADS = ("pressures", "sweep", "approaches", "forces", "mean_gaps")
@@ -53,12 +53,14 @@ def swept(
     high: float,
     value: Callable[[float | str], float] = float,
 ) -> list[float]:
-    """The loads of a sweep ``(N,)`` or ``(N, MIN, MAX)``: ``N`` log-spaced, by default from
-    ``low`` to ``high``; ``value`` turns a bound given with a unit (``"1kPa"``) into the run's
-    units."""
+    """The loads of a sweep ``(N,)`` or ``(N, MIN, MAX)``, read by its rule
+    (:func:`~petsc_contact.workflows.options.sweep_spec`: the command line's and ``Run``'s):
+    ``N`` log-spaced, by default from ``low`` to ``high``; ``value`` turns a bound given with
+    a unit (``"1kPa"``) into the run's units, where the rule's ``0 < MIN < MAX`` is checked."""
     if len(spec) == 3:
         n, lo, hi = float(spec[0]), value(spec[1]), value(spec[2])
-        log_range("the sweep", n, (lo, hi))
+        if any(isinstance(v, str) for v in spec[1:]):  # a bound with a unit, now in the run's
+            log_range("the sweep", n, (lo, hi))
     else:
         n, lo, hi = float(spec[0]), low, high
     return [float(v) for v in np.geomspace(lo, hi, int(n))]
@@ -183,10 +185,7 @@ class Run:
             raise ValueError(f"geometry must be one of {', '.join(GEOMETRIES)}: {self.geometry}")
         positive("--modulus", self.modulus_value)
         check_choices(lambda name: getattr(self, name))  # --device, --footprint, ...
-        if self.cut_from < 1:
-            raise ValueError(f"--cut-from must be a whole number >= 1, got {self.cut_from}")
-        if self.stop_after is not None:
-            non_negative("--stop-after", self.stop_after)
+        check_rules(lambda name: getattr(self, name))  # --sweep, --cut-from, --stop-after
         check_resume_or_overwrite(self.resume, self.overwrite)
         self._check_mean_gaps()
         loads = (("pressures", PASCALS), ("approaches", METRES), ("forces", NEWTONS))
@@ -218,8 +217,6 @@ class Run:
             object.__setattr__(self, "heights", os.fspath(self.heights))
         for name in LOADS:
             object.__setattr__(self, name, _listed(getattr(self, name)))
-        if self.sweep is not None and len(self.sweep) not in (1, 3):
-            raise ValueError(f"--sweep takes N or (N, MIN, MAX), got {self.sweep!r}")
         if self.grid is not None:
             object.__setattr__(self, "grid", grid_size(self.grid))
         if not isinstance(self.length, str | None) and np.size(self.length) not in (1, 2):

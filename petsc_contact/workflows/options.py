@@ -11,7 +11,8 @@ defaults (:func:`run_default`).  An option whose help differs between commands (
 of pressures or of approaches) has one description per meaning, under the same name.
 
 The parsers turn an option's text into its value and raise
-:class:`argparse.ArgumentTypeError` naming what is wrong.
+:class:`argparse.ArgumentTypeError` naming what is wrong.  Those of :data:`RULED` read
+``Run``'s values too (:func:`check_rules`): their rule is written once, for both doors.
 """
 
 from __future__ import annotations
@@ -80,12 +81,16 @@ def _float_list(text: str) -> list[float]:
         ) from None
 
 
-def whole(text: str) -> int:
-    """A whole number (``ArgumentTypeError`` naming ``text`` otherwise)."""
+def whole(text: str | float) -> int:
+    """A whole number, from text or a number (``ArgumentTypeError`` naming ``text``
+    otherwise: ``2.5`` and ``"2.5"`` alike)."""
     try:
-        return int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'") from None
+        value = int(text)
+    except (TypeError, ValueError):
+        value = None
+    if value is None or (not isinstance(text, str) and value != text):
+        raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'")
+    return value
 
 
 def seed(text: str) -> int:
@@ -96,19 +101,19 @@ def seed(text: str) -> int:
     return value
 
 
-def cut_from(text: str) -> int:
-    """``--cut-from M``: a whole number, 1 or more."""
+def cut_from(text: str | float) -> int:
+    """``--cut-from M``: a whole number, 1 or more (text, or ``Run``'s value)."""
     value = whole(text)
     if value < 1:
         raise argparse.ArgumentTypeError(f"M is 1 or more, got {text}")
     return value
 
 
-def minutes(text: str) -> float:
-    """A time budget: minutes, zero or more and finite."""
+def minutes(text: str | float) -> float:
+    """A time budget: minutes, zero or more and finite (text, or ``Run``'s value)."""
     try:
         value = float(text)
-    except ValueError:
+    except (TypeError, ValueError):
         raise argparse.ArgumentTypeError(f"expected minutes, got '{text}'") from None
     if not (np.isfinite(value) and value >= 0):
         raise argparse.ArgumentTypeError(f"minutes must be zero or more and finite, got {text}")
@@ -140,14 +145,16 @@ def grid_shape(text: str) -> int | tuple[int, int]:
         ) from None
 
 
-def sweep_spec(text: str) -> list[float | str]:
-    """``N`` or ``N,MIN,MAX``, the bounds with an optional unit (``12,1kPa,10MPa``: checked
-    once the run's units are known)."""
-    parts = _items(text)
+def sweep_spec(text: str | Sequence[float | str]) -> list[float | str]:
+    """``N`` or ``N,MIN,MAX`` (text, or ``Run``'s sequence), the bounds with an optional unit
+    (``12,1kPa,10MPa``: checked once the run's units are known,
+    :func:`~petsc_contact.workflows.description.swept`)."""
+    parts = _items(text) if isinstance(text, str) else list(text)
     if len(parts) not in (1, 3):
-        raise argparse.ArgumentTypeError(f"expected N or N,PMIN,PMAX, got '{text}'")
-    count = _float_list(parts[0])[0]
-    bounds = [quantity(v) for v in parts[1:]]
+        written = ",".join(str(v) for v in parts)
+        raise argparse.ArgumentTypeError(f"expected N or N,PMIN,PMAX, got '{written}'")
+    count = _float_list(str(parts[0]))[0]
+    bounds = [quantity(v) if isinstance(v, str) else float(v) for v in parts[1:]]
     numbers = [b for b in bounds if isinstance(b, float)]
     try:
         log_range("the sweep", count, (numbers[0], numbers[1]) if len(numbers) == 2 else None)
@@ -755,8 +762,8 @@ _THEORY = (
     ),
     _option(
         "compare",
-        "with --plot: draw these periodic runs' mean gap and stiffness beside the theory, in "
-        "its units",
+        "with --plot: draw these periodic runs' mean gap, stiffness and contact area beside "
+        "the theory's, in its units",
         ("theory",),
         metavar="RUN.h5",
         nargs="+",
@@ -795,6 +802,25 @@ def check_choices(values: Callable[[str], Any]) -> None:
                 raise ValueError(
                     f"{option.flags[0]} must be one of {', '.join(option.choices)}, not '{value}'"
                 )
+
+
+RULED = ("sweep", "cut_from", "stop_after")
+"""``Run``'s fields whose option's parser is their rule (:func:`check_rules`)."""
+
+
+def check_rules(values: Callable[[str], Any]) -> None:
+    """``ValueError`` naming the option (``--cut-from: M is 1 or more, got 0``) for a field of
+    ``Run`` among :data:`RULED` (``values(name)``; ``None``: not given) that its option's
+    parser refuses: the rule the command line applies to the option's text."""
+    for name in RULED:
+        value = values(name)
+        option = next(o for o in OPTIONS if o.name == name and o.parse is not None)
+        if value is None or option.parse is None:
+            continue
+        try:
+            option.parse(value)
+        except argparse.ArgumentTypeError as bad:
+            raise ValueError(f"{option.flags[0]}: {bad}") from None
 
 
 def run_default(name: str) -> Any:

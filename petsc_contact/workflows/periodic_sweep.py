@@ -29,6 +29,7 @@ from ..geometries.periodic import PeriodicProblem, verify
 from ..geometries.step import VERIFY_FACTOR, Step, Steps
 from ..io.topography import Heights, map_and_lengths
 from ..numerics.device import Device, get_device
+from ..numerics.fft import make_fft
 from ..solver.backends import SolverBackend
 from .choice import uses_petsc
 from .description import Run
@@ -180,4 +181,4 @@ def _periodic_problem(
     local = device.asarray(grid.scatter(array))
     check_finite(grid, local)
     check_map(local if grid.comm.size == 1 else array, grid, periodic=True)
-    return PeriodicProblem(grid, device.fft(grid), local, modulus, backend)
+    return PeriodicProblem(grid, make_fft(grid, device), local, modulus, backend)

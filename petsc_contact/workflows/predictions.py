@@ -1,5 +1,5 @@
-"""What theory predicts for a given height map: Persson's ``u_bar(p)`` and ``K(p)``, the
-exponential law's ``u0`` and ``beta``, and the finite-size crossover ``p_c``.
+"""What theory predicts for a given height map: Persson's ``u_bar(p)``, ``K(p)`` and
+``A(p)/A0``, the exponential law's ``u0`` and ``beta``, and the finite-size crossover ``p_c``.
 
 This is the comparison the paper's experiment (Appendix C) makes, and an experimentalist's
 first question about a measured surface.  The map's radially averaged spectrum
@@ -51,6 +51,8 @@ class Prediction:
     nominal_pressure: np.ndarray
     mean_gap: np.ndarray
     stiffness: np.ndarray
+    area_fraction: np.ndarray  # A/A0 (theory.persson_area)
+    spectrum_rms_slope: float  # h'_rms of the spectrum (q0 to q1), which A/A0 takes
     u0: float
     beta: float
     hurst_fit: float
@@ -74,6 +76,7 @@ class Prediction:
             "fit_range": list(self.fit_range),
             "rms_height": self.rms_height,
             "rms_slope": self.rms_slope,
+            "spectrum_rms_slope": self.spectrum_rms_slope,
             "crossover_pressure": self.crossover_pressure,
             "crossover_pressure_paper": self.crossover_pressure_paper,
             "crossover_pressure_appendix": self.crossover_pressure_appendix,
@@ -203,6 +206,8 @@ def _persson(
         nominal_pressure=p[valid],
         mean_gap=gap[valid],
         stiffness=stiffness[valid],
+        area_fraction=theory.persson_area(p[valid], q, c, modulus),
+        spectrum_rms_slope=theory.spectrum_rms_slope(q, c),
         u0=u0,
         beta=beta,
         hurst_fit=hurst,
@@ -280,7 +285,7 @@ def predict_map(
     fill_undefined: str = "error",
     detrend: str = "none",
 ) -> Prediction:
-    """Persson's theory and the finite-size estimates for a whole map, in one process.
+    """Persson's theory (gap, stiffness, area) and the finite-size estimates for a whole map.
 
     The parameters after ``heights`` are keywords, named as
     :class:`~petsc_contact.workflows.description.Run`'s fields (given by position they still
@@ -302,7 +307,8 @@ def predict_map(
     modulus
         The contact modulus ``E*`` (``1e9``, or ``"1GPa"``); pressures are in its unit.
     pressures
-        Nominal pressures for ``u_bar(p)`` and ``K(p)`` (default: 25 from 1e-7 to 1e-1 E*).
+        Nominal pressures for ``u_bar(p)``, ``K(p)`` and ``A(p)/A0`` (default: 25 from 1e-7
+        to 1e-1 E*).
     channel, height_unit, override_metadata, fill_undefined, detrend
         The map's preparation, as :class:`~petsc_contact.workflows.description.Run`'s fields
         of those names.

@@ -252,6 +252,8 @@ def _plot_theory_file(f: Any, out: str) -> None:
         **{k: f.attrs[k] for k in ("hurst_fit", "rms_height", "crossover_pressure")},
         # files before 0.2.0's paper reading: twice the appendix reading (theory.READINGS)
         crossover_pressure_paper=float(f.attrs.get("crossover_pressure_paper", 2 * appendix)),
+        # files before Persson's area was computed have none
+        area_fraction=f["area_fraction"][...] if "area_fraction" in f else None,
         fit_range=tuple(json.loads(f.attrs["fit_range"])),
     )
     plot_theory(out, result, float(f.attrs.get("modulus", 1.0)), units=_units(f))

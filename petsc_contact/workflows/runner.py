@@ -71,6 +71,7 @@ from ..io.store import (
     warn_replaced,
 )
 from ..numerics.device import get_device
+from ..numerics.fft import make_fft
 from ..physics.continuation import Held
 from ..solver.backends import SolverBackend
 from .choice import scoped_options, solver_backend, uses_petsc
@@ -434,7 +435,7 @@ def _record(
 
     grid, fft, heights = scene.grid, scene.fft, scene.heights
     if not fft.device.on_host:
-        fft = get_device("cpu-array").fft(grid)
+        fft = make_fft(grid, get_device("cpu-array"))
     realised = {
         "rms_height": rms_of(grid, fft, heights),
         "rms_slope": rms_of(grid, fft, heights, slope=True),

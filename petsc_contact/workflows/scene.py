@@ -30,6 +30,7 @@ from ..conventions.validation import check_finite
 from ..conventions.warnings import DoubtfulMap, option, user_level
 from ..io.topography import Topography, as_topography, check_guessed_sides
 from ..numerics.device import get_device
+from ..numerics.fft import make_fft
 from .description import Run
 
 SLOPE_LIMIT = 1e6  # heights this many times the cell's side are no contact surface
@@ -140,7 +141,7 @@ def sized(
 
         check_memory(shape[0] * shape[1], run.geometry, default_solver, run.fields)
     grid = grid_for(shape, lengths.pair, comm)
-    fft = get_device(run.device).fft(grid)  # the device's: the surface transformed there
+    fft = make_fft(grid, get_device(run.device))  # the device's: the surface transformed there
     return grid, fft, {"length": list(grid.lengths), "length_unit": lengths.unit or ""}
 
 
@@ -221,7 +222,7 @@ def cut_face(run: Run, grid: Grid, cutoff: float) -> tuple[np.ndarray, dict[str,
         (m * grid.lengths[0], m * grid.lengths[1]),
         grid.comm,
     )
-    parent_fft = get_device(run.device).fft(parent)  # the run's, as its own surface's
+    parent_fft = make_fft(parent, get_device(run.device))  # the run's, as its own surface's
     heights = generated(run, parent, parent_fft, m, cutoff)
     stats = {
         "parent_rms_height": rms_of(parent, parent_fft, heights),

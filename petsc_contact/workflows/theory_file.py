@@ -1,9 +1,9 @@
 """The file of ``petsc-contact theory``: Persson's predictions from a map's spectrum, as HDF5.
 
 The spectrum (``wavevector``, ``psd``) is on the dimension ``wavevector``, the predictions
-(``nominal_pressure``, ``mean_gap``, ``stiffness``) on ``step`` (1, 2, ... as the printed
-table counts); the single numbers (:meth:`Prediction.scalars`) and the run record are root
-attributes, beside ``geometry = 'theory'``.
+(``nominal_pressure``, ``mean_gap``, ``stiffness``, ``area_fraction``) on ``step`` (1, 2, ...
+as the printed table counts); the single numbers (:meth:`Prediction.scalars`) and the run
+record are root attributes, beside ``geometry = 'theory'``.
 """
 
 from __future__ import annotations

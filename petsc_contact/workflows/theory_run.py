@@ -11,6 +11,8 @@ import numpy as np
 
 from ..io.results import trusted
 
+COMPARED = ("nominal_pressure", "mean_gap", "stiffness", "area_fraction")  # a run's, drawn
+
 
 def line_scan(heights: str | None, channel: Any = None) -> Any:
     """The line scan the file ``heights`` holds (read and checked), or ``None`` for a map
@@ -91,7 +93,7 @@ def compared_runs(
     paths: Sequence[str] | None, units: dict[str, str]
 ) -> list[tuple[str, dict[str, np.ndarray]]]:
     """Each run to draw beside the theory: its file's name and its trusted steps' loads,
-    mean gaps and stiffnesses, converted into the theory's ``units`` (``length``,
+    mean gaps, stiffnesses and contact areas, converted into the theory's ``units`` (``length``,
     ``pressure``; ``""`` where it has none).
 
     Raises
@@ -119,7 +121,8 @@ def _in_units(path: str, units: dict[str, str]) -> dict[str, np.ndarray]:
             )
         factors[kind] = table_of_units[theirs] / table_of_units[ours] if ours else 1.0
     scales = {"nominal_pressure": factors["pressure"], "mean_gap": factors["length"],
-              "stiffness": factors["pressure"] / factors["length"]}  # fmt: skip
+              "stiffness": factors["pressure"] / factors["length"],
+              "area_fraction": 1.0}  # fmt: skip
     return {name: values * scales[name] for name, values in table.items()}
 
 
@@ -140,13 +143,14 @@ def _geometry(path: str) -> str:
 
 
 def _run_table(path: str) -> tuple[dict[str, np.ndarray], dict[str, str]]:
-    """A simulation's loads, mean gaps and stiffnesses, to draw beside the theory, and the
-    units its file records (``length``, ``pressure``; ``""`` for none)."""
+    """A simulation's loads, mean gaps, stiffnesses and contact areas (:data:`COMPARED`), to
+    draw beside the theory, and the units its file records (``length``, ``pressure``; ``""``
+    for none)."""
     import h5py
 
     try:
         with h5py.File(path, "r") as f:
-            table = {k: f[k][...] for k in ("nominal_pressure", "mean_gap", "stiffness") if k in f}
+            table = {k: f[k][...] for k in COMPARED if k in f}
             if "converged" in f:
                 table = {k: v[trusted(f)] for k, v in table.items()}
             units = {k: str(f.attrs.get(f"{k}_unit", "")) for k in ("length", "pressure")}

@@ -28,6 +28,7 @@ import numpy as np
 from ..conventions.units import METRES, NEWTONS, PASCALS, parse_quantity, pressure_value
 from ..conventions.validation import log_range, non_negative, positive
 from ..conventions.warnings import ConvertedLoads, user_level
+from ..substrates.layer import check_layer
 from .options import check_choices, grid_size, run_default
 
 GEOMETRIES = ("periodic", "punch")
@@ -103,6 +104,12 @@ class Run:
         unit: ``"2MPa"``, ``"10nm"``, ``"1mN"``; one load (``pressures=1e-3``) or a sweep's
         count alone (``sweep=4``) needs no tuple, and text with commas is read as the
         command line reads it (``"1e-3,2MPa"``).
+    thickness, poisson, base
+        The periodic geometry's elastic body: a layer of thickness ``thickness`` (a length,
+        ``"10um"`` with a unit; ``None``, the default: the half-space), its Poisson ratio (0 to
+        0.5; ``modulus`` stays its contact modulus ``E/(1 - nu^2)``) and how it rests on its
+        rigid base (``bonded``, ``frictionless``;
+        :class:`~petsc_contact.substrates.layer.PeriodicLayer`).
     footprint, flat_stiffness, stiffness
         The punch's outline (``square``, ``disk``) and its flat-punch reference (``grid``,
         ``analytic``: the exact continuum value, ``king``: King's estimate for a square);
@@ -149,6 +156,9 @@ class Run:
     sweep: Sequence[float | str] | None = run_default("sweep")
     approaches: Sequence[float | str] | None = run_default("approaches")
     forces: Sequence[float | str] | None = run_default("forces")
+    thickness: float | str | None = run_default("thickness")
+    poisson: float = run_default("poisson")
+    base: str = run_default("base")
     footprint: str = run_default("footprint")
     flat_stiffness: str = run_default("flat_stiffness")
     stiffness: bool = run_default("stiffness")
@@ -183,6 +193,7 @@ class Run:
             raise ValueError(f"--cut-from must be a whole number >= 1, got {self.cut_from}")
         if self.stop_after is not None:
             non_negative("--stop-after", self.stop_after)
+        self._check_layer()
         check_resume_or_overwrite(self.resume, self.overwrite)
         for name, units in (("pressures", PASCALS), ("approaches", METRES), ("forces", NEWTONS)):
             values = getattr(self, name)
@@ -193,6 +204,18 @@ class Run:
             check = non_negative if name == "approaches" else positive  # an approach may be 0
             for v in values:
                 check(f"--{name}", parse_quantity(v, units, f"--{name}").value)
+
+    def _check_layer(self) -> None:
+        """``ValueError`` in one line for a layer's thickness (positive, on the periodic
+        geometry), Poisson ratio or base that cannot be."""
+        check_layer(self.poisson, self.base)
+        if self.thickness is None:
+            return
+        if self.geometry != "periodic":
+            raise ValueError(
+                "--thickness is the periodic geometry's: the punch presses a half-space"
+            )
+        positive("--thickness", parse_quantity(self.thickness, METRES, "--thickness").value)
 
     def _normalise(self) -> None:
         """Put the fields given in another natural form in the one the run uses (frozen:

@@ -31,6 +31,9 @@ from ..geometries.step import Step
 from ..physics.continuation import Held
 from ..physics.observables import MIN_CONTACT_PIXELS
 from ..solver.backends import SolverBackend
+from ..substrates.half_space import PeriodicHalfSpace
+from ..substrates.layer import PeriodicLayer
+from ..substrates.substrate import PeriodicSubstrate
 from .choice import uses_petsc
 from .description import Run, swept
 from .periodic_steps import problem_solver, sweep
@@ -99,8 +102,10 @@ class PeriodicDriver:
         self, run: Run, scene: Scene, backend: SolverBackend, problem: PeriodicProblem | None = None
     ) -> None:
         if problem is None:
-            modulus = run.modulus_value
-            problem = PeriodicProblem(scene.grid, scene.fft, scene.heights, modulus, backend)
+            problem = PeriodicProblem(
+                scene.grid, scene.fft, scene.heights, run.modulus_value, backend,
+                substrate=periodic_substrate(run, scene),
+            )  # fmt: skip
             problem.filled = scene.filled
         p_full = problem.full_contact_pressure()
         self.loads, self.resolved = _pressures(run, problem)
@@ -126,6 +131,16 @@ class PeriodicDriver:
     def close(self) -> None:
         """Release the solver."""
         self.solver.close()
+
+
+def periodic_substrate(run: Run, scene: Scene) -> PeriodicSubstrate:
+    """The elastic body of a periodic ``run``: the half-space, or the layer of its
+    ``thickness`` (in the scene's length unit), ``poisson`` and ``base``."""
+    if run.thickness is None:
+        return PeriodicHalfSpace(run.modulus_value)
+    unit = scene.resolved["length_unit"] or None
+    thickness = length_value(run.thickness, unit, "--thickness")
+    return PeriodicLayer(run.modulus_value, thickness, run.poisson, run.base)
 
 
 HALF_AREA = 0.5  # a measured map's default sweep ends where Persson's law puts half in contact

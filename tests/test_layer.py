@@ -191,3 +191,33 @@ def test_the_exact_stiffness_of_a_layer_matches_the_sweep(petsc):
     u = np.array([s.scalars["mean_gap"] for s in result.steps])
     exact = np.array([s.scalars["stiffness"] for s in result.steps])
     assert np.allclose(sweep_stiffness(p0, u)[2:-2], exact[2:-2], rtol=0.03)
+
+
+def test_the_command_line_runs_a_layer_and_records_it(tmp_path):
+    """``--thickness 2um`` on a cell of ``--length 128um`` is the layer of ``T = 2`` in the
+    run's length unit: the same mean gap as ``Run(thickness=2.0)``, bit for bit, and the file
+    records the layer's parameters."""
+    import json
+
+    import h5py
+
+    from tests.conftest import cli
+
+    out = tmp_path / "layer.h5"
+    scene = ["--grid", "32", "--hurst", "0.7", "--rms-slope", "0.1", "--seed", "2"]
+    layer = ["--thickness", "2um", "--poisson", "0.4", "--base", "frictionless"]
+    done = cli("periodic", *scene, "--length", "128um", "--pressures", "1e-3", *layer,
+               "--output", str(out), "--quiet")  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    with h5py.File(out) as f:
+        recorded = json.loads(f.attrs["parameters"])
+        gap = f["mean_gap"][0]
+    assert (recorded["thickness"], recorded["poisson"], recorded["base"]) == (
+        "2um",
+        0.4,
+        "frictionless",
+    )
+    bare = Run(grid=32, hurst=0.7, rms_slope=0.1, seed=2, length=128.0, pressures=1e-3,
+               thickness=2.0, poisson=0.4, base="frictionless")  # fmt: skip
+    (step,) = run_contact(bare, progress=False).steps
+    assert step.scalars["mean_gap"] == gap

@@ -117,7 +117,10 @@ class PeriodicDriver:
             problem.check_pressure(p0)  # before the output is touched
         self.run, self.problem = run, problem
         self.solver = problem_solver(problem)
-        self.intro = f", full contact at p0 = {format_quantity(p_full, run.pressure_unit)}"
+        self.intro = (
+            _layer_words(run)
+            + f", full contact at p0 = {format_quantity(p_full, run.pressure_unit)}"
+        )
         self.backend = type(problem.stiffness.fft).__name__
 
     def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
@@ -141,6 +144,14 @@ def periodic_substrate(run: Run, scene: Scene) -> PeriodicSubstrate:
     unit = scene.resolved["length_unit"] or None
     thickness = length_value(run.thickness, unit, "--thickness")
     return PeriodicLayer(run.modulus_value, thickness, run.poisson, run.base)
+
+
+def _layer_words(run: Run) -> str:
+    """The intro's words on a periodic ``run``'s layer (none on the half-space)."""
+    if run.thickness is None:
+        return ""
+    thickness = run.thickness if isinstance(run.thickness, str) else f"{run.thickness:g}"
+    return f", a {run.base} layer {thickness} thick (nu = {run.poisson:g}) on a rigid base"
 
 
 HALF_AREA = 0.5  # a measured map's default sweep ends where Persson's law puts half in contact

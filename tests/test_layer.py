@@ -196,11 +196,12 @@ def test_the_exact_stiffness_of_a_layer_matches_the_sweep(petsc):
 def test_the_command_line_runs_a_layer_and_records_it(tmp_path):
     """``--thickness 2um`` on a cell of ``--length 128um`` is the layer of ``T = 2`` in the
     run's length unit: the same mean gap as ``Run(thickness=2.0)``, bit for bit, and the file
-    records the layer's parameters."""
+    records the layer's parameters; ``theory --compare`` refuses it."""
     import json
 
     import h5py
 
+    from petsc_contact.workflows.theory_run import check_compared
     from tests.conftest import cli
 
     out = tmp_path / "layer.h5"
@@ -221,3 +222,5 @@ def test_the_command_line_runs_a_layer_and_records_it(tmp_path):
                thickness=2.0, poisson=0.4, base="frictionless")  # fmt: skip
     (step,) = run_contact(bare, progress=False).steps
     assert step.scalars["mean_gap"] == gap
+    with pytest.raises(ValueError, match="a run on a layer .* the theory is the half-space's"):
+        check_compared([str(out)], str(tmp_path / "theory.png"))  # Persson's is no layer's

@@ -785,7 +785,8 @@ _THEORY = (
         nargs="+",
         section="theory",
         field=False,
-        more="Without `--plot`, given another geometry's file, or a run with a unit (lengths, "
+        more="Without `--plot`, given another geometry's file, a run on a layer "
+        "(`--thickness`: the theory is the half-space's), or a run with a unit (lengths, "
         "pressures) where the theory has none or the other way round, it is refused (exit 2, "
         "before the theory is computed)",
     ),

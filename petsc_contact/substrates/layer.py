@@ -12,8 +12,8 @@ from ..conventions.validation import positive
 from ..physics.greens import BASES, layer_factor, mean_mode_compliance, periodic_stiffness
 
 DEFAULT_POISSON = 0.3
-"""The Poisson ratio of a layer none is given for: that of most metals, glasses and ceramics
-(0.2 to 0.35), the coatings a layer usually is; only the bonded base depends on it."""
+"""The Poisson ratio of a layer none is given for (``--poisson``'s default: docs/cli.md says
+why)."""
 
 
 def check_layer(poisson: float, base: str) -> None:

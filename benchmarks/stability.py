@@ -2,7 +2,7 @@
 
 usage: .venv/bin/python benchmarks/stability.py [--grid 128] [--solvers cg pk tron ...]
        [--time-limit 20] [--stall-iterations 1000] [--markdown docs/stability.md]
-       [--grids 32 1024] [--no-scenes] [--append]
+       [--grids 32 1024] [--no-scenes] [--append] [--match TEXT]
 For each scene and solver: converged or not (the package's own verification), TAO's reason,
 iterations, wall time and the pressure error reached against a reference solved at 1e-12.
 """
@@ -20,6 +20,8 @@ from petsc_contact.conventions.grid import Grid
 from petsc_contact.geometries.periodic import PeriodicProblem
 from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.surface import self_affine
+from petsc_contact.substrates.layer import PeriodicLayer
+from petsc_contact.substrates.substrate import PeriodicSubstrate
 from petsc_contact.workflows.compare import DEFAULT_SOLVERS, compare
 
 
@@ -72,6 +74,24 @@ def scenes(n: int) -> list[tuple[str, np.ndarray, float, float, float]]:
     return out
 
 
+def layer_scenes(n: int) -> list[tuple[str, np.ndarray, float, float, float, PeriodicSubstrate]]:
+    """(name, heights, length, modulus, p0/E*, substrate) of the thin layers: a quarter pixel
+    thick, far thinner than the rough surface's shortest wavelength (4 pixels), so that the
+    stiffness no longer grows as ``|q|`` (bonded: ``M/T`` for every ``q``; incompressible:
+    ``3 E*/(4 q^2 T^3)``, stiffest at the longest wavelength)."""
+    h, thickness = rough(n), 1.0 / (4 * n)
+    bodies = {
+        "bonded, nu=0.3": PeriodicLayer(1.0, thickness, 0.3, "bonded"),
+        "frictionless": PeriodicLayer(1.0, thickness, 0.3, "frictionless"),
+        "bonded, nu=0.5": PeriodicLayer(1.0, thickness, 0.5, "bonded"),
+    }
+    return [
+        (f"layer T=a/4, {name}, p0={p:g}", h, 1.0, 1.0, p, body)
+        for name, body in bodies.items()
+        for p in (1e-3, 1e-2)
+    ]
+
+
 def parse_args() -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grid", type=int, default=128)
@@ -92,6 +112,7 @@ def parse_args() -> argparse.Namespace:
         "best for this many iterations (0: never)",
     )
     ap.add_argument("--markdown", default=None, help="also write the table here")
+    ap.add_argument("--match", default="", help="run only the scenes whose name has this text")
     ap.add_argument(
         "--append",
         action="store_true",
@@ -107,10 +128,11 @@ def parse_args() -> argparse.Namespace:
 
 
 def row(name: str, case: tuple, args: argparse.Namespace) -> str:
-    """One scene's table row: every solver's verdict, iterations, time and error."""
-    h, length, modulus, p0 = case
+    """One scene's table row: every solver's verdict, iterations, time and error (on the
+    half-space, or on the substrate the case ends with)."""
+    h, length, modulus, p0, *body = case
     grid = Grid(h.shape[0], length)
-    problem = PeriodicProblem(grid, make_fft(grid), h, modulus)
+    problem = PeriodicProblem(grid, make_fft(grid), h, modulus, substrate=(body or [None])[0])
     try:
         _, trajs = compare(
             problem, p0, args.solvers, args.time_limit, stall_iterations=args.stall_iterations
@@ -150,8 +172,9 @@ def write_markdown(lines: list[str], args: argparse.Namespace) -> None:
 def main() -> None:
     args = parse_args()
     _petsc.init([])
-    cases = scenes(args.grid) if args.scenes else []
+    cases: list[tuple] = [*scenes(args.grid), *layer_scenes(args.grid)] if args.scenes else []
     cases += [(f"grid {n}, p0=1e-3", rough(n), 1.0, 1.0, 1e-3) for n in args.grids]
+    cases = [case for case in cases if args.match in case[0]]
     lines = [
         "| scene | " + " | ".join(args.solvers) + " |",
         "| --- |" + " --- |" * len(args.solvers),

@@ -21,7 +21,7 @@ UNLISTED = {"__init__", "__main__"}  # modules of a folder the layout need not n
 OWN = {  # options of a command with a name the table describes for other commands
     "plot": ("output", "sweep"),
     "study": ("quiet",),
-    "experiment": ("modulus", "output", "plot"),
+    "experiment": ("modulus", "output", "plot", "thickness"),
 }
 
 

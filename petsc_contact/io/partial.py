@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..conventions.warnings import ResumeWarning, user_level
+from ..substrates.layer import DEFAULT_POISSON
 from .atomic import _reason, atomic_h5
 from .names import partial_path
 from .schema import COORDINATES, write_attributes
@@ -39,12 +40,15 @@ a run paused on a GPU goes on on the CPU; the ``resumed`` list records each part
 
 
 RECORDED_SINCE = {
+    "base": "bonded",
     "cut_from": 1,
     "flat_stiffness": "grid",
     "footprint": "square",
     "options_prefix": "",
     "override_metadata": False,
+    "poisson": DEFAULT_POISSON,
     "skip_memory_check": False,
+    "thickness": None,
 }
 """Parameters that files of earlier versions do not record, each with the value every run of
 those versions had (each option came with that behaviour as its default): a file without one

@@ -1,9 +1,11 @@
-"""Surface Green's functions of the elastic half-space (pure numpy).
+"""Surface Green's functions of the elastic half-space and of a layer on a rigid base (pure
+numpy).
 
 Periodic (paper Appendix A): in Fourier space the pressure that holds a surface displacement
 ``u(q)`` is ``p(q) = E* |q| / 2 u(q)`` for ``q != 0``; the ``q = 0`` mode carries the mean
 load and no displacement, so the stiffness kernel is 0 there.  Evaluated on the DFT
-wavevectors this is exact for a single sine wave.
+wavevectors this is exact for a single sine wave.  A layer of thickness ``T`` multiplies it by
+:func:`layer_factor` of ``|q| T`` (docs/formulation.md, "A layer on a rigid base").
 """
 
 from __future__ import annotations
@@ -20,6 +22,49 @@ def periodic_stiffness(q: Any, modulus: float) -> Any:
     """Stiffness kernel ``E* |q| / 2`` (pressure per displacement), 0 at ``q = 0``; ``q`` a
     float or a float array of any array module (the kernel is made where it is)."""
     return 0.5 * modulus * q
+
+
+BASES = ("bonded", "frictionless")
+"""How a layer rests on its rigid base: bonded (``u = 0`` there) or sliding freely on it
+(``u_z = 0``, no shear)."""
+
+SERIES_BELOW = 0.5  # 2 |q| T below which sinh(2 |q| T) - 2 |q| T is summed as its series
+
+
+def _sinh_excess(s: Any, t: Any) -> Any:
+    """``1 - t^2 - 4 s t = 2 t (sinh 2s - 2s)`` with ``t = exp(-2s)``, free of cancellation:
+    below :data:`SERIES_BELOW` from the series of ``sinh x - x`` (to ``x^13``, whose next
+    term is ``1e-15`` of the sum there), above it as written (at most 40 times ``eps``)."""
+    x2 = (2 * s) ** 2
+    tail = 1 + x2 / 20 * (1 + x2 / 42 * (1 + x2 / 72 * (1 + x2 / 110 * (1 + x2 / 156))))
+    series = 2 * t * (2 * s) ** 3 / 6 * tail
+    return np.where(2 * s < SERIES_BELOW, series, 1 - t * t - 4 * s * t)
+
+
+def layer_factor(s: Any, poisson: float, base: str) -> Any:
+    """``f(s)``, ``s = |q| T > 0``, of a layer's surface stiffness ``K = E* |q| / 2 f``: the
+    frictionless top of an isotropic layer of thickness ``T`` and Poisson ratio ``nu`` on a
+    rigid base (:data:`BASES`), in plane strain along ``q`` (docs/formulation.md).
+
+    With ``t = exp(-2s)`` and ``kappa = 3 - 4 nu``:
+
+    - bonded: ``f = [kappa (1 + t^2) + (1 + kappa^2 + 4 s^2) t] / [(kappa - 1)(1 - t^2)
+      + 1 - t^2 - 4 s t]``, that is ``(2 kappa cosh 2s + 1 + kappa^2 + 4 s^2) /
+      (2 kappa sinh 2s - 4 s)``;
+    - frictionless: ``f = (1 - t^2 + 4 s t) / (1 - t)^2 = (sinh 2s + 2s) / (cosh 2s - 1)``,
+      which does not depend on ``nu``.
+
+    Each term is non-negative for ``0 <= nu <= 1/2``, so no digits cancel at any ``s``
+    (:func:`_sinh_excess`); ``f -> 1`` as ``s -> infinity`` and the thin limits are
+    ``K -> M/T`` (bonded, ``M`` the oedometric modulus), ``3 E*/(4 q^2 T^3)`` (bonded,
+    ``nu = 1/2``) and ``E*/T`` (frictionless).  ``s`` of any array module (made where it is).
+    """
+    t = np.exp(-2 * s)
+    if base == "frictionless":
+        return (-np.expm1(-4 * s) + 4 * s * t) / np.expm1(-2 * s) ** 2
+    kappa = 3 - 4 * poisson
+    top = kappa * (1 + t * t) + (1 + kappa * kappa + 4 * s * s) * t
+    return top / ((kappa - 1) * -np.expm1(-4 * s) + _sinh_excess(s, t))
 
 
 def periodic_compliance(q: np.ndarray | float, modulus: float, q_zero: float) -> np.ndarray:

@@ -28,6 +28,7 @@ import numpy as np
 from ..conventions.units import METRES, NEWTONS, PASCALS, parse_quantity, pressure_value
 from ..conventions.validation import log_range, non_negative, positive
 from ..conventions.warnings import ConvertedLoads, user_level
+from ..substrates.layer import check_layer
 from .options import check_choices, check_rules, grid_size, run_default
 
 GEOMETRIES = ("periodic", "punch")
@@ -108,6 +109,12 @@ class Run:
         count alone (``sweep=4``) needs no tuple, and text with commas is read as the
         command line reads it (``"1e-3,2MPa"``); a mean gap is in the unit of ``length``
         (``"10nm"`` where it has one).
+    thickness, poisson, base
+        The periodic geometry's elastic body: a layer of thickness ``thickness`` (a length,
+        ``"10um"`` with a unit; ``None``, the default: the half-space), its Poisson ratio (0 to
+        0.5; ``modulus`` stays its contact modulus ``E/(1 - nu^2)``) and how it rests on its
+        rigid base (``bonded``, ``frictionless``;
+        :class:`~petsc_contact.substrates.layer.PeriodicLayer`).
     footprint, flat_stiffness, stiffness
         The punch's outline (``square``, ``disk``) and its flat-punch reference (``grid``,
         ``analytic``: the exact continuum value, ``king``: King's estimate for a square);
@@ -155,6 +162,9 @@ class Run:
     approaches: Sequence[float | str] | None = run_default("approaches")
     forces: Sequence[float | str] | None = run_default("forces")
     mean_gaps: Sequence[float | str] | None = run_default("mean_gaps")
+    thickness: float | str | None = run_default("thickness")
+    poisson: float = run_default("poisson")
+    base: str = run_default("base")
     footprint: str = run_default("footprint")
     flat_stiffness: str = run_default("flat_stiffness")
     stiffness: bool = run_default("stiffness")
@@ -186,6 +196,7 @@ class Run:
         positive("--modulus", self.modulus_value)
         check_choices(lambda name: getattr(self, name))  # --device, --footprint, ...
         check_rules(lambda name: getattr(self, name))  # --sweep, --cut-from, --stop-after
+        self._check_layer()
         check_resume_or_overwrite(self.resume, self.overwrite)
         self._check_mean_gaps()
         loads = (("pressures", PASCALS), ("approaches", METRES), ("forces", NEWTONS))
@@ -209,6 +220,18 @@ class Run:
         others = [f"--{n}" for n in ("pressures", "sweep") if getattr(self, n) is not None]
         if others:
             raise ValueError(f"give one kind of load: --mean-gaps or {' or '.join(others)}")
+
+    def _check_layer(self) -> None:
+        """``ValueError`` in one line for a layer's thickness (positive, on the periodic
+        geometry), Poisson ratio or base that cannot be."""
+        check_layer(self.poisson, self.base)
+        if self.thickness is None:
+            return
+        if self.geometry != "periodic":
+            raise ValueError(
+                "--thickness is the periodic geometry's: the punch presses a half-space"
+            )
+        positive("--thickness", parse_quantity(self.thickness, METRES, "--thickness").value)
 
     def _normalise(self) -> None:
         """Put the fields given in another natural form in the one the run uses (frozen:

@@ -34,6 +34,9 @@ from ..geometries.step import Step
 from ..physics.continuation import Held
 from ..physics.observables import MIN_CONTACT_PIXELS
 from ..solver.backends import SolverBackend
+from ..substrates.half_space import PeriodicHalfSpace
+from ..substrates.layer import PeriodicLayer
+from ..substrates.substrate import PeriodicSubstrate
 from .choice import uses_petsc
 from .description import Run, swept
 from .periodic_steps import mean_gap_sweep, problem_solver, sweep
@@ -103,8 +106,10 @@ class PeriodicDriver:
         self, run: Run, scene: Scene, backend: SolverBackend, problem: PeriodicProblem | None = None
     ) -> None:
         if problem is None:
-            modulus = run.modulus_value
-            problem = PeriodicProblem(scene.grid, scene.fft, scene.heights, modulus, backend)
+            problem = PeriodicProblem(
+                scene.grid, scene.fft, scene.heights, run.modulus_value, backend,
+                substrate=periodic_substrate(run, scene),
+            )  # fmt: skip
             problem.filled = scene.filled
         p_full = problem.full_contact_pressure()
         if run.approaches is not None or run.forces is not None:
@@ -122,7 +127,10 @@ class PeriodicDriver:
             check(load)  # before the output is touched
         self.run, self.problem = run, problem
         self.solver = problem_solver(problem)
-        self.intro = f", full contact at p0 = {format_quantity(p_full, run.pressure_unit)}"
+        self.intro = (
+            _layer_words(run)
+            + f", full contact at p0 = {format_quantity(p_full, run.pressure_unit)}"
+        )
         self.backend = type(problem.stiffness.fft).__name__
 
     def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
@@ -140,6 +148,24 @@ class PeriodicDriver:
     def close(self) -> None:
         """Release the solver."""
         self.solver.close()
+
+
+def periodic_substrate(run: Run, scene: Scene) -> PeriodicSubstrate:
+    """The elastic body of a periodic ``run``: the half-space, or the layer of its
+    ``thickness`` (in the scene's length unit), ``poisson`` and ``base``."""
+    if run.thickness is None:
+        return PeriodicHalfSpace(run.modulus_value)
+    unit = scene.resolved["length_unit"] or None
+    thickness = length_value(run.thickness, unit, "--thickness")
+    return PeriodicLayer(run.modulus_value, thickness, run.poisson, run.base)
+
+
+def _layer_words(run: Run) -> str:
+    """The intro's words on a periodic ``run``'s layer (none on the half-space)."""
+    if run.thickness is None:
+        return ""
+    thickness = run.thickness if isinstance(run.thickness, str) else f"{run.thickness:g}"
+    return f", a {run.base} layer {thickness} thick (nu = {run.poisson:g}) on a rigid base"
 
 
 HALF_AREA = 0.5  # a measured map's default sweep ends where Persson's law puts half in contact

@@ -30,6 +30,8 @@ import numpy as np
 
 from ..conventions.validation import log_range
 from ..numerics.device import DEVICES
+from ..physics.greens import BASES
+from ..substrates.layer import DEFAULT_POISSON
 
 SEED_LIMIT = 2**63  # seeds are stored as 64-bit integers
 
@@ -515,6 +517,42 @@ _PUNCH_LOADS = (
     ),
 )
 
+LAYERED = ("periodic", "ensemble")  # the periodic runs that pose their own substrate
+
+_LAYER = (
+    _option(
+        "thickness",
+        "press an elastic layer of thickness T on a rigid base instead of the half-space, "
+        "with an optional unit (10um)",
+        LAYERED,
+        metavar="T",
+        parse=quantity,
+        unit="length",
+        shown_default="none: the half-space",
+        more='Its stiffness is `E* q/2 f(qT, nu)` ([formulation.md](formulation.md), "A layer '
+        'on a rigid base"); the file records `thickness`, `poisson` and `base`',
+    ),
+    _option(
+        "poisson",
+        "the layer's Poisson ratio nu (0 to 0.5); its contact modulus E/(1 - nu^2) is --modulus",
+        LAYERED,
+        default=DEFAULT_POISSON,
+        metavar="NU",
+        parse=float,
+        more="Only a bonded layer depends on it (the frictionless base's stiffness in units of "
+        "`E*` does not); the default is that of most metals, glasses and ceramics (0.2 to "
+        "0.35), the coatings a layer usually is: give 0.5 for rubber",
+    ),
+    _option(
+        "base",
+        "how the layer rests on its rigid base: bonded (no displacement there) or "
+        "frictionless (no normal displacement, no shear)",
+        LAYERED,
+        default="bonded",
+        choices=BASES,
+    ),
+)
+
 _UNCONVERGED_STIFFNESS = (
     "A solve that stops short of its tolerance (`-stiffness_ksp_max_it`, "
     "`-stiffness_ksp_rtol`) leaves that stiffness NaN, with a one-line warning"
@@ -769,7 +807,8 @@ _THEORY = (
         nargs="+",
         section="theory",
         field=False,
-        more="Without `--plot`, given another geometry's file, or a run with a unit (lengths, "
+        more="Without `--plot`, given another geometry's file, a run on a layer "
+        "(`--thickness`: the theory is the half-space's), or a run with a unit (lengths, "
         "pressures) where the theory has none or the other way round, it is refused (exit 2, "
         "before the theory is computed)",
     ),
@@ -781,6 +820,7 @@ OPTIONS: tuple[Option, ...] = (
     *_PERIODIC_LOADS,
     *_PUNCH_LOADS,
     *_COMPARE,
+    *_LAYER,
     *_RUN,
     *_THEORY,
 )

@@ -71,10 +71,14 @@ def ensemble_loads(base: Run, first_seed: int) -> list[float]:
         unit = base.pressure_unit
         return swept(base.sweep, 0.0, 0.0, lambda v: pressure_value(v, unit, "--sweep"))
     from ..geometries.periodic import PeriodicProblem
+    from .drivers import periodic_substrate
     from .scene import prepare_scene
 
     scene = prepare_scene(base.with_(seed=first_seed))
-    problem = PeriodicProblem(scene.grid, scene.fft, scene.heights, base.modulus_value)
+    body = periodic_substrate(base, scene)
+    problem = PeriodicProblem(
+        scene.grid, scene.fft, scene.heights, base.modulus_value, substrate=body
+    )
     p_full = problem.full_contact_pressure()
     return swept(base.sweep, 1e-4 * p_full, 0.9 * p_full)
 

@@ -3,6 +3,7 @@ record, and the periodic runs drawn beside the prediction (``--compare``)."""
 
 from __future__ import annotations
 
+import json
 import os
 from collections.abc import Sequence
 from typing import Any
@@ -77,7 +78,8 @@ def profile_record(run: Any, command_line: str, profile: Any) -> dict[str, Any]:
 def check_compared(paths: Sequence[str] | None, plot: str | None) -> None:
     """``ValueError`` unless the runs to compare (``--compare``) come with a plot to draw
     them in (``--plot``) and are periodic runs' files (a punch's mean gap is over its
-    footprint, not a cell's)."""
+    footprint, not a cell's) on the half-space, whose contact the theory predicts (not on a
+    layer)."""
     if not paths:
         return
     if not plot:
@@ -87,6 +89,11 @@ def check_compared(paths: Sequence[str] | None, plot: str | None) -> None:
         if geometry != "periodic":
             what = f"geometry '{geometry}'" if geometry else "no geometry: not a run's file"
             raise ValueError(f"--compare takes periodic runs; '{path}' is not one ({what})")
+        if _parameters(path).get("thickness") is not None:
+            raise ValueError(
+                f"--compare: '{path}' is a run on a layer (--thickness); the theory is the "
+                "half-space's"
+            )
 
 
 def compared_runs(
@@ -129,6 +136,14 @@ def _in_units(path: str, units: dict[str, str]) -> dict[str, np.ndarray]:
 def _unit_words(kind: str, unit: str) -> str:
     """``pressures in GPa``, or ``unit-free pressures``."""
     return f"{kind}s in {unit}" if unit else f"unit-free {kind}s"
+
+
+def _parameters(path: str) -> dict[str, Any]:
+    """The ``parameters`` record of a run's file (read after :func:`_geometry`)."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        return dict(json.loads(f.attrs.get("parameters", "{}")))
 
 
 def _geometry(path: str) -> str:

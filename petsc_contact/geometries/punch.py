@@ -241,7 +241,8 @@ class PunchProblem:
         self._recess_flat = device.asarray(self.recess.reshape(-1))
         self._footprint_flat = device.asarray(self.footprint.reshape(-1).astype(float))
         self._footprint = device.asarray(self.footprint)
-        self._upper = device.asarray(interaction.pressure_upper(self.footprint, np).reshape(-1))
+        upper = interaction.pressure_upper(self.footprint, np) / self.pressure_scale
+        self._upper = device.asarray(upper.reshape(-1))
         area = self.footprint_pixels * grid.pixel_area
         self.k_flat_analytic = flat_punch_stiffness(self.modulus, area, beta)  # the footprint's
         self.flat_residual = 0.0  # the recomputed residual of the flat punch's held-set solve
@@ -365,12 +366,12 @@ class PunchProblem:
         gap = device.to_host(self.gap(on_device))
         pressure = device.to_host(on_device)
         obs = punch_observables(self, pressure, gap)
-        contact = obs.pop("contact")
+        contact, plastic = obs.pop("contact"), obs.pop("plastic")
         verdict = verify_punch(info, obs)
         scalars = {
             **obs,
             "force_balance": np.nan,  # under load control: PunchSolver.at_force
-            **self.held_set_stiffness(contact, verdict == "ok"),
+            **self.held_set_stiffness(contact & ~plastic, verdict == "ok"),
             **info.scalars(verdict),
         }
         if stiffness:
@@ -379,10 +380,12 @@ class PunchProblem:
         self.accuracy().assess(scalars)
         if not fields:
             return Step(scalars)
-        return Step(scalars, *contact_fields(gap, pressure, contact), contact=contact)
+        extra = self.interaction.fields(gap, plastic)
+        return Step(scalars, *contact_fields(gap, pressure, contact), contact=contact, extra=extra)
 
     def held_set_stiffness(self, contact: np.ndarray, converged: bool) -> dict[str, Any]:
-        """The exact total stiffness ``dF/dδ`` with ``contact`` (this rank's host mask) held
+        """The exact total stiffness ``dF/dδ`` with ``contact`` (this rank's host mask of the
+        contact pixels below the interaction's cap: a plastic pixel's pressure stays) held
         fixed and the interfacial stiffness per area from it (paper Eq. 2), NaN unless
         ``converged``; the held-set solve's iterations, time, recomputed residual (the
         larger of its and the flat punch's) and the tolerance asked."""
@@ -413,18 +416,22 @@ class PunchProblem:
 def punch_observables(
     problem: PunchProblem, pressure: np.ndarray, gap: np.ndarray
 ) -> dict[str, Any]:
-    """Scalars of one punch step (same on every rank); see the module docstring."""
-    grid, fp = problem.grid, problem.footprint
+    """Scalars of one punch step (same on every rank; see the module docstring), and this
+    rank's masks of the pixels in contact and at the interaction's cap (``plastic``, whose
+    negative gap is the plastic displacement: ``min_gap`` is over the others)."""
+    grid, fp, law = problem.grid, problem.footprint, problem.interaction
     k = problem.pixel_stiffness
     contact = fp & (pressure > k * gap)
+    plastic = fp & law.plastic(gap, pressure, k)
     sizes = patch_sizes(grid, contact, periodic=False)
-    r = np.where(fp, np.minimum(gap, pressure / k), 0.0)
-    p_sum, n_contact, pg, r2, g_sum = grid.sum(
+    r = np.where(fp, law.residual(gap, pressure, k), 0.0)
+    p_sum, n_contact, pg, r2, g_sum, n_plastic = grid.sum(
         pressure.sum(),
         np.count_nonzero(contact),
         np.vdot(pressure, np.maximum(gap, 0.0)),
         np.vdot(r, r),
         np.where(fp, gap, 0.0).sum(),
+        np.count_nonzero(plastic),
     )
     ell, fp_pixels = problem.scale_length, problem.footprint_pixels
     area = grid.area
@@ -438,11 +445,13 @@ def punch_observables(
         "contact_resolved": bool(contact_resolved(n_contact / fp_pixels, fp_pixels)),
         "contact_patches": sizes.size,
         "max_pressure": grid.max(float(pressure.max(initial=0.0))),
-        "min_gap": grid.min(float(np.where(fp, gap, np.inf).min(initial=np.inf))),
+        "min_gap": grid.min(float(np.where(fp & ~plastic, gap, np.inf).min(initial=np.inf))),
         "complementarity": pg / (p_sum * ell) if p_sum > 0 else 0.0,
         "kkt_residual": float(np.sqrt(r2 / problem.footprint_pixels)) / ell,
         **distributions(grid, gap, pressure, contact, sizes, fp, problem.filled),
+        **law.scalars(int(n_plastic), fp_pixels),
         "contact": contact,
+        "plastic": plastic,
     }
 
 

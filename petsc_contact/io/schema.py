@@ -230,6 +230,11 @@ PUNCH_COLUMNS = _entries(
         "beyond 1e-4 not converged)",
     ),
     newton_iterations=("count", "Newton steps on the approach (load control)"),
+    plastic_area_fraction=(
+        "1",
+        "fraction of the footprint's pixels at the hardness cap, p - k g > H (--hardness; "
+        "in area_fraction too)",
+    ),
     stiffness=(
         "pressure/length",
         "the interfacial stiffness per area (--stiffness; NaN as interfacial_stiffness)",
@@ -250,6 +255,11 @@ FIELDS = _entries(
     pressure=("pressure", "pressure of every step, exactly zero out of contact (steps x n x n)"),
     contact=("bool", "contact mask of every step, p > k g (steps x n x n)"),
     filled=("bool", "the pixels whose heights were undefined and filled (n x n)"),
+    plastic_displacement=(
+        "length",
+        "depth the punch sinks into the pixels at the hardness cap (--hardness), 0 elsewhere "
+        "(steps x n x n)",
+    ),
 )
 ENSEMBLE = _entries(
     seeds=("count", "the seeds, one row of every table each"),

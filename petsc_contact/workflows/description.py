@@ -28,6 +28,9 @@ import numpy as np
 from ..conventions.units import METRES, NEWTONS, PASCALS, parse_quantity, pressure_value
 from ..conventions.validation import log_range, non_negative, positive
 from ..conventions.warnings import ConvertedLoads, user_level
+from ..interactions.hard_wall import HARD_WALL
+from ..interactions.hardness import HardnessCap
+from ..interactions.interaction import Interaction
 from .options import check_choices, grid_size, run_default
 
 GEOMETRIES = ("periodic", "punch")
@@ -103,10 +106,12 @@ class Run:
         unit: ``"2MPa"``, ``"10nm"``, ``"1mN"``; one load (``pressures=1e-3``) or a sweep's
         count alone (``sweep=4``) needs no tuple, and text with commas is read as the
         command line reads it (``"1e-3,2MPa"``).
-    footprint, flat_stiffness, stiffness
+    footprint, flat_stiffness, hardness, stiffness
         The punch's outline (``square``, ``disk``) and its flat-punch reference (``grid``,
-        ``analytic``: the exact continuum value, ``king``: King's estimate for a square);
-        whether every step adds the exact stiffness.
+        ``analytic``: the exact continuum value, ``king``: King's estimate for a square); the
+        hardness its pressure is capped at (``None``: the hard wall;
+        :class:`~petsc_contact.interactions.hardness.HardnessCap`); whether every step adds
+        the exact stiffness.
     output, fields, scalars_only, resume, overwrite, stop_after
         The HDF5 file (none: results only in memory), whether the fields of every step are
         stored, whether the height map is left out, whether an interrupted run is continued
@@ -151,6 +156,7 @@ class Run:
     forces: Sequence[float | str] | None = run_default("forces")
     footprint: str = run_default("footprint")
     flat_stiffness: str = run_default("flat_stiffness")
+    hardness: float | str | None = run_default("hardness")
     stiffness: bool = run_default("stiffness")
     output: str | None = run_default("output")
     fields: bool = run_default("fields")
@@ -178,6 +184,7 @@ class Run:
         if self.geometry not in GEOMETRIES:
             raise ValueError(f"geometry must be one of {', '.join(GEOMETRIES)}: {self.geometry}")
         positive("--modulus", self.modulus_value)
+        _ = self.interaction  # --hardness checked
         check_choices(lambda name: getattr(self, name))  # --device, --footprint, ...
         if self.cut_from < 1:
             raise ValueError(f"--cut-from must be a whole number >= 1, got {self.cut_from}")
@@ -224,6 +231,16 @@ class Run:
     def pressure_unit(self) -> str | None:
         """The run's pressure unit: the modulus's (``--modulus 1GPa``), or none."""
         return parse_quantity(self.modulus, PASCALS, "--modulus").unit
+
+    @property
+    def interaction(self) -> Interaction:
+        """The law at the surface: the hard wall, or the cap of ``hardness`` (in the run's
+        pressure unit; the punch only); ``ValueError`` in one line for another."""
+        if self.hardness is None:
+            return HARD_WALL
+        if self.geometry != "punch":
+            raise ValueError("--hardness caps the punch's pressure; a periodic run takes none")
+        return HardnessCap(pressure_value(self.hardness, self.pressure_unit, "--hardness"))
 
     @property
     def measured(self) -> bool:

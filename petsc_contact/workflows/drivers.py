@@ -179,7 +179,7 @@ class PunchDriver:
             mask, beta = footprint_mask(scene.grid, run.footprint)
             problem = PunchProblem(
                 scene.grid, scene.heights, run.modulus_value, mask, run.flat_stiffness, beta,
-                device=scene.fft.device, backend=backend,
+                device=scene.fft.device, backend=backend, interaction=run.interaction,
             )  # fmt: skip
             problem.filled = scene.filled
         given = [run.forces, run.approaches, run.pressures, run.sweep]
@@ -187,6 +187,10 @@ class PunchDriver:
             raise ValueError("give one of --approaches, --forces, --pressures and --sweep")
         self.by_force = run.forces is not None or run.pressures is not None
         self.loads, self.resolved = _punch_loads(run, problem, scene.resolved["length_unit"])
+        if self.by_force:  # a hardness cap at or below a nominal pressure over the face
+            area = problem.footprint_pixels * problem.grid.pixel_area
+            for force in self.loads:
+                problem.interaction.check_nominal(force / area, "the force")
         if self.by_force and posed_here:  # the Python API's solver says what it reaches
             _check_forces(self.loads, problem, run)
         self.run, self.solver = run, PunchSolver(problem)

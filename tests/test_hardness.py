@@ -1,0 +1,181 @@
+"""A hardness cap on the punch's pressure (Kato's perfectly plastic surface layer): the
+elastic answer far below the cap, the fully plastic flat punch exactly, Kato's conditions on
+a rough face, the exact stiffness with the plastic pixels held at the cap, the same answer from
+every solver, and the refusals."""
+
+import h5py
+import numpy as np
+import pytest
+from conftest import cli
+
+from petsc_contact import Run
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.conventions.warnings import FullContact
+from petsc_contact.geometries.punch import PunchProblem
+from petsc_contact.interactions.hardness import HardnessCap
+from petsc_contact.numerics.fft import make_fft
+from petsc_contact.physics.surface import self_affine
+from petsc_contact.workflows.punch_sweep import punch_contact
+
+ROUNDING = 4e-16  # the cap is the scaled bound H/p_s times p_s: H to an ulp or two
+APPROACH = 3e-3  # 3 h_rms: 7.5% of the face in contact, elastic peak pressure 0.043 E*
+HARDNESS = 3e-3  # 14% of the face at the cap at APPROACH
+
+
+@pytest.fixture(scope="module")
+def rough():
+    grid = Grid(64, 1.0)
+    return self_affine(
+        grid, make_fft(grid), hurst=0.7, rolloff_ratio=1, cutoff_ratio=16, seed=3, rms_height=1e-3
+    )
+
+
+def capped(heights, hardness=HARDNESS, **kw):
+    if "forces" not in kw:
+        kw.setdefault("approaches", [APPROACH])
+    return punch_contact(heights, length=1.0, modulus=1.0, hardness=hardness, progress=False, **kw)
+
+
+@pytest.mark.parametrize("loads", [{"approaches": [APPROACH]}, {"forces": [2e-4, 5e-4]}])
+def test_a_hardness_far_above_the_pressures_is_the_hard_wall(rough, loads):
+    """A cap 1e4 times the elastic peak pressure changes nothing: the same iterations (Newton's
+    too) and the same answer bit for bit, no pixel at the cap."""
+    wall = punch_contact(rough, length=1.0, modulus=1.0, progress=False, **loads)
+    cap = capped(rough, hardness=1e3, **loads)
+    for a, b in zip(wall, cap, strict=True):
+        assert b.converged and b.scalars["plastic_area_fraction"] == 0
+        for name in ("iterations", "force", "approach", "area_fraction", "total_stiffness"):
+            assert a.scalars[name] == b.scalars[name], name
+
+
+def test_the_flat_punch_past_full_flow_carries_the_hardness_everywhere():
+    """A flat punch pressed beyond the approach at which the uniform pressure ``H`` closes
+    every gap, ``max(G H 1)``, is fully plastic: ``p = H`` on every pixel (the force ``H A``
+    exactly), the plastic displacement ``delta - G H 1`` (exact: the discrete solution), and
+    nothing held: no stiffness (and every pixel in contact: full contact, with its warning)."""
+    n, hardness = 32, 0.01
+    grid = Grid(n, 1.0)
+    problem = PunchProblem(grid, np.zeros((n, n)), 1.0)
+    elastic = problem.compliance.apply_array(np.full((n, n), hardness), np.empty((n, n)))
+    delta = 1.05 * elastic.max()
+    with pytest.warns(FullContact):
+        (step,) = capped(np.zeros((n, n)), hardness, approaches=[delta], fields=True)
+    s = step.scalars
+    assert step.converged, s["verification"]
+    assert s["plastic_area_fraction"] == 1.0 and s["area_fraction"] == 1.0
+    assert step.pressure == pytest.approx(hardness, rel=ROUNDING, abs=0)  # the bound
+    assert s["force"] == pytest.approx(hardness, rel=1e-14)  # H times the unit area
+    w = step.field("plastic_displacement")
+    assert w == pytest.approx(delta - elastic, rel=1e-9, abs=1e-9 * delta)  # solver's tolerance
+    assert s["total_stiffness"] == 0
+
+
+@pytest.mark.parametrize("loads", [{"approaches": [APPROACH]}, {"forces": [3e-4]}])
+def test_kato_conditions_on_a_rough_face(rough, loads):
+    """Kato's law on every pixel of a capped rough punch: ``0 <= p <= H``; the force is the
+    pressure's sum (and the target under load control, to Newton's 1e-6); the gap of a pixel
+    below the cap is not negative beyond the solver's tolerance (an rms of 1e-8 of the rms
+    recess over the 64^2 pixels: one pixel's at most 64 times that); the plastic displacement
+    is positive exactly on the pixels at ``p = H``, which are in contact and part of the
+    area."""
+    (step,) = capped(rough, fields=True, **loads)
+    s = step.scalars
+    assert step.converged, s["verification"]
+    p, w, gap = step.pressure, step.field("plastic_displacement"), step.gap
+    assert p.min() >= 0 and s["max_pressure"] == p.max() == pytest.approx(HARDNESS, rel=ROUNDING)
+    assert s["force"] == pytest.approx(p.sum() / p.size, rel=1e-12)
+    if "forces" in loads:
+        assert s["force"] == pytest.approx(loads["forces"][0], rel=1e-6)
+    plastic = w > 0
+    assert np.array_equal(plastic, p >= HARDNESS * (1 - ROUNDING))
+    assert np.all(step.contact[plastic]) and np.all(gap[plastic] == 0)
+    assert s["plastic_area_fraction"] == plastic.mean() > 0.05
+    assert s["area_fraction"] > s["plastic_area_fraction"]
+    assert s["min_gap"] > -64e-8 * np.sqrt(np.mean((rough.max() - rough) ** 2))
+    assert s["kkt_residual"] < 1e-7
+
+
+def test_the_stiffness_holds_the_plastic_pixels_at_the_cap(rough):
+    """``dF/dδ`` with the elastic contact held and the plastic pixels at the cap is the
+    derivative of the capped force: a central difference of ``F(δ)`` within 2% (the contact
+    and plastic sets change inside the difference step, as for the hard wall), and well below
+    the stiffness of the same contact held elastically (the plastic pixels carry no more
+    load)."""
+    d, eps = APPROACH, 2e-5
+    lo, mid, hi = (s.scalars for s in capped(rough, approaches=[d - eps, d, d + eps]))
+    assert mid["total_stiffness"] == pytest.approx(
+        (hi["force"] - lo["force"]) / (2 * eps), rel=0.02
+    )
+    (wall,) = punch_contact(rough, length=1.0, modulus=1.0, approaches=[d], progress=False)
+    assert mid["total_stiffness"] < 0.8 * wall.scalars["total_stiffness"]
+
+
+@pytest.mark.parametrize(
+    "solver",
+    [
+        {"options": ["-tao_type", "blmvm"]},
+        {"options": ["-tao_type", "bncg"]},
+        {"options": ["-tao_type", "tron"]},
+        {"device": "cpu-array"},
+    ],
+)
+def test_every_solver_gives_the_same_capped_answer(rough, solver):
+    """TAO's bound types and the package's own array CG against the default (TAO with the
+    package's CG) under the cap: the same contact and plastic pixels, force and pressure
+    field to the gap tolerance 1e-8 l (the pressure differs by ``E*/a`` times the gap's
+    error, ~1e-6 of the cap at 64 pixels)."""
+    (ref,) = capped(rough, fields=True)
+    (other,) = capped(rough, fields=True, **solver)
+    a, b = ref.scalars, other.scalars
+    assert other.converged, b["verification"]
+    assert b["plastic_area_fraction"] == a["plastic_area_fraction"]
+    assert b["area_fraction"] == a["area_fraction"]
+    assert b["force"] == pytest.approx(a["force"], rel=1e-6)
+    assert np.abs(other.pressure - ref.pressure).max() < 1e-5 * HARDNESS
+
+
+@pytest.mark.parametrize("hardness", [0, -1e-3, np.inf, np.nan])
+def test_a_hardness_that_is_not_positive_and_finite_is_refused(hardness):
+    with pytest.raises(ValueError, match="--hardness must be positive and finite"):
+        Run(geometry="punch", hardness=hardness, approaches=[0.1])
+    with pytest.raises(ValueError, match="--hardness must be positive and finite"):
+        HardnessCap(hardness)
+
+
+def test_a_periodic_run_with_a_hardness_is_refused():
+    with pytest.raises(ValueError, match="--hardness caps the punch's pressure"):
+        Run(geometry="periodic", hardness=1e-2, pressures=[1e-3])
+
+
+def test_a_force_the_cap_cannot_carry_is_refused(rough):
+    """A nominal pressure over the face at or above the hardness: refused in one line before
+    anything is solved (the whole face would flow, and no approach reaches it)."""
+    with pytest.raises(ValueError, match="not below the hardness 0.003: the whole surface"):
+        capped(rough, forces=[1e-3, HARDNESS])
+
+
+def test_the_command_line_keeps_the_plastic_displacement(tmp_path):
+    """``punch --hardness H --fields``: each step's ``plastic_area_fraction``, the field
+    ``plastic_displacement`` (positive exactly where the pressure is at the cap), both with
+    units and descriptions; a force above ``H`` times the face's area refused in one line."""
+    out = tmp_path / "capped.h5"
+    common = ["punch", "--grid", "32", "--hurst", "0.8", "--rms-slope", "0.1", "--quiet"]
+    done = cli(
+        *common, "--forces", "1e-4,2e-4", "--hardness", "0.01", "--fields", "--output", str(out)
+    )
+    assert done.returncode == 0, done.stderr
+    with h5py.File(out) as f:
+        fraction = f["plastic_area_fraction"][:]
+        w, p = f["plastic_displacement"][:], f["pressure"][:]
+        assert f["plastic_displacement"].attrs["units"] == "length"
+        assert "hardness cap" in f["plastic_displacement"].attrs["description"]
+        assert "description" in f["plastic_area_fraction"].attrs
+    assert np.all(fraction > 0)
+    assert np.array_equal(w > 0, p >= 0.01 * (1 - ROUNDING))
+    assert fraction == pytest.approx((w > 0).mean(axis=(1, 2)), abs=0)
+    refused = cli(
+        *common, "--forces", "0.02", "--hardness", "0.01", "--output", str(tmp_path / "x.h5")
+    )
+    assert refused.returncode != 0
+    assert "not below the hardness 0.01" in refused.stderr
+    assert len(refused.stderr.strip().splitlines()) == 1

@@ -3,18 +3,23 @@ elastic answer far below the cap, the fully plastic flat punch exactly, Kato's c
 a rough face, the exact stiffness with the plastic pixels held at the cap, the same answer from
 every solver, and the refusals."""
 
+from dataclasses import dataclass
+
 import h5py
 import numpy as np
 import pytest
 from conftest import cli
 
-from petsc_contact import Run
+from petsc_contact import Run, run_contact
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.conventions.warnings import FullContact
+from petsc_contact.geometries.capped_periodic import CappedPeriodicProblem
 from petsc_contact.geometries.punch import PunchProblem
 from petsc_contact.interactions.hardness import HardnessCap
 from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.surface import self_affine
+from petsc_contact.substrates.half_space import PeriodicHalfSpace
+from petsc_contact.workflows.punch_steps import PunchSolver
 from petsc_contact.workflows.punch_sweep import punch_contact
 
 ROUNDING = 4e-16  # the cap is the scaled bound H/p_s times p_s: H to an ulp or two
@@ -142,9 +147,103 @@ def test_a_hardness_that_is_not_positive_and_finite_is_refused(hardness):
         HardnessCap(hardness)
 
 
-def test_a_periodic_run_with_a_hardness_is_refused():
-    with pytest.raises(ValueError, match="--hardness caps the punch's pressure"):
-        Run(geometry="periodic", hardness=1e-2, pressures=[1e-3])
+CELL = {"grid": 64, "hurst": 0.8, "rms_slope": 0.1, "seed": 3}  # elastic peak 0.17 E* at 5e-3
+PRESSURES = (1e-3, 5e-3)
+
+
+def cell(**kw):
+    return run_contact(Run(**CELL, pressures=PRESSURES, **kw)).steps
+
+
+def test_the_capped_cell_far_below_its_cap_is_the_periodic_contact():
+    """The periodic cell posed in the pressure with a cap 1e4 times the elastic peak gives
+    the periodic geometry's answer (posed in the gap): the same contact pixels, mean gap,
+    elastic energy and exact stiffness ``-dp0/du_bar`` to the solvers' tolerances (1e-8 of
+    the rms height and of ``p0``: 1e-6 relative leaves a hundredfold margin)."""
+    gap_posed = cell(stiffness=True)
+    capped_cell = cell(stiffness=True, hardness=1e3)
+    for a, b in zip(gap_posed, capped_cell, strict=True):
+        s, t = a.scalars, b.scalars
+        assert b.converged, t["verification"]
+        assert t["area_fraction"] == s["area_fraction"] and t["plastic_area_fraction"] == 0
+        for name in ("mean_gap", "elastic_energy", "stiffness", "max_pressure"):
+            assert t[name] == pytest.approx(s[name], rel=1e-6), name
+        assert t["force_balance"] < 1e-6  # Newton's tolerance on mean(p) = p0
+
+
+@dataclass(frozen=True)
+class StifferMean:
+    """The half-space with a mean-mode compliance ten times the longest wavelength's."""
+
+    modulus: float
+    name = "half-space, stiffer mean"
+
+    def stiffness(self, q):
+        return PeriodicHalfSpace(self.modulus).stiffness(q)
+
+    def mean_mode_compliance(self, q0, interfacial_stiffness):
+        return 10 * PeriodicHalfSpace(self.modulus).mean_mode_compliance(q0, 0.0)
+
+
+def test_the_capped_cell_does_not_depend_on_the_mean_modes_compliance():
+    """The mean mode's compliance ``c`` only moves the approach: with ``10 c`` the same
+    pressure and gap fields (to the gap tolerance, 1e-8 of the rms height over the 64^2
+    pixels, and the pressure's ``E*/a`` times that), area and stiffness."""
+    grid = Grid(64, 1.0)
+    h = self_affine(
+        grid, make_fft(grid), hurst=0.8, rolloff_ratio=1, cutoff_ratio=32, seed=3, rms_slope=0.1
+    )
+    fields = []
+    for substrate in (None, StifferMean(1.0)):
+        problem = CappedPeriodicProblem(
+            grid, make_fft(grid), h, 1.0, HardnessCap(0.02), substrate=substrate
+        )
+        with PunchSolver(problem) as solver:
+            step = solver.at_force(5e-3, fields=True, stiffness=True)
+        assert step.converged, step.scalars["verification"]
+        fields.append((step, problem.approach))
+    (a, delta_a), (b, delta_b) = fields
+    assert abs(delta_b - delta_a) > 1e-3  # the approach takes up 9 c p0
+    assert b.scalars["area_fraction"] == a.scalars["area_fraction"]
+    assert b.scalars["plastic_area_fraction"] == a.scalars["plastic_area_fraction"]
+    assert b.scalars["stiffness"] == pytest.approx(a.scalars["stiffness"], rel=1e-6)
+    h_rms = np.sqrt(np.mean(h**2))
+    assert np.abs(b.gap - a.gap).max() < 64e-8 * h_rms
+    assert np.abs(b.pressure - a.pressure).max() < 1e-5 * 0.02
+
+
+@pytest.mark.parametrize(
+    "solver",
+    [{}, {"options": ("-tao_type", "blmvm")}, {"options": ("-tao_type", "bncg")},
+     {"device": "cpu-array"}],
+)  # fmt: skip
+def test_kato_conditions_on_the_periodic_cell(solver):
+    """Kato's law on the capped cell, from TAO (the package's CG, blmvm, bncg) and the
+    package's array CG alike: ``mean(p) = p0`` (Newton's 1e-6), ``0 <= p <= H``, the
+    plastic displacement positive exactly where ``p = H``, those pixels in contact, and the
+    same areas and pressure field from every solver (an rms gap tolerance of 1e-8 h_rms, one
+    pixel's at most 64 times that, times the pixel stiffness ~100 E*: 4e-7 E* = 2e-5 H)."""
+    reference = cell(hardness=0.02, fields=True)
+    steps = cell(hardness=0.02, fields=True, **solver)
+    for p0, step, ref in zip(PRESSURES, steps, reference, strict=True):
+        s, p, w = step.scalars, step.pressure, step.field("plastic_displacement")
+        assert step.converged, s["verification"]
+        assert p.mean() == pytest.approx(p0, rel=1e-6)
+        assert p.min() >= 0 and p.max() == pytest.approx(0.02, rel=ROUNDING)
+        assert np.array_equal(w > 0, p >= 0.02 * (1 - ROUNDING))
+        assert np.all(step.contact[w > 0]) and s["plastic_area_fraction"] == (w > 0).mean()
+        assert s["area_fraction"] == ref.scalars["area_fraction"]
+        assert s["plastic_area_fraction"] == ref.scalars["plastic_area_fraction"] > 0.04
+        assert np.abs(p - ref.pressure).max() < 5e-5 * 0.02
+
+
+def test_a_periodic_load_the_cap_cannot_carry_is_refused():
+    """``p0 >= H``: the whole surface flows; a sweep (whose default range is the gap-posed
+    cell's) is refused as well."""
+    with pytest.raises(ValueError, match="--pressures: a nominal pressure of 0.02 is not below"):
+        run_contact(Run(**CELL, pressures=(1e-3, 0.02), hardness=0.02))
+    with pytest.raises(ValueError, match="takes --pressures, not a --sweep"):
+        run_contact(Run(**CELL, sweep=(3,), hardness=0.02))
 
 
 def test_a_force_the_cap_cannot_carry_is_refused(rough):
@@ -154,15 +253,16 @@ def test_a_force_the_cap_cannot_carry_is_refused(rough):
         capped(rough, forces=[1e-3, HARDNESS])
 
 
-def test_the_command_line_keeps_the_plastic_displacement(tmp_path):
-    """``punch --hardness H --fields``: each step's ``plastic_area_fraction``, the field
-    ``plastic_displacement`` (positive exactly where the pressure is at the cap), both with
-    units and descriptions; a force above ``H`` times the face's area refused in one line."""
+@pytest.mark.parametrize("geometry", ["punch", "periodic"])
+def test_the_command_line_keeps_the_plastic_displacement(tmp_path, geometry):
+    """``punch --hardness H --fields`` (and ``periodic``): each step's
+    ``plastic_area_fraction``, the field ``plastic_displacement`` (positive exactly where the
+    pressure is at the cap), both with units and descriptions, drawn by ``plot``; a load
+    above ``H`` (the punch's: times the face's area) refused in one line."""
     out = tmp_path / "capped.h5"
-    common = ["punch", "--grid", "32", "--hurst", "0.8", "--rms-slope", "0.1", "--quiet"]
-    done = cli(
-        *common, "--forces", "1e-4,2e-4", "--hardness", "0.01", "--fields", "--output", str(out)
-    )
+    common = [geometry, "--grid", "32", "--hurst", "0.8", "--rms-slope", "0.1", "--quiet"]
+    loads = "--forces" if geometry == "punch" else "--pressures"
+    done = cli(*common, loads, "1e-4,2e-4", "--hardness", "0.01", "--fields", "--output", str(out))
     assert done.returncode == 0, done.stderr
     with h5py.File(out) as f:
         fraction = f["plastic_area_fraction"][:]
@@ -173,9 +273,10 @@ def test_the_command_line_keeps_the_plastic_displacement(tmp_path):
     assert np.all(fraction > 0)
     assert np.array_equal(w > 0, p >= 0.01 * (1 - ROUNDING))
     assert fraction == pytest.approx((w > 0).mean(axis=(1, 2)), abs=0)
-    refused = cli(
-        *common, "--forces", "0.02", "--hardness", "0.01", "--output", str(tmp_path / "x.h5")
-    )
+    drawn = tmp_path / "w.png"
+    plotted = cli("plot", str(out), "--field", "plastic_displacement", "--output", str(drawn))
+    assert plotted.returncode == 0 and drawn.stat().st_size > 0, plotted.stderr
+    refused = cli(*common, loads, "0.02", "--hardness", "0.01", "--output", str(tmp_path / "x.h5"))
     assert refused.returncode != 0
     assert "not below the hardness 0.01" in refused.stderr
     assert len(refused.stderr.strip().splitlines()) == 1

@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from ..backend.operator import PaddedOperator
+from ..backend.operator import PaddedOperator, SpectralOperator
 from ..backend.solve import SolveInfo
 from ..backend.stiffness import punch_stiffness_exact
 from ..conventions.grid import Grid
@@ -198,6 +198,11 @@ class PunchProblem:
         default: the hard wall.
     """
 
+    compliance: SpectralOperator  # G, the hessian G / (a sqrt(N) / E*) and their inverses
+    inverse: SpectralOperator
+    hessian: SpectralOperator
+    preconditioner: SpectralOperator
+
     def __init__(
         self,
         grid: Grid,
@@ -273,16 +278,17 @@ class PunchProblem:
         Hessian ``H = G / (a sqrt(N) / E*)`` with its preconditioner ``H^-1``."""
         grid = self.grid
         a = np.sqrt(grid.pixel_area)  # the pixel's size for the scaling (its side if square)
-        self.compliance = PaddedOperator(
+        compliance = PaddedOperator(
             grid,
             lambda rows: self.substrate.compliance_kernel(grid.shape, grid.spacing, rows),
             device=self.device,
         )
-        self.inverse = self.compliance.with_spectrum(self.compliance.inverse_spectrum())
-        self.pixel_stiffness = 1.0 / self.compliance.diagonal()
+        inverse = compliance.with_spectrum(compliance.inverse_spectrum())
+        self.compliance, self.inverse = compliance, inverse
+        self.pixel_stiffness = 1.0 / compliance.diagonal()
         self._scale = a * np.sqrt(grid.size) / self.modulus  # H = G / _scale
-        self.hessian = self.compliance.with_spectrum(self.compliance.spectrum / self._scale)
-        self.preconditioner = self.inverse.with_spectrum(self.inverse.spectrum * self._scale)
+        self.hessian = compliance.with_spectrum(compliance.spectrum / self._scale)
+        self.preconditioner = inverse.with_spectrum(inverse.spectrum * self._scale)
         self.pressure_scale = self.modulus * self.scale_length / a
 
     def held_set_solve(self, grid: Grid, op: Any, pc: Any, mask: Any) -> tuple[Any, int]:

@@ -184,7 +184,11 @@ PERIODIC_COLUMNS = _entries(
     contact_pressure_mean=("pressure", "mean over all pixels of the contact pressure (= p0)"),
     elastic_energy=("pressure*length", "elastic energy per apparent area, 1/2 <(g+h)(p-p0)>"),
     min_pressure=("pressure", "smallest pressure over all pixels (negative: tension)"),
-    kkt_residual=("1", "natural residual rms(min(k g, p)) / p0"),
+    kkt_residual=(
+        "1",
+        "natural residual rms(min(k g, p)) / p0 (--hardness: the gap's, as the punch's, over "
+        "h_rms)",
+    ),
     force_balance=(
         "1",
         "abs(contact_pressure_mean - p0) / p0: the force the contact pressure misses (at most "
@@ -230,14 +234,31 @@ PUNCH_COLUMNS = _entries(
         "beyond 1e-4 not converged)",
     ),
     newton_iterations=("count", "Newton steps on the approach (load control)"),
-    plastic_area_fraction=(
-        "1",
-        "fraction of the footprint's pixels at the hardness cap, p - k g > H (--hardness; "
-        "in area_fraction too)",
-    ),
     stiffness=(
         "pressure/length",
         "the interfacial stiffness per area (--stiffness; NaN as interfacial_stiffness)",
+    ),
+)
+PLASTIC = _entries(
+    plastic_area_fraction=(
+        "1",
+        "fraction of the pixels (punch: of the footprint) at the hardness cap, p - k g > H "
+        "(--hardness; in area_fraction too)",
+    )
+)
+CAPPED_CELL = _entries(
+    approach=(
+        "length",
+        "--hardness: the rigid approach at which mean(p) = p0 (the cell posed in the "
+        "pressure; it includes c p0, c the mean mode's compliance 2/(E* q0))",
+    ),
+    force=("pressure*length^2", "--hardness: the force p0 A the approach's Newton reached"),
+    target_force=("pressure*length^2", "--hardness: the force p0 A it aimed at"),
+    newton_iterations=("count", "--hardness: Newton steps on the approach"),
+    total_stiffness=(
+        "pressure*length",
+        "--hardness: dF/d delta with the elastic contact held and the plastic pixels at the "
+        "cap; stiffness = 1/(A/total_stiffness - c)",
     ),
 )
 COORDINATES = _entries(
@@ -311,11 +332,27 @@ ENTRIES = {
     **DISTRIBUTIONS,
     **PERIODIC_COLUMNS,
     **PUNCH_COLUMNS,
+    **PLASTIC,
     **FIELDS,
 }
 GEOMETRIES = {
-    "periodic": {**COORDINATES, **SOLVE_COLUMNS, **DISTRIBUTIONS, **PERIODIC_COLUMNS, **FIELDS},
-    "punch": {**COORDINATES, **SOLVE_COLUMNS, **DISTRIBUTIONS, **PUNCH_COLUMNS, **FIELDS},
+    "periodic": {
+        **COORDINATES,
+        **SOLVE_COLUMNS,
+        **DISTRIBUTIONS,
+        **PERIODIC_COLUMNS,
+        **PLASTIC,
+        **CAPPED_CELL,
+        **FIELDS,
+    },
+    "punch": {
+        **COORDINATES,
+        **SOLVE_COLUMNS,
+        **DISTRIBUTIONS,
+        **PUNCH_COLUMNS,
+        **PLASTIC,
+        **FIELDS,
+    },
 }
 
 

@@ -109,7 +109,7 @@ class Run:
     footprint, flat_stiffness, hardness, stiffness
         The punch's outline (``square``, ``disk``) and its flat-punch reference (``grid``,
         ``analytic``: the exact continuum value, ``king``: King's estimate for a square); the
-        hardness its pressure is capped at (``None``: the hard wall;
+        hardness the pressure is capped at, on either geometry (``None``: the hard wall;
         :class:`~petsc_contact.interactions.hardness.HardnessCap`); whether every step adds
         the exact stiffness.
     output, fields, scalars_only, resume, overwrite, stop_after
@@ -235,11 +235,9 @@ class Run:
     @property
     def interaction(self) -> Interaction:
         """The law at the surface: the hard wall, or the cap of ``hardness`` (in the run's
-        pressure unit; the punch only); ``ValueError`` in one line for another."""
+        pressure unit); ``ValueError`` in one line for a hardness not positive."""
         if self.hardness is None:
             return HARD_WALL
-        if self.geometry != "punch":
-            raise ValueError("--hardness caps the punch's pressure; a periodic run takes none")
         return HardnessCap(pressure_value(self.hardness, self.pressure_unit, "--hardness"))
 
     @property

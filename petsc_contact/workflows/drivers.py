@@ -25,9 +25,11 @@ import numpy as np
 
 from ..backend.solve import Monitor
 from ..conventions.units import force_value, format_quantity, length_value, pressure_value
+from ..geometries.capped_periodic import CappedPeriodicProblem
 from ..geometries.periodic import LARGEST_LOAD, PeriodicProblem
 from ..geometries.punch import PunchProblem, footprint_mask
 from ..geometries.step import Step
+from ..interactions.hardness import HardnessCap
 from ..physics.continuation import Held
 from ..physics.observables import MIN_CONTACT_PIXELS
 from ..solver.backends import SolverBackend
@@ -82,9 +84,13 @@ def on_device(run: Run, device: str, options: Sequence[str] = ()) -> Run:
 
 def driver_for(run: Run, scene: Scene, backend: SolverBackend) -> Driver:
     """The driver of ``run``'s geometry on ``scene``, solved by ``backend``, its loads
-    checked (``ValueError``)."""
-    kind = PunchDriver if run.geometry == "punch" else PeriodicDriver
-    return kind(run, scene, backend)
+    checked (``ValueError``): a periodic run with a hardness is posed in the pressure
+    (:class:`CappedPeriodicDriver`)."""
+    if run.geometry == "punch":
+        return PunchDriver(run, scene, backend)
+    if run.hardness is not None:
+        return CappedPeriodicDriver(run, scene, backend)
+    return PeriodicDriver(run, scene, backend)
 
 
 class PeriodicDriver:
@@ -121,6 +127,46 @@ class PeriodicDriver:
         run = self.run
         return sweep(
             self.problem, loads, run.fields, monitor, run.stiffness, state, self.solver, held
+        )
+
+    def close(self) -> None:
+        """Release the solver."""
+        self.solver.close()
+
+
+class CappedPeriodicDriver:
+    """A periodic run with a hardness: the cell posed in the pressure
+    (:class:`~petsc_contact.geometries.capped_periodic.CappedPeriodicProblem`), each nominal
+    pressure reached by Newton on the approach as the punch reaches a force
+    (:func:`~petsc_contact.workflows.punch_sweep.punch_sweep`).  It takes ``--pressures``,
+    each below the hardness."""
+
+    def __init__(self, run: Run, scene: Scene, backend: SolverBackend) -> None:
+        if run.pressures is None or run.sweep is not None:
+            raise ValueError("a periodic run with --hardness takes --pressures, not a --sweep")
+        cap = run.interaction
+        assert isinstance(cap, HardnessCap)  # driver_for's choice: run.hardness is given
+        self.loads = [pressure_value(p, run.pressure_unit, "--pressures") for p in run.pressures]
+        for p0 in self.loads:
+            cap.check_nominal(p0, "--pressures")
+        problem = CappedPeriodicProblem(
+            scene.grid, scene.fft, scene.heights, run.modulus_value, cap, backend
+        )
+        problem.filled = scene.filled
+        self.resolved: dict[str, Any] = {}
+        if any(isinstance(p, str) for p in run.pressures):
+            self.resolved = {"pressures_resolved": self.loads}
+        self.run, self.problem, self.solver = run, problem, PunchSolver(problem)
+        self.intro = f", hardness {format_quantity(cap.hardness, run.pressure_unit)}"
+        self.backend = type(problem.compliance.fft).__name__
+
+    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
+        """Newton on the approach to each nominal pressure's force, ``p0 A``."""
+        state, held = start or (None, None)
+        run, area = self.run, self.problem.grid.area
+        forces = [p0 * area for p0 in loads]
+        return punch_sweep(
+            self.solver, forces, True, run.fields, monitor, run.stiffness, state, held
         )
 
     def close(self) -> None:

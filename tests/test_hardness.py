@@ -280,3 +280,22 @@ def test_the_command_line_keeps_the_plastic_displacement(tmp_path, geometry):
     assert refused.returncode != 0
     assert "not below the hardness 0.01" in refused.stderr
     assert len(refused.stderr.strip().splitlines()) == 1
+
+
+def test_compare_with_a_hardness(tmp_path):
+    """``compare --hardness``: the cell posed in the pressure, the reference by Newton at
+    ``-tao_gatol 1e-12``, every solver at its approach: each converges, to the reference's
+    pressure within 1e-5 (the default tolerance 1e-8 of the gap, times the pixel stiffness
+    over ``p0``: ~1e-6), and the reference's natural residual is at its tolerance's level."""
+    out = tmp_path / "compare.h5"
+    done = cli(
+        "compare", "--grid", "32", "--hurst", "0.8", "--rms-slope", "0.1", "--pressures",
+        "5e-3", "--hardness", "0.02", "--solvers", "cg,blmvm,bncg,tron", "--quiet",
+        "--output", str(out),
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    with h5py.File(out) as f:
+        assert f.attrs["reference_natural_residual"] < 1e-9
+        for name in ("cg", "blmvm", "bncg", "tron"):
+            assert f[name].attrs["converged"], name
+            assert f[name]["pressure_error"][-1] < 1e-5, name

@@ -495,7 +495,7 @@ _PUNCH_LOADS = (
         "hardness",
         "cap the pressure at the hardness H (units of E*, or with a unit: 5GPa): Kato's "
         "perfectly plastic surface layer",
-        ("periodic", "punch"),
+        ("periodic", "punch", "compare"),
         metavar="H",
         parse=quantity,
         unit="pressure",
@@ -503,9 +503,9 @@ _PUNCH_LOADS = (
         more="A pixel at the cap carries `H` and the punch sinks into it by the plastic "
         "displacement (`--fields`: `plastic_displacement`); each step records "
         "`plastic_area_fraction`, and its stiffness holds the plastic pixels at the cap "
-        "([formulation.md](formulation.md)). A periodic run is then posed in the pressure "
-        "and takes `--pressures`; a nominal pressure (the punch's: over its face) not below "
-        "`H` is refused",
+        "([formulation.md](formulation.md)). A periodic run (and `compare`) is then posed in "
+        "the pressure and takes `--pressures`; a nominal pressure (the punch's: over its "
+        "face) not below `H` is refused",
     ),
 )
 

@@ -44,6 +44,12 @@ from .step import Step, contact_fields, mark_full_contact, residual_verdict
 class CappedPeriodicProblem(PunchProblem):
     """The periodic cell of ``heights`` posed in the pressure, bounded by ``interaction``.
 
+    A :class:`~petsc_contact.geometries.punch.PunchProblem` whose footprint is the whole cell
+    and whose compliance is the periodic one: the objective, the bounds, the gap and the
+    held-set stiffness are the punch's; the operators (:meth:`_operators`) and what a step
+    measures (:meth:`measure`) are the cell's.  The punch's flat reference it inherits
+    (``k_flat``: ``A/c`` here) enters no answer.
+
     Parameters
     ----------
     grid, fft, heights, modulus

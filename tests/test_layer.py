@@ -118,6 +118,7 @@ def test_the_mean_mode_carries_no_stiffness():
         ({"thickness": 0.1, "poisson": -0.1}, "--poisson must be from 0 to 0.5"),
         ({"thickness": 0.1, "base": "glued"}, "--base must be one of bonded, frictionless"),
         ({"thickness": 0.1, "geometry": "punch"}, "--thickness is the periodic geometry's"),
+        ({"thickness": 0.1, "hardness": 0.5}, "--thickness with --hardness"),
     ],
 )
 def test_a_layer_that_cannot_be_is_refused_in_one_line(given, message):

@@ -173,7 +173,7 @@ def test_the_command_line_and_its_refusals(tmp_path: Path) -> None:
     punch = ["punch", "--grid", "32", "--hurst", "0.7", "--rms-slope", "0.1", *other]
     _refused(cli(*punch, "--approaches", "1e-3", "--mean-gaps", "1e-3"), "--mean-gaps")
     assert not (tmp_path / "no.h5").exists()
-    for given in ({"pressures": 1e-2}, {"sweep": 4}, {"geometry": "punch"}):
+    for given in ({"pressures": 1e-2}, {"sweep": 4}, {"geometry": "punch"}, {"hardness": 0.5}):
         with pytest.raises(ValueError, match="--mean-gaps") as caught:
             Run(**SURFACE, mean_gaps=1e-3, **given)
         assert "\n" not in str(caught.value)

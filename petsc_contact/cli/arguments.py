@@ -429,7 +429,7 @@ def _plot_parser(sub: Any) -> None:
     )
     p.add_argument(
         "--field",
-        choices=("pressure", "gap", "contact", "heights", "filled"),
+        choices=("pressure", "gap", "contact", "heights", "filled", "plastic_displacement"),
         default="pressure",
         help="the map to draw (default pressure; fields need a run with --fields; filled: the "
         "points --fill-undefined filled)",

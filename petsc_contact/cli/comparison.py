@@ -41,6 +41,7 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
         args.resume,
         args.overwrite,
         report=_print_trajectory if show else None,
+        interaction=run.interaction,
     )
     if show:
         reference = result.reference

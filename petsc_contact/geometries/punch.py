@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from ..backend.operator import PaddedOperator
+from ..backend.operator import PaddedOperator, SpectralOperator
 from ..backend.solve import SolveInfo
 from ..backend.stiffness import punch_stiffness_exact
 from ..conventions.grid import Grid
@@ -198,6 +198,11 @@ class PunchProblem:
         default: the hard wall.
     """
 
+    compliance: SpectralOperator  # G, the hessian G / (a sqrt(N) / E*) and their inverses
+    inverse: SpectralOperator
+    hessian: SpectralOperator
+    preconditioner: SpectralOperator
+
     def __init__(
         self,
         grid: Grid,
@@ -241,7 +246,8 @@ class PunchProblem:
         self._recess_flat = device.asarray(self.recess.reshape(-1))
         self._footprint_flat = device.asarray(self.footprint.reshape(-1).astype(float))
         self._footprint = device.asarray(self.footprint)
-        self._upper = device.asarray(interaction.pressure_upper(self.footprint, np).reshape(-1))
+        upper = interaction.pressure_upper(self.footprint, np) / self.pressure_scale
+        self._upper = device.asarray(upper.reshape(-1))
         area = self.footprint_pixels * grid.pixel_area
         self.k_flat_analytic = flat_punch_stiffness(self.modulus, area, beta)  # the footprint's
         self.flat_residual = 0.0  # the recomputed residual of the flat punch's held-set solve
@@ -272,16 +278,17 @@ class PunchProblem:
         Hessian ``H = G / (a sqrt(N) / E*)`` with its preconditioner ``H^-1``."""
         grid = self.grid
         a = np.sqrt(grid.pixel_area)  # the pixel's size for the scaling (its side if square)
-        self.compliance = PaddedOperator(
+        compliance = PaddedOperator(
             grid,
             lambda rows: self.substrate.compliance_kernel(grid.shape, grid.spacing, rows),
             device=self.device,
         )
-        self.inverse = self.compliance.with_spectrum(self.compliance.inverse_spectrum())
-        self.pixel_stiffness = 1.0 / self.compliance.diagonal()
+        inverse = compliance.with_spectrum(compliance.inverse_spectrum())
+        self.compliance, self.inverse = compliance, inverse
+        self.pixel_stiffness = 1.0 / compliance.diagonal()
         self._scale = a * np.sqrt(grid.size) / self.modulus  # H = G / _scale
-        self.hessian = self.compliance.with_spectrum(self.compliance.spectrum / self._scale)
-        self.preconditioner = self.inverse.with_spectrum(self.inverse.spectrum * self._scale)
+        self.hessian = compliance.with_spectrum(compliance.spectrum / self._scale)
+        self.preconditioner = inverse.with_spectrum(inverse.spectrum * self._scale)
         self.pressure_scale = self.modulus * self.scale_length / a
 
     def held_set_solve(self, grid: Grid, op: Any, pc: Any, mask: Any) -> tuple[Any, int]:
@@ -365,12 +372,12 @@ class PunchProblem:
         gap = device.to_host(self.gap(on_device))
         pressure = device.to_host(on_device)
         obs = punch_observables(self, pressure, gap)
-        contact = obs.pop("contact")
+        contact, plastic = obs.pop("contact"), obs.pop("plastic")
         verdict = verify_punch(info, obs)
         scalars = {
             **obs,
             "force_balance": np.nan,  # under load control: PunchSolver.at_force
-            **self.held_set_stiffness(contact, verdict == "ok"),
+            **self.held_set_stiffness(contact & ~plastic, verdict == "ok"),
             **info.scalars(verdict),
         }
         if stiffness:
@@ -379,10 +386,12 @@ class PunchProblem:
         self.accuracy().assess(scalars)
         if not fields:
             return Step(scalars)
-        return Step(scalars, *contact_fields(gap, pressure, contact), contact=contact)
+        extra = self.interaction.fields(gap, plastic)
+        return Step(scalars, *contact_fields(gap, pressure, contact), contact=contact, extra=extra)
 
     def held_set_stiffness(self, contact: np.ndarray, converged: bool) -> dict[str, Any]:
-        """The exact total stiffness ``dF/dδ`` with ``contact`` (this rank's host mask) held
+        """The exact total stiffness ``dF/dδ`` with ``contact`` (this rank's host mask of the
+        contact pixels below the interaction's cap: a plastic pixel's pressure stays) held
         fixed and the interfacial stiffness per area from it (paper Eq. 2), NaN unless
         ``converged``; the held-set solve's iterations, time, recomputed residual (the
         larger of its and the flat punch's) and the tolerance asked."""
@@ -413,18 +422,22 @@ class PunchProblem:
 def punch_observables(
     problem: PunchProblem, pressure: np.ndarray, gap: np.ndarray
 ) -> dict[str, Any]:
-    """Scalars of one punch step (same on every rank); see the module docstring."""
-    grid, fp = problem.grid, problem.footprint
+    """Scalars of one punch step (same on every rank; see the module docstring), and this
+    rank's masks of the pixels in contact and at the interaction's cap (``plastic``, whose
+    negative gap is the plastic displacement: ``min_gap`` is over the others)."""
+    grid, fp, law = problem.grid, problem.footprint, problem.interaction
     k = problem.pixel_stiffness
     contact = fp & (pressure > k * gap)
+    plastic = fp & law.plastic(gap, pressure, k)
     sizes = patch_sizes(grid, contact, periodic=False)
-    r = np.where(fp, np.minimum(gap, pressure / k), 0.0)
-    p_sum, n_contact, pg, r2, g_sum = grid.sum(
+    r = np.where(fp, law.residual(gap, pressure, k), 0.0)
+    p_sum, n_contact, pg, r2, g_sum, n_plastic = grid.sum(
         pressure.sum(),
         np.count_nonzero(contact),
         np.vdot(pressure, np.maximum(gap, 0.0)),
         np.vdot(r, r),
         np.where(fp, gap, 0.0).sum(),
+        np.count_nonzero(plastic),
     )
     ell, fp_pixels = problem.scale_length, problem.footprint_pixels
     area = grid.area
@@ -438,11 +451,13 @@ def punch_observables(
         "contact_resolved": bool(contact_resolved(n_contact / fp_pixels, fp_pixels)),
         "contact_patches": sizes.size,
         "max_pressure": grid.max(float(pressure.max(initial=0.0))),
-        "min_gap": grid.min(float(np.where(fp, gap, np.inf).min(initial=np.inf))),
+        "min_gap": grid.min(float(np.where(fp & ~plastic, gap, np.inf).min(initial=np.inf))),
         "complementarity": pg / (p_sum * ell) if p_sum > 0 else 0.0,
         "kkt_residual": float(np.sqrt(r2 / problem.footprint_pixels)) / ell,
         **distributions(grid, gap, pressure, contact, sizes, fp, problem.filled),
+        **law.scalars(int(n_plastic), fp_pixels),
         "contact": contact,
+        "plastic": plastic,
     }
 
 

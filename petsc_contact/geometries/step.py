@@ -41,6 +41,8 @@ class Step:
     pressure: np.ndarray | None = None
     _: KW_ONLY  # the rest by name only (the fourth field by position was ``state`` in 0.2.0)
     contact: np.ndarray | None = None  # local mask of the pixels in contact
+    extra: dict[str, np.ndarray] = field(default_factory=dict)
+    """The interaction's fields (``plastic_displacement`` under a hardness cap), by name."""
     resume: Callable[[], tuple[np.ndarray, Held]] | None = field(default=None, repr=False)
     """Makes :attr:`state` and :attr:`held` on their first reading: a sweep whose steps
     nobody goes on from moves no field off its device (512 MB a step at 8192^2)."""
@@ -75,9 +77,13 @@ class Step:
         self.resume, self._point = None, None
 
     def field(self, name: str) -> np.ndarray | None:
-        """A field by its dataset name: ``gap``, ``pressure`` or ``contact``."""
+        """A field by its dataset name: ``gap``, ``pressure``, ``contact`` or one of the
+        interaction's (:attr:`extra`)."""
+        if name in self.extra:
+            return self.extra[name]
         if name not in FIELD_NAMES:
-            raise KeyError(f"no field '{name}': choose one of {', '.join(FIELD_NAMES)}")
+            names = (*FIELD_NAMES, *self.extra)
+            raise KeyError(f"no field '{name}': choose one of {', '.join(names)}")
         value: np.ndarray | None = getattr(self, name)
         return value
 

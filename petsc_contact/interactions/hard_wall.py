@@ -23,6 +23,11 @@ class HardWall:
     name = "hard wall"
 
     @property
+    def field_names(self) -> tuple[str, ...]:
+        """None beyond the geometry's."""
+        return ()
+
+    @property
     def gap_lower(self) -> float:
         """The gap's lower bound, 0."""
         return 0.0
@@ -41,6 +46,25 @@ class HardWall:
         if min_gap < -BOUND_ROUNDING * scale_length:
             return f"bound violated: min gap {min_gap:.3e}"
         return None
+
+    def residual(self, gap: np.ndarray, pressure: np.ndarray, stiffness: float) -> np.ndarray:
+        """The natural residual in units of the gap, ``min(g, p/k)``."""
+        return np.minimum(gap, pressure / stiffness)
+
+    def plastic(self, gap: np.ndarray, pressure: np.ndarray, stiffness: float) -> np.ndarray:
+        """No pixel is plastic."""
+        return np.zeros(np.shape(gap), dtype=bool)
+
+    def scalars(self, plastic_pixels: int, pixels: int) -> dict[str, Any]:
+        """Nothing beyond the geometry's scalars."""
+        return {}
+
+    def fields(self, gap: np.ndarray, plastic: np.ndarray) -> dict[str, np.ndarray]:
+        """Nothing beyond the geometry's fields."""
+        return {}
+
+    def check_nominal(self, pressure: float, what: str) -> None:
+        """Any nominal pressure: the wall carries every load."""
 
 
 HARD_WALL = HardWall()

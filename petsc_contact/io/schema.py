@@ -188,7 +188,11 @@ PERIODIC_COLUMNS = _entries(
     contact_pressure_mean=("pressure", "mean over all pixels of the contact pressure (= p0)"),
     elastic_energy=("pressure*length", "elastic energy per apparent area, 1/2 <(g+h)(p-p0)>"),
     min_pressure=("pressure", "smallest pressure over all pixels (negative: tension)"),
-    kkt_residual=("1", "natural residual rms(min(k g, p)) / p0"),
+    kkt_residual=(
+        "1",
+        "natural residual rms(min(k g, p)) / p0 (--hardness: the gap's, as the punch's, over "
+        "h_rms)",
+    ),
     force_balance=(
         "1",
         "abs(contact_pressure_mean - p0) / p0: the force the contact pressure misses (at most "
@@ -214,8 +218,8 @@ PERIODIC_COLUMNS = _entries(
     ),
     newton_iterations=(
         "count",
-        "Newton steps on the nominal pressure (displacement control; punch: on the approach, "
-        "load control)",
+        "Newton steps on the nominal pressure (displacement control) or, with --hardness, on "
+        "the approach (punch: on the approach, load control)",
     ),
 )
 PUNCH_COLUMNS = _entries(
@@ -250,12 +254,33 @@ PUNCH_COLUMNS = _entries(
     ),
     newton_iterations=(
         "count",
-        "Newton steps on the approach (load control; periodic: on the nominal pressure, "
-        "displacement control)",
+        "Newton steps on the approach (load control; periodic: on the nominal pressure under "
+        "displacement control, on the approach with --hardness)",
     ),
     stiffness=(
         "pressure/length",
         "the interfacial stiffness per area (--stiffness; NaN as interfacial_stiffness)",
+    ),
+)
+PLASTIC = _entries(
+    plastic_area_fraction=(
+        "1",
+        "fraction of the pixels (punch: of the footprint) at the hardness cap, p - k g > H "
+        "(--hardness; in area_fraction too)",
+    )
+)
+CAPPED_CELL = _entries(
+    approach=(
+        "length",
+        "--hardness: the rigid approach at which mean(p) = p0 (the cell posed in the "
+        "pressure; it includes c p0, c the mean mode's compliance 2/(E* q0))",
+    ),
+    force=("pressure*length^2", "--hardness: the force p0 A the approach's Newton reached"),
+    target_force=("pressure*length^2", "--hardness: the force p0 A it aimed at"),
+    total_stiffness=(
+        "pressure*length",
+        "--hardness: dF/d delta with the elastic contact held and the plastic pixels at the "
+        "cap; stiffness = 1/(A/total_stiffness - c)",
     ),
 )
 COORDINATES = _entries(
@@ -273,6 +298,11 @@ FIELDS = _entries(
     pressure=("pressure", "pressure of every step, exactly zero out of contact (steps x n x n)"),
     contact=("bool", "contact mask of every step, p > k g (steps x n x n)"),
     filled=("bool", "the pixels whose heights were undefined and filled (n x n)"),
+    plastic_displacement=(
+        "length",
+        "depth the punch sinks into the pixels at the hardness cap (--hardness), 0 elsewhere "
+        "(steps x n x n)",
+    ),
 )
 ENSEMBLE = _entries(
     seeds=("count", "the seeds, one row of every table each"),
@@ -329,11 +359,27 @@ ENTRIES = {
     **DISTRIBUTIONS,
     **PERIODIC_COLUMNS,
     **PUNCH_COLUMNS,
+    **PLASTIC,
     **FIELDS,
 }
 GEOMETRIES = {
-    "periodic": {**COORDINATES, **SOLVE_COLUMNS, **DISTRIBUTIONS, **PERIODIC_COLUMNS, **FIELDS},
-    "punch": {**COORDINATES, **SOLVE_COLUMNS, **DISTRIBUTIONS, **PUNCH_COLUMNS, **FIELDS},
+    "periodic": {
+        **COORDINATES,
+        **SOLVE_COLUMNS,
+        **DISTRIBUTIONS,
+        **PERIODIC_COLUMNS,
+        **PLASTIC,
+        **CAPPED_CELL,
+        **FIELDS,
+    },
+    "punch": {
+        **COORDINATES,
+        **SOLVE_COLUMNS,
+        **DISTRIBUTIONS,
+        **PUNCH_COLUMNS,
+        **PLASTIC,
+        **FIELDS,
+    },
 }
 
 

@@ -11,6 +11,10 @@ each TAO iteration (never TAO's own gnorm, which means different things for diff
 - ``complementarity``: ``sum(p+ g) / (sum(p+) h_rms)``, as Tamaas reports it (``h_rms``
   replaced by the problem's length scale for a flat surface).
 
+With a hardness cap the scene is posed in the pressure (:class:`PressurePosed`): the
+reference reaches ``mean(p) = p0`` by Newton on the approach, every solver solves at that
+approach, and the natural residual is the box's (``0 <= p <= H``), in units of ``p0``.
+
 The reference is the default solver at ``REFERENCE_GATOL`` (or the rounding floor); its own
 natural residual is stored, so the reference's accuracy is stated next to every error.
 The time axis excludes the cost of these measurements (one FFT per iteration).
@@ -40,8 +44,11 @@ from ..backend import _petsc
 from ..backend.solve import BOUND_TYPES, BoundSolver, SolveInfo
 from ..backend.tao import PetscBackend
 from ..conventions.warnings import user_level
+from ..geometries.capped_periodic import CappedPeriodicProblem
 from ..geometries.periodic import PeriodicProblem
 from ..geometries.step import residual_verdict
+from ..interactions.hard_wall import HARD_WALL
+from ..interactions.interaction import Interaction
 from ..io.atomic import atomic_h5, on_root, replaced, storage
 from ..io.names import partial_path
 from ..io.partial import check_same_input, check_same_run, commit, discard, opened
@@ -52,6 +59,7 @@ from ..io.store import check_resume_or_overwrite, remove_temporaries, warn_repla
 from ..physics.observables import natural_residual
 from ..physics.surface import rms_of
 from .periodic_steps import sweep
+from .punch_steps import PunchSolver
 
 REFERENCE_GATOL = 1e-12
 STALL_GAIN = 0.9  # a new low of the natural residual must be 10% below the best so far
@@ -216,6 +224,93 @@ def reference_solve(problem: PeriodicProblem, pressure: float) -> Reference:
     )
 
 
+class GapPosed:
+    """What :func:`compare` asks of the periodic cell posed in the gap (the package's own
+    problem): its reference, its first touch, and the gap and pressure of an iterate."""
+
+    def __init__(self, problem: PeriodicProblem) -> None:
+        self.problem = problem
+        self.grid, self.scale_length = problem.grid, problem.scale_length
+
+    def reference(self, pressure: float) -> Reference:
+        """:func:`reference_solve`."""
+        return reference_solve(self.problem, pressure)
+
+    def pose(self, pressure: float, backend: PetscBackend) -> tuple[np.ndarray, float]:
+        """Posed at ``pressure`` for ``backend``: the first touch (TAO's scaled gap) and the
+        gradient tolerance's rounding floor."""
+        problem = self.problem
+        x0 = problem.initial_gap().reshape(-1) / problem.scale_length
+        problem.use(backend)
+        problem.set_pressure(pressure)
+        problem.start(x0)
+        return x0, problem.rounding_floor(pressure)
+
+    def tolerance_unit(self) -> float:
+        """The natural residual over ``p0`` is in the unit of TAO's tolerance: 1."""
+        return 1.0
+
+    def fields(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The gap, the pressure and the natural residual (a pressure) of TAO's iterate."""
+        problem = self.problem
+        gap = x.reshape(problem.grid.local_shape) * problem.scale_length
+        p = problem.pressure(gap)
+        return gap, p, natural_residual(gap, p, problem.pixel_stiffness)
+
+
+class PressurePosed:
+    """What :func:`compare` asks of the periodic cell posed in the pressure (a hardness cap:
+    :class:`~petsc_contact.geometries.capped_periodic.CappedPeriodicProblem`).  The reference
+    reaches ``mean(p) = p0`` by Newton on the approach; every solver then solves at that
+    approach, from no pressure."""
+
+    def __init__(self, problem: CappedPeriodicProblem) -> None:
+        self.problem = problem
+        self.grid, self.scale_length = problem.grid, problem.scale_length
+        self.approach = self.nominal = np.nan
+
+    def reference(self, pressure: float) -> Reference:
+        """The default solver at :data:`REFERENCE_GATOL`, Newton to ``mean(p) = p0``."""
+        problem = self.problem
+        tight = ["-tao_gatol", str(REFERENCE_GATOL)]
+        with _petsc.scoped_options(tight), PunchSolver(problem) as solver:
+            step = solver.at_force(pressure * problem.grid.area)
+            x = solver.x
+        if not step.converged:
+            raise RuntimeError(f"reference solve failed: {step.scalars['verification']}")
+        self.approach = problem.approach
+        gap, p, r = self.fields(x)
+        (r2,) = self.grid.sum(np.vdot(r, r))
+        s = step.scalars
+        rms = float(np.sqrt(r2 / self.grid.size)) / pressure
+        return Reference(p, s["mean_gap"], rms, s["tolerance"], s["iterations"])
+
+    def pose(self, pressure: float, backend: PetscBackend) -> tuple[np.ndarray, float]:
+        """At the reference's approach: no pressure (TAO's scaled pressure), no floor."""
+        self.problem.backend = backend
+        self.problem.set_approach(self.approach)
+        self.nominal = pressure
+        return np.zeros(self.grid.local_shape).reshape(-1), 0.0
+
+    def tolerance_unit(self) -> float:
+        """The natural residual over ``p0`` in the unit of TAO's tolerance (the gap's over
+        the rms height): ``p0 / (k h_rms)``."""
+        problem = self.problem
+        return self.nominal / (problem.pixel_stiffness * problem.scale_length)
+
+    def fields(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The gap, the pressure and the natural residual (a pressure, the interaction's) of
+        TAO's iterate."""
+        problem = self.problem
+        p = x.reshape(problem.grid.local_shape) * problem.pressure_scale
+        gap = problem.gap(p)
+        k = problem.pixel_stiffness
+        return gap, p, k * problem.interaction.residual(gap, p, k)
+
+
+Posed = GapPosed | PressurePosed
+
+
 class _Recorder:
     """The TAO monitor of one trajectory: measures the iterate, decides when to stop.
 
@@ -225,7 +320,7 @@ class _Recorder:
 
     def __init__(
         self,
-        problem: PeriodicProblem,
+        problem: Posed,
         reference: Reference,
         nominal_pressure: float,
         traj: Trajectory,
@@ -247,13 +342,11 @@ class _Recorder:
     def __call__(self, it: int, f: float, gnorm: float) -> bool:
         t_in = time.perf_counter()
         problem, grid, traj = self.problem, self.problem.grid, self.traj
-        gap = self.solver.x.array_r.reshape(grid.local_shape) * problem.scale_length
-        p = problem.pressure(gap)
-        r = natural_residual(gap, p, problem.pixel_stiffness)
+        gap, p, r = problem.fields(self.solver.x.array_r)
         pp = np.maximum(p, 0.0)
         dp = p - self.reference.pressure
         g_sum, dp2, r2, pg, p_sum = grid.sum(
-            gap.sum(), np.vdot(dp, dp), np.vdot(r, r), np.vdot(pp, gap), pp.sum()
+            gap.sum(), np.vdot(dp, dp), np.vdot(r, r), np.vdot(pp, np.maximum(gap, 0.0)), pp.sum()
         )
         traj.iteration.append(int(it))
         # the slowest rank's time, so that every rank stops at the same iteration
@@ -285,13 +378,13 @@ def _conclude(traj: Trajectory, info: SolveInfo, recorder: _Recorder) -> None:
     traj.solve_time = info.solve_time - recorder.spent
     traj.iterations = info.iterations
     final = traj.natural_residual[-1] if traj.natural_residual else np.inf
-    verdict = residual_verdict(final, info.tolerance)
+    verdict = residual_verdict(final * recorder.problem.tolerance_unit(), info.tolerance)
     traj.converged = info.reason_code > 0 and verdict == "ok"
     traj.verification = verdict if info.reason_code > 0 else f"TAO: {info.reason}"
 
 
 def compare(
-    problem: PeriodicProblem,
+    problem: PeriodicProblem | Posed,
     pressure: float,
     solvers: Sequence[str],
     time_limit: float = 120.0,
@@ -326,7 +419,8 @@ def compare(
         solver, in order.
     """
     check_solvers(solvers)
-    reference = reference_solve(problem, pressure)
+    posed = GapPosed(problem) if isinstance(problem, PeriodicProblem) else problem
+    reference = posed.reference(pressure)
     if reference_ready is not None:
         reference_ready(reference.scalars())
     kept = {t.name: t for t in unchanged(done, solvers, extra_options)}
@@ -336,7 +430,7 @@ def compare(
             out.append(kept[name])
             continue
         opts = run_options(name, solvers, extra_options)
-        traj = _trajectory(problem, reference, pressure, Trajectory(name, opts), time_limit,
+        traj = _trajectory(posed, reference, pressure, Trajectory(name, opts), time_limit,
                            stall_iterations)  # fmt: skip
         out.append(traj)
         if report is not None:
@@ -345,7 +439,7 @@ def compare(
 
 
 def _trajectory(
-    problem: PeriodicProblem,
+    posed: Posed,
     reference: Reference,
     pressure: float,
     traj: Trajectory,
@@ -353,21 +447,19 @@ def _trajectory(
     stall_iterations: int,
 ) -> Trajectory:
     """Run one solver (its options in ``traj``) from first touch, recording ``traj``."""
-    x0 = problem.initial_gap().reshape(-1) / problem.scale_length
+    problem = posed.problem
     with _petsc.scoped_options(traj.options):
         backend = PetscBackend()  # this solver's options, its two-level form's among them
-        problem.use(backend)
-        problem.set_pressure(pressure)
-        problem.start(x0)
+        x0, floor = posed.pose(pressure, backend)
         with backend.solver(problem) as s:
-            recorder = _Recorder(
-                problem, reference, pressure, traj, s, time_limit, stall_iterations
-            )
+            recorder = _Recorder(posed, reference, pressure, traj, s, time_limit, stall_iterations)
             _, info = s.solve(
                 problem.objective_gradient,
                 x0,
+                lower=problem.lower_bound,
                 monitor=recorder,
-                gatol_floor=problem.rounding_floor(pressure),
+                upper=problem.upper_bound,
+                gatol_floor=floor,
             )
     _conclude(traj, info, recorder)
     return traj
@@ -420,6 +512,7 @@ def compare_into(
     resume: bool = False,
     overwrite: bool = False,
     report: Callable[[Trajectory], None] | None = None,
+    interaction: Interaction = HARD_WALL,
 ) -> Comparison:
     """:func:`compare` on a prepared ``scene`` at ``pressure``, durable solver by solver in
     ``output``'s ``.partial`` file (the caller holds the output's lock), then written whole:
@@ -430,10 +523,11 @@ def compare_into(
     comparison goes on with ``resume`` or starts afresh with ``overwrite``
     (:func:`finished_solvers`); a finished solver whose options changed is solved again.
     ``report(trajectory)`` is called with each finished solver: first those an interrupted
-    comparison kept, then each as it is committed.
+    comparison kept, then each as it is committed.  An ``interaction`` that caps the pressure
+    (a hardness) poses the cell in the pressure (:class:`PressurePosed`).
     """
     grid, fft, heights = scene.grid, scene.fft, scene.heights
-    problem = PeriodicProblem(grid, fft, heights, modulus)
+    problem = posed_cell(scene, modulus, interaction)
     realised = {"rms_height": rms_of(grid, fft, heights), "pressure": pressure}  # collective
     attrs = record(realised)
     attrs["parameters"] |= _parameters(pressure, solvers, time_limit, stall_iterations)
@@ -464,6 +558,15 @@ def compare_into(
     if grid.comm.rank == 0:  # the verdicts come from reduced residuals: the same on every rank
         result.csv, result.png = write_compare(output, reference, trajectories, attrs)
     return result
+
+
+def posed_cell(scene: Any, modulus: float, interaction: Interaction) -> PeriodicProblem | Posed:
+    """The periodic cell of ``scene``: posed in the gap (the hard wall), or in the pressure
+    for an ``interaction`` that caps it (:class:`PressurePosed`)."""
+    grid, fft, heights = scene.grid, scene.fft, scene.heights
+    if interaction is HARD_WALL:
+        return PeriodicProblem(grid, fft, heights, modulus)
+    return PressurePosed(CappedPeriodicProblem(grid, fft, heights, modulus, interaction))
 
 
 def _parameters(

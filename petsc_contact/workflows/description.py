@@ -28,6 +28,9 @@ import numpy as np
 from ..conventions.units import METRES, NEWTONS, PASCALS, parse_quantity, pressure_value
 from ..conventions.validation import log_range, non_negative, positive
 from ..conventions.warnings import ConvertedLoads, user_level
+from ..interactions.hard_wall import HARD_WALL
+from ..interactions.hardness import HardnessCap
+from ..interactions.interaction import Interaction
 from ..substrates.layer import check_layer
 from .options import check_choices, check_rules, grid_size, run_default
 
@@ -115,10 +118,12 @@ class Run:
         0.5; ``modulus`` stays its contact modulus ``E/(1 - nu^2)``) and how it rests on its
         rigid base (``bonded``, ``frictionless``;
         :class:`~petsc_contact.substrates.layer.PeriodicLayer`).
-    footprint, flat_stiffness, stiffness
+    footprint, flat_stiffness, hardness, stiffness
         The punch's outline (``square``, ``disk``) and its flat-punch reference (``grid``,
-        ``analytic``: the exact continuum value, ``king``: King's estimate for a square);
-        whether every step adds the exact stiffness.
+        ``analytic``: the exact continuum value, ``king``: King's estimate for a square); the
+        hardness the pressure is capped at, on either geometry (``None``: the hard wall;
+        :class:`~petsc_contact.interactions.hardness.HardnessCap`); whether every step adds
+        the exact stiffness.
     output, fields, scalars_only, resume, overwrite, stop_after
         The HDF5 file (none: results only in memory), whether the fields of every step are
         stored, whether the height map is left out, whether an interrupted run is continued
@@ -167,6 +172,7 @@ class Run:
     base: str = run_default("base")
     footprint: str = run_default("footprint")
     flat_stiffness: str = run_default("flat_stiffness")
+    hardness: float | str | None = run_default("hardness")
     stiffness: bool = run_default("stiffness")
     output: str | None = run_default("output")
     fields: bool = run_default("fields")
@@ -194,6 +200,7 @@ class Run:
         if self.geometry not in GEOMETRIES:
             raise ValueError(f"geometry must be one of {', '.join(GEOMETRIES)}: {self.geometry}")
         positive("--modulus", self.modulus_value)
+        _ = self.interaction  # --hardness checked
         check_choices(lambda name: getattr(self, name))  # --device, --footprint, ...
         check_rules(lambda name: getattr(self, name))  # --sweep, --cut-from, --stop-after
         self._check_layer()
@@ -220,6 +227,8 @@ class Run:
         others = [f"--{n}" for n in ("pressures", "sweep") if getattr(self, n) is not None]
         if others:
             raise ValueError(f"give one kind of load: --mean-gaps or {' or '.join(others)}")
+        if self.hardness is not None:
+            raise ValueError("--mean-gaps with --hardness: a capped periodic run takes --pressures")
 
     def _check_layer(self) -> None:
         """``ValueError`` in one line for a layer's thickness (positive, on the periodic
@@ -231,6 +240,8 @@ class Run:
             raise ValueError(
                 "--thickness is the periodic geometry's: the punch presses a half-space"
             )
+        if self.hardness is not None:
+            raise ValueError("--thickness with --hardness: the capped cell is a half-space's")
         positive("--thickness", parse_quantity(self.thickness, METRES, "--thickness").value)
 
     def _normalise(self) -> None:
@@ -261,6 +272,14 @@ class Run:
     def pressure_unit(self) -> str | None:
         """The run's pressure unit: the modulus's (``--modulus 1GPa``), or none."""
         return parse_quantity(self.modulus, PASCALS, "--modulus").unit
+
+    @property
+    def interaction(self) -> Interaction:
+        """The law at the surface: the hard wall, or the cap of ``hardness`` (in the run's
+        pressure unit); ``ValueError`` in one line for a hardness not positive."""
+        if self.hardness is None:
+            return HARD_WALL
+        return HardnessCap(pressure_value(self.hardness, self.pressure_unit, "--hardness"))
 
     @property
     def measured(self) -> bool:

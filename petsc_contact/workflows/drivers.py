@@ -28,9 +28,11 @@ import numpy as np
 
 from ..backend.solve import Monitor
 from ..conventions.units import force_value, format_quantity, length_value, pressure_value
+from ..geometries.capped_periodic import CappedPeriodicProblem
 from ..geometries.periodic import LARGEST_LOAD, PeriodicProblem
 from ..geometries.punch import PunchProblem, footprint_mask
 from ..geometries.step import Step
+from ..interactions.hardness import HardnessCap
 from ..physics.continuation import Held
 from ..physics.observables import MIN_CONTACT_PIXELS
 from ..solver.backends import SolverBackend
@@ -88,9 +90,13 @@ def on_device(run: Run, device: str, options: Sequence[str] = ()) -> Run:
 
 def driver_for(run: Run, scene: Scene, backend: SolverBackend) -> Driver:
     """The driver of ``run``'s geometry on ``scene``, solved by ``backend``, its loads
-    checked (``ValueError``)."""
-    kind = PunchDriver if run.geometry == "punch" else PeriodicDriver
-    return kind(run, scene, backend)
+    checked (``ValueError``): a periodic run with a hardness is posed in the pressure
+    (:class:`CappedPeriodicDriver`)."""
+    if run.geometry == "punch":
+        return PunchDriver(run, scene, backend)
+    if run.hardness is not None:
+        return CappedPeriodicDriver(run, scene, backend)
+    return PeriodicDriver(run, scene, backend)
 
 
 class PeriodicDriver:
@@ -168,6 +174,46 @@ def _layer_words(run: Run) -> str:
     return f", a {run.base} layer {thickness} thick (nu = {run.poisson:g}) on a rigid base"
 
 
+class CappedPeriodicDriver:
+    """A periodic run with a hardness: the cell posed in the pressure
+    (:class:`~petsc_contact.geometries.capped_periodic.CappedPeriodicProblem`), each nominal
+    pressure reached by Newton on the approach as the punch reaches a force
+    (:func:`~petsc_contact.workflows.punch_sweep.punch_sweep`).  It takes ``--pressures``,
+    each below the hardness."""
+
+    def __init__(self, run: Run, scene: Scene, backend: SolverBackend) -> None:
+        if run.pressures is None or run.sweep is not None:
+            raise ValueError("a periodic run with --hardness takes --pressures, not a --sweep")
+        cap = run.interaction
+        assert isinstance(cap, HardnessCap)  # driver_for's choice: run.hardness is given
+        self.loads = [pressure_value(p, run.pressure_unit, "--pressures") for p in run.pressures]
+        for p0 in self.loads:
+            cap.check_nominal(p0, "--pressures")
+        problem = CappedPeriodicProblem(
+            scene.grid, scene.fft, scene.heights, run.modulus_value, cap, backend
+        )
+        problem.filled = scene.filled
+        self.resolved: dict[str, Any] = {}
+        if any(isinstance(p, str) for p in run.pressures):
+            self.resolved = {"pressures_resolved": self.loads}
+        self.run, self.problem, self.solver = run, problem, PunchSolver(problem)
+        self.intro = f", hardness {format_quantity(cap.hardness, run.pressure_unit)}"
+        self.backend = type(problem.compliance.fft).__name__
+
+    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
+        """Newton on the approach to each nominal pressure's force, ``p0 A``."""
+        state, held = start or (None, None)
+        run, area = self.run, self.problem.grid.area
+        forces = [p0 * area for p0 in loads]
+        return punch_sweep(
+            self.solver, forces, True, run.fields, monitor, run.stiffness, state, held
+        )
+
+    def close(self) -> None:
+        """Release the solver."""
+        self.solver.close()
+
+
 HALF_AREA = 0.5  # a measured map's default sweep ends where Persson's law puts half in contact
 
 
@@ -229,7 +275,7 @@ class PunchDriver:
             mask, beta = footprint_mask(scene.grid, run.footprint)
             problem = PunchProblem(
                 scene.grid, scene.heights, run.modulus_value, mask, run.flat_stiffness, beta,
-                device=scene.fft.device, backend=backend,
+                device=scene.fft.device, backend=backend, interaction=run.interaction,
             )  # fmt: skip
             problem.filled = scene.filled
         given = [run.forces, run.approaches, run.pressures, run.sweep]
@@ -237,6 +283,10 @@ class PunchDriver:
             raise ValueError("give one of --approaches, --forces, --pressures and --sweep")
         self.by_force = run.forces is not None or run.pressures is not None
         self.loads, self.resolved = _punch_loads(run, problem, scene.resolved["length_unit"])
+        if self.by_force:  # a hardness cap at or below a nominal pressure over the face
+            area = problem.footprint_pixels * problem.grid.pixel_area
+            for force in self.loads:
+                problem.interaction.check_nominal(force / area, "the force")
         if self.by_force and posed_here:  # the Python API's solver says what it reaches
             _check_forces(self.loads, problem, run)
         self.run, self.solver = run, PunchSolver(problem)

@@ -515,6 +515,22 @@ _PUNCH_LOADS = (
             "2048). Each step records `flat_punch_stiffness` and its `flat_punch_beta`"
         ),
     ),
+    _option(
+        "hardness",
+        "cap the pressure at the hardness H (units of E*, or with a unit: 5GPa): Kato's "
+        "perfectly plastic surface layer",
+        ("periodic", "punch", "compare"),
+        metavar="H",
+        parse=quantity,
+        unit="pressure",
+        shown_default="none: the hard wall",
+        more="A pixel at the cap carries `H` and the punch sinks into it by the plastic "
+        "displacement (`--fields`: `plastic_displacement`); each step records "
+        "`plastic_area_fraction`, and its stiffness holds the plastic pixels at the cap "
+        "([formulation.md](formulation.md)). A periodic run (and `compare`) is then posed in "
+        "the pressure and takes `--pressures`; a nominal pressure (the punch's: over its "
+        "face) not below `H` is refused",
+    ),
 )
 
 LAYERED = ("periodic", "ensemble")  # the periodic runs that pose their own substrate

@@ -21,6 +21,7 @@ from ..conventions.grid import grid_for
 from ..conventions.validation import check_finite, keywords_after_first, non_negative, positive
 from ..geometries.punch import PunchProblem, footprint_mask
 from ..geometries.step import Step, Steps
+from ..interactions.interaction import Interaction
 from ..io.topography import Heights, map_and_lengths
 from ..numerics.device import Device, get_device
 from ..solver.backends import SolverBackend
@@ -76,6 +77,7 @@ def punch_contact(
     comm: Any = None,
     flat: str | None = None,
     device: str = "cpu",
+    hardness: float | None = None,
 ) -> Steps:
     """Press a rigid punch with face ``heights`` into a free elastic half-space.
 
@@ -95,8 +97,9 @@ def punch_contact(
     options, fields, progress, monitor, comm, device
         As for :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact` (``device``
         too: ``cpu``, TAO; ``gpu`` or ``cpu-array``, the package's CG without petsc4py).
-    stiffness
-        Add the exact interfacial stiffness to every step, as ``Run``'s ``stiffness`` does.
+    stiffness, hardness
+        Add the exact interfacial stiffness to every step, and cap the pressure at
+        ``hardness`` (``None``: no cap), as ``Run``'s ``stiffness`` and ``hardness`` do.
     footprint
         ``square`` (default) or ``disk``, as ``Run``'s, or a full ``nx x ny`` boolean mask.
     flat_stiffness, beta
@@ -111,6 +114,7 @@ def punch_contact(
     """
     face = (footprint, _renamed_flat(flat, flat_stiffness), beta)
     kept = {"fields": fields, "stiffness": stiffness, **_punch_loads(approaches, forces)}
+    kept |= {"hardness": hardness}
     array, sides, _ = map_and_lengths(heights, length)
     run = api_run(array, sides, modulus, options, device, geometry="punch", **kept)
     posing = partial(_posed, array, sides, modulus, face, comm)
@@ -144,7 +148,7 @@ def _posed(
 ) -> tuple[Scene, PunchDriver]:
     """:func:`punch_contact`'s scene and driver: its problem (:func:`_punch_problem`) on
     ``run``'s device, with the footprint, flat punch and shape factor ``described``."""
-    face = _PunchFace(*described, get_device(run.device), backend)
+    face = _PunchFace(*described, get_device(run.device), backend, run.interaction)
     problem = _punch_problem(array, sides, modulus, face, comm)
     scene = posed_scene(problem.grid)
     return scene, PunchDriver(run, scene, backend, problem)
@@ -153,13 +157,15 @@ def _posed(
 @dataclass(frozen=True)
 class _PunchFace:
     """What :func:`punch_contact` says of its punch besides the map: the footprint, the
-    flat-punch reference and its shape factor, the device and the solver backend."""
+    flat-punch reference and its shape factor, the device, the solver backend and the
+    interaction."""
 
     footprint: str | np.ndarray | None
     flat_stiffness: str
     beta: float | None
     device: Device
     backend: SolverBackend
+    interaction: Interaction
 
 
 def _punch_problem(
@@ -181,6 +187,7 @@ def _punch_problem(
         beta,
         device=face.device,
         backend=face.backend,
+        interaction=face.interaction,
     )
     check_map(array, grid, periodic=False)
     return problem

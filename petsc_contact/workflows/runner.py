@@ -253,7 +253,7 @@ class Prepared:
         for i, step in enumerate(steps_of, len(table)):
             if store is not None:
                 fields: dict[str, Any] | None = (
-                    {n: step.field(n) for n in FIELD_NAMES} if run.fields else None
+                    {n: step.field(n) for n in field_names(run)} if run.fields else None
                 )
                 self._note(store)
                 store.append(step.scalars, fields, state=step.state, held=step.held)
@@ -307,7 +307,7 @@ class Prepared:
         run, grid = self.run, self.scene.grid
         if run.output is None:
             return None, None
-        fields = FIELD_NAMES if run.fields else ()
+        fields = field_names(run) if run.fields else ()
         finished = self.resumable
         heights, filled = _maps(run, self.scene)
         if not finished.steps:
@@ -323,6 +323,12 @@ class Prepared:
         earlier = json.loads(str(store.attributes.get("warnings", "")) or "[]")  # rank 0's
         self.warnings[:0] = [w for w in earlier if w not in self.warnings]
         return store, start
+
+
+def field_names(run: Run) -> tuple[str, ...]:
+    """The fields a step of ``run`` keeps with ``--fields``: the gap, pressure and contact,
+    and its interaction's (``plastic_displacement`` under a hardness cap)."""
+    return (*FIELD_NAMES, *run.interaction.field_names)
 
 
 def _maps(run: Run, scene: Scene) -> tuple[np.ndarray | None, np.ndarray | None]:

@@ -30,9 +30,9 @@ import numpy as np
 
 from petsc_contact.conventions.grid import fft_order
 from petsc_contact.geometries.step import Step
+from petsc_contact.paper.paper_study import add_pressures_option, log_pressures
 from petsc_contact.physics import theory
 from petsc_contact.workflows import scenes
-from petsc_contact.workflows.paper_study import add_pressures_option, log_pressures
 from petsc_contact.workflows.periodic_sweep import periodic_contact
 
 HURSTS = (0.3, 0.5, 0.7)
@@ -232,7 +232,7 @@ def _geometric(x: np.ndarray) -> float:
 def seed_factors(run: dict[str, np.ndarray], fitted: np.ndarray, hurst: float) -> dict:
     """One seed at the fitted loads: each measurement against Appendix B's, as arrays over
     the loads (ratios ``theory/measured`` for energies, ``measured/theory`` for lengths)."""
-    from petsc_contact.workflows.ensemble import power_law_fit
+    from petsc_contact.paper.fits import power_law_fit
 
     p = run["nominal_pressure"][fitted]
     m = {k: run[k][fitted] for k in (*MEASURED, "stiffness")}

@@ -10,17 +10,17 @@ import argparse
 import numpy as np
 
 from petsc_contact.geometries.punch import flat_punch_stiffness, interfacial_stiffness
-from petsc_contact.physics import theory
-from petsc_contact.reference import flat_punch
-from petsc_contact.workflows import scenes
-from petsc_contact.workflows.ensemble import power_law_fit
-from petsc_contact.workflows.paper_study import (
+from petsc_contact.paper.fits import power_law_fit
+from petsc_contact.paper.paper_study import (
     RMS_SLOPE,
     add_data_options,
     add_pressures_option,
     log_pressures,
     piece_files,
 )
+from petsc_contact.physics import theory
+from petsc_contact.reference import flat_punch
+from petsc_contact.workflows import scenes
 
 
 def crossover_from_simulation(

@@ -6,15 +6,15 @@ import argparse
 import numpy as np
 
 from petsc_contact.io.store import is_partial
-from petsc_contact.physics import theory
-from petsc_contact.workflows import scenes
-from petsc_contact.workflows.ensemble import ensemble_statistics
-from petsc_contact.workflows.paper_study import (
+from petsc_contact.paper.fits import ensemble_statistics
+from petsc_contact.paper.paper_study import (
     add_pressures_option,
     add_redraw_options,
     log_pressures,
     piece_files,
 )
+from petsc_contact.physics import theory
+from petsc_contact.workflows import scenes
 
 PAPER_ALPHA = {0.3: 0.72, 0.5: 0.66, 0.7: 0.59}
 

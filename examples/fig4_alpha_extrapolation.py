@@ -9,14 +9,14 @@ import argparse
 import numpy as np
 
 from petsc_contact.io.store import is_partial
-from petsc_contact.workflows import scenes
-from petsc_contact.workflows.paper_study import (
+from petsc_contact.paper.paper_study import (
     FIG3_RATIOS,
     add_pressures_option,
     add_redraw_options,
     log_pressures,
     piece_files,
 )
+from petsc_contact.workflows import scenes
 
 
 def _computed(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]:

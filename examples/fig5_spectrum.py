@@ -13,9 +13,9 @@ from mpi4py import MPI
 
 from petsc_contact.conventions.grid import Grid, fundamental_wavevector
 from petsc_contact.numerics.fft import make_fft
+from petsc_contact.paper.paper_study import RMS_SLOPE
 from petsc_contact.physics.surface import radial_psd, rms_of
 from petsc_contact.workflows import scenes
-from petsc_contact.workflows.paper_study import RMS_SLOPE
 
 
 def spectra(grid_n: int, hurst: float, ratio: float, cutoff: float, seed: int) -> dict:

@@ -5,14 +5,14 @@ import argparse
 
 import numpy as np
 
-from petsc_contact.physics import theory
-from petsc_contact.workflows import scenes
-from petsc_contact.workflows.paper_study import (
+from petsc_contact.paper.paper_study import (
     add_data_options,
     add_pressures_option,
     log_pressures,
     piece_files,
 )
+from petsc_contact.physics import theory
+from petsc_contact.workflows import scenes
 
 HURST = 0.7
 

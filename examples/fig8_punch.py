@@ -9,15 +9,10 @@ import argparse
 import numpy as np
 
 from petsc_contact.geometries.punch import flat_punch_stiffness, interfacial_stiffness
+from petsc_contact.paper.paper_study import CUT_FROM, PUNCH_RATIOS, add_data_options, piece_files
 from petsc_contact.physics import theory
 from petsc_contact.reference import flat_punch
 from petsc_contact.workflows import scenes
-from petsc_contact.workflows.paper_study import (
-    CUT_FROM,
-    PUNCH_RATIOS,
-    add_data_options,
-    piece_files,
-)
 
 HURST = 0.7
 FACES = ("periodic", "cut")
@@ -29,7 +24,7 @@ and King's estimate, the paper's choice (as Pharr et al. quote it)."""
 
 def linearity(p: np.ndarray, k: np.ndarray, resolved: np.ndarray) -> str:
     """How far ``K ~ p`` holds over the ``resolved`` loads (at least 16 contact pixels): the
-    widest windows of :func:`~petsc_contact.workflows.scenes.linear_width` at each of
+    widest windows of :func:`~petsc_contact.paper.figures.linear_width` at each of
     :data:`TOLERANCES`, and the smallest ``K/p``'s load."""
     ratio = np.where(resolved, k / p, np.nan)
     parts = [f"K/p smallest at p/E* {p[np.nanargmin(ratio)]:.2g}"]

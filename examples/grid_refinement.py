@@ -13,8 +13,8 @@ import os
 
 import numpy as np
 
+from petsc_contact.paper.paper_study import add_pressures_option, log_pressures
 from petsc_contact.workflows import scenes
-from petsc_contact.workflows.paper_study import add_pressures_option, log_pressures
 
 BINS = (1, 6, 16, 21, 100, 1000, np.inf)  # contact pixels on the coarsest grid
 

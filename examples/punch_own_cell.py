@@ -17,14 +17,9 @@ import argparse
 
 import numpy as np
 
+from petsc_contact.paper.paper_study import PUNCH_RATIOS, RMS_SLOPE, add_data_options, piece_files
 from petsc_contact.physics import theory
 from petsc_contact.workflows import scenes
-from petsc_contact.workflows.paper_study import (
-    PUNCH_RATIOS,
-    RMS_SLOPE,
-    add_data_options,
-    piece_files,
-)
 
 HURST = 0.7
 WINDOW = (0.01, 0.1)  # the contact areas where the linear regime is read
@@ -160,7 +155,7 @@ def u0_by_gap(p: np.ndarray, k: np.ndarray, gap: np.ndarray) -> float:
 def seeds_and_loads(windows: list[tuple[np.ndarray, ...]], estimator: object) -> np.ndarray:
     """The 68% percentile interval of the median over seeds of ``estimator(p, K, u_bar)``,
     seeds resampled and, within each seed drawn, its window's loads resampled
-    (:data:`~petsc_contact.workflows.scenes.BOOTSTRAP_RESAMPLES` times, a fixed stream)."""
+    (:data:`~petsc_contact.paper.figures.BOOTSTRAP_RESAMPLES` times, a fixed stream)."""
     rng = np.random.default_rng(scenes.BOOTSTRAP_SEED)
     values = []
     for _ in range(scenes.BOOTSTRAP_RESAMPLES):

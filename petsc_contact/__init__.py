@@ -9,7 +9,8 @@ package's own solver on arrays of any device; the solver backend), ``io`` (HDF5,
 plots),
 ``backend`` (PETSc: operators, TAO driver, the package's TAO types, preconditioners,
 stiffness solves), ``geometries`` (the contact core: periodic and punch), ``workflows``
-(runs, sweeps, compare, ensembles, figures, the paper's study) and ``cli``.  The names below
+(runs, sweeps, compare, ensembles), ``paper`` (theory for a map, figures, the paper's study)
+and ``cli``.  The names below
 are loaded when first used, so that importing the package is quick; PETSc is initialised by
 the backend (:func:`petsc_contact.backend._petsc.init`) when a run needs it.
 """
@@ -25,7 +26,10 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 from typing import Any
 
+from ._moved import install
 from ._version import __version__
+
+install()  # the old paths of moved modules (petsc_contact._moved)
 
 PUBLIC = {  # loaded when first used: importing the package loads no numba, scipy or PETSc
     "Grid": "conventions.grid",
@@ -35,7 +39,7 @@ PUBLIC = {  # loaded when first used: importing the package loads no numba, scip
     "run_contact": "workflows.runner",
     "run_ensemble": "workflows.seeds",
     "read_topography": "io.topography",
-    "predict_map": "workflows.predictions",
+    "predict_map": "paper.predictions",
     "read_frame": "io.results",
 }
 __all__ = [*PUBLIC, "__version__"]

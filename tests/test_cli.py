@@ -456,26 +456,23 @@ def test_modules_import_only_from_layers_above():
         "backend",
         "geometries",
         "workflows",
+        "paper",
         "cli",
     ]
     rank = {name: i for i, name in enumerate(layers)}
     rank["_version"] = -1  # the ground floor: the version, defined once, imports nothing
     version = pathlib.Path(__file__).parent.parent / "petsc_contact" / "_version.py"
     assert "import " not in version.read_text().split('"""')[-1]  # code, not docstring
+    moved = pathlib.Path(__file__).parent.parent / "petsc_contact" / "_moved.py"
+    assert "from ." not in moved.read_text()  # the old paths' finder imports no package module
     package = pathlib.Path(__file__).parent.parent / "petsc_contact"
     folders = {p.name for p in package.iterdir() if (p / "__init__.py").exists()}
     assert folders == set(layers), "every folder of the package is a layer"
-    # deprecated aliases of moved modules: a warning and a re-export of the new module, no more
-    aliases = {"conventions/fft.py", "backend/kernels.py", "backend/schur.py"}
+    names = [p.name for p in package.glob("*/*.py") if p.name != "__init__.py"]
+    assert len(names) == len(set(names)), "no two modules of one name"
     checked = 0
     for path in package.glob("*/*.py"):
         folder = path.parent.name
-        if f"{folder}/{path.name}" in aliases:
-            tree = ast.parse(path.read_text())
-            imports = [n for n in tree.body if isinstance(n, ast.Import | ast.ImportFrom)]
-            assert len(imports) == 2 and "DeprecationWarning" in ast.unparse(tree), path
-            assert imports[1].module.startswith("numerics."), path  # type: ignore[union-attr]
-            continue
         for node in ast.walk(ast.parse(path.read_text())):
             if not isinstance(node, ast.ImportFrom):
                 continue
@@ -643,7 +640,7 @@ def test_a_damaged_study_piece_is_named_not_skipped_or_recomputed(tmp_path):
 def test_study_computes_a_shared_run_once():
     """Fig. 3's largest ratio is the same run as Fig. 2's H = 0.3: listed for both figures,
     kept once (in fig2/)."""
-    from petsc_contact.workflows.paper_study import pieces
+    from petsc_contact.paper.paper_study import pieces
 
     todo = pieces()
     assert len({tuple(p.run.arguments()) for p in todo}) == len(todo)
@@ -657,7 +654,7 @@ def test_dataset_pieces_reuse_the_paper_figures_runs():
     seeds 5-64 its own; the punch has 8 seeds of each face and ``L_p/lambda_r``, the cut faces
     from a 4x larger surface; the Hertz pieces put ``lambda_1`` at 16, 32 and 64 pixels; each
     periodic punch face is also a periodic cell, loaded 0.05 decades apart."""
-    from petsc_contact.workflows.paper_study import pieces
+    from petsc_contact.paper.paper_study import pieces
 
     todo = pieces()
     seeds = [p for p in todo if "seeds" in (p.figure, *p.used_by)]

@@ -25,7 +25,7 @@ from petsc_contact.conventions.warnings import (
     command_line,
     option,
 )
-from petsc_contact.workflows.predictions import TheoryWarning
+from petsc_contact.paper.predictions import TheoryWarning
 
 SCENE = {"grid": 32, "hurst": 0.7, "rms_slope": 0.1, "pressures": [1e-3, 1e-2]}
 

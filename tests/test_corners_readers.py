@@ -12,9 +12,9 @@ from conftest import cli, smooth_map
 
 from petsc_contact.conventions.warnings import DoubtfulMap
 from petsc_contact.io.topography import NotAMap, read_topography, surface_topography_available
+from petsc_contact.paper.predictions import predict_map
 from petsc_contact.physics.preparation import detrend
 from petsc_contact.workflows.description import Run
-from petsc_contact.workflows.predictions import predict_map
 from petsc_contact.workflows.runner import run_contact
 
 needs_st = pytest.mark.skipif(
@@ -113,7 +113,7 @@ def _tilted(tmp_path):
     return str(tmp_path / "tilted.npy"), tilted
 
 
-@pytest.mark.filterwarnings("ignore::petsc_contact.workflows.predictions.TheoryWarning")
+@pytest.mark.filterwarnings("ignore::petsc_contact.paper.predictions.TheoryWarning")
 def test_predict_map_takes_the_run_s_preparation(tmp_path):
     """predict_map takes Run's preparation keywords and prepares the map as a run does: the
     tilted map warns as the run does, detrend='slope' removes the tilt, a height unit scales

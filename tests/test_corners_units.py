@@ -17,8 +17,8 @@ from conftest import cli
 
 from petsc_contact.conventions.units import display_scale, format_quantity, typeset
 from petsc_contact.io import plot
-from petsc_contact.workflows.redraw import field_map, redraw
-from petsc_contact.workflows.theory_run import compared_runs
+from petsc_contact.paper.redraw import field_map, redraw
+from petsc_contact.paper.theory_run import compared_runs
 
 P = np.geomspace(1e-5, 1e-1, 5)  # log-spaced loads, in units of E* (1 GPa where a unit)
 SCENE = "--grid 32 --hurst 0.7 --rms-slope 0.1 --seed 3".split()

@@ -23,7 +23,7 @@ from petsc_contact import (
 from petsc_contact.io.topography import Topography, as_topography
 
 pytestmark = pytest.mark.filterwarnings(  # a smooth map, no power law: p_c is meaningless
-    "ignore::petsc_contact.workflows.predictions.TheoryWarning"
+    "ignore::petsc_contact.paper.predictions.TheoryWarning"
 )
 SIDES = (4.0, 3.0)  # um
 PRESSURE, APPROACH = 1e-3, 2e-3

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from conftest import cli
 
-from petsc_contact.workflows.ensemble import ensemble_statistics, power_law_fit
+from petsc_contact.paper.fits import ensemble_statistics, power_law_fit
 
 
 def test_power_law_fit_exact_and_noisy():
@@ -40,7 +40,7 @@ def test_resolution_rule_counts_pixels_and_keeps_unresolved_loads_out_of_the_fit
     """A load is resolved when every seed has at least 16 contact pixels, counted from the
     area fraction whatever its rounding (1536^2 is not a power of two); the fit of exact
     power laws ``K = c p^0.8`` over the resolved loads below ``p_c`` returns 0.8."""
-    from petsc_contact.workflows.scenes import contact_resolved, finite_size_fit, resolved
+    from petsc_contact.paper.figures import contact_resolved, finite_size_fit, resolved
 
     n = 1536
     pixels = np.array([[8, 15, 16, 40, 90, 200, 500, 2000], [9, 16, 17, 50, 99, 300, 700, 3000]])
@@ -65,7 +65,7 @@ def test_the_seed_bootstrap_spans_what_the_seeds_disagree_on():
     """Four seeds of exponents 0.6, 0.7, 0.8 and 0.9: the 68% interval of the averaged
     stiffness' exponent over resampled seeds lies inside the seeds' range and holds the
     average's own exponent; it narrows as the seeds agree more."""
-    from petsc_contact.workflows.scenes import finite_size_fit
+    from petsc_contact.paper.figures import finite_size_fit
 
     n, p = 512, np.geomspace(1e-6, 1e-5, 4)
     curves = {"nominal_pressure": p, "area_fraction": np.full((4, 4), 0.01)}

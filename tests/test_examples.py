@@ -205,7 +205,7 @@ def test_figure_scripts_refuse_loads_that_are_not_log_spaced(bad, capsys):
     fractional count is a usage error naming the option, not a traceback from numpy."""
     import argparse
 
-    from petsc_contact.workflows.paper_study import add_pressures_option, log_pressures
+    from petsc_contact.paper.paper_study import add_pressures_option, log_pressures
 
     parser = argparse.ArgumentParser()
     add_pressures_option(parser, 1e-8, 1e-3, 16)
@@ -235,8 +235,8 @@ def test_an_unfinished_study_is_read_over_the_loads_every_seed_has(tmp_path):
     """``--with-partial``: a piece still computing (``.partial``, 4 of 6 loads) joins the
     three complete seeds; the script fits them over the 4 loads all four have and says so.
     Without the option, and for a piece that has kept no step, only complete files count."""
-    from petsc_contact.workflows.paper_study import piece_files
-    from petsc_contact.workflows.scenes import curves_from_files
+    from petsc_contact.paper.figures import curves_from_files
+    from petsc_contact.paper.paper_study import piece_files
 
     fig2 = tmp_path / "paper" / "fig2"
     fig2.mkdir(parents=True)
@@ -355,7 +355,7 @@ def test_sweeps_whose_loads_differ_by_rounding_are_one_sweep(tmp_path):
     sweep written under each are read together; loads apart by more are refused."""
     import numpy as np
 
-    from petsc_contact.workflows.scenes import curves_from_files
+    from petsc_contact.paper.figures import curves_from_files
 
     for name, scale in (("a.h5", 1.0), ("b.h5", 1 + 2e-16), ("c.h5", 1 + 1e-9)):
         _sweep_file(tmp_path / name, 1, 6, True)

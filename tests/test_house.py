@@ -57,7 +57,7 @@ def test_the_command_line_writes_no_file_itself():
 
 
 def test_the_command_line_reads_no_results_file():
-    """Results files are read by the library too (``workflows.redraw``, ``theory_run``):
+    """Results files are read by the library too (``paper.redraw``, ``theory_run``):
     no module under ``cli/`` imports h5py."""
     importing = [
         path

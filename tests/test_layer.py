@@ -202,7 +202,7 @@ def test_the_command_line_runs_a_layer_and_records_it(tmp_path):
 
     import h5py
 
-    from petsc_contact.workflows.theory_run import check_compared
+    from petsc_contact.paper.theory_run import check_compared
     from tests.conftest import cli
 
     out = tmp_path / "layer.h5"

@@ -95,11 +95,19 @@ def test_importing_the_package_and_its_help_load_no_solver():
         ("conventions.fft", "numerics.fft", "make_fft"),
         ("backend.kernels", "numerics.kernels", "free_set"),
         ("backend.schur", "numerics.schur", "ContactSchur"),
+        ("solver.cg", "solver.constrained_cg", "ConstrainedCG"),
+        ("workflows.ensemble", "paper.fits", "power_law_fit"),
+        ("workflows.paper_study", "paper.paper_study", "run_pieces"),
+        ("workflows.predictions", "paper.predictions", "predict_map"),
+        ("workflows.redraw", "paper.redraw", "redraw"),
+        ("workflows.scenes", "paper.figures", "stiffness_curve"),
+        ("workflows.theory_file", "paper.theory_file", "write_theory"),
+        ("workflows.theory_run", "paper.theory_run", "line_scan"),
     ],
 )
 def test_moved_modules_warn_and_forward(old, new, name):
-    """Modules moved in 0.2.0 still import from their old paths, with a DeprecationWarning
-    naming the new one, and give the same objects."""
+    """Moved modules still import from their old paths, with a DeprecationWarning naming the
+    new one, and give the same objects (``petsc_contact._moved``)."""
     import importlib
     import sys
 

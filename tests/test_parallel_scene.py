@@ -36,7 +36,7 @@ import json
 import sys
 from petsc_contact.cli.main import main
 from petsc_contact.cli.study import STATUS, _piece
-from petsc_contact.workflows.paper_study import punch_pieces, run_pieces
+from petsc_contact.paper.paper_study import punch_pieces, run_pieces
 
 for args in json.loads(sys.argv[1]):
     if main(args):

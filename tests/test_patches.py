@@ -83,7 +83,7 @@ def test_patch_sizes_and_distributions_add_up(petsc):
     histograms count every contact and every open pixel; the filled statistics see the
     filled pixels."""
     from petsc_contact import periodic_contact
-    from petsc_contact.workflows.scenes import surface
+    from petsc_contact.paper.figures import surface
 
     h, _ = surface(64, 0.7, 1.0, 32.0, 2)
     (step,) = periodic_contact(h, length=1.0, modulus=1.0, pressures=[1e-2], fields=True)
@@ -106,7 +106,7 @@ from mpi4py import MPI
 from petsc_contact import periodic_contact
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.physics.observables import patch_sizes
-from petsc_contact.workflows.scenes import surface
+from petsc_contact.paper.figures import surface
 h, _ = surface(64, 0.7, 1.0, 32.0, {seed})
 (step,) = periodic_contact(
     h, length=1.0, modulus=1.0, pressures=[1e-2], fields=True, comm=MPI.COMM_SELF

@@ -16,8 +16,8 @@ from SurfaceTopography import open_topography
 from petsc_contact import periodic_contact, punch_contact
 from petsc_contact.io import topography as topography_module
 from petsc_contact.io.topography import NotAMap, read_topography
+from petsc_contact.paper.predictions import predict_map
 from petsc_contact.physics.preparation import fill_undefined
-from petsc_contact.workflows.predictions import predict_map
 
 SIDES = (4.0, 3.0)  # um
 

@@ -337,7 +337,7 @@ def test_an_unresolved_force_is_flagged_not_converged(petsc):
     """A force whose approach is lost in the gap tolerance comes back with force 0: it is
     flagged, with the reason, never reported converged; a resolved one meets its target."""
     from petsc_contact import punch_contact
-    from petsc_contact.workflows.scenes import surface
+    from petsc_contact.paper.figures import surface
 
     h, _ = surface(32, 0.7, 1.0, 16.0, 1)
     tiny, fine = punch_contact(h, length=1.0, modulus=1.0, forces=[1e-30, 1e-3])

@@ -9,7 +9,7 @@ from petsc_contact.geometries.periodic import PeriodicProblem
 from petsc_contact.numerics.fft import make_fft
 from petsc_contact.numerics.schur import response_quarter
 from petsc_contact.physics.surface import self_affine
-from petsc_contact.solver.cg import ONE_RANK, growth_fraction
+from petsc_contact.solver.constrained_cg import ONE_RANK, growth_fraction
 from petsc_contact.workflows.periodic_sweep import periodic_contact
 
 

@@ -167,9 +167,9 @@ def test_prediction_from_a_map_matches_the_prescribed_spectrum():
     put u0 about 20% lower (docs/measured.md)."""
     from petsc_contact.conventions.grid import Grid
     from petsc_contact.numerics.fft import make_fft
+    from petsc_contact.paper.figures import ideal_spectrum
+    from petsc_contact.paper.predictions import predict
     from petsc_contact.physics.surface import self_affine
-    from petsc_contact.workflows.predictions import predict
-    from petsc_contact.workflows.scenes import ideal_spectrum
 
     grid = Grid(512, 1.0)
     fft = make_fft(grid)
@@ -238,7 +238,7 @@ def test_the_quoted_q_r_h_rms_is_taken_with_two_pi_over_lambda_r(ratio, quoted):
     L = lambda_r scatters by that much and more (the study's four H = 0.7 seeds: -11% to
     +19% of the expectation), and 1.3e-2 is quoted to two figures.  With q_r = pi/lambda_r
     they would be half: the height's q_r of the paper's recipe is 2 pi/lambda_r."""
-    from petsc_contact.workflows.scenes import ideal_spectrum
+    from petsc_contact.paper.figures import ideal_spectrum
 
     q, c = ideal_spectrum(1.0, 0.7, ratio, 4096, rms_slope=0.1, points=100_000)
     h_rms = np.sqrt(2 * np.pi * np.trapezoid(q * c, q))
@@ -299,7 +299,7 @@ def test_a_profile_predicts_what_its_map_predicts():
     scatters: one direction, one row)."""
     import warnings
 
-    from petsc_contact.workflows.predictions import predict, predict_profile
+    from petsc_contact.paper.predictions import predict, predict_profile
 
     grid, fft, h = _surface((512, 512), 1.0, cutoff=256)
     loads = np.geomspace(1e-5, 1e-2, 4)
@@ -320,7 +320,7 @@ def test_theory_says_when_it_is_unsure():
 
     from petsc_contact.conventions.grid import Grid
     from petsc_contact.numerics.fft import SerialFFT
-    from petsc_contact.workflows.predictions import TheoryWarning, predict
+    from petsc_contact.paper.predictions import TheoryWarning, predict
 
     grid = Grid(128, 1.0)
     noise = np.random.default_rng(0).standard_normal((128, 128)) * 1e-3

@@ -1,5 +1,5 @@
 """The package's constrained CG as TAO Python types (the PETSc edge of
-:mod:`petsc_contact.solver.cg`).
+:mod:`petsc_contact.solver.constrained_cg`).
 
 Select them like any TAO type::
 
@@ -7,18 +7,18 @@ Select them like any TAO type::
     -tao_type python -tao_python_type petsc_contact.backend.cg.PolonskyKeer
 
 The algorithm (an active-set conjugate gradient for ``min f(x), lower <= x <= upper``) lives
-in :class:`~petsc_contact.solver.cg.ConstrainedCG` and works on arrays; here TAO gives it its
-Vecs' arrays, its objective/gradient callback and its Hessian ``Mat``, and judges it as it
-judges its own types: every iteration reports the objective, the natural residual (the
+in :class:`~petsc_contact.solver.constrained_cg.ConstrainedCG` and works on arrays; here TAO
+gives it its Vecs' arrays, its objective/gradient callback and its Hessian ``Mat``, and judges
+it as it judges its own types: every iteration reports the objective, the natural residual (the
 projected gradient's norm, TAO's ``gnorm``) and the step length to TAO's monitors
 (``-tao_monitor``, ``tao.setMonitor``) and runs TAO's convergence test (:func:`check_converged`:
 every TAO tolerance, ``-tao_max_it``, ``-tao_max_funcs``, a user's ``tao.setConvergenceTest``).
 ``-tao_view`` describes the solver, its preconditioner and its tolerances.
-A Hessian whose Python context is a :class:`~petsc_contact.solver.cg.SplitHessian` (the
+A Hessian whose Python context is a :class:`~petsc_contact.solver.constrained_cg.SplitHessian` (the
 package's FFT operators) is applied in two halves; any other is multiplied and dotted.
 :class:`PreconditionedCG` applies a ``PC`` (the Fourier compliance the package gives it)
 restricted to the free set; a ``PC`` whose context is a
-:class:`~petsc_contact.solver.cg.ContactPreconditioner` follows the free set.
+:class:`~petsc_contact.solver.constrained_cg.ContactPreconditioner` follows the free set.
 :class:`PolonskyKeer` is the unpreconditioned method (``M = I``).  The work Vecs are kept
 from one solve to the next and destroyed with the TAO.
 """
@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from ..numerics.device import CPU
-from ..solver.cg import (
+from ..solver.constrained_cg import (
     MONITOR,
     ONE_RANK,
     ConstrainedCG,
@@ -124,8 +124,8 @@ def check_converged(tao: Any) -> int:
 
 
 class TaoConvergence:
-    """The :class:`~petsc_contact.solver.cg.Convergence` of a solve inside TAO: each iteration
-    goes to TAO's monitors and convergence test (:func:`check_converged`)."""
+    """The :class:`~petsc_contact.solver.constrained_cg.Convergence` of a solve inside TAO:
+    each iteration goes to TAO's monitors and convergence test (:func:`check_converged`)."""
 
     def __init__(self, tao: Any) -> None:
         self.tao = tao
@@ -211,8 +211,8 @@ class PolonskyKeer:
         self.arrays.close()
 
     def solve(self, tao: Any) -> None:
-        """Run :class:`~petsc_contact.solver.cg.ConstrainedCG` on ``tao``'s solution vector
-        (TAO's ``TaoSolve``)."""
+        """Run :class:`~petsc_contact.solver.constrained_cg.ConstrainedCG` on ``tao``'s solution
+        vector (TAO's ``TaoSolve``)."""
         from petsc4py import PETSc
 
         x = tao.getSolution()

@@ -47,7 +47,7 @@ def refusal(args: argparse.Namespace, petsc_args: Sequence[str]) -> str | None:
                 check_input(given, option)
         check_outputs(command_outputs(args), inputs)
         if args.command == "theory":
-            from ..workflows.theory_run import check_compared
+            from ..paper.theory_run import check_compared
 
             check_compared(args.compare, args.plot)
     except (ValueError, FileNotFoundError) as exc:

@@ -162,10 +162,10 @@ def _dispatch(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[st
     """Run the command (each module imported when used, so that ``--help`` starts fast)."""
     from ..workflows.runner import locked
     from .comparison import run_compare
-    from .ensemble import run_ensemble
+    from .ensemble_command import run_ensemble
     from .runs import execute, run
     from .study import run_study, study_plan
-    from .theory import run_theory
+    from .theory_command import run_theory
     from .tools import run_experiment, run_plot
 
     if args.command == "schema":

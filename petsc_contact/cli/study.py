@@ -7,7 +7,7 @@ from its ``.partial`` file; the study stops cleanly after the step that ends pas
 run is writing is left to that run, so several studies started on the same ``--data`` share
 the pieces between them, one core each.  A piece's file (complete, or its ``.partial``)
 of other parameters (another ``--shrink`` in the same ``--data``) is refused before anything
-runs, never joined (:func:`~petsc_contact.workflows.paper_study.run_pieces`).
+runs, never joined (:func:`~petsc_contact.paper.paper_study.run_pieces`).
 """
 
 from __future__ import annotations
@@ -29,9 +29,9 @@ PIECE_END = {code: end for end, code in STATUS.items()}  # how a piece's run end
 def run_study(args: argparse.Namespace, petsc_args: list[str]) -> int:
     """Run the pieces of the chosen figures in order within ``--minutes``."""
     from ..backend import _petsc
+    from ..paper.paper_study import run_pieces, study_data, study_pieces
     from ..workflows.choice import uses_petsc
     from ..workflows.drivers import on_device
-    from ..workflows.paper_study import run_pieces, study_data, study_pieces
 
     data = study_data(args.data)
     todo = study_pieces(data, args.figure, args.shrink)
@@ -62,8 +62,8 @@ def _say(line: str) -> None:
 def study_plan(args: argparse.Namespace) -> str:
     """One line per piece: its state (``done``, ``todo``, or the steps an unfinished piece
     has kept, ``13/25``), its file and its command line."""
-    from ..workflows.paper_study import study_data, study_pieces
-    from ..workflows.paper_study import study_plan as plan
+    from ..paper.paper_study import study_data, study_pieces
+    from ..paper.paper_study import study_plan as plan
 
     data = study_data(args.data)
     return "\n".join(plan(study_pieces(data, args.figure, args.shrink), data))

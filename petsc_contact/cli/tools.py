@@ -9,7 +9,7 @@ import argparse
 def run_plot(args: argparse.Namespace) -> int:
     """``petsc-contact plot``: one field of one step as a map or, with ``--sweep`` (a theory
     or ensemble file always), the file's load plot drawn again as ``OUT_redrawn.png``."""
-    from ..workflows.redraw import draw_map, draws_load_plot, field_map, map_file, redraw
+    from ..paper.redraw import draw_map, draws_load_plot, field_map, map_file, redraw
 
     if draws_load_plot(args.file, args.sweep):
         print(f"# wrote {redraw(args.file, args.output)}")

@@ -3,9 +3,9 @@
 :class:`ArraySolver` is what :class:`~petsc_contact.backend.solve.BoundSolver` is on the PETSc
 path: ``solve(objective_gradient, start, ...)`` runs one load step and returns the solution
 with a :class:`~petsc_contact.solver.report.SolveInfo`.  It runs
-:class:`~petsc_contact.solver.cg.ConstrainedCG` with the problem's Hessian and preconditioner
-on the arrays of a :class:`~petsc_contact.numerics.device.Device` (``gpu``, or its CPU
-stand-in ``cpu-array``), its sums and minima over the grid's ranks.
+:class:`~petsc_contact.solver.constrained_cg.ConstrainedCG` with the problem's Hessian and
+preconditioner on the arrays of a :class:`~petsc_contact.numerics.device.Device` (``gpu``, or its
+CPU stand-in ``cpu-array``), its sums and minima over the grid's ranks.
 
 Its options are PETSc's names for what it reads (:class:`SolveSettings`), so a command line
 keeps its meaning on every device; any other option is refused in one line rather than
@@ -24,7 +24,7 @@ import numpy as np
 
 from ..conventions.grid import Grid
 from ..numerics.device import Device
-from .cg import (
+from .constrained_cg import (
     MONITOR,
     ONE_RANK,
     USER,
@@ -57,7 +57,7 @@ class SolveSettings:
     ----------
     gatol, grtol, max_it
         ``-tao_gatol``, ``-tao_grtol``, ``-tao_max_it``, tested as TAO tests them
-        (:class:`~petsc_contact.solver.cg.ToleranceTest`).
+        (:class:`~petsc_contact.solver.constrained_cg.ToleranceTest`).
     monitor
         ``-tao_monitor``: a line per iteration.
     two_level, block, max_fraction
@@ -203,11 +203,11 @@ class ArraySolver:
     Parameters
     ----------
     hessian
-        The scaled Hessian (a :class:`~petsc_contact.solver.cg.SplitHessian` with
+        The scaled Hessian (a :class:`~petsc_contact.solver.constrained_cg.SplitHessian` with
         ``applications``).
     preconditioner
         Its approximate inverse (``apply_array``; a
-        :class:`~petsc_contact.solver.cg.ContactPreconditioner` follows the free set).
+        :class:`~petsc_contact.solver.constrained_cg.ContactPreconditioner` follows the free set).
     device
         Where the arrays live.
     settings

@@ -1,2 +1,2 @@
-"""What users run on the core: load sweeps of both geometries, solver comparison, ensembles
-over seeds, theory for a given map, figure data and the paper's study."""
+"""The runs on the core: a run described and prepared, load sweeps of both geometries, the
+one runner, solver comparison, ensembles over seeds and the squeeze test."""

@@ -5,7 +5,7 @@ seed, each into its own resumable file ``OUT_seedK.h5`` (:func:`seed_runs`), wit
 pressures for every seed (:func:`ensemble_loads`), then write the mean, standard deviation
 and standard error over seeds of every per-step quantity to ``OUT.h5``
 (:func:`write_summary`; statistics by
-:func:`~petsc_contact.workflows.ensemble.ensemble_statistics`).
+:func:`~petsc_contact.io.results.ensemble_statistics`).
 
 What an earlier ensemble left on the same output is never joined blindly
 (:func:`seeds_to_run`): without ``resume`` or ``overwrite`` it is refused; ``overwrite``
@@ -34,11 +34,10 @@ from ..io.atomic import atomic_h5, on_root
 from ..io.lock import OutputLock
 from ..io.names import partial_path
 from ..io.partial import check_same_run, read_attributes
-from ..io.results import labelled, scale, trusted
+from ..io.results import ensemble_statistics, labelled, scale, trusted
 from ..io.schema import ENSEMBLE, annotate, ensemble_entry, write_attributes
 from ..io.store import tidy
 from .description import Run
-from .ensemble import ensemble_statistics
 from .runner import Progress, check_files, locked, run_contact, swept
 
 QUANTITIES = tuple(k for k in ENSEMBLE if k not in ("seeds", "nominal_pressure"))

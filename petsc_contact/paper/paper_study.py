@@ -26,8 +26,8 @@ from ..io.partial import committed_steps
 from ..io.results import trusted
 from ..io.store import tidy
 from ..physics.surface import psd_shape
-from .description import Run
-from .options import DEFAULT_DATA
+from ..workflows.description import Run
+from ..workflows.options import DEFAULT_DATA
 
 T = TypeVar("T")
 
@@ -277,7 +277,7 @@ def check_piece(path: str, run: Run) -> None:
     """``ValueError`` (one line) unless the piece's file ``path`` (complete, or its
     ``.partial``) was written by ``run`` (:func:`~petsc_contact.workflows.seeds.check_kept`):
     a folder of another study (another ``--shrink``) is never joined."""
-    from .seeds import check_kept
+    from ..workflows.seeds import check_kept
 
     try:
         check_kept(path, run)
@@ -441,7 +441,7 @@ class _Study:
     def piece(self, piece: Piece, heading: str, minutes: float) -> str:
         """Run ``piece`` within ``minutes`` under its lock: how it ended, or ``"elsewhere"``
         when another run holds it."""
-        from .runner import check_files, locked
+        from ..workflows.runner import check_files, locked
 
         path = piece.path(self.data)
         os.makedirs(os.path.dirname(path), exist_ok=True)
@@ -507,7 +507,7 @@ def _foreign(data: str, todo: Sequence[Piece]) -> str:
 def add_redraw_options(parser: argparse.ArgumentParser, figure: int, output: str) -> None:
     """A figure script's ``--fit-points``, ``--min-contact-pixels``, ``--data DIR`` (redraw
     the paper's Fig. ``figure`` from the study's files) and ``--output`` options."""
-    from .scenes import MIN_CONTACT_PIXELS
+    from .figures import MIN_CONTACT_PIXELS
 
     parser.add_argument(
         "--fit-points", type=int, default=4, help="the lowest resolved loads fitted (default 4)"

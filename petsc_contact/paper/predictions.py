@@ -313,8 +313,8 @@ def predict_map(
         The map's preparation, as :class:`~petsc_contact.workflows.description.Run`'s fields
         of those names.
     """
-    from .description import Run
-    from .scene import given_lengths, measured
+    from ..workflows.description import Run
+    from ..workflows.scene import given_lengths, measured
 
     topo = as_topography(heights, channel)
     check_given(topo, length, fill_undefined, override_metadata)

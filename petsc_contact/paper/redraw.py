@@ -229,7 +229,7 @@ def _plot_ensemble_file(f: Any, path: str, out: str) -> None:
     import h5py
 
     from ..io.plot import plot_ensemble
-    from .seeds import seed_files, seed_scales
+    from ..workflows.seeds import seed_files, seed_scales
 
     seeds = seed_files(path, f)
     with h5py.File(seeds[0], "r") as seed:

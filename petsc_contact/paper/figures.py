@@ -23,8 +23,8 @@ from ..numerics.fft import make_fft
 from ..physics import theory
 from ..physics.observables import MIN_CONTACT_PIXELS, contact_resolved
 from ..physics.surface import psd_shape, rms_of, self_affine
-from .periodic_sweep import periodic_contact
-from .punch_sweep import punch_contact
+from ..workflows.periodic_sweep import periodic_contact
+from ..workflows.punch_sweep import punch_contact
 
 # a sweep's columns in the figures (contact_patches: NaN in files of versions before it)
 _CURVE_KEYS = ("nominal_pressure", "mean_gap", "area_fraction", "stiffness", "contact_patches")
@@ -186,7 +186,7 @@ def finite_size_fit(
     the 68% percentile interval of ``alpha`` over the seeds resampled with replacement
     (:func:`seed_bootstrap`; with four seeds a coarse one, 35 distinct resamples).
     """
-    from .ensemble import ensemble_statistics, power_law_fit
+    from .fits import ensemble_statistics, power_law_fit
 
     p = np.asarray(curves["nominal_pressure"], dtype=float)
     p = p[0] if p.ndim == 2 else p

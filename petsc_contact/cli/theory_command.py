@@ -8,10 +8,10 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..conventions.units import pressure_value
-from ..workflows.predictions import Prediction, predict, predict_profile
+from ..paper.predictions import Prediction, predict, predict_profile
+from ..paper.theory_file import write_theory
+from ..paper.theory_run import compared_runs, line_scan, profile_length, profile_record
 from ..workflows.runner import swept
-from ..workflows.theory_file import write_theory
-from ..workflows.theory_run import compared_runs, line_scan, profile_length, profile_record
 from .common import describe, record_for, scene_for
 
 LOAD_RANGE = (1e-7, 1e-1)  # default pressures, in units of E*

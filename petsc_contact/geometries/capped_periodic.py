@@ -132,6 +132,11 @@ class CappedPeriodicProblem(PunchProblem):
         extra = self.interaction.fields(gap, plastic)
         return Step(scalars, *contact_fields(gap, pressure, contact), contact=contact, extra=extra)
 
+    def approach_at(self, p0: float, mean_gap: float) -> float:
+        """The approach at which an answer of nominal pressure ``p0`` has the mean gap
+        ``mean_gap``: ``mean(g) = c p0 + mean(s) - δ``."""
+        return float(self.mean_compliance * p0 + self.recess_sum / self.grid.size - mean_gap)
+
     def cell_stiffness(self, total: float) -> float:
         """``-dp0/du_bar = 1/(A/K_tot - c)`` from ``K_tot = dF/dδ``: ``u_bar = c p0 +
         mean(s) - δ``, so ``du_bar/dp0 = c - A/K_tot`` (0 without an elastic contact pixel;

@@ -71,7 +71,8 @@ SOLVE_COLUMNS = _entries(
     iterations=(
         "count",
         "TAO iterations of the step (punch with forces, periodic with mean gaps: summed over "
-        "Newton)",
+        "Newton; periodic with --hardness where cap_reached: the hard wall's solve and the "
+        "capped Newton's together)",
     ),
     solve_time=("s", "wall time of the solve, the slowest rank's"),
     converged=(
@@ -270,6 +271,12 @@ PLASTIC = _entries(
     )
 )
 CAPPED_CELL = _entries(
+    cap_reached=(
+        "bool",
+        "--hardness: false where the hard wall's answer stays at or below the cap (that is "
+        "the capped answer: kkt_residual the hard wall's, over p0), true where the cell was "
+        "then solved posed in the pressure (kkt_residual over h_rms)",
+    ),
     approach=(
         "length",
         "--hardness: the rigid approach at which mean(p) = p0 (the cell posed in the "

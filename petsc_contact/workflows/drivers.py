@@ -41,7 +41,7 @@ from ..substrates.layer import PeriodicLayer
 from ..substrates.substrate import PeriodicSubstrate
 from .choice import uses_petsc
 from .description import Run, swept
-from .periodic_steps import mean_gap_sweep, problem_solver, sweep
+from .periodic_steps import PeriodicSteps, mean_gap_sweep, problem_solver, sweep
 from .punch_steps import PunchSolver, punch_sweep
 from .scene import Scene
 
@@ -175,43 +175,78 @@ def _layer_words(run: Run) -> str:
 
 
 class CappedPeriodicDriver:
-    """A periodic run with a hardness: the cell posed in the pressure
-    (:class:`~petsc_contact.geometries.capped_periodic.CappedPeriodicProblem`), each nominal
-    pressure reached by Newton on the approach as the punch reaches a force
-    (:func:`~petsc_contact.workflows.punch_sweep.punch_sweep`).  It takes ``--pressures``,
-    each below the hardness."""
+    """A periodic run with a hardness: each nominal pressure solved first on the hard wall
+    (the gap-posed cell of :class:`PeriodicDriver`, with its continuation along the sweep);
+    where its pressure stays at or below the hardness that is the capped answer too (Kato's
+    conditions hold with no pixel at the cap), else the cell posed in the pressure
+    (:class:`~petsc_contact.geometries.capped_periodic.CappedPeriodicProblem`) is solved by
+    Newton on the approach, from the hard wall's pressure clipped at the cap and its approach.
+    Each step says which (``cap_reached``).  It takes ``--pressures`` or a ``--sweep``, each
+    load below the hardness."""
 
     def __init__(self, run: Run, scene: Scene, backend: SolverBackend) -> None:
-        if run.pressures is None or run.sweep is not None:
-            raise ValueError("a periodic run with --hardness takes --pressures, not a --sweep")
+        if run.pressures is None and run.sweep is None:
+            raise ValueError("a periodic run with --hardness takes --pressures or a --sweep")
         cap = run.interaction
         assert isinstance(cap, HardnessCap)  # driver_for's choice: run.hardness is given
-        self.loads = [pressure_value(p, run.pressure_unit, "--pressures") for p in run.pressures]
+        self.wall = PeriodicDriver(run, scene, backend)
+        self.loads, self.resolved = self.wall.loads, self.wall.resolved
         for p0 in self.loads:
-            cap.check_nominal(p0, "--pressures")
-        problem = CappedPeriodicProblem(
-            scene.grid, scene.fft, scene.heights, run.modulus_value, cap, backend
-        )
-        problem.filled = scene.filled
-        self.resolved: dict[str, Any] = {}
-        if any(isinstance(p, str) for p in run.pressures):
-            self.resolved = {"pressures_resolved": self.loads}
-        self.run, self.problem, self.solver = run, problem, PunchSolver(problem)
-        self.intro = f", hardness {format_quantity(cap.hardness, run.pressure_unit)}"
-        self.backend = type(problem.compliance.fft).__name__
+            cap.check_nominal(p0, "--pressures" if run.sweep is None else "--sweep")
+        self.run, self.scene, self.cap, self.backend_ = run, scene, cap, backend
+        # posed when a step first reaches the cap
+        self.capped: tuple[PunchSolver, CappedPeriodicProblem] | None = None
+        hardness = format_quantity(cap.hardness, run.pressure_unit)
+        self.intro = f"{self.wall.intro}, hardness {hardness}"
+        self.backend = self.wall.backend
 
     def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
-        """Newton on the approach to each nominal pressure's force, ``p0 A``."""
+        """Each load on the hard wall along its load path (resumed from ``start``, a hard-wall
+        state), then, where the cap is reached, capped (:meth:`capped_step`)."""
         state, held = start or (None, None)
-        run, area = self.run, self.problem.grid.area
-        forces = [p0 * area for p0 in loads]
-        return punch_sweep(
-            self.solver, forces, True, run.fields, monitor, run.stiffness, state, held
-        )
+        run, wall = self.run, self.wall.problem
+        steps = PeriodicSteps(wall, state, held)
+        for p0 in loads:
+            step = steps.at_pressure(self.wall.solver, p0, run.fields, monitor, run.stiffness)
+            s = step.scalars
+            if step.converged and s["max_pressure"] <= self.cap.hardness:
+                s.update(plastic_area_fraction=0.0, cap_reached=False)
+                if run.fields:  # the hard wall's: no plastic displacement anywhere
+                    step.extra["plastic_displacement"] = np.zeros_like(step.gap)
+                yield step
+                continue
+            guess = wall.pressure(steps.x.reshape(wall.grid.local_shape) * wall.scale_length)
+            capped = self.capped_step(p0, guess, s["mean_gap"], monitor)
+            for name in ("iterations", "solve_time"):  # the hard wall's solve too
+                capped.scalars[name] += s[name]
+            capped.resume = step.resume  # a resumed sweep goes on along the hard wall's path
+            yield capped
+
+    def capped_step(self, p0: float, pressure: Any, mean_gap: float, monitor: Any) -> Step:
+        """The capped cell at ``p0`` from the hard wall's ``pressure`` clipped at the cap, its
+        Newton from the hard wall's approach (of its ``mean_gap``)."""
+        if self.capped is None:
+            scene, run = self.scene, self.run
+            problem = CappedPeriodicProblem(
+                scene.grid, scene.fft, scene.heights, run.modulus_value, self.cap, self.backend_
+            )
+            problem.filled = scene.filled
+            self.capped = PunchSolver(problem), problem
+        solver, problem = self.capped
+        solver.restart_from(problem.device.xp.clip(pressure, 0.0, self.cap.hardness))
+        force, run = p0 * problem.grid.area, self.run
+        step = solver.at_force(
+            force, run.fields, monitor=monitor, stiffness=run.stiffness,
+            start=problem.approach_at(p0, mean_gap),
+        )  # fmt: skip
+        step.scalars["cap_reached"] = True
+        return step
 
     def close(self) -> None:
-        """Release the solver."""
-        self.solver.close()
+        """Release the solvers."""
+        self.wall.close()
+        if self.capped is not None:
+            self.capped[0].close()
 
 
 HALF_AREA = 0.5  # a measured map's default sweep ends where Persson's law puts half in contact

@@ -527,9 +527,10 @@ _PUNCH_LOADS = (
         more="A pixel at the cap carries `H` and the punch sinks into it by the plastic "
         "displacement (`--fields`: `plastic_displacement`); each step records "
         "`plastic_area_fraction`, and its stiffness holds the plastic pixels at the cap "
-        "([formulation.md](formulation.md)). A periodic run (and `compare`) is then posed in "
-        "the pressure and takes `--pressures`; a nominal pressure (the punch's: over its "
-        "face) not below `H` is refused",
+        "([formulation.md](formulation.md)). A periodic run takes `--pressures` or a "
+        "`--sweep`: each load is solved on the hard wall first, and posed in the pressure "
+        "only where that reaches the cap (`cap_reached`; `compare` poses it so); a nominal "
+        "pressure (the punch's: over its face) not below `H` is refused",
     ),
 )
 

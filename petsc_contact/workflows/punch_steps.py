@@ -103,6 +103,7 @@ class PunchSolver:
         rtol: float = FORCE_RTOL,
         monitor: Monitor | None = None,
         stiffness: bool = False,
+        start: float | None = None,
     ) -> Step:
         """Find ``δ`` with ``F(δ) = force`` (relative tolerance ``rtol``) and solve there.
 
@@ -119,12 +120,15 @@ class PunchSolver:
         iteration: the solve cannot tell the two approaches apart, and the force (stored next
         to ``target_force``) is as close to the target as the solve resolves, on contacts of
         a few pixels about ``1e-5`` (the gradient tolerance is an rms over the footprint).
-        A force further than :data:`FORCE_RESOLVED` from its target (a load so small that
-        its approach is lost in the tolerance, force 0) is not converged, and says why.
+        ``start`` replaces ``force / K_flat`` as the first approach when no step converged
+        before (:meth:`restart_from` without ``held``).  A force further than
+        :data:`FORCE_RESOLVED` from its target (a load so small that its approach is lost in
+        the tolerance, force 0) is not converged, and says why.
         """
         positive("force", force)
         bracket = Bracket(force, 0.0, np.inf, lambda lo: 2 * lo + self.problem.scale_length)
-        delta = bracket.start(force / self.k_flat_analytic, self.last)
+        first = force / self.k_flat_analytic if start is None else start
+        delta = bracket.start(first, self.last)
         end = newton(
             bracket,
             delta,

@@ -1,4 +1,4 @@
-"""Stability matrix: every solver on stiff and extreme periodic scenes.
+"""Stability matrix: every solver on stiff and extreme scenes.
 
 usage: .venv/bin/python benchmarks/stability.py [--grid 128] [--solvers cg pk tron ...]
        [--time-limit 20] [--stall-iterations 1000] [--markdown docs/stability.md]
@@ -11,18 +11,25 @@ from __future__ import annotations
 
 import argparse
 import time
+from collections.abc import Callable
 
 import numpy as np
 from mpi4py import MPI
 
 from petsc_contact.backend import _petsc
 from petsc_contact.conventions.grid import Grid
+from petsc_contact.geometries.capped_periodic import CappedPeriodicProblem
 from petsc_contact.geometries.periodic import PeriodicProblem
+from petsc_contact.geometries.punch import PunchProblem
+from petsc_contact.interactions.hardness import HardnessCap
 from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.substrates.layer import PeriodicLayer
 from petsc_contact.substrates.substrate import PeriodicSubstrate
-from petsc_contact.workflows.compare import DEFAULT_SOLVERS, compare
+from petsc_contact.workflows.compare import DEFAULT_SOLVERS, PressurePosed, compare
+
+Pose = Callable[[Grid, np.ndarray, float], PeriodicProblem | PressurePosed]
+"""How a scene is posed from its grid, heights and modulus (default: the periodic half-space)."""
 
 
 def rough(n: int, hurst: float = 0.7, slope: float = 0.1, seed: int = 1) -> np.ndarray:
@@ -74,8 +81,8 @@ def scenes(n: int) -> list[tuple[str, np.ndarray, float, float, float]]:
     return out
 
 
-def layer_scenes(n: int) -> list[tuple[str, np.ndarray, float, float, float, PeriodicSubstrate]]:
-    """(name, heights, length, modulus, p0/E*, substrate) of the thin layers: a quarter pixel
+def layer_scenes(n: int) -> list[tuple[str, np.ndarray, float, float, float, Pose]]:
+    """(name, heights, length, modulus, p0/E*, pose) of the thin layers: a quarter pixel
     thick, far thinner than the rough surface's shortest wavelength (4 pixels), so that the
     stiffness no longer grows as ``|q|`` (bonded: ``M/T`` for every ``q``; incompressible:
     ``3 E*/(4 q^2 T^3)``, stiffest at the longest wavelength)."""
@@ -86,10 +93,42 @@ def layer_scenes(n: int) -> list[tuple[str, np.ndarray, float, float, float, Per
         "bonded, nu=0.5": PeriodicLayer(1.0, thickness, 0.5, "bonded"),
     }
     return [
-        (f"layer T=a/4, {name}, p0={p:g}", h, 1.0, 1.0, p, body)
+        (f"layer T=a/4, {name}, p0={p:g}", h, 1.0, 1.0, p, on_substrate(body))
         for name, body in bodies.items()
         for p in (1e-3, 1e-2)
     ]
+
+
+def on_substrate(body: PeriodicSubstrate) -> Pose:
+    """The periodic cell on ``body``, posed in the gap."""
+    return lambda grid, h, modulus: PeriodicProblem(
+        grid, make_fft(grid), h, modulus, substrate=body
+    )
+
+
+def hardness_scenes(n: int) -> list[tuple[str, np.ndarray, float, float, float, Pose]]:
+    """(name, heights, length, modulus, p0/E*, pose) of the capped scenes: the rough surface
+    under a hardness ``H`` of 10, 2 and 1.05 times the nominal pressure (at 1.05 nearly the
+    whole surface flows), posed in the pressure: the periodic cell
+    (:class:`~petsc_contact.geometries.capped_periodic.CappedPeriodicProblem`) and the punch
+    of the same face, whose nominal pressure is over its face."""
+    h = rough(n)
+    return [
+        (f"hardness {ratio:g} p0, {kind}, p0={p:g}", h, 1.0, 1.0, p, capped(kind, ratio * p))
+        for kind in ("periodic", "punch")
+        for p in (1e-3, 1e-2)
+        for ratio in (10, 2, 1.05)
+    ]
+
+
+def capped(kind: str, hardness: float) -> Pose:
+    """The ``kind`` (periodic cell or punch) posed in the pressure under ``hardness``."""
+    cap = HardnessCap(hardness)
+    if kind == "periodic":
+        return lambda grid, h, modulus: PressurePosed(
+            CappedPeriodicProblem(grid, make_fft(grid), h, modulus, cap)
+        )
+    return lambda grid, h, modulus: PressurePosed(PunchProblem(grid, h, modulus, interaction=cap))
 
 
 def parse_args() -> argparse.Namespace:
@@ -129,10 +168,12 @@ def parse_args() -> argparse.Namespace:
 
 def row(name: str, case: tuple, args: argparse.Namespace) -> str:
     """One scene's table row: every solver's verdict, iterations, time and error (on the
-    half-space, or on the substrate the case ends with)."""
-    h, length, modulus, p0, *body = case
+    periodic half-space, or as the case's last item poses it)."""
+    h, length, modulus, p0, *pose = case
     grid = Grid(h.shape[0], length)
-    problem = PeriodicProblem(grid, make_fft(grid), h, modulus, substrate=(body or [None])[0])
+    problem = (
+        pose[0](grid, h, modulus) if pose else PeriodicProblem(grid, make_fft(grid), h, modulus)
+    )
     try:
         _, trajs = compare(
             problem, p0, args.solvers, args.time_limit, stall_iterations=args.stall_iterations
@@ -172,7 +213,9 @@ def write_markdown(lines: list[str], args: argparse.Namespace) -> None:
 def main() -> None:
     args = parse_args()
     _petsc.init([])
-    cases: list[tuple] = [*scenes(args.grid), *layer_scenes(args.grid)] if args.scenes else []
+    cases: list[tuple] = []
+    if args.scenes:
+        cases = [*scenes(args.grid), *layer_scenes(args.grid), *hardness_scenes(args.grid)]
     cases += [(f"grid {n}, p0=1e-3", rough(n), 1.0, 1.0, 1e-3) for n in args.grids]
     cases = [case for case in cases if args.match in case[0]]
     lines = [

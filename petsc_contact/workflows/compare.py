@@ -46,6 +46,7 @@ from ..backend.tao import PetscBackend
 from ..conventions.warnings import user_level
 from ..geometries.capped_periodic import CappedPeriodicProblem
 from ..geometries.periodic import PeriodicProblem
+from ..geometries.punch import PunchProblem
 from ..geometries.step import residual_verdict
 from ..interactions.hard_wall import HARD_WALL
 from ..interactions.interaction import Interaction
@@ -259,12 +260,12 @@ class GapPosed:
 
 
 class PressurePosed:
-    """What :func:`compare` asks of the periodic cell posed in the pressure (a hardness cap:
-    :class:`~petsc_contact.geometries.capped_periodic.CappedPeriodicProblem`).  The reference
-    reaches ``mean(p) = p0`` by Newton on the approach; every solver then solves at that
-    approach, from no pressure."""
+    """What :func:`compare` asks of a problem posed in the pressure: the periodic cell under a
+    hardness cap (:class:`~petsc_contact.geometries.capped_periodic.CappedPeriodicProblem`) or
+    the punch.  The reference reaches ``mean(p) = p0`` (over the face) by Newton on the
+    approach; every solver then solves at that approach, from no pressure."""
 
-    def __init__(self, problem: CappedPeriodicProblem) -> None:
+    def __init__(self, problem: PunchProblem) -> None:
         self.problem = problem
         self.grid, self.scale_length = problem.grid, problem.scale_length
         self.approach = self.nominal = np.nan

@@ -18,7 +18,6 @@ from mpi4py import MPI
 
 from petsc_contact.backend import _petsc
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.geometries.capped_periodic import CappedPeriodicProblem
 from petsc_contact.geometries.periodic import PeriodicProblem
 from petsc_contact.geometries.punch import PunchProblem
 from petsc_contact.interactions.hardness import HardnessCap
@@ -26,7 +25,8 @@ from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.substrates.layer import PeriodicLayer
 from petsc_contact.substrates.substrate import PeriodicSubstrate
-from petsc_contact.workflows.compare import DEFAULT_SOLVERS, PressurePosed, compare
+from petsc_contact.workflows.compare import DEFAULT_SOLVERS, PressurePosed, compare, posed_cell
+from petsc_contact.workflows.scene import Scene
 
 Pose = Callable[[Grid, np.ndarray, float], PeriodicProblem | PressurePosed]
 """How a scene is posed from its grid, heights and modulus (default: the periodic half-space)."""
@@ -125,9 +125,7 @@ def capped(kind: str, hardness: float) -> Pose:
     """The ``kind`` (periodic cell or punch) posed in the pressure under ``hardness``."""
     cap = HardnessCap(hardness)
     if kind == "periodic":
-        return lambda grid, h, modulus: PressurePosed(
-            CappedPeriodicProblem(grid, make_fft(grid), h, modulus, cap)
-        )
+        return lambda grid, h, modulus: posed_cell(Scene(grid, make_fft(grid), h, {}), modulus, cap)
     return lambda grid, h, modulus: PressurePosed(PunchProblem(grid, h, modulus, interaction=cap))
 
 

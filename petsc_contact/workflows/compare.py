@@ -60,7 +60,7 @@ from ..io.store import check_resume_or_overwrite, remove_temporaries, warn_repla
 from ..physics.observables import natural_residual
 from ..physics.surface import rms_of
 from .periodic_steps import sweep
-from .punch_steps import PunchSolver
+from .punch_steps import PunchSolver, capped_from_wall
 
 REFERENCE_GATOL = 1e-12
 STALL_GAIN = 0.9  # a new low of the natural residual must be 10% below the best so far
@@ -265,17 +265,25 @@ class PressurePosed:
     the punch.  The reference reaches ``mean(p) = p0`` (over the face) by Newton on the
     approach; every solver then solves at that approach, from no pressure."""
 
-    def __init__(self, problem: PunchProblem) -> None:
-        self.problem = problem
+    def __init__(self, problem: PunchProblem, wall: PeriodicProblem | None = None) -> None:
+        self.problem, self.wall = problem, wall
         self.grid, self.scale_length = problem.grid, problem.scale_length
         self.approach = self.nominal = np.nan
 
     def reference(self, pressure: float) -> Reference:
-        """The default solver at :data:`REFERENCE_GATOL`, Newton to ``mean(p) = p0``."""
-        problem = self.problem
+        """The default solver at :data:`REFERENCE_GATOL`, Newton to ``mean(p) = p0``: from
+        the hard wall's answer at ``p0`` where the cell's ``wall`` is given
+        (:func:`~petsc_contact.workflows.punch_steps.capped_from_wall`), else from none."""
+        problem, start = self.problem, None
+        if self.wall is not None:
+            (start,) = sweep(self.wall, [pressure], fields=True)
         tight = ["-tao_gatol", str(REFERENCE_GATOL)]
         with _petsc.scoped_options(tight), PunchSolver(problem) as solver:
-            step = solver.at_force(pressure * problem.grid.area)
+            if start is None:
+                step = solver.at_force(pressure * problem.grid.area)
+            else:
+                mean_gap = start.scalars["mean_gap"]
+                step = capped_from_wall(solver, pressure, start.pressure, mean_gap)
             x = solver.x
         if not step.converged:
             raise RuntimeError(f"reference solve failed: {step.scalars['verification']}")
@@ -567,7 +575,8 @@ def posed_cell(scene: Any, modulus: float, interaction: Interaction) -> Periodic
     grid, fft, heights = scene.grid, scene.fft, scene.heights
     if interaction is HARD_WALL:
         return PeriodicProblem(grid, fft, heights, modulus)
-    return PressurePosed(CappedPeriodicProblem(grid, fft, heights, modulus, interaction))
+    capped = CappedPeriodicProblem(grid, fft, heights, modulus, interaction)
+    return PressurePosed(capped, PeriodicProblem(grid, fft, heights, modulus))
 
 
 def _parameters(

@@ -42,7 +42,7 @@ from ..substrates.substrate import PeriodicSubstrate
 from .choice import uses_petsc
 from .description import Run, swept
 from .periodic_steps import PeriodicSteps, mean_gap_sweep, problem_solver, sweep
-from .punch_steps import PunchSolver, punch_sweep
+from .punch_steps import PunchSolver, capped_from_wall, punch_sweep
 from .scene import Scene
 
 Start = tuple[np.ndarray, Held | None] | None
@@ -195,7 +195,7 @@ class CappedPeriodicDriver:
             cap.check_nominal(p0, "--pressures" if run.sweep is None else "--sweep")
         self.run, self.scene, self.cap, self.backend_ = run, scene, cap, backend
         # posed when a step first reaches the cap
-        self.capped: tuple[PunchSolver, CappedPeriodicProblem] | None = None
+        self.capped: PunchSolver | None = None
         hardness = format_quantity(cap.hardness, run.pressure_unit)
         self.intro = f"{self.wall.intro}, hardness {hardness}"
         self.backend = self.wall.backend
@@ -231,14 +231,11 @@ class CappedPeriodicDriver:
                 scene.grid, scene.fft, scene.heights, run.modulus_value, self.cap, self.backend_
             )
             problem.filled = scene.filled
-            self.capped = PunchSolver(problem), problem
-        solver, problem = self.capped
-        solver.restart_from(problem.device.xp.clip(pressure, 0.0, self.cap.hardness))
-        force, run = p0 * problem.grid.area, self.run
-        step = solver.at_force(
-            force, run.fields, monitor=monitor, stiffness=run.stiffness,
-            start=problem.approach_at(p0, mean_gap),
-        )  # fmt: skip
+            self.capped = PunchSolver(problem)
+        run = self.run
+        step = capped_from_wall(
+            self.capped, p0, pressure, mean_gap, run.fields, monitor, run.stiffness
+        )
         step.scalars["cap_reached"] = True
         return step
 
@@ -246,7 +243,7 @@ class CappedPeriodicDriver:
         """Release the solvers."""
         self.wall.close()
         if self.capped is not None:
-            self.capped[0].close()
+            self.capped.close()
 
 
 HALF_AREA = 0.5  # a measured map's default sweep ends where Persson's law puts half in contact

@@ -9,11 +9,13 @@ iteration on ``δ`` that uses the exact ``dF/dδ`` (:mod:`~petsc_contact.workflo
 from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
+from typing import Any
 
 import numpy as np
 
 from ..backend.solve import Monitor
 from ..conventions.validation import positive
+from ..geometries.capped_periodic import CappedPeriodicProblem
 from ..geometries.punch import PunchProblem
 from ..geometries.step import Step, solve_step
 from ..physics.continuation import Held
@@ -155,6 +157,30 @@ class PunchSolver:
         )
         self.problem.accuracy().assess(s)
         return end.step
+
+
+def capped_from_wall(
+    solver: PunchSolver,
+    p0: float,
+    wall_pressure: Any,
+    wall_mean_gap: float,
+    fields: bool = False,
+    monitor: Monitor | None = None,
+    stiffness: bool = False,
+) -> Step:
+    """The capped cell of ``solver`` (:class:`~petsc_contact.geometries.capped_periodic.
+    CappedPeriodicProblem`) at the nominal pressure ``p0`` from the hard wall's answer there:
+    its pressure (a local slab) clipped to the bounds, Newton from its approach (of its
+    mean gap, :meth:`~petsc_contact.geometries.capped_periodic.CappedPeriodicProblem.
+    approach_at`), the whole cell's force ``p0 A`` the target."""
+    problem = solver.problem
+    assert isinstance(problem, CappedPeriodicProblem)  # the punch has no hard wall's cell
+    upper = problem.upper_bound.reshape(problem.grid.local_shape) * problem.pressure_scale
+    xp = problem.device.xp
+    solver.restart_from(xp.minimum(xp.maximum(wall_pressure, 0.0), upper))
+    start = problem.approach_at(p0, wall_mean_gap)
+    force = p0 * problem.grid.area
+    return solver.at_force(force, fields, monitor=monitor, stiffness=stiffness, start=start)
 
 
 def punch_sweep(

@@ -47,8 +47,8 @@ class CappedPeriodicProblem(PunchProblem):
     A :class:`~petsc_contact.geometries.punch.PunchProblem` whose footprint is the whole cell
     and whose compliance is the periodic one: the objective, the bounds, the gap and the
     held-set stiffness are the punch's; the operators (:meth:`_operators`) and what a step
-    measures (:meth:`measure`) are the cell's.  The punch's flat reference it inherits
-    (``k_flat``: ``A/c`` here) enters no answer.
+    measures (:meth:`measure`) are the cell's.  The punch's flat reference enters no answer:
+    it is the analytic one (no held-set solve at set-up).
 
     Parameters
     ----------
@@ -79,8 +79,9 @@ class CappedPeriodicProblem(PunchProblem):
         self.cell = of_modulus(body, modulus)
         self.mean_compliance = self.cell.mean_mode_compliance(grid.q0, 0.0)  # c
         super().__init__(
-            grid, heights, modulus, device=fft.device, backend=backend, interaction=interaction
-        )
+            grid, heights, modulus, flat="analytic", device=fft.device, backend=backend,
+            interaction=interaction,
+        )  # fmt: skip
         (self.recess_sum,) = grid.sum(self.recess.sum())
 
     def _operators(self) -> None:

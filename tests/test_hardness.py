@@ -100,6 +100,21 @@ def test_kato_conditions_on_a_rough_face(rough, loads):
     assert s["kkt_residual"] < 1e-7
 
 
+def test_a_force_reached_past_a_fully_plastic_approach():
+    """A cap just above the nominal pressure (``H = 1.05 p0``): Newton's tangent from the
+    first contact overshoots to an approach where every pixel flows (the force ``H A``, no
+    slope), whose answer a solve at a smaller approach accepts unchanged; Newton bisects down
+    out of it, not stopping there, and reaches the force (to its 1e-6)."""
+    grid = Grid(32, 1.0)
+    h = self_affine(
+        grid, make_fft(grid), hurst=0.7, rolloff_ratio=2, cutoff_ratio=8, seed=1, rms_slope=0.1
+    )
+    (step,) = capped(h, 1.05e-3, forces=[1e-3])
+    assert step.converged, step.scalars["verification"]
+    assert step.scalars["force"] == pytest.approx(1e-3, rel=1e-6)
+    assert 0 < step.scalars["plastic_area_fraction"] < 1
+
+
 def test_the_stiffness_holds_the_plastic_pixels_at_the_cap(rough):
     """``dF/dδ`` with the elastic contact held and the plastic pixels at the cap is the
     derivative of the capped force: a central difference of ``F(δ)`` within 2% (the contact

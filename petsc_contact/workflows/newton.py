@@ -100,9 +100,10 @@ def newton(
     It stops on the target (``|value - target| <= rtol scale``, ``scale`` by default
     ``|target|``), at a step that did not converge, or when a solve accepts its warm start at
     a new ``x`` without an iteration (it cannot tell the two apart: the value is as close as
-    the solve resolves).  A step that stops for another reason is made not converged, saying
-    why: ``what`` not reached in :data:`MAX_NEWTON` steps, or the root above the bracket's
-    ceiling (``out_of_reach``)."""
+    the solve resolves) unless the value lies above the target with no slope (a hardness cap
+    with every pixel at it: the same answer at every ``x`` there, bisected down).  A step
+    that stops for another reason is made not converged, saying why: ``what`` not reached in
+    :data:`MAX_NEWTON` steps, or the root above the bracket's ceiling (``out_of_reach``)."""
     tolerance = rtol * (abs(bracket.target) if scale is None else scale)
     iterations, solve_time = 0, 0.0
     for count in range(1, MAX_NEWTON + 1):
@@ -115,8 +116,8 @@ def newton(
         value, slope = point(s)
         if abs(value - bracket.target) <= tolerance:
             break
-        if count > 1 and s["iterations"] == 0:
-            break  # as close as the solve resolves
+        if count > 1 and s["iterations"] == 0 and not (slope == 0 and value > bracket.target):
+            break  # as close as the solve resolves (not: past a flat top, every pixel capped)
         following = bracket.next(x, value, slope)
         if following is None:
             s["converged"] = False

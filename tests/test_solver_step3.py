@@ -127,7 +127,8 @@ def test_leaving_the_schur_form_keeps_the_recurrence(petsc, monkeypatch, device)
     the contact past ``m_S``): the recurrence goes on across the change, in fewer
     iterations than a restart there, to the same answer.  Measured at 128^2 (``H = 0.3``,
     ``p0 = 1e-2``, seed 5): 22 iterations going on, 25 restarting; over 64 cold 512^2
-    steps 1684 against 1749 (docs/performance.md, "The lost iterations").  TAO's path and
+    steps 1684 against 1749, over 64 at 1024^2 1996 against 2102 (docs/performance.md,
+    "The lost iterations").  TAO's path and
     the array path run the same CG."""
     n = 128
     grid = Grid(n, 1.0)

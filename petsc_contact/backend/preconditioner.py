@@ -145,8 +145,10 @@ class MeanModePreconditioner(FourierOperator):
                 return False  # an older coarse space is kept until the set has settled
             if settled and self._build(free):
                 return True
-        # a restart on leaving the Schur form too cost 4% more iterations over 64 cold 512^2
-        # steps (1749 against 1684; a Polak-Ribiere beta there: 1694, and one more array)
+        # a restart on leaving the Schur form too took 1749 iterations against 1684 over 64
+        # cold 512^2 steps and 2102 against 1996 over 64 at 1024^2 (a Polak-Ribiere beta
+        # there, with one more array: 1694 at 512^2; at 1024^2 and p0 = 1e-3 809, the
+        # restart 807, this 797; docs/performance.md, "The lost iterations")
         leaving = self.coarse is not None
         self.correction = self._spread = self._built_free = None
         if self._filled != self.support:

@@ -125,9 +125,12 @@ class MeanModePreconditioner(FourierOperator):
         """Adapt to ``bound_count`` variables at their bound (``free``: this rank's free mask).
 
         Returns whether the operator changed with the set (the same on every rank): always
-        in the Schur form, on every build of the two-level form and when leaving either;
+        in the Schur form, on every build of the two-level form and when leaving it;
         otherwise only its ``q = 0`` entry followed the count (or an older coarse space is
-        kept).  The Schur form needs a free pixel (``G_BB`` is singular on the whole grid).
+        kept).  Leaving the Schur form for the Fourier one is not reported: the CG's
+        recurrence goes on across it (``beta = r.z/r_old.z_old``), which takes fewer
+        iterations than a restart there (docs/performance.md, "The lost iterations").  The
+        Schur form needs a free pixel (``G_BB`` is singular on the whole grid).
         """
         last, self._last_count = self._last_count, bound_count
         if 0 < bound_count <= min(self.schur_max, self.grid.size - 1):
@@ -142,7 +145,11 @@ class MeanModePreconditioner(FourierOperator):
                 return False  # an older coarse space is kept until the set has settled
             if settled and self._build(free):
                 return True
-        leaving = self.correction is not None  # the Schur or the two-level form
+        # a restart on leaving the Schur form too took 1749 iterations against 1684 over 64
+        # cold 512^2 steps and 2102 against 1996 over 64 at 1024^2 (a Polak-Ribiere beta
+        # there, with one more array: 1694 at 512^2; at 1024^2 and p0 = 1e-3 809, the
+        # restart 807, this 797; docs/performance.md, "The lost iterations")
+        leaving = self.coarse is not None
         self.correction = self._spread = self._built_free = None
         if self._filled != self.support:
             self._fill(self.support)

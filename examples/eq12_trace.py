@@ -30,9 +30,9 @@ import numpy as np
 
 from petsc_contact.conventions.grid import fft_order
 from petsc_contact.geometries.step import Step
+from petsc_contact.paper import figures
 from petsc_contact.paper.paper_study import add_pressures_option, log_pressures
 from petsc_contact.physics import theory
-from petsc_contact.workflows import scenes
 from petsc_contact.workflows.periodic_sweep import periodic_contact
 
 HURSTS = (0.3, 0.5, 0.7)
@@ -197,12 +197,12 @@ def solve_seed(args: argparse.Namespace, hurst: float, seed: int) -> dict[str, n
     ``OUTPUT_H<H>_seed<S>.npz`` with the settings it was solved for."""
     path, settings = f"{args.output}_H{hurst}_seed{seed}.npz", _settings(args, hurst, seed)
     try:
-        kept = scenes.kept_seed(path, settings, "measurements (other grid, loads or H)")
+        kept = figures.kept_seed(path, settings, "measurements (other grid, loads or H)")
     except ValueError as exc:
         raise SystemExit(str(exc)) from None
     if kept is not None:
         return kept
-    heights, h_rms = scenes.surface(args.grid, hurst, 1.0, args.grid / 2, seed)
+    heights, h_rms = figures.surface(args.grid, hurst, 1.0, args.grid / 2, seed)
     p = log_pressures(args)
     rows: dict[str, list[float]] = {k: [] for k in (*MEASURED, "stiffness", "area_fraction")}
     theory_at = mesoasperity_theory(p, h_rms, hurst)
@@ -290,12 +290,14 @@ SEED_LINE = (
 
 
 def summary(runs: list[dict[str, np.ndarray]], hurst: float, grid: int) -> dict[str, float]:
-    """The seeds of one H at their fitted loads (``scenes.finite_size_fit``, as
+    """The seeds of one H at their fitted loads (``figures.finite_size_fit``, as
     ``examples/fig3_finite_size.py``; :func:`_aggregate`), each seed's line printed, and
     ``K/Eq. 12`` of the seed-averaged ``K`` (the seeds' mean ``h_rms``)."""
     curves = {k: np.array([r[k] for r in runs]) for k in ("area_fraction", "stiffness", "h_rms")}
     curves["nominal_pressure"] = runs[0]["nominal_pressure"]
-    fit = scenes.finite_size_fit(curves, grid * grid, scenes.crossover(curves["h_rms"], hurst, 1.0))
+    fit = figures.finite_size_fit(
+        curves, grid * grid, figures.crossover(curves["h_rms"], hurst, 1.0)
+    )
     fitted = fit["fitted"]
     per_seed = [seed_factors(r, fitted, hurst) for r in runs]
     for run, factors in zip(runs, per_seed, strict=True):
@@ -359,7 +361,7 @@ def _panels(axes: tuple, hurst: float, seed: int, grid: int, load: float) -> Non
     """One H's two panels: the contact pixels about the force's centroid (coloured by their
     pressure) with B12's ``r0`` and the measured ones, and the share of the elastic energy
     below ``|q|`` against ``|q|/q0``."""
-    heights, h_rms = scenes.surface(grid, hurst, 1.0, grid / 2, seed)
+    heights, h_rms = figures.surface(grid, hurst, 1.0, grid / 2, seed)
     (step,) = periodic_contact(heights, length=1.0, pressures=[load], fields=True)
     r0_b = float(mesoasperity_theory(np.array([load]), h_rms, hurst)["r0"][0])
     found, gap, load_field = measure(step, heights, r0_b, 1.0), step.gap, step.pressure

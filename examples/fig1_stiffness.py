@@ -10,6 +10,7 @@ import argparse
 import numpy as np
 
 from petsc_contact.geometries.punch import flat_punch_stiffness, interfacial_stiffness
+from petsc_contact.paper import figures
 from petsc_contact.paper.fits import power_law_fit
 from petsc_contact.paper.paper_study import (
     RMS_SLOPE,
@@ -20,7 +21,6 @@ from petsc_contact.paper.paper_study import (
 )
 from petsc_contact.physics import theory
 from petsc_contact.reference import flat_punch
-from petsc_contact.workflows import scenes
 
 
 def crossover_from_simulation(
@@ -39,8 +39,8 @@ def crossover_from_simulation(
 def _solved(
     args: argparse.Namespace, ratio: float, p: np.ndarray, cutoff: float
 ) -> tuple[dict, float, int, float]:
-    h, h_rms = scenes.surface(args.grid, args.hurst, ratio, cutoff, args.seed, RMS_SLOPE)
-    return scenes.stiffness_curve(h, p), h_rms, args.grid, cutoff
+    h, h_rms = figures.surface(args.grid, args.hurst, ratio, cutoff, args.seed, RMS_SLOPE)
+    return figures.stiffness_curve(h, p), h_rms, args.grid, cutoff
 
 
 def _read(
@@ -54,16 +54,16 @@ def _read(
         raise FileNotFoundError(f"no complete Fig. 1 sweep for L/lambda_r = {ratio:g}")
     with h5py.File(paths[0]) as f:
         n, cutoff = int(f.attrs["grid"]), float(f.attrs["cutoff_ratio"])
-    curves = scenes.curves_from_files(paths)
+    curves = figures.curves_from_files(paths)
     curve = {k: v[0] for k, v in curves.items() if k != "h_rms"}
-    return scenes.with_sweep_stiffness(curve), float(curves["h_rms"][0]), n, cutoff
+    return figures.with_sweep_stiffness(curve), float(curves["h_rms"][0]), n, cutoff
 
 
 def _solved_punch(args: argparse.Namespace) -> tuple[dict, float, int]:
     n = args.punch_grid or args.grid // 2
-    hp, hp_rms = scenes.surface(n, args.hurst, 1.0, n / 4, args.seed)
+    hp, hp_rms = figures.surface(n, args.hurst, 1.0, n / 4, args.seed)
     approaches = np.geomspace(1e-2, 30.0, 18) * hp_rms  # to well over 10% contact area
-    punch = scenes.punch_curve(hp, approaches)
+    punch = figures.punch_curve(hp, approaches)
     k_tot, k_int = punch["total_stiffness"], punch["interfacial_stiffness"]
     with np.errstate(divide="ignore", invalid="ignore"):  # the grid's flat punch, from Eq. 2
         punch["flat_punch_stiffness"] = 1 / (1 / k_tot - 1 / k_int)
@@ -138,13 +138,13 @@ def _periodic_curves(args: argparse.Namespace) -> tuple[dict, int]:
             args.rolloff_ratios.remove(ratio)
             continue
         p = curve["nominal_pressure"]
-        q, c = scenes.ideal_spectrum(1.0, args.hurst, ratio, cutoff, rms_slope=RMS_SLOPE)
+        q, c = figures.ideal_spectrum(1.0, args.hurst, ratio, cutoff, rms_slope=RMS_SLOPE)
         curve["persson_stiffness"] = theory.persson_stiffness(p, q, c, 1.0)
         curve["persson_mean_gap"] = theory.persson_mean_gap(p, q, c, 1.0)
         pc_formula = theory.crossover_pressure(
             1.0, h_rms, args.hurst, 1.0, ratio, convention="paper"
         )
-        curve["resolved"] = ok = scenes.resolved(curve["area_fraction"], n)
+        curve["resolved"] = ok = figures.resolved(curve["area_fraction"], n)
         pc_sim, u0 = crossover_from_simulation(
             p[ok], curve["stiffness"][ok], curve["area_fraction"][ok]
         )
@@ -302,7 +302,7 @@ def main() -> None:
         flush=True,
     )
     data["punch"] = punch | {"h_rms": hp_rms}
-    scenes.save(
+    figures.save(
         f"{args.output}.h5",
         data,
         grid=n,

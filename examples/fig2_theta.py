@@ -4,8 +4,8 @@ import argparse
 
 import numpy as np
 
+from petsc_contact.paper import figures
 from petsc_contact.physics import theory
-from petsc_contact.workflows import scenes
 
 
 def main() -> None:
@@ -14,7 +14,7 @@ def main() -> None:
     args = ap.parse_args()
     h = np.linspace(0.02, 1.0, 99)
     inv0, inv1 = theory.inverse_theta_parts(h)
-    scenes.save(
+    figures.save(
         f"{args.output}.h5",
         {"hurst": h, "inverse_theta0": inv0, "inverse_theta1": inv1, "theta": theory.theta(h)},
         gamma=theory.GAMMA,

@@ -6,6 +6,7 @@ import argparse
 import numpy as np
 
 from petsc_contact.io.store import is_partial
+from petsc_contact.paper import figures
 from petsc_contact.paper.fits import ensemble_statistics
 from petsc_contact.paper.paper_study import (
     add_pressures_option,
@@ -14,7 +15,6 @@ from petsc_contact.paper.paper_study import (
     piece_files,
 )
 from petsc_contact.physics import theory
-from petsc_contact.workflows import scenes
 
 PAPER_ALPHA = {0.3: 0.72, 0.5: 0.66, 0.7: 0.59}
 
@@ -24,7 +24,7 @@ def _computed(args: argparse.Namespace) -> tuple[np.ndarray, dict]:
     cutoff = args.cutoff_ratio = args.cutoff_ratio or args.grid / 4
     p = log_pressures(args)
     results = {
-        f"H{h}": scenes.ensemble_curves(
+        f"H{h}": figures.ensemble_curves(
             args.grid,
             h,
             1.0,
@@ -53,9 +53,9 @@ def _from_data(args: argparse.Namespace) -> tuple[np.ndarray, dict]:
             continue
         with h5py.File(paths[0], "r", locking=False) as f:
             n, args.cutoff_ratio = int(f.attrs["grid"]), float(f.attrs["cutoff_ratio"])
-        curves = scenes.curves_from_files(paths)
-        p_c = scenes.crossover(curves["h_rms"], h, 1.0)
-        fit = scenes.finite_size_fit(curves, n * n, p_c, args.fit_points, args.min_contact_pixels)
+        curves = figures.curves_from_files(paths)
+        p_c = figures.crossover(curves["h_rms"], h, 1.0)
+        fit = figures.finite_size_fit(curves, n * n, p_c, args.fit_points, args.min_contact_pixels)
         if any(map(is_partial, paths)):
             loads, below = curves["stiffness"].shape[1], fit["below_crossover"]
             print(f"# H = {h}: unfinished pieces read, {loads} loads; {below} fitted below p_c")
@@ -69,7 +69,7 @@ def eq12_ratios(r: dict, hurst: float) -> tuple[float, np.ndarray, np.ndarray]:
     """The simulated ``K`` over paper Eq. 12's at the fitted loads (geometric mean): of the
     seed-averaged ``K`` against Eq. 12 with the seeds' mean ``h_rms``, of each seed's ``K``
     against Eq. 12 with its own ``h_rms``, and the first's 68% interval over the seeds
-    resampled with replacement (``scenes.seed_bootstrap``)."""
+    resampled with replacement (``figures.seed_bootstrap``)."""
     p = r["nominal_pressure"][0][r["fitted"]]
 
     def ratio(k: np.ndarray, h_rms: float) -> float:
@@ -80,7 +80,7 @@ def eq12_ratios(r: dict, hurst: float) -> tuple[float, np.ndarray, np.ndarray]:
         return ratio(np.nanmean(r["stiffness"][rows], axis=0), float(r["h_rms"][rows].mean()))
 
     seeds = np.array([ratio(k, h) for k, h in zip(r["stiffness"], r["h_rms"], strict=True)])
-    interval = scenes.seed_bootstrap(len(seeds), resampled)
+    interval = figures.seed_bootstrap(len(seeds), resampled)
     return ratio(r["stiffness_mean"], float(r["h_rms"].mean())), seeds, interval
 
 
@@ -175,7 +175,7 @@ def main() -> None:
             f"resampled: {low:.3f}-{high:.3f}); K/Eq. 12 = {r['eq12_ratio']:.2f} "
             f"({k_low:.2f}-{k_high:.2f}); fitted loads below p_c: {r['below_crossover']}"
         )
-    scenes.save(
+    figures.save(
         f"{args.output}.h5",
         {"nominal_pressure": p, **results},
         grid=args.grid,

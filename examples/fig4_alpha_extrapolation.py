@@ -9,6 +9,7 @@ import argparse
 import numpy as np
 
 from petsc_contact.io.store import is_partial
+from petsc_contact.paper import figures
 from petsc_contact.paper.paper_study import (
     FIG3_RATIOS,
     add_pressures_option,
@@ -16,7 +17,6 @@ from petsc_contact.paper.paper_study import (
     log_pressures,
     piece_files,
 )
-from petsc_contact.workflows import scenes
 
 
 def _computed(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]:
@@ -24,7 +24,7 @@ def _computed(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]:
     ratios = args.ratios or [args.grid / 32, args.grid / 16, args.grid / 8, args.grid / 4]
     p = log_pressures(args)
     results = {
-        f"ratio{r:g}": scenes.ensemble_curves(
+        f"ratio{r:g}": figures.ensemble_curves(
             args.grid,
             args.hurst,
             1.0,
@@ -54,13 +54,13 @@ def _from_data(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]
             n, hurst = int(f.attrs["grid"]), float(f.attrs["hurst"])
         if hurst != args.hurst:
             raise SystemExit(f"the study's Fig. 3 pieces have H = {hurst}, not {args.hurst}")
-        curves = scenes.curves_from_files(paths)
+        curves = figures.curves_from_files(paths)
         if any(map(is_partial, paths)):
             loads = curves["stiffness"].shape[1]
             print(f"# lambda_r/lambda_1 = {r}: unfinished pieces read, {loads} loads")
-        p_c = scenes.crossover(curves["h_rms"], hurst, 1.0)
+        p_c = figures.crossover(curves["h_rms"], hurst, 1.0)
         try:
-            fit = scenes.finite_size_fit(
+            fit = figures.finite_size_fit(
                 curves, n * n, p_c, args.fit_points, args.min_contact_pixels
             )
         except ValueError as exc:
@@ -194,7 +194,7 @@ def main() -> None:
     args = _arguments()
     ratios, p, results = (_from_data if args.data else _computed)(args)
     fit = extrapolation(args.hurst, ratios, results)
-    scenes.save(
+    figures.save(
         f"{args.output}.h5",
         {
             "nominal_pressure": p,

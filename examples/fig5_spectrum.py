@@ -13,20 +13,20 @@ from mpi4py import MPI
 
 from petsc_contact.conventions.grid import Grid, fundamental_wavevector
 from petsc_contact.numerics.fft import make_fft
+from petsc_contact.paper import figures
 from petsc_contact.paper.paper_study import RMS_SLOPE
 from petsc_contact.physics.surface import radial_psd, rms_of
-from petsc_contact.workflows import scenes
 
 
 def spectra(grid_n: int, hurst: float, ratio: float, cutoff: float, seed: int) -> dict:
     """The realised radial PSD of one surface and the prescribed spectrum it was drawn from
     (Eq. 5 at the rms slope :data:`RMS_SLOPE`), with the realised and prescribed rms slope and
     ``h_rms``."""
-    h, h_rms = scenes.surface(grid_n, hurst, ratio, cutoff, seed, RMS_SLOPE)
+    h, h_rms = figures.surface(grid_n, hurst, ratio, cutoff, seed, RMS_SLOPE)
     grid = Grid(grid_n, 1.0, MPI.COMM_SELF)
     fft = make_fft(grid)
     q, c = radial_psd(grid, fft, h)
-    qi, ci = scenes.ideal_spectrum(1.0, hurst, ratio, cutoff, rms_slope=RMS_SLOPE)
+    qi, ci = figures.ideal_spectrum(1.0, hurst, ratio, cutoff, rms_slope=RMS_SLOPE)
     return {
         "q": q,
         "psd": c,
@@ -81,7 +81,7 @@ def main() -> None:
     cutoff = args.cutoff_ratio or args.grid / 4
     ratios = {"a": 1.0, "b": args.rolloff_ratio}
     data = {k: spectra(args.grid, args.hurst, r, cutoff, args.seed) for k, r in ratios.items()}
-    scenes.save(
+    figures.save(
         f"{args.output}.h5",
         {k: {n: v for n, v in d.items() if n != "h_rms"} for k, d in data.items()},
         rms_slope_target=RMS_SLOPE,

@@ -5,6 +5,7 @@ import argparse
 
 import numpy as np
 
+from petsc_contact.paper import figures
 from petsc_contact.paper.paper_study import (
     add_data_options,
     add_pressures_option,
@@ -12,7 +13,6 @@ from petsc_contact.paper.paper_study import (
     piece_files,
 )
 from petsc_contact.physics import theory
-from petsc_contact.workflows import scenes
 
 HURST = 0.7
 
@@ -87,8 +87,8 @@ def _solved(args: argparse.Namespace, pixels: int) -> dict:
     p = log_pressures(args)
     rows, h_rms = [], []
     for seed in range(1, args.seeds + 1):
-        h, rms = scenes.surface(args.grid, HURST, 1.0, args.grid / pixels, seed)
-        rows.append(scenes.stiffness_curve(h, p))
+        h, rms = figures.surface(args.grid, HURST, 1.0, args.grid / pixels, seed)
+        rows.append(figures.stiffness_curve(h, p))
         h_rms.append(rms)
     out = {k: np.array([r[k] for r in rows]) for k in rows[0]}
     return out | {"h_rms": np.array(h_rms), "seed": np.arange(1, args.seeds + 1), "grid": args.grid}
@@ -105,7 +105,7 @@ def _read(args: argparse.Namespace, pixels: int) -> dict:
     with h5py.File(paths[0]) as f:
         if int(f.attrs["grid"]) != n:
             raise ValueError(f"{paths[0]}: grid {f.attrs['grid']}, the study's is {n}")
-    return scenes.curves_from_files(paths) | {"grid": n}
+    return figures.curves_from_files(paths) | {"grid": n}
 
 
 def analyse(curves: dict, pixels: int) -> dict:
@@ -116,12 +116,12 @@ def analyse(curves: dict, pixels: int) -> dict:
     radius, pixel_radius, hertz, half_space = [], [], [], []
     limit, slopes_one, hertz_end = [], [], []
     for row, seed in enumerate(curves["seed"]):
-        h, _ = scenes.surface(n, HURST, 1.0, n / pixels, int(seed))
+        h, _ = figures.surface(n, HURST, 1.0, n / pixels, int(seed))
         radius.append(summit_radius(h))
         pixel_radius.append(summit_radius(h, subpixel=False))
         hertz.append(theory.hertz_stiffness(p, 1.0, radius[-1], 1.0, cell=1.0))
         half_space.append(theory.hertz_stiffness(p, 1.0, pixel_radius[-1], 1.0))
-        ok = scenes.resolved(curves["area_fraction"][row], n) & np.isfinite(
+        ok = figures.resolved(curves["area_fraction"][row], n) & np.isfinite(
             curves["stiffness"][row]
         )
         one = ok & (curves["contact_patches"][row] == 1)
@@ -129,7 +129,7 @@ def analyse(curves: dict, pixels: int) -> dict:
         hertz_end.append(hertz_limit(p, curves["stiffness"][row] / hertz[-1], ok))
         both = one[1:] & one[:-1]  # a slope between two single-patch loads
         slopes_one.extend(local_slope(p, curves["stiffness"][row])[both])
-    resolved = scenes.resolved(curves["area_fraction"], n)
+    resolved = figures.resolved(curves["area_fraction"], n)
     return curves | {
         "pixels": pixels,
         "radius": np.array(radius),
@@ -183,11 +183,11 @@ def refinement(pixels: int, seed: int, loads: np.ndarray, factors=(1, 2, 4)) -> 
     deviation from Hertz is the grid's (it shrinks) or the surface's (it stays)."""
     from petsc_contact import periodic_contact
 
-    h, _ = scenes.surface(512, HURST, 1.0, 512 / pixels, seed)
+    h, _ = figures.surface(512, HURST, 1.0, 512 / pixels, seed)
     hertz = theory.hertz_stiffness(loads, 1.0, summit_radius(h), 1.0, cell=1.0)
     lines = []
     for factor in factors:
-        fine = scenes.refined(h, factor)
+        fine = figures.refined(h, factor)
         steps = periodic_contact(fine, length=1.0, pressures=loads, stiffness=True)
         k = np.array([step.scalars["stiffness"] for step in steps])
         area = np.array([step.scalars["area_fraction"] for step in steps]) * (512 * factor) ** 2
@@ -306,7 +306,7 @@ def main() -> None:
         print(report(data[f"lambda{pixels}"]))
     if not data:
         raise SystemExit(f"no complete Hertz piece in {args.data}")
-    scenes.save(f"{args.output}.h5", data, hurst=HURST, study_data=args.data or "")
+    figures.save(f"{args.output}.h5", data, hurst=HURST, study_data=args.data or "")
     _draw(args, data)
     print(f"wrote {args.output}.png and {args.output}.h5")
 

@@ -5,6 +5,7 @@ import argparse
 
 import numpy as np
 
+from petsc_contact.paper import figures
 from petsc_contact.paper.fits import power_law_fit
 from petsc_contact.paper.paper_study import (
     DISTRIBUTION_RATIO,
@@ -14,7 +15,6 @@ from petsc_contact.paper.paper_study import (
     piece_files,
 )
 from petsc_contact.physics import theory
-from petsc_contact.workflows import scenes
 
 HURST = 0.3
 
@@ -93,7 +93,7 @@ def analyse(curves: dict, n: int, rolloff_ratio: float, at: list[float], points:
     over the seeds that resolve it."""
     p = curves["nominal_pressure"][0]
     h = curves["h_rms"]
-    resolved = scenes.resolved(curves["area_fraction"], n) & np.isfinite(curves["stiffness"])
+    resolved = figures.resolved(curves["area_fraction"], n) & np.isfinite(curves["stiffness"])
     scaled = np.where(resolved, curves["stiffness"] * h[:, None], np.nan)
     index = [int(np.argmin(np.abs(np.log(p / v)))) for v in at]
     prefactors, pc_theory = np.array([theory_per_seed(v, rolloff_ratio) for v in h]).T
@@ -135,8 +135,8 @@ def _solved(args: argparse.Namespace) -> tuple[dict, int]:
     p = log_pressures(args)
     rows, h_rms = [], []
     for seed in range(1, args.seeds + 1):
-        h, rms = scenes.surface(args.grid, HURST, 1.0, args.grid / 2, seed)
-        rows.append(scenes.stiffness_curve(h, p))
+        h, rms = figures.surface(args.grid, HURST, 1.0, args.grid / 2, seed)
+        rows.append(figures.stiffness_curve(h, p))
         h_rms.append(rms)
     curves = {k: np.array([r[k] for r in rows]) for k in rows[0]}
     return curves | {"h_rms": np.array(h_rms), "seed": np.arange(1, args.seeds + 1)}, args.grid
@@ -146,7 +146,7 @@ def _read(args: argparse.Namespace) -> tuple[dict, int]:
     paths = piece_files(args.data, "seeds", partial=args.with_partial)
     if len(paths) < 2:
         raise SystemExit(f"fewer than two complete seed pieces in {args.data}")
-    return scenes.curves_from_files(paths), 2 * DISTRIBUTION_RATIO
+    return figures.curves_from_files(paths), 2 * DISTRIBUTION_RATIO
 
 
 def _histogram(ax, values: dict, xlabel: str, title: str) -> None:
@@ -315,7 +315,7 @@ def main() -> None:
     d = analyse(curves, n, 1.0, at, args.fit_points)
     for line in report(d):
         print(line)
-    scenes.save(f"{args.output}.h5", d, hurst=HURST, grid=n, study_data=args.data or "")
+    figures.save(f"{args.output}.h5", d, hurst=HURST, grid=n, study_data=args.data or "")
     _draw(args, d, n)
     print(f"wrote {args.output}.png and {args.output}.h5")
 

@@ -9,10 +9,10 @@ import argparse
 import numpy as np
 
 from petsc_contact.geometries.punch import flat_punch_stiffness, interfacial_stiffness
+from petsc_contact.paper import figures
 from petsc_contact.paper.paper_study import CUT_FROM, PUNCH_RATIOS, add_data_options, piece_files
 from petsc_contact.physics import theory
 from petsc_contact.reference import flat_punch
-from petsc_contact.workflows import scenes
 
 HURST = 0.7
 FACES = ("periodic", "cut")
@@ -29,7 +29,7 @@ def linearity(p: np.ndarray, k: np.ndarray, resolved: np.ndarray) -> str:
     ratio = np.where(resolved, k / p, np.nan)
     parts = [f"K/p smallest at p/E* {p[np.nanargmin(ratio)]:.2g}"]
     for tolerance in TOLERANCES:
-        width, low, high = scenes.linear_width(p, ratio, tolerance)
+        width, low, high = figures.linear_width(p, ratio, tolerance)
         parts.append(f"K/p within {tolerance:.0%} over {width:.2f} decades ({low:.2g}-{high:.2g})")
     return ", ".join(parts)
 
@@ -73,7 +73,7 @@ def punch_rows(paths: list[str]) -> list[dict]:
             good = ok & (row["nominal_pressure"] > 0)
             row["mean_gap_stiffness"] = np.full(ok.size, np.nan)
             if good.sum() >= 3:
-                row["mean_gap_stiffness"][good] = scenes.sweep_stiffness(
+                row["mean_gap_stiffness"][good] = figures.sweep_stiffness(
                     row["nominal_pressure"][good], row["mean_gap"][good]
                 )
         rows.append(row)
@@ -95,19 +95,19 @@ def periodic_reference(data: str, ratio: int) -> dict | None:
     paths = piece_files(data, "fig1", rolloff_ratio=f"{ratio:g}")
     if not paths:
         return None
-    c = scenes.curves_from_files(paths)
+    c = figures.curves_from_files(paths)
     with h5py.File(paths[0], "r", locking=False) as f:
         n = int(np.atleast_1d(f.attrs["grid"])[0])
     ref = {k: v[0] for k, v in c.items() if k != "h_rms"} | {"h_rms": float(c["h_rms"][0])}
     p = ref["nominal_pressure"]
-    ok = scenes.resolved(ref["area_fraction"], n) & np.isfinite(ref["stiffness"])
+    ok = figures.resolved(ref["area_fraction"], n) & np.isfinite(ref["stiffness"])
     return ref | {"n": n, "resolved": ok, "normalised": ref["stiffness"] * ref["h_rms"] / p}
 
 
 def normalised(row: dict, key: str = "interfacial_stiffness") -> np.ndarray:
     """``K h_rms/p`` of a punch piece over its resolved loads (``nan`` elsewhere): constant
     in a linear regime."""
-    ok = scenes.contact_resolved(row["area_fraction"], row["pixels"])
+    ok = figures.contact_resolved(row["area_fraction"], row["pixels"])
     return np.where(ok, row[key] * row["h_rms"] / row["nominal_pressure"], np.nan)
 
 
@@ -117,7 +117,7 @@ def against_cell(row: dict, ref: dict | None) -> np.ndarray:
     if ref is None:
         return np.full(row["nominal_pressure"].shape, np.nan)
     cell = np.where(ref["resolved"], ref["normalised"], np.nan)
-    return normalised(row) / scenes.log_interp(
+    return normalised(row) / figures.log_interp(
         row["nominal_pressure"], ref["nominal_pressure"], cell
     )
 
@@ -125,7 +125,7 @@ def against_cell(row: dict, ref: dict | None) -> np.ndarray:
 def seed_median(rows: list, x_key: str, y: list[np.ndarray], x: np.ndarray) -> np.ndarray:
     """The median over seeds of ``y`` (one array per seed, against its ``x_key`` column) at
     ``x``, where at least half of the seeds (and two) reach it."""
-    at = np.array([scenes.log_interp(x, r[x_key], v) for r, v in zip(rows, y, strict=True)])
+    at = np.array([figures.log_interp(x, r[x_key], v) for r, v in zip(rows, y, strict=True)])
     enough = np.sum(np.isfinite(at), axis=0) >= max(2, (len(rows) + 1) // 2)
     middle = np.full(x.shape, np.nan)
     middle[enough] = np.nanmedian(at[:, enough], axis=0)
@@ -159,14 +159,14 @@ def summary(face: str, ratio: int, rows: list, ref: dict | None) -> str:
     areas = np.array(AREAS)
     half = np.array(
         [
-            scenes.log_interp(
+            figures.log_interp(
                 0.5, r["total_stiffness"] / r["flat_punch_stiffness"], r["area_fraction"]
             )
             for r in rows
         ]
     )
     vs_cell = np.array(
-        [scenes.log_interp(areas, r["area_fraction"], against_cell(r, ref)) for r in rows]
+        [figures.log_interp(areas, r["area_fraction"], against_cell(r, ref)) for r in rows]
     )
     near = [int(np.nanargmin(np.abs(np.log(r["area_fraction"] / 0.2)))) for r in rows]
     top = np.array([normalised(r)[i] for r, i in zip(rows, near, strict=True)])
@@ -177,9 +177,9 @@ def summary(face: str, ratio: int, rows: list, ref: dict | None) -> str:
     reached = np.array([r["area_fraction"][i] for r, i in zip(rows, near, strict=True)])
     widths = []
     for r in rows:
-        ok = scenes.contact_resolved(r["area_fraction"], r["pixels"])
+        ok = figures.contact_resolved(r["area_fraction"], r["pixels"])
         ratio_k = np.where(ok, r["interfacial_stiffness"] / r["nominal_pressure"], np.nan)
-        widths.append(scenes.linear_width(r["nominal_pressure"], ratio_k, 0.1)[0])
+        widths.append(figures.linear_width(r["nominal_pressure"], ratio_k, 0.1)[0])
     gap = []
     for r in rows:
         mid = (r["area_fraction"] >= 1e-3) & (r["area_fraction"] <= 0.1)
@@ -187,7 +187,7 @@ def summary(face: str, ratio: int, rows: list, ref: dict | None) -> str:
             gap.extend((r["mean_gap_stiffness"] / r["interfacial_stiffness"])[mid])
     gap_text = f"{np.nanmin(gap):.2f}-{np.nanmax(gap):.2f}" if np.isfinite(gap).any() else "-"
     loads = np.array(SCATTER_LOADS)
-    at = np.array([scenes.log_interp(loads, r["nominal_pressure"], normalised(r)) for r in rows])
+    at = np.array([figures.log_interp(loads, r["nominal_pressure"], normalised(r)) for r in rows])
     scatter = []
     for column in at.T:
         column = column[np.isfinite(column)]
@@ -357,7 +357,7 @@ def report(face: str, ratio: int, rows: list) -> list[str]:
     lines = []
     for row in rows:
         p = row["nominal_pressure"]
-        ok = row["converged"] & scenes.contact_resolved(row["area_fraction"], row["pixels"])
+        ok = row["converged"] & figures.contact_resolved(row["area_fraction"], row["pixels"])
         text = (
             f"{face} face, L_p/lambda_r = {ratio}, seed {row['seed']}: "
             f"{row['converged'].sum()}/{ok.size} converged ({ok.sum()} resolved), p/E* "
@@ -420,7 +420,7 @@ def main() -> None:
     print(SUMMARY_HEADER)
     for (face, ratio), rows in sorted(variants.items(), key=lambda v: (v[0][1], v[0][0])):
         print(summary(face, ratio, rows, references[ratio]))
-    scenes.save(f"{args.output}.h5", data, hurst=HURST, cut_from=CUT_FROM, study_data=args.data)
+    figures.save(f"{args.output}.h5", data, hurst=HURST, cut_from=CUT_FROM, study_data=args.data)
     _draw(args, variants, references)
     print(f"wrote {args.output}.png and {args.output}.h5")
 

@@ -3,7 +3,7 @@ and 4 times finer (2, 4 and 8 pixels per lambda_1 by default), K at each load ag
 finest grid's, by how many contact pixels the coarsest grid resolves there.
 
 The surface of each seed is generated on the coarsest grid and interpolated exactly to the
-finer ones (its spectrum padded with zeros, ``scenes.refined``): only the discretisation
+finer ones (its spectrum padded with zeros, ``figures.refined``): only the discretisation
 changes.  Each seed's curves are kept in ``OUTPUT_seedK.npz`` as they finish, so that an
 interrupted run goes on where it stopped.
 """
@@ -13,8 +13,8 @@ import os
 
 import numpy as np
 
+from petsc_contact.paper import figures
 from petsc_contact.paper.paper_study import add_pressures_option, log_pressures
-from petsc_contact.workflows import scenes
 
 BINS = (1, 6, 16, 21, 100, 1000, np.inf)  # contact pixels on the coarsest grid
 
@@ -31,16 +31,16 @@ def solve_seed(args: argparse.Namespace, seed: int) -> dict[str, np.ndarray]:
     the settings they were solved for)."""
     path, settings = f"{args.output}_seed{seed}.npz", _settings(args, seed)
     try:
-        kept = scenes.kept_seed(path, settings, "curves (other grid, loads, H or factors)")
+        kept = figures.kept_seed(path, settings, "curves (other grid, loads, H or factors)")
     except ValueError as exc:
         raise SystemExit(str(exc)) from None
     if kept is not None:
         return kept
-    h, _ = scenes.surface(args.grid, args.hurst, 1.0, args.grid / args.pixels, seed)
+    h, _ = figures.surface(args.grid, args.hurst, 1.0, args.grid / args.pixels, seed)
     p = log_pressures(args)
     out: dict[str, np.ndarray] = {"nominal_pressure": p, "settings": settings}
     for factor in args.factors:
-        curve = scenes.stiffness_curve(scenes.refined(h, factor), p)
+        curve = figures.stiffness_curve(figures.refined(h, factor), p)
         out[f"stiffness_{factor}"] = curve["stiffness"]
         out[f"area_{factor}"] = curve["area_fraction"]
         print(f"# seed {seed}: {args.grid * factor}^2 solved", flush=True)

@@ -17,9 +17,9 @@ import argparse
 
 import numpy as np
 
+from petsc_contact.paper import figures
 from petsc_contact.paper.paper_study import PUNCH_RATIOS, RMS_SLOPE, add_data_options, piece_files
 from petsc_contact.physics import theory
-from petsc_contact.workflows import scenes
 
 HURST = 0.7
 WINDOW = (0.01, 0.1)  # the contact areas where the linear regime is read
@@ -47,7 +47,7 @@ def read(path: str) -> dict:
     except (OSError, KeyError) as exc:
         raise ValueError(f"'{path}' cannot be read ({exc}): not compared") from None
     pixels, row["n"] = int(grid[0] * grid[-1]), int(grid[0])
-    row["resolved"] = ok & scenes.contact_resolved(row["area_fraction"], pixels)
+    row["resolved"] = ok & figures.contact_resolved(row["area_fraction"], pixels)
     return row
 
 
@@ -92,7 +92,7 @@ def width(row: dict) -> float:
     """The widest window (decades of load) over which ``K/p`` stays within :data:`TOLERANCE`
     (resolved steps only)."""
     ratio = np.where(row["resolved"], row["K"] / row["nominal_pressure"], np.nan)
-    return scenes.linear_width(row["nominal_pressure"], ratio, TOLERANCE)[0]
+    return figures.linear_width(row["nominal_pressure"], ratio, TOLERANCE)[0]
 
 
 def over_cell(punch: dict, cell: dict) -> np.ndarray:
@@ -101,10 +101,11 @@ def over_cell(punch: dict, cell: dict) -> np.ndarray:
     cell_k = np.where(cell["resolved"], cell["K"], np.nan)
     ratio = np.where(
         punch["resolved"],
-        punch["K"] / scenes.log_interp(punch["nominal_pressure"], cell["nominal_pressure"], cell_k),
+        punch["K"]
+        / figures.log_interp(punch["nominal_pressure"], cell["nominal_pressure"], cell_k),
         np.nan,
     )
-    return scenes.log_interp(np.array(AREAS), punch["area_fraction"], ratio)
+    return figures.log_interp(np.array(AREAS), punch["area_fraction"], ratio)
 
 
 def _range(values: np.ndarray, digits: int = 2) -> str:
@@ -156,9 +157,9 @@ def seeds_and_loads(windows: list[tuple[np.ndarray, ...]], estimator: object) ->
     """The 68% percentile interval of the median over seeds of ``estimator(p, K, u_bar)``,
     seeds resampled and, within each seed drawn, its window's loads resampled
     (:data:`~petsc_contact.paper.figures.BOOTSTRAP_RESAMPLES` times, a fixed stream)."""
-    rng = np.random.default_rng(scenes.BOOTSTRAP_SEED)
+    rng = np.random.default_rng(figures.BOOTSTRAP_SEED)
     values = []
-    for _ in range(scenes.BOOTSTRAP_RESAMPLES):
+    for _ in range(figures.BOOTSTRAP_RESAMPLES):
         per_seed = []
         for i in rng.integers(0, len(windows), len(windows)):
             picked = rng.integers(0, windows[i][0].size, windows[i][0].size)
@@ -198,7 +199,7 @@ def u0_row(ratio: int, rows: list[tuple[dict, dict]]) -> str:
     closed form on the prescribed spectrum (the same length unit); beside it Persson's in the
     spectrum's ``h_rms``, as a Markdown table row."""
     n = rows[0][1]["n"]  # the paper bandwidth: L/lambda_1 = n/2
-    q, c = scenes.ideal_spectrum(1.0, HURST, ratio, n / 2, rms_slope=RMS_SLOPE)
+    q, c = figures.ideal_spectrum(1.0, HURST, ratio, n / 2, rms_slope=RMS_SLOPE)
     spectrum_h = float(np.sqrt(2 * np.pi * np.trapezoid(q * c, q)))
     persson = theory.persson_exponential(q, c)[1]
     realised = [cell["h_rms"] for _, cell in rows]
@@ -266,7 +267,7 @@ def main() -> None:
         f"r{r}": {f"seed{c['seed']}": {"punch": p, "cell": c} for p, c in rows}
         for r, rows in variants.items()
     }
-    scenes.save(f"{args.output}.h5", kept)
+    figures.save(f"{args.output}.h5", kept)
 
 
 if __name__ == "__main__":

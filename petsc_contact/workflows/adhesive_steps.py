@@ -1,0 +1,95 @@
+"""The adhesive periodic contact's steps under load control, through a load cycle.
+
+Each nominal pressure (any sign: tension is held by the attraction) is solved from the last
+converged gap, the previous step of its branch, never extrapolated (the energy is not convex:
+a start on the other side of a jump would land on the other branch).  Every step records
+``branch_jump`` (its contact area differs from the last converged step's by more than
+:data:`JUMP_AREA` of the cell, a jump into or out of contact, warned about loudly:
+:class:`BranchJump`) and a step under tension whose surfaces came apart beyond the law's
+range is not converged: ``verification`` says ``pulled off``.  :func:`pull_off_pressure`
+reads the pull-off from the steps of an unloading branch; each step records it as it stands.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Iterator, Sequence
+from contextlib import nullcontext
+from typing import Any
+
+import numpy as np
+
+from ..backend.solve import Monitor
+from ..geometries.adhesive_periodic import AdhesivePeriodicProblem
+from ..geometries.step import Step, solve_step
+from ..solver.backends import BoundSolver
+from .periodic_steps import problem_solver
+
+JUMP_AREA = 0.5  # an area changed by more than this fraction of the larger of two steps: a jump
+
+
+class BranchJump(UserWarning):
+    """A step whose contact area jumped from the last converged one's (module docstring)."""
+
+
+def adhesive_sweep(
+    problem: AdhesivePeriodicProblem,
+    pressures: Sequence[float],
+    fields: bool = False,
+    monitor: Monitor | None = None,
+    start: np.ndarray | None = None,
+    solver: BoundSolver | None = None,
+) -> Iterator[Step]:
+    """Solve the nominal pressures in the given order (a cycle: down into compression and
+    back into tension), each from the last converged gap (``start``, a local gap slab, for
+    the first; default: first touch).  ``solver`` as :func:`~petsc_contact.workflows.
+    periodic_steps.sweep` takes it; every step adds ``branch_jump`` (module docstring) and
+    ``pull_off_pressure``, :func:`pull_off_pressure` of the steps so far."""
+    ell, device = problem.scale_length, problem.device
+    x = (problem.initial_gap() if start is None else device.asarray(start)).reshape(-1) / ell
+    last_area: float | None = None
+    done: list[dict[str, Any]] = []
+    with nullcontext(solver) if solver is not None else problem_solver(problem) as solver:
+        for p0 in (float(p) for p in pressures):
+            problem.set_pressure(p0)
+            problem.start(x)
+            watch = problem.separation_monitor(monitor)
+            step, x_new = solve_step(solver, problem, problem.start_point, watch, False, fields)
+            note_jump(step.scalars, last_area)
+            done.append(step.scalars)
+            step.scalars["pull_off_pressure"] = pull_off_pressure(done)[0]
+            if step.converged:
+                x, last_area = x_new, step.scalars["area_fraction"]
+            yield step
+
+
+def note_jump(scalars: dict[str, Any], last_area: float | None) -> None:
+    """Record ``branch_jump`` in a step's ``scalars`` and warn (:class:`BranchJump`) where its
+    area differs from ``last_area`` (the last converged step's) by more than :data:`JUMP_AREA`."""
+    area = scalars["area_fraction"]
+    jumped = bool(scalars["converged"] and last_area is not None)
+    jumped = jumped and abs(area - float(last_area or 0.0)) > JUMP_AREA
+    scalars["branch_jump"] = jumped
+    if jumped:
+        warnings.warn(
+            f"at p0 = {scalars['nominal_pressure']:.4g} the contact area jumped from "
+            f"{last_area:.4g} to {area:.4g} of the cell: the step left its branch (a jump "
+            "into or out of contact)",
+            BranchJump,
+            stacklevel=2,
+        )
+
+
+def pull_off_pressure(steps: Sequence[dict[str, Any]]) -> tuple[float, bool]:
+    """The pull-off estimate of a load cycle's step ``scalars``: the most tensile converged
+    nominal pressure with contact on the unloading branch (the steps after the largest
+    pressure), and whether it is bracketed (a more tensile step of that branch pulled off).
+    NaN where the unloading branch has no converged step in contact."""
+    loads = [s["nominal_pressure"] for s in steps]
+    unloading = steps[int(np.argmax(loads)) :] if loads else []
+    held = [s for s in unloading if s["converged"] and s["area_fraction"] > 0]
+    if not held:
+        return np.nan, False
+    p_off = min(s["nominal_pressure"] for s in held)
+    bracketed = any(not s["converged"] and s["nominal_pressure"] < p_off for s in unloading)
+    return float(p_off), bracketed

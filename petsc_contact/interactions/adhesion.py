@@ -69,10 +69,9 @@ class Adhesion:
             return -self.work * xp.exp(-gap / self.range)
         eps, rho = MAUGIS_SMOOTHING, self.range
         t = xp.clip((gap - rho * (1 - eps)) / (2 * eps * rho), 0.0, 1.0)  # 0 to 1 on the ramp
-        # -w (1 - g/rho) below the ramp; on it the integral of the falling attraction
-        below = -self.work * (1 - xp.minimum(gap, rho * (1 - eps)) / rho)
-        ramp = self.strength * 2 * eps * rho * (t - 0.5 * t * t)
-        return xp.minimum(below + ramp, 0.0)
+        # minus the attraction's integral beyond g: the flat part's, then the ramp's
+        flat = xp.maximum(rho * (1 - eps) - gap, 0.0)
+        return -self.strength * (flat + eps * rho * (1.0 - t) ** 2)
 
     def derivative(self, gap: Any, xp: Any = np) -> Any:
         """``phi'(g)``, minus the attraction, on each pixel (non-negative)."""

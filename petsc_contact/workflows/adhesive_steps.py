@@ -3,9 +3,9 @@
 Each nominal pressure (any sign: tension is held by the attraction) is solved from the last
 converged gap, the previous step of its branch, never extrapolated (the energy is not convex:
 a start on the other side of a jump would land on the other branch).  Every step records
-``branch_jump`` (its contact area differs from the last converged step's by more than
-:data:`JUMP_AREA` of the cell, a jump into or out of contact, warned about loudly:
-:class:`BranchJump`) and a step under tension whose surfaces came apart beyond the law's
+``branch_jump`` (its contact area misses the tangent of its branch through the last two
+converged steps by more than :data:`JUMP_AREA` of the larger of it and the last one's, a jump
+into or out of contact, warned about loudly: :class:`BranchJump`) and a step under tension whose surfaces came apart beyond the law's
 range is not converged: ``verification`` says ``pulled off``.  :func:`pull_off_pressure`
 reads the pull-off from the steps of an unloading branch; each step records it as it stands.
 """
@@ -25,7 +25,7 @@ from ..geometries.step import Step, solve_step
 from ..solver.backends import BoundSolver
 from .periodic_steps import problem_solver
 
-JUMP_AREA = 0.5  # an area changed by more than this fraction of the larger of two steps: a jump
+JUMP_AREA = 0.5  # an area this far (of the larger area) off its branch's tangent: a jump
 
 
 class BranchJump(UserWarning):
@@ -47,7 +47,7 @@ def adhesive_sweep(
     ``pull_off_pressure``, :func:`pull_off_pressure` of the steps so far."""
     ell, device = problem.scale_length, problem.device
     x = (problem.initial_gap() if start is None else device.asarray(start)).reshape(-1) / ell
-    last_area: float | None = None
+    held: list[tuple[float, float]] = []  # the converged steps' (p0, area)
     done: list[dict[str, Any]] = []
     with nullcontext(solver) if solver is not None else problem_solver(problem) as solver:
         for p0 in (float(p) for p in pressures):
@@ -55,26 +55,35 @@ def adhesive_sweep(
             problem.start(x)
             watch = problem.separation_monitor(monitor)
             step, x_new = solve_step(solver, problem, problem.start_point, watch, False, fields)
-            note_jump(step.scalars, last_area)
+            note_jump(step.scalars, held)
             done.append(step.scalars)
             step.scalars["pull_off_pressure"] = pull_off_pressure(done)[0]
             if step.converged:
-                x, last_area = x_new, step.scalars["area_fraction"]
+                x = x_new
+                held.append((p0, step.scalars["area_fraction"]))
             yield step
 
 
-def note_jump(scalars: dict[str, Any], last_area: float | None) -> None:
+def note_jump(scalars: dict[str, Any], held: Sequence[tuple[float, float]]) -> None:
     """Record ``branch_jump`` in a step's ``scalars`` and warn (:class:`BranchJump`) where its
-    area differs from ``last_area`` (the last converged step's) by more than :data:`JUMP_AREA`."""
-    area = scalars["area_fraction"]
-    jumped = bool(scalars["converged"] and last_area is not None)
-    jumped = jumped and abs(area - float(last_area or 0.0)) > JUMP_AREA
+    area misses the one its branch predicts by more than :data:`JUMP_AREA` of the larger of
+    it and the last converged step's.  ``held`` are the converged steps' ``(p0, area)`` so
+    far: the prediction is the tangent through the last two (the last area alone after the
+    first); a step that did not converge, or the first, is not judged."""
+    area, p0 = scalars["area_fraction"], scalars["nominal_pressure"]
+    jumped = False
+    if scalars["converged"] and held:
+        p_last, a_last = held[-1]
+        predicted = a_last
+        if len(held) > 1 and held[-2][0] != p_last:
+            p_prev, a_prev = held[-2]
+            predicted += (a_last - a_prev) / (p_last - p_prev) * (p0 - p_last)
+        jumped = abs(area - predicted) > JUMP_AREA * max(area, a_last)
     scalars["branch_jump"] = jumped
     if jumped:
         warnings.warn(
-            f"at p0 = {scalars['nominal_pressure']:.4g} the contact area jumped from "
-            f"{last_area:.4g} to {area:.4g} of the cell: the step left its branch (a jump "
-            "into or out of contact)",
+            f"at p0 = {p0:.4g} the contact area jumped from {held[-1][1]:.4g} to {area:.4g} "
+            "of the cell: the step left its branch (a jump into or out of contact)",
             BranchJump,
             stacklevel=2,
         )

@@ -5,9 +5,10 @@ converged gap, the previous step of its branch, never extrapolated (the energy i
 a start on the other side of a jump would land on the other branch).  Every step records
 ``branch_jump`` (its contact area misses the tangent of its branch through the last two
 converged steps by more than :data:`JUMP_AREA` of the larger of it and the last one's, a jump
-into or out of contact, warned about loudly: :class:`BranchJump`) and a step under tension whose surfaces came apart beyond the law's
-range is not converged: ``verification`` says ``pulled off``.  :func:`pull_off_pressure`
-reads the pull-off from the steps of an unloading branch; each step records it as it stands.
+into or out of contact, warned about loudly: :class:`BranchJump`), and a step under tension
+whose surfaces came apart beyond the law's range is not converged: ``verification`` says
+``pulled off``.  :func:`pull_off_pressure` reads the pull-off from the steps of an unloading
+branch; each step records it as it stands.
 """
 
 from __future__ import annotations

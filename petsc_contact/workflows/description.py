@@ -245,12 +245,12 @@ class Run:
     def _check_adhesion(self) -> None:
         """``ValueError`` in one line for an adhesive law without its work and range (or
         those without it), or beside what it does not yet combine with."""
-        given = [self.work_of_adhesion is not None, self.interaction_range is not None]
+        work, reach = self.work_of_adhesion, self.interaction_range
         if self.adhesion is None:
-            if any(given):
+            if work is not None or reach is not None:
                 raise ValueError("--work-of-adhesion and --interaction-range need --adhesion")
             return
-        if not all(given):
+        if work is None or reach is None:
             raise ValueError("--adhesion needs --work-of-adhesion W and --interaction-range RHO")
         others = ("mean_gaps", "sweep", "thickness", "hardness", "stiffness")
         given_others = [o for o in others if getattr(self, o) not in (None, False)]
@@ -260,9 +260,8 @@ class Run:
                 f"--adhesion with {flags}: an adhesive run is periodic, on the "
                 "half-space, and takes --pressures"
             )
-        positive("--work-of-adhesion", float(self.work_of_adhesion or 0.0))
-        rho = parse_quantity(self.interaction_range, METRES, "--interaction-range").value
-        positive("--interaction-range", rho)
+        positive("--work-of-adhesion", work)
+        positive("--interaction-range", parse_quantity(reach, METRES, "--interaction-range").value)
 
     def _check_layer(self) -> None:
         """``ValueError`` in one line for a layer's thickness (positive, on the periodic

@@ -18,6 +18,7 @@ from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.workflows.adhesive_steps import (
     BranchJump,
+    adhesive_mean_gap_sweep,
     adhesive_sweep,
     note_jump,
     pull_off_pressure,
@@ -138,6 +139,29 @@ def test_a_spheres_pull_off_lies_between_jkr_and_dmt(law, tabor, tao_type, low, 
         assert s["force_balance"] < 1e-6 and s["min_gap"] >= 0
 
 
+def test_displacement_control_reaches_the_load_controlled_pull_off():
+    """At ``mu = 2`` the sphere held by the loading machine at prescribed mean gaps, down and
+    back up past the load-controlled pull-off, stays in contact (the machine holds the branch
+    that load control leaves): every mean gap within 1e-6, the most tensile pressure within
+    the load-controlled bracket (0.80 held, 0.85 pulled off, of ``2 pi R w``) and the
+    path reversible (the same pressure down and up, to the tolerance's 1e-6 of ``P``)."""
+    n = 128
+    grid = Grid(n, 1.0)
+    x = (np.arange(n) + 0.5) / n - 0.5
+    h = -(x[:, None] ** 2 + x[None, :] ** 2) / 2
+    w = np.sqrt(2.0**3 * RHO**3)
+    gaps = [0.08, 0.07, 0.075, 0.08, 0.0825, 0.085, 0.09]
+    with scoped_options(["-tao_type", "blmvm"]):
+        problem = AdhesivePeriodicProblem(
+            grid, make_fft(grid), h, 1.0, Adhesion("exponential", w, RHO), PetscBackend()
+        )
+        steps = [s.scalars for s in adhesive_mean_gap_sweep(problem, gaps)]
+    assert all(s["converged"] and s["mean_gap_mismatch"] <= 1e-6 for s in steps)
+    assert all(s["area_fraction"] > 0 for s in steps)
+    assert 0.80 < -pull_off_pressure(steps)[0] / (2 * np.pi * w) < 0.85
+    assert steps[3]["nominal_pressure"] == pytest.approx(steps[0]["nominal_pressure"], rel=1e-5)
+
+
 def test_a_jump_of_the_contact_area_is_flagged():
     """A converged step whose area misses its branch's tangent through the last two steps by
     more than half the larger area is a branch jump, warned about; one on the tangent, one
@@ -193,9 +217,9 @@ def test_adhesion_with_the_packages_cg_is_refused(tmp_path):
         ({"pressures": [1e-3], "adhesion": "exponential"}, "--work-of-adhesion W"),
         ({"pressures": [1e-3], "work_of_adhesion": 1e-4}, "need --adhesion"),
         (
-            {"mean_gaps": [1e-3], "adhesion": "maugis", "work_of_adhesion": 1e-4,
-             "interaction_range": 1e-3},
-            "--mean-gaps",
+            {"pressures": [1e-3], "adhesion": "maugis", "work_of_adhesion": 1e-4,
+             "interaction_range": 1e-3, "thickness": 0.1},
+            "--thickness",
         ),
         (
             {"pressures": [1e-3], "adhesion": "maugis", "work_of_adhesion": -1e-4,
@@ -206,6 +230,6 @@ def test_adhesion_with_the_packages_cg_is_refused(tmp_path):
 )  # fmt: skip
 def test_what_adhesion_does_not_take_is_refused(fields, words):
     """Tension without an adhesive law, a law without its work and range (or those without
-    it), displacement control and a work that is not positive: one line naming the option."""
+    it), a layer and a work that is not positive: one line naming the option."""
     with pytest.raises(ValueError, match=words):
         Run(grid=32, hurst=0.8, rms_slope=0.1, **fields)

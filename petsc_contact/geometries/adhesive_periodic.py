@@ -76,8 +76,9 @@ class AdhesivePeriodicProblem(PeriodicProblem):
         )
         self.adhesion = adhesion
         self.pressure_scale = np.nan
-        self._phi_ref = 0.0
+        self._phi_ref: Any = None  # phi(g) at the reference point
         self.separated = False
+        self.machine: tuple[float, float] | None = None  # displacement control's (k_m, t)
 
     def set_pressure(self, p0: float, interfacial_stiffness: float | None = None) -> None:
         """Set the nominal pressure ``p0`` (any sign) and scale the problem by
@@ -88,6 +89,19 @@ class AdhesivePeriodicProblem(PeriodicProblem):
         super().set_pressure(scale, interfacial_stiffness)
         self.pressure_scale = scale
         self.nominal_pressure = float(p0)
+        self.machine = None
+
+    def set_machine(self, anchor: float, scale: float) -> None:
+        """Displacement control: a loading machine of stiffness ``k_m`` (the pixel stiffness,
+        stiffer than any contact) holds the mean gap near ``anchor``, adding
+        ``N k_m/2 (mean(g) - anchor)^2`` to the energy in place of ``p0 sum(g)``: the
+        nominal pressure is ``k_m (mean(g) - anchor)``, and every branch is stable under it.
+        ``scale`` is the pressure scale (``P``); the preconditioner's mean mode is held by
+        ``k_m`` exactly."""
+        k_m = float(self.pixel_stiffness)
+        self.set_pressure(max(scale, self.adhesion.strength), k_m)
+        self.nominal_pressure = 0.0
+        self.machine = (k_m, float(anchor))
 
     def tolerance_floor(self) -> float:
         """The tolerance double precision resolves, in units of the pressure scale."""
@@ -96,24 +110,42 @@ class AdhesivePeriodicProblem(PeriodicProblem):
     def start(self, x0: np.ndarray) -> None:
         """The periodic geometry's reference point, and the interaction energy there."""
         super().start(x0)
-        self._phi_ref = self._interaction_sum(self._x_ref)
-
-    def _interaction_sum(self, x: np.ndarray) -> float:
-        """``sum(phi(l x))`` over the grid."""
         xp = self.device.xp
-        (total,) = self.grid.sum(float(self.adhesion.energy(x * self.scale_length, xp).sum()))
+        self._phi_ref = self.adhesion.energy(self._x_ref * self.scale_length, xp)
+
+    def _spring(self, x: np.ndarray) -> tuple[float, float]:
+        """The change of the loading machine's energy from the reference over the pixel area,
+        ``N k_m/2 (s^2 - s_ref^2)`` with ``s = mean(g) - t``, formed as ``N k_m/2 (s -
+        s_ref)(s + s_ref)`` (no cancellation of the large terms), and its pressure ``k_m s``
+        (both 0 under load control)."""
+        if self.machine is None:
+            return 0.0, 0.0
+        k_m, anchor = self.machine
+        ell, n = self.scale_length, self.grid.size
+        total, change = self.grid.sum(float(x.sum()), float((x - self._x_ref).sum()))
+        stretch = total * ell / n - anchor
+        moved = change * ell / n
+        return 0.5 * n * k_m * moved * (2 * stretch - moved), k_m * stretch
+
+    def _interaction_change(self, x: np.ndarray) -> float:
+        """``sum(phi(l x) - phi(l x_ref))`` over the grid, pixel by pixel (the change, not
+        the difference of two large sums)."""
+        phi = self.adhesion.energy(x * self.scale_length, self.device.xp)
+        (total,) = self.grid.sum(float((phi - self._phi_ref).sum()))
         return float(total)
 
     def objective_gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
         """The periodic geometry's scaled objective (relative to the reference) plus
-        ``s/l (sum(phi(l x)) - sum(phi(l x_ref)))``; ``grad <- s (p + phi'(g))``."""
+        ``s/l (sum(phi(l x)) - sum(phi(l x_ref)))`` and the loading machine's change
+        (:meth:`set_machine`); ``grad <- s (p + phi'(g) + k_m (mean(g) - t))``."""
         f = super().objective_gradient(x, grad)
         xp, ell = self.device.xp, self.scale_length
         if self.nominal_pressure < 0:  # the gap grows without bound once pulled off
             lowest = self.grid.min(float(x.min(initial=np.inf)) * ell)
             self.separated = lowest > SEPARATED * self.adhesion.range
-        grad += self._s * self.adhesion.derivative(x * ell, xp)
-        return f + self._s / ell * (self._interaction_sum(x) - self._phi_ref)
+        spring, pull = self._spring(x)
+        grad += self._s * (self.adhesion.derivative(x * ell, xp) + pull)
+        return f + self._s / ell * (self._interaction_change(x) + spring)
 
     def separation_monitor(self, monitor: Monitor | None) -> Monitor:
         """``monitor`` that also stops the solve once the surfaces separated under tension
@@ -133,6 +165,8 @@ class AdhesivePeriodicProblem(PeriodicProblem):
         solver's report and the verdict (``stiffness`` is not measured: the held-set
         stiffness leaves out the law's curvature)."""
         grid, ell, device = self.grid, self.scale_length, self.device
+        if self.machine is not None:  # the nominal pressure the machine holds
+            self.nominal_pressure = self._spring(x)[1]
         gap = device.to_host(x.reshape(grid.local_shape) * ell)
         pressure = device.to_host(self.pressure(device.asarray(gap)))
         obs = adhesive_observables(self, gap, pressure)

@@ -252,13 +252,13 @@ class Run:
             return
         if work is None or reach is None:
             raise ValueError("--adhesion needs --work-of-adhesion W and --interaction-range RHO")
-        others = ("mean_gaps", "sweep", "thickness", "hardness", "stiffness")
+        others = ("sweep", "thickness", "hardness", "stiffness")
         given_others = [o for o in others if getattr(self, o) not in (None, False)]
         if self.geometry != "periodic" or given_others:
             flags = ", ".join("--" + o.replace("_", "-") for o in given_others) or "the punch"
             raise ValueError(
                 f"--adhesion with {flags}: an adhesive run is periodic, on the "
-                "half-space, and takes --pressures"
+                "half-space, and takes --pressures or --mean-gaps"
             )
         positive("--work-of-adhesion", work)
         positive("--interaction-range", parse_quantity(reach, METRES, "--interaction-range").value)

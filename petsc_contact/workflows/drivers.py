@@ -41,7 +41,7 @@ from ..solver.backends import SolverBackend
 from ..substrates.half_space import PeriodicHalfSpace
 from ..substrates.layer import PeriodicLayer
 from ..substrates.substrate import PeriodicSubstrate
-from .adhesive_steps import adhesive_sweep
+from .adhesive_steps import adhesive_mean_gap_sweep, adhesive_sweep
 from .choice import uses_petsc
 from .description import Run, swept
 from .periodic_steps import mean_gap_sweep, problem_solver, sweep
@@ -221,9 +221,10 @@ class CappedPeriodicDriver:
 
 
 class AdhesivePeriodicDriver:
-    """A periodic run with an adhesive law: its nominal pressures (any sign) in order, each
-    from the last converged step (:func:`~petsc_contact.workflows.adhesive_steps.
-    adhesive_sweep`), by one of TAO's bound solvers (the package's CG refused)."""
+    """A periodic run with an adhesive law: its nominal pressures (any sign) or mean gaps in
+    order, each from the last converged step (:func:`~petsc_contact.workflows.adhesive_steps.
+    adhesive_sweep`, :func:`~petsc_contact.workflows.adhesive_steps.adhesive_mean_gap_sweep`),
+    by one of TAO's bound solvers (the package's CG refused)."""
 
     def __init__(self, run: Run, scene: Scene, backend: SolverBackend) -> None:
         check_solver(backend)
@@ -231,8 +232,12 @@ class AdhesivePeriodicDriver:
         unit = scene.resolved["length_unit"] or None
         rho = length_value(run.interaction_range, unit, "--interaction-range")
         law = Adhesion(run.adhesion, run.work_of_adhesion, rho)
-        self.loads, self.resolved = _pressures(run, None)
-        for p0 in self.loads:
+        self.by_mean_gap = run.mean_gaps is not None
+        if self.by_mean_gap:
+            self.loads, self.resolved = _mean_gaps(run, scene.resolved["length_unit"])
+        else:
+            self.loads, self.resolved = _pressures(run, None)
+        for p0 in [] if self.by_mean_gap else self.loads:
             law.check_nominal(p0, "--pressures")
         problem = AdhesivePeriodicProblem(
             scene.grid, scene.fft, scene.heights, run.modulus_value, law, backend
@@ -245,7 +250,8 @@ class AdhesivePeriodicDriver:
     def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
         """The cycle of ``loads`` from ``start``'s gap (first touch without one)."""
         state = start[0] if start else None
-        return adhesive_sweep(self.problem, loads, self.run.fields, monitor, state, self.solver)
+        solve = adhesive_mean_gap_sweep if self.by_mean_gap else adhesive_sweep
+        return solve(self.problem, loads, self.run.fields, monitor, state, self.solver)
 
     def close(self) -> None:
         """Release the solver."""

@@ -580,10 +580,11 @@ _ADHESION = (
         more="Posed in the gap with the interaction energy added (not convex; "
         '[formulation.md](formulation.md), "Adhesion"): solved by TAO\'s bound solvers '
         "(`-tao_type blmvm` or `bncg`; the package's CG, a QP solver, is refused), each "
-        "nominal pressure (tension too) from the last converged step. Each step records "
-        "`adhesive_pressure`, `interaction_energy`, `pressure_scale` and `branch_jump`; a "
-        "step under tension whose surfaces came apart is not converged (`pulled off`), and "
-        "the run prints the pull-off estimate. Takes `--pressures` on the half-space",
+        "nominal pressure (tension too) or mean gap (held by a stiff loading machine to "
+        "1e-6) from the last converged step. Each step records `adhesive_pressure`, "
+        "`interaction_energy`, `pressure_scale`, `pull_off_pressure` and `branch_jump`; a "
+        "step under tension whose surfaces came apart is not converged (`pulled off`). "
+        "Takes `--pressures` or `--mean-gaps` on the half-space",
     ),
     _option(
         "work_of_adhesion",

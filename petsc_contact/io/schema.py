@@ -290,6 +290,32 @@ CAPPED_CELL = _entries(
         "cap; stiffness = 1/(A/total_stiffness - c)",
     ),
 )
+ADHESIVE = _entries(
+    adhesive_pressure=(
+        "pressure",
+        "--adhesion: the mean attraction mean(phi'(g)); the mean wall reaction less it is the "
+        "nominal pressure",
+    ),
+    pressure_scale=(
+        "pressure",
+        "--adhesion: the pressure scale P = max(|p0|, w/rho) that kkt_residual, force_balance "
+        "and the tolerance are in units of",
+    ),
+    interaction_energy=(
+        "pressure*length",
+        "--adhesion: the interaction energy per apparent area, mean(phi(g)) (-w in full contact)",
+    ),
+    pull_off_pressure=(
+        "pressure",
+        "--adhesion: the most tensile converged nominal pressure with contact on the unloading "
+        "branch so far (the steps from the largest pressure on; NaN before any)",
+    ),
+    branch_jump=(
+        "bool",
+        "--adhesion: the contact area changed by more than half of the larger of this and the "
+        "last converged step's (a jump into or out of contact; warned)",
+    ),
+)
 COORDINATES = _entries(
     step=("count", "load step, counted from 1 as the printed table counts"),
     bin=("count", "a histogram's bin, counted from 0"),
@@ -367,6 +393,7 @@ ENTRIES = {
     **PERIODIC_COLUMNS,
     **PUNCH_COLUMNS,
     **PLASTIC,
+    **ADHESIVE,
     **FIELDS,
 }
 GEOMETRIES = {
@@ -377,6 +404,7 @@ GEOMETRIES = {
         **PERIODIC_COLUMNS,
         **PLASTIC,
         **CAPPED_CELL,
+        **ADHESIVE,
         **FIELDS,
     },
     "punch": {

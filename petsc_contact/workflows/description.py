@@ -124,6 +124,12 @@ class Run:
         hardness the pressure is capped at, on either geometry (``None``: the hard wall;
         :class:`~petsc_contact.interactions.hardness.HardnessCap`); whether every step adds
         the exact stiffness.
+    adhesion, work_of_adhesion, interaction_range
+        An adhesive law on the periodic half-space (``exponential``, ``maugis``; ``None``: the
+        hard wall), its work of adhesion ``w`` (units of ``E*`` times the length unit) and
+        range ``rho`` (a length, ``"5nm"`` with a unit;
+        :class:`~petsc_contact.interactions.adhesion.Adhesion`): the nominal pressures may
+        then be zero or tensile.
     output, fields, scalars_only, resume, overwrite, stop_after
         The HDF5 file (none: results only in memory), whether the fields of every step are
         stored, whether the height map is left out, whether an interrupted run is continued
@@ -173,6 +179,9 @@ class Run:
     footprint: str = run_default("footprint")
     flat_stiffness: str = run_default("flat_stiffness")
     hardness: float | str | None = run_default("hardness")
+    adhesion: str | None = run_default("adhesion")
+    work_of_adhesion: float | None = run_default("work_of_adhesion")
+    interaction_range: float | str | None = run_default("interaction_range")
     stiffness: bool = run_default("stiffness")
     output: str | None = run_default("output")
     fields: bool = run_default("fields")
@@ -206,6 +215,7 @@ class Run:
         self._check_layer()
         check_resume_or_overwrite(self.resume, self.overwrite)
         self._check_mean_gaps()
+        self._check_adhesion()
         loads = (("pressures", PASCALS), ("approaches", METRES), ("forces", NEWTONS))
         for name, units in (*loads, ("mean_gaps", METRES)):
             values = getattr(self, name)
@@ -215,6 +225,8 @@ class Run:
             if len(values) == 0:
                 raise ValueError(f"{flag} needs at least one value")
             check = non_negative if name == "approaches" else positive  # an approach may be 0
+            if name == "pressures" and self.adhesion is not None:
+                continue  # tension is held by the attraction: any finite pressure
             for v in values:
                 check(flag, parse_quantity(v, units, flag).value)
 
@@ -229,6 +241,27 @@ class Run:
             raise ValueError(f"give one kind of load: --mean-gaps or {' or '.join(others)}")
         if self.hardness is not None:
             raise ValueError("--mean-gaps with --hardness: a capped periodic run takes --pressures")
+
+    def _check_adhesion(self) -> None:
+        """``ValueError`` in one line for an adhesive law without its work and range (or
+        those without it), or beside what it does not yet combine with."""
+        work, reach = self.work_of_adhesion, self.interaction_range
+        if self.adhesion is None:
+            if work is not None or reach is not None:
+                raise ValueError("--work-of-adhesion and --interaction-range need --adhesion")
+            return
+        if work is None or reach is None:
+            raise ValueError("--adhesion needs --work-of-adhesion W and --interaction-range RHO")
+        others = ("sweep", "thickness", "hardness", "stiffness")
+        given_others = [o for o in others if getattr(self, o) not in (None, False)]
+        if self.geometry != "periodic" or given_others:
+            flags = ", ".join("--" + o.replace("_", "-") for o in given_others) or "the punch"
+            raise ValueError(
+                f"--adhesion with {flags}: an adhesive run is periodic, on the "
+                "half-space, and takes --pressures or --mean-gaps"
+            )
+        positive("--work-of-adhesion", work)
+        positive("--interaction-range", parse_quantity(reach, METRES, "--interaction-range").value)
 
     def _check_layer(self) -> None:
         """``ValueError`` in one line for a layer's thickness (positive, on the periodic

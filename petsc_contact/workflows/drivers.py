@@ -28,10 +28,12 @@ import numpy as np
 
 from ..backend.solve import Monitor
 from ..conventions.units import force_value, format_quantity, length_value, pressure_value
+from ..geometries.adhesive_periodic import AdhesivePeriodicProblem, check_solver
 from ..geometries.capped_periodic import CappedPeriodicProblem
 from ..geometries.periodic import LARGEST_LOAD, PeriodicProblem
 from ..geometries.punch import PunchProblem, footprint_mask
 from ..geometries.step import Step
+from ..interactions.adhesion import Adhesion
 from ..interactions.hardness import HardnessCap
 from ..physics.continuation import Held
 from ..physics.observables import MIN_CONTACT_PIXELS
@@ -39,6 +41,7 @@ from ..solver.backends import SolverBackend
 from ..substrates.half_space import PeriodicHalfSpace
 from ..substrates.layer import PeriodicLayer
 from ..substrates.substrate import PeriodicSubstrate
+from .adhesive_steps import adhesive_mean_gap_sweep, adhesive_sweep
 from .choice import uses_petsc
 from .description import Run, swept
 from .periodic_steps import PeriodicSteps, mean_gap_sweep, problem_solver, sweep
@@ -91,9 +94,12 @@ def on_device(run: Run, device: str, options: Sequence[str] = ()) -> Run:
 def driver_for(run: Run, scene: Scene, backend: SolverBackend) -> Driver:
     """The driver of ``run``'s geometry on ``scene``, solved by ``backend``, its loads
     checked (``ValueError``): a periodic run with a hardness is posed in the pressure
-    (:class:`CappedPeriodicDriver`)."""
+    (:class:`CappedPeriodicDriver`), one with adhesion in the gap with the law's energy
+    (:class:`AdhesivePeriodicDriver`)."""
     if run.geometry == "punch":
         return PunchDriver(run, scene, backend)
+    if run.adhesion is not None:
+        return AdhesivePeriodicDriver(run, scene, backend)
     if run.hardness is not None:
         return CappedPeriodicDriver(run, scene, backend)
     return PeriodicDriver(run, scene, backend)
@@ -246,6 +252,44 @@ class CappedPeriodicDriver:
             self.capped.close()
 
 
+class AdhesivePeriodicDriver:
+    """A periodic run with an adhesive law: its nominal pressures (any sign) or mean gaps in
+    order, each from the last converged step (:func:`~petsc_contact.workflows.adhesive_steps.
+    adhesive_sweep`, :func:`~petsc_contact.workflows.adhesive_steps.adhesive_mean_gap_sweep`),
+    by one of TAO's bound solvers (the package's CG refused)."""
+
+    def __init__(self, run: Run, scene: Scene, backend: SolverBackend) -> None:
+        check_solver(backend)
+        assert run.adhesion and run.work_of_adhesion and run.interaction_range  # Run checked
+        unit = scene.resolved["length_unit"] or None
+        rho = length_value(run.interaction_range, unit, "--interaction-range")
+        law = Adhesion(run.adhesion, run.work_of_adhesion, rho)
+        self.by_mean_gap = run.mean_gaps is not None
+        if self.by_mean_gap:
+            self.loads, self.resolved = _mean_gaps(run, scene.resolved["length_unit"])
+        else:
+            self.loads, self.resolved = _pressures(run, None)
+        for p0 in [] if self.by_mean_gap else self.loads:
+            law.check_nominal(p0, "--pressures")
+        problem = AdhesivePeriodicProblem(
+            scene.grid, scene.fft, scene.heights, run.modulus_value, law, backend
+        )
+        problem.filled = scene.filled
+        self.run, self.problem, self.solver = run, problem, problem_solver(problem)
+        self.intro = f", {law.law} adhesion w = {law.work:.4g}, rho = {rho:.4g}"
+        self.backend = type(problem.stiffness.fft).__name__
+
+    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
+        """The cycle of ``loads`` from ``start``'s gap (first touch without one)."""
+        state = start[0] if start else None
+        solve = adhesive_mean_gap_sweep if self.by_mean_gap else adhesive_sweep
+        return solve(self.problem, loads, self.run.fields, monitor, state, self.solver)
+
+    def close(self) -> None:
+        """Release the solver."""
+        self.solver.close()
+
+
 HALF_AREA = 0.5  # a measured map's default sweep ends where Persson's law puts half in contact
 
 
@@ -266,12 +310,13 @@ def sweep_range(run: Run, problem: PeriodicProblem) -> tuple[float, float]:
     return min(low, 0.1 * high), high
 
 
-def _pressures(run: Run, problem: PeriodicProblem) -> tuple[list[float], dict[str, Any]]:
+def _pressures(run: Run, problem: PeriodicProblem | None) -> tuple[list[float], dict[str, Any]]:
     """The nominal pressures of a periodic ``run`` (a sweep's default range:
     :func:`sweep_range`), in its pressure unit, and what its record adds: a sweep's
     pressures, or those given with units."""
     unit = run.pressure_unit
     if run.sweep is not None:
+        assert problem is not None  # an adhesive run (no problem given) takes no sweep
         low, high = sweep_range(run, problem)
         pressures = swept(run.sweep, low, high, lambda v: pressure_value(v, unit, "--sweep"))
         return pressures, {"pressures": pressures, "sweep": None}  # the file records the loads

@@ -570,6 +570,41 @@ _LAYER = (
     ),
 )
 
+_ADHESION = (
+    _option(
+        "adhesion",
+        "an adhesive law beside the hard wall: exponential (the interaction energy per area "
+        "-w exp(-g/rho)) or maugis (Maugis-Dugdale: the attraction w/rho below g = rho)",
+        ("periodic",),
+        choices=("exponential", "maugis"),
+        shown_default="none: the hard wall",
+        more="Posed in the gap with the interaction energy added (not convex; "
+        '[formulation.md](formulation.md), "Adhesion"): solved by TAO\'s bound solvers '
+        "(`-tao_type blmvm` or `bncg`; the package's CG, a QP solver, is refused), each "
+        "nominal pressure (tension too) or mean gap (held by a stiff loading machine to "
+        "1e-6) from the last converged step. Each step records `adhesive_pressure`, "
+        "`interaction_energy`, `pressure_scale`, `pull_off_pressure` and `branch_jump`; a "
+        "step under tension whose surfaces came apart is not converged (`pulled off`). "
+        "Takes `--pressures` or `--mean-gaps` on the half-space",
+    ),
+    _option(
+        "work_of_adhesion",
+        "the work of adhesion w of --adhesion: an energy per area (units of E* times the "
+        "length unit)",
+        ("periodic",),
+        metavar="W",
+        parse=float,
+    ),
+    _option(
+        "interaction_range",
+        "the range rho of --adhesion, with an optional unit (5nm)",
+        ("periodic",),
+        metavar="RHO",
+        parse=quantity,
+        unit="length",
+    ),
+)
+
 _UNCONVERGED_STIFFNESS = (
     "A solve that stops short of its tolerance (`-stiffness_ksp_max_it`, "
     "`-stiffness_ksp_rtol`) leaves that stiffness NaN, with a one-line warning"
@@ -838,6 +873,7 @@ OPTIONS: tuple[Option, ...] = (
     *_PUNCH_LOADS,
     *_COMPARE,
     *_LAYER,
+    *_ADHESION,
     *_RUN,
     *_THEORY,
 )

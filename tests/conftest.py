@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import gc
 import importlib
 import os
 import shutil
@@ -149,6 +150,33 @@ def python(*args: str, mpi: int = 0, timeout: float = 300) -> subprocess.Complet
     return subprocess.run(
         cmd, capture_output=True, text=True, timeout=timeout, env=env, stdin=subprocess.DEVNULL
     )
+
+
+# what the command line's runs import and keep for the life of the process
+WARM = ("petsc_contact.cli.main", "petsc_contact.cli.runs", "petsc_contact.cli.study",
+        "petsc_contact.cli.comparison", "petsc_contact.cli.ensemble", "petsc_contact.cli.theory",
+        "petsc_contact.cli.tools", "petsc_contact.workflows.runner", "petsc_contact.io.plot",
+        "h5py", "matplotlib.pyplot", "mpi4py.MPI", "pandas", "scipy.sparse")  # fmt: skip
+
+
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """Exempt what a test process keeps for its whole life from Python's cyclic garbage
+    collection (``gc.freeze``): the modules the command line's runs import (:data:`WARM`),
+    PETSc and the numba kernels loaded. The command line collects garbage fully at each run
+    (its memory check, its PETSc clean-up): in a worker holding some 230,000 such objects,
+    each collection read them all, 0.1 s, 17% of tests/test_cli.py's time; frozen, it reads
+    only what the tests made since. Cycles made later are collected as before."""
+    for name in WARM:
+        importlib.import_module(name)
+    from petsc_contact.backend import _petsc
+    from petsc_contact.numerics import kernels
+
+    _petsc.init([])
+    done = _kernels_done()
+    kernels.compile_kernels(announce=False)
+    _kernels_done(done)  # a run still compiles (or loads) them as in a fresh process
+    gc.collect()
+    gc.freeze()
 
 
 @pytest.fixture(scope="session")

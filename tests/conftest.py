@@ -154,7 +154,8 @@ def python(*args: str, mpi: int = 0, timeout: float = 300) -> subprocess.Complet
 
 # what the command line's runs import and keep for the life of the process
 WARM = ("petsc_contact.cli.main", "petsc_contact.cli.runs", "petsc_contact.cli.study",
-        "petsc_contact.cli.comparison", "petsc_contact.cli.ensemble", "petsc_contact.cli.theory",
+        "petsc_contact.cli.comparison", "petsc_contact.cli.ensemble_command",
+        "petsc_contact.cli.theory_command",
         "petsc_contact.cli.tools", "petsc_contact.workflows.runner", "petsc_contact.io.plot",
         "h5py", "matplotlib.pyplot", "mpi4py.MPI", "pandas", "scipy.sparse")  # fmt: skip
 

@@ -154,6 +154,39 @@ def test_punch_takes_run_s_names(heights, petsc):
     assert old[0].scalars["interfacial_stiffness"] == new[0].scalars["interfacial_stiffness"]
 
 
+@pytest.mark.parametrize(
+    "model",
+    [
+        {"mean_gaps": "half"},
+        {"pressures": PRESSURE, "hardness": "half"},
+        {"pressures": PRESSURE, "thickness": 1.0, "poisson": 0.3, "base": "frictionless"},
+    ],
+    ids=["mean_gaps", "hardness", "layer"],
+)
+def test_periodic_takes_run_s_models(heights, model, petsc):
+    """periodic_contact's mean gaps (displacement control), hardness and layer give Run's
+    answer on the same map: the same driver solves both, so they agree to rounding (1e-12;
+    Run's map goes through the scene's reading). The hardness is half the hard wall's largest
+    pressure, so that the cap is reached; the mean gap half that at first touch."""
+    given = dict(model)
+    if given.get("mean_gaps") == "half":
+        given["mean_gaps"] = 0.5 * (heights.max() - heights.mean())
+    if given.get("hardness") == "half":
+        (wall,) = periodic_contact(heights, length=SIDES, pressures=PRESSURE, options=OPTIONS)
+        given["hardness"] = 0.5 * wall.scalars["max_pressure"]
+    (step,) = periodic_contact(heights, length=SIDES, options=OPTIONS, **given)
+    loads = {k: (v,) for k, v in given.items() if k in ("pressures", "mean_gaps")}
+    run = Run(heights=heights, length=SIDES, options=OPTIONS, **{**given, **loads})
+    (row,) = run_contact(run).table
+    assert step.converged and row["converged"]
+    names = ["nominal_pressure", "mean_gap", "area_fraction"]
+    names += ["plastic_area_fraction"] if "hardness" in given else []
+    for name in names:
+        assert step.scalars[name] == pytest.approx(row[name], rel=1e-12), name
+    if "hardness" in given:
+        assert step.scalars["cap_reached"] and step.scalars["plastic_area_fraction"] > 0
+
+
 def test_run_reads_the_natural_forms(petsc):
     """sweep=4, a load alone, text with commas, a grid as text or one item, options as a
     string: read as the command line reads them; a wrong count refused naming the option."""

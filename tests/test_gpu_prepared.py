@@ -193,8 +193,9 @@ def test_a_sweep_keeps_its_forms_and_checks_on_the_device(monkeypatch):
     where it lives, the Schur form's ``G_BB`` is made, factorised and solved on the device
     (no contact mask, no right-hand side crosses) and ``G``'s quarter stays there."""
     from petsc_contact.backend import preconditioner
+    from petsc_contact.geometries.periodic import PeriodicProblem
     from petsc_contact.numerics.schur import ContactSchur
-    from petsc_contact.workflows.periodic_sweep import _periodic_problem
+    from petsc_contact.workflows.periodic_sweep import periodic_scene
 
     n = 128
     made: list[int] = []  # the sizes of the Schur forms made, minus those of coarse spaces
@@ -213,7 +214,8 @@ def test_a_sweep_keeps_its_forms_and_checks_on_the_device(monkeypatch):
     monkeypatch.setattr(preconditioner, "CoarseSpace", Built)
     device = RecordingDevice("cpu-array", np)
     comm, backend = Grid(n, 1.0).comm, ArrayBackend()
-    problem = _periodic_problem(surface(n, 0.7, 32), (1.0, 1.0), 1.0, comm, device, backend)
+    scene = periodic_scene(surface(n, 0.7, 32), (1.0, 1.0), comm, device)
+    problem = PeriodicProblem(scene.grid, scene.fft, scene.heights, 1.0, backend)
     steps = list(sweep(problem, [1e-4, 1e-3, 1e-2], stiffness=True))
     assert all(s.converged for s in steps)
     assert max(made) > 0 > min(made), made  # both forms were used (coarse: negative)

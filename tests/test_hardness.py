@@ -315,10 +315,17 @@ def test_the_command_line_keeps_the_plastic_displacement(tmp_path, geometry):
     out = tmp_path / "capped.h5"
     common = [geometry, "--grid", "32", "--hurst", "0.8", "--rms-slope", "0.1", "--quiet"]
     loads = "--forces" if geometry == "punch" else "--pressures"
-    done = cli(*common, loads, "1e-4,2e-4", "--hardness", "0.01", "--fields", "--output", str(out))
+    shown = [a for a in common if a != "--quiet"]
+    done = cli(*shown, loads, "1e-4,2e-4", "--hardness", "0.01", "--fields", "--output", str(out))
     assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    header = next(line for line in lines if line.split()[:1] == ["step"])
+    assert " area    plastic " in header  # the printed table: right-aligned, 10 wide
+    end = header.index(" plastic") + len(" plastic")
+    rows = [line[end - 10 : end].strip() for line in lines if line.split()[0] in ("1/2", "2/2")]
     with h5py.File(out) as f:
         fraction = f["plastic_area_fraction"][:]
+        assert rows == [f"{x:.5g}" for x in fraction]
         w, p = f["plastic_displacement"][:], f["pressure"][:]
         assert f["plastic_displacement"].attrs["units"] == "length"
         assert "hardness cap" in f["plastic_displacement"].attrs["description"]

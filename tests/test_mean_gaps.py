@@ -160,6 +160,10 @@ def test_the_command_line_and_its_refusals(tmp_path: Path) -> None:
     out = tmp_path / "g.h5"
     r = cli(*scene, "--length", "1um", "--mean-gaps", "4nm,0.002", "--output", str(out))
     assert r.returncode == 0, r.stderr
+    header = next(line for line in r.stdout.splitlines() if line.split()[:1] == ["step"])
+    end = header.index(" target") + len(" target")  # right-aligned, 12 wide
+    rows = [line for line in r.stdout.splitlines() if line.split()[:1] in (["1/2"], ["2/2"])]
+    assert [row[end - 12 : end].strip() for row in rows] == ["4 nm", "2 nm"]
     with h5py.File(out) as f:
         assert list(f["target_mean_gap"][:]) == pytest.approx([4e-3, 2e-3], rel=1e-12)
         assert f["mean_gap"].attrs["units"] == "um"

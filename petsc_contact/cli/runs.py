@@ -27,8 +27,11 @@ STEP_COLUMNS = (
     ("kkt", "kkt_residual", "{:>9.1e}"),
 )
 """The columns after the load columns: (header, dataset, format)."""
+TARGET_COLUMN = ("target", "target_mean_gap")  # after the load columns of --mean-gaps
+PLASTIC_COLUMN = ("plastic", "plastic_area_fraction", "{:>10.5g}")  # after area, --hardness
 WIDTH = 12  # of a load column: "346.7 kPa/um"
 Columns = tuple[tuple[str, str, str], ...]  # (header, dataset, its unit in the run)
+StepColumns = tuple[tuple[str, str, str], ...]  # (header, dataset, format)
 
 
 def _unit(key: str, record: dict[str, Any]) -> str:
@@ -41,25 +44,34 @@ def _unit(key: str, record: dict[str, Any]) -> str:
     return "" if entry.units in ("1", "count") or symbolic else entry.units
 
 
-def _columns(geometry: str, record: dict[str, Any], stiffness: bool = False) -> Columns:
-    """The load columns of ``geometry``'s table (with ``stiffness``, the stiffness per area
-    ``K`` after them), with their units in the run ``record``."""
-    titled = (*LOAD_COLUMNS[geometry], *((("K", "stiffness"),) if stiffness else ()))
-    return tuple((title, key, _unit(key, record)) for title, key in titled)
+def _columns(description: Any, record: dict[str, Any]) -> tuple[Columns, StepColumns]:
+    """The columns of the table of the run ``description``: its geometry's load columns (with
+    ``--mean-gaps``, the target mean gap after them; with ``--stiffness``, the stiffness per
+    area ``K``), with their units in the run ``record``; then :data:`STEP_COLUMNS` (with
+    ``--hardness``, the plastic area fraction after the area)."""
+    titled = (
+        *LOAD_COLUMNS[description.geometry],
+        *((TARGET_COLUMN,) if description.mean_gaps is not None else ()),
+        *((("K", "stiffness"),) if description.stiffness else ()),
+    )
+    area, *rest = STEP_COLUMNS
+    plastic = (PLASTIC_COLUMN,) if description.hardness is not None else ()
+    load = tuple((title, key, _unit(key, record)) for title, key in titled)
+    return load, (area, *plastic, *rest)
 
 
-def _legend(columns: Columns, record: dict[str, Any]) -> str:
+def _legend(columns: Columns, steps: StepColumns, record: dict[str, Any]) -> str:
     """The line above the table: each column's dataset in the output, with its unit there."""
     parts = []
-    for title, key, _ in (*columns, *STEP_COLUMNS):
+    for title, key, _ in (*columns, *steps):
         unit = _unit(key, record)
         parts.append(("" if title == key else f"{title} = ") + key + (f" [{unit}]" if unit else ""))
     return "# the output's datasets [in its units]: " + ", ".join(parts)
 
 
-def _header(columns: Columns) -> str:
+def _header(columns: Columns, steps: StepColumns) -> str:
     load = " ".join(f"{title:>{WIDTH}}" for title, _, _ in columns)
-    step = " ".join(f"{title:>{len(fmt.format(0))}}" for title, _, fmt in STEP_COLUMNS)
+    step = " ".join(f"{title:>{len(fmt.format(0))}}" for title, _, fmt in steps)
     return f"{'step':>7} {load} {step}  tao_reason"
 
 
@@ -79,9 +91,9 @@ def _flag(s: dict[str, Any]) -> str:
     return ""
 
 
-def _row(i: int, total: int, s: dict[str, Any], columns: Columns) -> str:
+def _row(i: int, total: int, s: dict[str, Any], columns: Columns, steps: StepColumns) -> str:
     load = " ".join(f"{format_quantity(s[key], unit):>{WIDTH}}" for _, key, unit in columns)
-    step = " ".join(fmt.format(s[key]) for _, key, fmt in STEP_COLUMNS)
+    step = " ".join(fmt.format(s[key]) for _, key, fmt in steps)
     return f"{f'{i + 1}/{total}':>7} {load} {step}  {s['tao_reason']}{_flag(s)}"
 
 
@@ -107,14 +119,14 @@ def execute(
     with opened(description, " ".join(["petsc-contact", *argv]), lock) as prepared:
         root = prepared.scene.grid.comm.rank == 0
         show = root and not args.quiet
-        columns = _columns(description.geometry, prepared.record, description.stiffness)
+        columns, steps = _columns(description, prepared.record)
         if show:
             _introduce(args.command, description, prepared)
-            print(_header(columns), flush=True)
+            print(_header(columns, steps), flush=True)
 
         def progress(i: int, total: int, scalars: dict[str, Any]) -> None:
             if show:
-                print(_row(i, total, scalars, columns), flush=True)
+                print(_row(i, total, scalars, columns, steps), flush=True)
 
         try:
             result = prepared.execute(progress)
@@ -154,8 +166,7 @@ def _introduce(command: str, description: Any, prepared: Any) -> None:
         total = len(prepared.loads)
         where = partial_path(description.output)
         print(f"# resuming {where} after {finished.steps} of {total} steps", flush=True)
-    columns = _columns(description.geometry, prepared.record, description.stiffness)
-    print(_legend(columns, prepared.record), flush=True)
+    print(_legend(*_columns(description, prepared.record), prepared.record), flush=True)
 
 
 def _problem(description: Any, prepared: Any) -> str:

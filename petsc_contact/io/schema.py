@@ -210,8 +210,9 @@ PERIODIC_COLUMNS = _entries(
     target_mean_gap=("length", "the prescribed mean gap (displacement control, --mean-gaps)"),
     mean_gap_mismatch=(
         "1",
-        "abs(mean_gap - target_mean_gap) / target_mean_gap (displacement control; beyond "
-        "1e-4 not converged)",
+        "abs(mean_gap - target_mean_gap) / s (displacement control): s is the smaller of "
+        "target_mean_gap and its approach from first touch, beyond 1e-4 not converged; with "
+        "--adhesion s = target_mean_gap, beyond 1e-6 not converged (the loading machine)",
     ),
     mean_gap_tolerance=(
         "1",

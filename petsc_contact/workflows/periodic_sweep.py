@@ -25,7 +25,7 @@ from ..backend import _petsc
 from ..backend.solve import Monitor
 from ..conventions.grid import grid_for
 from ..conventions.validation import check_finite, keywords_after_first
-from ..geometries.periodic import PeriodicProblem, verify
+from ..geometries.periodic import verify
 from ..geometries.step import VERIFY_FACTOR, Step, Steps
 from ..io.topography import Heights, map_and_lengths
 from ..numerics.device import Device, get_device
@@ -33,7 +33,8 @@ from ..numerics.fft import make_fft
 from ..solver.backends import SolverBackend
 from .choice import uses_petsc
 from .description import Run
-from .drivers import PeriodicDriver
+from .drivers import Driver, driver_for
+from .options import run_default
 from .periodic_steps import Progress, problem_solver, sweep
 from .runner import contact_steps, posed_scene
 from .scene import Scene, check_map
@@ -86,8 +87,13 @@ def periodic_contact(
     monitor: Monitor | None = None,
     comm: Any = None,
     device: str = "cpu",
+    mean_gaps: float | Sequence[float] | None = None,
+    hardness: float | None = None,
+    thickness: float | None = None,
+    poisson: float = run_default("poisson"),
+    base: str = run_default("base"),
 ) -> Steps:
-    """Solve the periodic contact of ``heights`` for each nominal pressure.
+    """Solve the periodic contact of ``heights`` for each nominal pressure or mean gap.
 
     The parameters after ``heights`` are keywords, named as ``Run``'s fields and the command
     line's options (by position they work until 0.3.0, with a ``DeprecationWarning``).
@@ -104,20 +110,19 @@ def periodic_contact(
     pressures
         Nominal pressures ``p0`` (in ``modulus``'s unit), solved in order, warm-started; one
         number is one load.
+    mean_gaps, hardness, thickness, poisson, base
+        As ``Run``'s fields: mean gaps in place of ``pressures`` (displacement control), the
+        hardness cap (``None``: the hard wall), a layer in place of the half-space.
     options
         PETSc options for this call only: ``["-tao_type", "bncg"]``, ``"-tao_type bncg"`` or
         ``{"tao_type": "bncg"}``; options nothing read (a misspelt name) are warned of.
     fields, stiffness
-        Keep the local ``gap`` and ``pressure`` slabs of every step; add the exact
-        incremental ``stiffness`` to every step (see :func:`sweep`).
-    progress, monitor, comm
-        ``progress(index, total, scalars)`` is told of each step (``index`` from 0: step
-        ``index + 1`` of the table; default ``True``: a bar where a person watches, ``False``:
-        nothing), ``monitor(iteration, f, gnorm)`` of every TAO iteration (``True`` stops); the
-        mpi4py communicator (default ``COMM_WORLD``).
-    device
-        ``cpu`` (TAO), ``gpu`` (the package's solver on CuPy, one rank) or ``cpu-array`` (its
-        code on NumPy), without petsc4py, reading the options ``SolveSettings`` reads.
+        Keep each step's ``gap`` and ``pressure``; add its exact ``stiffness`` (:func:`sweep`).
+    progress, monitor, comm, device
+        As :func:`~petsc_contact.workflows.runner.run_contact` takes ``progress`` (``index``
+        from 0) and ``monitor``; the mpi4py communicator (default ``COMM_WORLD``); ``cpu``
+        (TAO), ``gpu`` (the package's solver on CuPy, one rank) or ``cpu-array`` (its code on
+        NumPy), without petsc4py, reading the options ``SolveSettings`` reads.
 
     Returns
     -------
@@ -125,11 +130,24 @@ def periodic_contact(
         A list, one per load in order (``to_dataframe()``: a table); the last keeps ``state``.
     """
     array, sides, _ = map_and_lengths(heights, length)
-    loads = check_pressures(np.atleast_1d(pressures).tolist())
-    kept = {"fields": fields, "stiffness": stiffness}
-    run = api_run(array, sides, modulus, options, device, pressures=tuple(loads), **kept)
-    posing = partial(_posed, array, sides, modulus, comm)
-    return contact_steps(run, posing, progress, monitor)
+    layer = {"thickness": thickness, "poisson": poisson, "base": base}
+    kept = {"fields": fields, "stiffness": stiffness, "hardness": hardness, **layer}
+    run = api_run(array, sides, modulus, options, device, **_loads(pressures, mean_gaps), **kept)
+    return contact_steps(run, partial(_posed, array, sides, comm), progress, monitor)
+
+
+def _loads(
+    pressures: float | Sequence[float], mean_gaps: float | Sequence[float] | None
+) -> dict[str, tuple[float, ...]]:
+    """:func:`periodic_contact`'s loads as ``Run`` takes them: its pressures (checked), or
+    its mean gaps; both given, refused as ``Run`` refuses them."""
+    given = np.atleast_1d(pressures).tolist()
+    loads: dict[str, tuple[float, ...]] = {}
+    if mean_gaps is None or given:
+        loads["pressures"] = tuple(check_pressures(given))
+    if mean_gaps is not None:
+        loads["mean_gaps"] = tuple(np.atleast_1d(mean_gaps).tolist())
+    return loads
 
 
 def api_run(
@@ -151,29 +169,19 @@ def api_run(
 
 
 def _posed(
-    array: np.ndarray,
-    sides: tuple[float, float],
-    modulus: float,
-    comm: Any,
-    run: Run,
-    backend: SolverBackend,
-) -> tuple[Scene, PeriodicDriver]:
-    """:func:`periodic_contact`'s scene and driver: its problem (:func:`_periodic_problem`) on
-    ``run``'s device."""
-    problem = _periodic_problem(array, sides, modulus, comm, get_device(run.device), backend)
-    scene = posed_scene(problem.grid)
-    return scene, PeriodicDriver(run, scene, backend, problem)
+    array: np.ndarray, sides: tuple[float, float], comm: Any, run: Run, backend: SolverBackend
+) -> tuple[Scene, Driver]:
+    """:func:`periodic_contact`'s scene (:func:`periodic_scene`) on ``run``'s device and the
+    driver :func:`~petsc_contact.workflows.runner.run_contact` takes there
+    (:func:`~petsc_contact.workflows.drivers.driver_for`)."""
+    scene = periodic_scene(array, sides, comm, get_device(run.device))
+    return scene, driver_for(run, scene, backend)
 
 
-def _periodic_problem(
-    array: np.ndarray,
-    sides: tuple[float, float],
-    modulus: float,
-    comm: Any,
-    device: Device,
-    backend: SolverBackend,
-) -> PeriodicProblem:
-    """:func:`periodic_contact`'s problem: the map scattered on its grid, with the FFT of
+def periodic_scene(
+    array: np.ndarray, sides: tuple[float, float], comm: Any, device: Device
+) -> Scene:
+    """:func:`periodic_contact`'s scene: the map scattered on its grid, with the FFT of
     ``device``; the map checked as a run's scene checks it (:func:`check_map`), where it
     lives: on a GPU on the device (a GPU runs on one rank, whose slab is the map).
     """
@@ -181,4 +189,4 @@ def _periodic_problem(
     local = device.asarray(grid.scatter(array))
     check_finite(grid, local)
     check_map(local if grid.comm.size == 1 else array, grid, periodic=True)
-    return PeriodicProblem(grid, make_fft(grid, device), local, modulus, backend)
+    return posed_scene(grid, make_fft(grid, device), local)

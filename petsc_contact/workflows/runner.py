@@ -550,11 +550,13 @@ def contact_steps(
         return Steps(prepared.execute(progress, monitor).steps, kind=run.geometry)
 
 
-def posed_scene(grid: Grid) -> Scene:
-    """The scene of a problem posed from a map as it is (the Python API's): its grid alone;
-    the problem holds the heights and their FFT, and no file records them."""
+def posed_scene(grid: Grid, fft: Any = None, heights: Any = None) -> Scene:
+    """The scene of a problem posed from a map as it is (the Python API's): its grid, and the
+    map's ``fft`` and local ``heights`` where its driver poses the problem from the scene (else
+    the problem holds them); no file records them."""
     resolved = {"length": list(grid.lengths), "length_unit": ""}
-    return Scene(grid, None, np.empty((0, grid.shape[1])), resolved)
+    local = np.empty((0, grid.shape[1])) if heights is None else heights
+    return Scene(grid, fft, local, resolved)
 
 
 def run_options(run: Run) -> AbstractContextManager[ModuleType | None]:

@@ -28,6 +28,7 @@ pytestmark = pytest.mark.filterwarnings(  # a smooth map, no power law: p_c is m
 SIDES = (4.0, 3.0)  # um
 PRESSURE, APPROACH = 1e-3, 2e-3
 OPTIONS = ("-tao_gatol", "1e-10")
+ADHESIVE = {"adhesion": "exponential", "work_of_adhesion": 1e-5, "interaction_range": 5e-3}
 
 
 @pytest.fixture(scope="module")
@@ -160,23 +161,26 @@ def test_punch_takes_run_s_names(heights, petsc):
         {"mean_gaps": "half"},
         {"pressures": PRESSURE, "hardness": "half"},
         {"pressures": PRESSURE, "thickness": 1.0, "poisson": 0.3, "base": "frictionless"},
+        {"pressures": PRESSURE, **ADHESIVE},
     ],
-    ids=["mean_gaps", "hardness", "layer"],
+    ids=["mean_gaps", "hardness", "layer", "adhesion"],
 )
 def test_periodic_takes_run_s_models(heights, model, petsc):
-    """periodic_contact's mean gaps (displacement control), hardness and layer give Run's
-    answer on the same map: the same driver solves both, so they agree to rounding (1e-12;
-    Run's map goes through the scene's reading). The hardness is half the hard wall's largest
-    pressure, so that the cap is reached; the mean gap half that at first touch."""
+    """periodic_contact's mean gaps (displacement control), hardness, layer and adhesion give
+    Run's answer on the same map: the same driver solves both, so they agree to rounding
+    (1e-12; Run's map goes through the scene's reading). The hardness is half the hard wall's
+    largest pressure, so that the cap is reached; the mean gap half that at first touch; the
+    adhesive law is solved by a TAO type."""
     given = dict(model)
+    options = OPTIONS + (("-tao_type", "blmvm") if "adhesion" in given else ())
     if given.get("mean_gaps") == "half":
         given["mean_gaps"] = 0.5 * (heights.max() - heights.mean())
     if given.get("hardness") == "half":
         (wall,) = periodic_contact(heights, length=SIDES, pressures=PRESSURE, options=OPTIONS)
         given["hardness"] = 0.5 * wall.scalars["max_pressure"]
-    (step,) = periodic_contact(heights, length=SIDES, options=OPTIONS, **given)
+    (step,) = periodic_contact(heights, length=SIDES, options=options, **given)
     loads = {k: (v,) for k, v in given.items() if k in ("pressures", "mean_gaps")}
-    run = Run(heights=heights, length=SIDES, options=OPTIONS, **{**given, **loads})
+    run = Run(heights=heights, length=SIDES, options=options, **{**given, **loads})
     (row,) = run_contact(run).table
     assert step.converged and row["converged"]
     names = ["nominal_pressure", "mean_gap", "area_fraction"]

@@ -92,11 +92,14 @@ def periodic_contact(
     thickness: float | None = None,
     poisson: float = run_default("poisson"),
     base: str = run_default("base"),
+    adhesion: str | None = None,
+    work_of_adhesion: float | None = None,
+    interaction_range: float | None = None,
 ) -> Steps:
     """Solve the periodic contact of ``heights`` for each nominal pressure or mean gap.
 
-    The parameters after ``heights`` are keywords, named as ``Run``'s fields and the command
-    line's options (by position they work until 0.3.0, with a ``DeprecationWarning``).
+    The parameters after ``heights`` are keywords, named as ``Run``'s fields (by position
+    they work until 0.3.0, with a ``DeprecationWarning``).
 
     Parameters
     ----------
@@ -108,43 +111,42 @@ def periodic_contact(
         Cell sides ``(Lx, Ly)``, or the side ``Lx`` with square pixels (``L`` for a square
         map; optional for a map with sides), and the contact modulus ``E*``.
     pressures
-        Nominal pressures ``p0`` (in ``modulus``'s unit), solved in order, warm-started; one
-        number is one load.
-    mean_gaps, hardness, thickness, poisson, base
-        As ``Run``'s fields: mean gaps in place of ``pressures`` (displacement control), the
-        hardness cap (``None``: the hard wall), a layer in place of the half-space.
+        Nominal pressures ``p0`` (in ``modulus``'s unit), solved in order, warm-started.
+    mean_gaps, hardness, thickness, poisson, base, adhesion, work_of_adhesion, interaction_range
+        As ``Run``'s: mean gaps for ``pressures``, a hardness cap, a layer, an adhesive law.
     options
         PETSc options for this call only: ``["-tao_type", "bncg"]``, ``"-tao_type bncg"`` or
         ``{"tao_type": "bncg"}``; options nothing read (a misspelt name) are warned of.
-    fields, stiffness
-        Keep each step's ``gap`` and ``pressure``; add its exact ``stiffness`` (:func:`sweep`).
-    progress, monitor, comm, device
-        As :func:`~petsc_contact.workflows.runner.run_contact` takes ``progress`` (``index``
-        from 0) and ``monitor``; the mpi4py communicator (default ``COMM_WORLD``); ``cpu``
-        (TAO), ``gpu`` (the package's solver on CuPy, one rank) or ``cpu-array`` (its code on
-        NumPy), without petsc4py, reading the options ``SolveSettings`` reads.
+    fields, stiffness, progress, monitor, comm, device
+        Keep each step's ``gap`` and ``pressure``; add its exact ``stiffness``; ``progress``
+        and ``monitor`` as :func:`~petsc_contact.workflows.runner.run_contact` takes them
+        (``index`` from 0); the mpi4py communicator (default ``COMM_WORLD``); ``cpu`` (TAO),
+        ``gpu`` (the package's solver on CuPy) or ``cpu-array`` (its code on NumPy).
 
     Returns
     -------
     Steps
-        A list, one per load in order (``to_dataframe()``: a table); the last keeps ``state``.
+        One per load in order (``to_dataframe()``: a table); the last keeps ``state``.
     """
     array, sides, _ = map_and_lengths(heights, length)
-    layer = {"thickness": thickness, "poisson": poisson, "base": base}
-    kept = {"fields": fields, "stiffness": stiffness, "hardness": hardness, **layer}
-    run = api_run(array, sides, modulus, options, device, **_loads(pressures, mean_gaps), **kept)
+    model: dict[str, Any] = dict(hardness=hardness, thickness=thickness, poisson=poisson)
+    model.update(base=base, adhesion=adhesion, work_of_adhesion=work_of_adhesion, fields=fields)
+    model.update(_loads(pressures, mean_gaps, adhesion), interaction_range=interaction_range)
+    run = api_run(array, sides, modulus, options, device, stiffness=stiffness, **model)
     return contact_steps(run, partial(_posed, array, sides, comm), progress, monitor)
 
 
 def _loads(
-    pressures: float | Sequence[float], mean_gaps: float | Sequence[float] | None
+    pressures: float | Sequence[float], mean_gaps: float | Sequence[float] | None, law: Any
 ) -> dict[str, tuple[float, ...]]:
-    """:func:`periodic_contact`'s loads as ``Run`` takes them: its pressures (checked), or
-    its mean gaps; both given, refused as ``Run`` refuses them."""
+    """:func:`periodic_contact`'s loads as ``Run`` takes them: its pressures (checked positive
+    unless an adhesive ``law`` allows tension: then ``Run`` checks them), or its mean gaps;
+    both given, refused as ``Run`` refuses them."""
     given = np.atleast_1d(pressures).tolist()
     loads: dict[str, tuple[float, ...]] = {}
     if mean_gaps is None or given:
-        loads["pressures"] = tuple(check_pressures(given))
+        tension = law is not None and given
+        loads["pressures"] = tuple(given if tension else check_pressures(given))
     if mean_gaps is not None:
         loads["mean_gaps"] = tuple(np.atleast_1d(mean_gaps).tolist())
     return loads

@@ -186,6 +186,21 @@ def _problem(description: Any, prepared: Any) -> str:
     )
 
 
+ADHESIVE_SUMMARY = ("pull_off_pressure", "hysteresis_energy")
+"""The datasets of an adhesive run's last step printed after its table."""
+
+
+def _adhesive_summary(last: dict[str, Any], record: dict[str, Any]) -> str:
+    """The line after an adhesive run's table: its last step's :data:`ADHESIVE_SUMMARY`
+    (as it stands at the end: NaN where the cycle gave none), each in its unit."""
+    parts = []
+    for key in ADHESIVE_SUMMARY:
+        if key in last:
+            unit = _unit(key, record)
+            parts.append(f"{key} = {last[key]:.6g}" + (f" [{unit}]" if unit else ""))
+    return "# " + ", ".join(parts)
+
+
 def _conclude(
     args: argparse.Namespace, description: Any, result: Any, root: bool, wrote: bool = True
 ) -> int:
@@ -203,6 +218,8 @@ def _conclude(
         draw = plot_punch if description.geometry == "punch" else plot_sweep
         draw(plot, table, modulus=description.modulus_value, h_rms=record["rms_height"],
              units=units)  # fmt: skip
+    if root and not args.quiet and description.adhesion is not None and table:
+        print(_adhesive_summary(table[-1], result.record), flush=True)
     written = [description.output] if wrote else []
     if root and not args.quiet and (written or plot):
         print(f"# wrote {' and '.join([*written, *([plot] if plot else [])])}")

@@ -311,6 +311,13 @@ ADHESIVE = _entries(
         "--adhesion: the most tensile converged nominal pressure with contact on the unloading "
         "branch so far (the steps from the largest pressure on; NaN before any)",
     ),
+    hysteresis_energy=(
+        "pressure*length",
+        "--adhesion --mean-gaps: the energy per apparent area the cycle lost, the work the "
+        "loading machine did, -integral of nominal_pressure d mean_gap over the steps so far "
+        "(trapezoids: a jump closed by the chord between its steps); NaN until a step is "
+        "back at the first step's target_mean_gap, and after a step that did not converge",
+    ),
     branch_jump=(
         "bool",
         "--adhesion: the contact area changed by more than half of the larger of this and the "

@@ -8,7 +8,8 @@ converged steps by more than :data:`JUMP_AREA` of the larger of it and the last 
 into or out of contact, warned about loudly: :class:`BranchJump`), and a step under tension
 whose surfaces came apart beyond the law's range is not converged: ``verification`` says
 ``pulled off``.  :func:`pull_off_pressure` reads the pull-off from the steps of an unloading
-branch; each step records it as it stands.
+branch; each step records it as it stands, and under displacement control the energy the
+cycle lost (:func:`hysteresis_energy`) once it is back at its first mean gap.
 """
 
 from __future__ import annotations
@@ -81,8 +82,9 @@ def adhesive_mean_gap_sweep(
     AdhesivePeriodicProblem.set_machine`) whose anchor is moved by the miss until the mean gap
     is within :data:`MACHINE_RTOL` of its target.  Each step adds ``target_mean_gap``,
     ``mean_gap_mismatch`` (beyond :data:`MACHINE_RTOL` after :data:`MACHINE_ITERATIONS`: not
-    converged), ``branch_jump`` and ``pull_off_pressure`` (the most tensile ``p0`` with
-    contact from the smallest mean gap on); ``iterations`` and ``solve_time`` are summed."""
+    converged), ``branch_jump``, ``pull_off_pressure`` (the most tensile ``p0`` with
+    contact from the smallest mean gap on) and ``hysteresis_energy`` (:func:`hysteresis_energy`
+    of the steps so far); ``iterations`` and ``solve_time`` are summed."""
     ell, device = problem.scale_length, problem.device
     x = (problem.initial_gap() if start is None else device.asarray(start)).reshape(-1) / ell
     held: list[tuple[float, float]] = []
@@ -95,6 +97,7 @@ def adhesive_mean_gap_sweep(
             note_jump(s, held, -target)  # a smaller gap is a larger load
             done.append(s)
             s["pull_off_pressure"] = pull_off_pressure(done)[0]
+            s["hysteresis_energy"] = hysteresis_energy(done)
             if step.converged:
                 held.append((-target, s["area_fraction"]))
                 scale = max(abs(s["nominal_pressure"]), problem.adhesion.strength)
@@ -141,7 +144,8 @@ def note_jump(
     it and the last converged step's.  ``held`` are the converged steps' ``(p0, area)`` so
     far (``control``: the load, by default ``p0``; under displacement control minus the mean
     gap): the prediction is the tangent through the last two (the last area alone after the
-    first); a step that did not converge, or the first, is not judged."""
+    first); a step that did not converge, or the first, is not judged, and one whose area is
+    the last one's (still apart, say) never jumped."""
     area, p0 = scalars["area_fraction"], scalars["nominal_pressure"]
     load = p0 if control is None else control
     jumped = False
@@ -151,7 +155,7 @@ def note_jump(
         if len(held) > 1 and held[-2][0] != p_last:
             p_prev, a_prev = held[-2]
             predicted += (a_last - a_prev) / (p_last - p_prev) * (load - p_last)
-        jumped = abs(area - predicted) > JUMP_AREA * max(area, a_last)
+        jumped = area != a_last and abs(area - predicted) > JUMP_AREA * max(area, a_last)
     scalars["branch_jump"] = jumped
     if jumped:
         warnings.warn(
@@ -175,3 +179,19 @@ def pull_off_pressure(steps: Sequence[dict[str, Any]]) -> tuple[float, bool]:
     p_off = min(s["nominal_pressure"] for s in held)
     bracketed = any(not s["converged"] and s["nominal_pressure"] < p_off for s in unloading)
     return float(p_off), bracketed
+
+
+def hysteresis_energy(steps: Sequence[dict[str, Any]]) -> float:
+    """The energy per apparent area a displacement-controlled cycle's steps (``scalars``)
+    lost: the work the loading machine did on the cell, ``-sum (p0_k + p0_k+1)/2 (u_k+1 -
+    u_k)`` over consecutive steps' nominal pressures ``p0`` and mean gaps ``u`` (trapezoids; a
+    jump, a change of ``p0`` between two steps, is closed by the chord between them), which is
+    ``-closed integral p0 du`` once the last step is back at the first one's target mean gap
+    (the states alike).  NaN before, and where a step did not converge."""
+    if len(steps) < 3 or steps[-1]["target_mean_gap"] != steps[0]["target_mean_gap"]:
+        return np.nan
+    if not all(s["converged"] for s in steps):
+        return np.nan
+    u = np.array([s["mean_gap"] for s in steps])
+    p0 = np.array([s["nominal_pressure"] for s in steps])
+    return float(-np.sum(0.5 * (p0[1:] + p0[:-1]) * np.diff(u)))

@@ -70,6 +70,21 @@ def swept(
     return [float(v) for v in np.geomspace(lo, hi, int(n))]
 
 
+def cycled(spec: Sequence[float | str], value: Callable[[float | str], float] = float) -> list[float]:
+    """The nominal pressures of an adhesive load cycle ``(N, PMIN, PMAX)`` (the periodic
+    ``--sweep`` with ``--adhesion``; ``value`` turns a bound given with a unit into the run's
+    units): ``N`` equally spaced up to ``PMAX`` (``PMAX/N, ..., PMAX``: loading), then ``N``
+    equally spaced down to ``PMIN`` (unloading, into tension where ``PMIN < 0``);
+    ``ValueError`` in one line unless ``PMIN < PMAX`` and ``PMAX > 0`` (bounds with units are
+    compared here, numbers by the rule: :func:`~petsc_contact.workflows.options.cycle_spec`)."""
+    n, low, high = int(float(spec[0])), value(spec[1]), value(spec[2])
+    if not (low < high and high > 0):
+        raise ValueError(f"--sweep: a load cycle needs PMIN < PMAX and PMAX > 0, got {low:g}, {high:g}")
+    loading = high * np.arange(1, n + 1) / n
+    unloading = high - (high - low) * np.arange(1, n + 1) / n
+    return [float(p) for p in (*loading, *unloading)]
+
+
 @dataclass(frozen=True)
 class Run:
     """One contact run (the options of ``petsc-contact periodic`` and ``punch``).
@@ -249,17 +264,22 @@ class Run:
         if self.adhesion is None:
             if work is not None or reach is not None:
                 raise ValueError("--work-of-adhesion and --interaction-range need --adhesion")
+            low = self.sweep[1] if self.sweep is not None and len(self.sweep) == 3 else 1.0
+            if not isinstance(low, str) and low < 0:
+                raise ValueError("--sweep: a tensile PMIN < 0 is an adhesive load cycle's (--adhesion)")
             return
         if work is None or reach is None:
             raise ValueError("--adhesion needs --work-of-adhesion W and --interaction-range RHO")
-        others = ("sweep", "thickness", "hardness", "stiffness")
+        others = ("thickness", "hardness", "stiffness")
         given_others = [o for o in others if getattr(self, o) not in (None, False)]
         if self.geometry != "periodic" or given_others:
             flags = ", ".join("--" + o.replace("_", "-") for o in given_others) or "the punch"
             raise ValueError(
                 f"--adhesion with {flags}: an adhesive run is periodic, on the "
-                "half-space, and takes --pressures or --mean-gaps"
+                "half-space, and takes --pressures, a --sweep (a load cycle) or --mean-gaps"
             )
+        if self.sweep is not None and len(self.sweep) != 3:
+            raise ValueError("--sweep with --adhesion is a load cycle: give N,PMIN,PMAX")
         positive("--work-of-adhesion", work)
         positive("--interaction-range", parse_quantity(reach, METRES, "--interaction-range").value)
 

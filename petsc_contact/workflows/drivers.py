@@ -43,7 +43,7 @@ from ..substrates.layer import PeriodicLayer
 from ..substrates.substrate import PeriodicSubstrate
 from .adhesive_steps import adhesive_mean_gap_sweep, adhesive_sweep
 from .choice import uses_petsc
-from .description import Run, swept
+from .description import Run, cycled, swept
 from .periodic_steps import PeriodicSteps, mean_gap_sweep, problem_solver, sweep
 from .punch_steps import PunchSolver, capped_from_wall, punch_sweep
 from .scene import Scene
@@ -312,13 +312,20 @@ def sweep_range(run: Run, problem: PeriodicProblem) -> tuple[float, float]:
 
 def _pressures(run: Run, problem: PeriodicProblem | None) -> tuple[list[float], dict[str, Any]]:
     """The nominal pressures of a periodic ``run`` (a sweep's default range:
-    :func:`sweep_range`), in its pressure unit, and what its record adds: a sweep's
+    :func:`sweep_range`; an adhesive run's sweep: its load cycle, :func:`cycled`), in its
+    pressure unit, and what its record adds: a sweep's
     pressures, or those given with units."""
     unit = run.pressure_unit
     if run.sweep is not None:
-        assert problem is not None  # an adhesive run (no problem given) takes no sweep
-        low, high = sweep_range(run, problem)
-        pressures = swept(run.sweep, low, high, lambda v: pressure_value(v, unit, "--sweep"))
+
+        def value(bound: float | str) -> float:
+            return pressure_value(bound, unit, "--sweep")
+
+        if run.adhesion is not None:  # an adhesive run's sweep is a load cycle
+            pressures = cycled(run.sweep, value)
+        else:
+            assert problem is not None  # every other periodic run gives its problem
+            pressures = swept(run.sweep, *sweep_range(run, problem), value)
         return pressures, {"pressures": pressures, "sweep": None}  # the file records the loads
     if run.pressures is None:
         raise ValueError("give the nominal pressures (--pressures), a --sweep or --mean-gaps")

@@ -165,6 +165,19 @@ def sweep_spec(text: str | Sequence[float | str]) -> list[float | str]:
     return [count, *bounds]
 
 
+def cycle_spec(text: str | Sequence[float | str]) -> list[float | str]:
+    """A periodic ``--sweep``: :func:`sweep_spec`'s ``N[,PMIN,PMAX]``, or ``N,PMIN,PMAX`` with
+    ``PMIN < 0 < PMAX`` (numbers; a tensile end is an adhesive load cycle's:
+    :func:`~petsc_contact.workflows.description.cycled`, ``--adhesion`` checked by ``Run``)."""
+    parts = _items(text) if isinstance(text, str) else list(text)
+    if len(parts) == 3 and all(isinstance(quantity(str(v)), float) for v in parts):
+        count, low, high = (float(v) for v in parts)
+        if low < 0 < high < np.inf:
+            sweep_spec(parts[:1])  # the count's rule
+            return [count, low, high]
+    return sweep_spec(text)
+
+
 def solver_list(text: str) -> list[str]:
     """``compare --solvers``: distinct names (or options files)."""
     if not text.replace(",", "").strip():
@@ -435,8 +448,12 @@ _PERIODIC_LOADS = (
         metavar="N[,PMIN,PMAX]",
         unit="pressure",
         more="The file records the pressures themselves; an ensemble takes the range of its "
-        "first seed's surface, so that every seed gets the same pressures",
-        **_SWEEP,
+        "first seed's surface, so that every seed gets the same pressures. With `--adhesion` "
+        "a sweep is a load cycle and needs its bounds: N equally spaced pressures up to PMAX "
+        "(PMAX/N, 2 PMAX/N, ..., PMAX: loading), then N equally spaced down to PMIN "
+        "(unloading; PMIN < 0, tension, is taken only there), each step from the last "
+        "converged one on its branch",
+        **{**_SWEEP, "parse": cycle_spec},
     ),
     _option(
         "mean_gaps",

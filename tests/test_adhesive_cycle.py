@@ -1,0 +1,166 @@
+"""The adhesive periodic cell through a cycle: the load cycle a ``--sweep`` is, the energy a
+displacement-controlled cycle loses, and Johnson's (1995) adhesive wave in the JKR limit."""
+
+import h5py
+import numpy as np
+import pytest
+from conftest import cli
+
+from petsc_contact import Run
+from petsc_contact.backend._petsc import scoped_options
+from petsc_contact.backend.tao import PetscBackend
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.geometries.adhesive_periodic import AdhesivePeriodicProblem
+from petsc_contact.geometries.periodic import PeriodicProblem
+from petsc_contact.interactions.adhesion import Adhesion
+from petsc_contact.numerics.fft import make_fft
+from petsc_contact.reference import johnson_wavy, westergaard
+from petsc_contact.workflows.adhesive_steps import (
+    adhesive_mean_gap_sweep,
+    adhesive_sweep,
+    hysteresis_energy,
+)
+from petsc_contact.workflows.description import cycled
+from petsc_contact.workflows.periodic_steps import sweep
+
+RHO = 0.01  # the sphere's interaction range (1.28 pixels at 128^2)
+
+
+def test_an_adhesive_sweep_is_a_load_cycle():
+    """``N,PMIN,PMAX``: N equal steps up to PMAX, N equal steps down to PMIN."""
+    assert cycled((2, -1.0, 4.0)) == [2.0, 4.0, 1.5, -1.0]
+    assert cycled((3, 1.0, 3.0)) == pytest.approx([1.0, 2.0, 3.0, 2 + 1 / 3, 1 + 2 / 3, 1.0])
+
+
+@pytest.mark.parametrize(
+    ("fields", "words"),
+    [
+        ({"sweep": (4, -1e-3, 1e-2)}, "adhesive load cycle's"),
+        ({"sweep": (4, -1e-3, 1e-2), "geometry": "punch"}, "adhesive load cycle's"),
+        ({"sweep": (4, -1e-3, -1e-4)}, "0 < PMIN < PMAX"),
+    ],
+)
+def test_a_tensile_sweep_without_adhesion_is_refused(fields, words):
+    """A tensile end is an adhesive cycle's: refused without ``--adhesion`` (and on the
+    punch), as is a sweep with no compressive end, in one line naming the option."""
+    with pytest.raises(ValueError, match=words):
+        Run(grid=32, hurst=0.8, rms_slope=0.1, **fields)
+
+
+COMMON = ("periodic", "--grid", "32", "--hurst", "0.8", "--rms-slope", "0.1")
+ADHESIVE = ("--adhesion", "exponential", "--work-of-adhesion", "1e-4", "--interaction-range")
+
+
+def test_a_sweep_with_adhesion_cycles_on_the_command_line(tmp_path):
+    """``--sweep 4,-6e-3,2e-2`` with adhesion: loading to 2e-2, unloading into tension, the
+    file records the cycle's pressures, every step of the cycle that held converged, the
+    pull-off as it stands printed after the table; a sweep without its bounds is refused."""
+    out = tmp_path / "cycle.h5"
+    done = cli(*COMMON, "--sweep", "4,-6e-3,2e-2", *ADHESIVE, "0.005", "-tao_type", "blmvm",
+               "--output", str(out))  # fmt: skip
+    with h5py.File(out) as f:
+        p0 = f["nominal_pressure"][()]
+        converged = f["converged"][()]
+        pull_off = f["pull_off_pressure"][()]
+    assert p0 == pytest.approx([5e-3, 1e-2, 1.5e-2, 2e-2, 1.35e-2, 7e-3, 5e-4, -6e-3])
+    assert converged[:7].all(), done.stdout
+    assert pull_off[6] == p0[6] and f"pull_off_pressure = {pull_off[-1]:.6g}" in done.stdout
+    bare = cli(*COMMON, "--sweep", "4", *ADHESIVE, "0.005", "--output", str(tmp_path / "b.h5"))
+    assert bare.returncode == 2 and "give N,PMIN,PMAX" in bare.stderr
+
+
+def sphere(n=128):
+    """A sphere ``R = 1`` in a unit cell."""
+    grid = Grid(n, 1.0)
+    x = (np.arange(n) + 0.5) / n - 0.5
+    return grid, -(x[:, None] ** 2 + x[None, :] ** 2) / 2
+
+
+def sphere_loop(tabor, gaps):
+    """The Maugis sphere's steps held by the loading machine at ``gaps`` (``rho = 0.01``,
+    ``w`` from the Tabor parameter ``(R w^2 / (E*^2 rho^3))^(1/3)``) and ``w``."""
+    grid, h = sphere()
+    w = np.sqrt(tabor**3 * RHO**3)
+    with scoped_options(["-tao_type", "blmvm"]):
+        law = Adhesion("maugis", w, RHO)
+        problem = AdhesivePeriodicProblem(grid, make_fft(grid), h, 1.0, law, PetscBackend())
+        return [s.scalars for s in adhesive_mean_gap_sweep(problem, gaps)], w
+
+
+def test_weak_adhesion_loses_no_energy_around_a_cycle():
+    """At Tabor parameter 0.1 the attraction deforms the sphere far less than its range: one
+    branch, retraced, so the loop encloses only the solve's tolerance, ``1e-6 P`` per step
+    over the 0.03 of travel: ``2e-10``, ``6e-6 w`` (tested: 1e-5 w).  Each step records the
+    loop's energy as it stands: NaN until the first mean gap is reached again."""
+    down = [0.1, 0.09, 0.08, 0.07]
+    steps, w = sphere_loop(0.1, down + down[-2::-1])
+    assert all(s["converged"] for s in steps)
+    assert np.isnan([s["hysteresis_energy"] for s in steps[:-1]]).all()
+    assert abs(steps[-1]["hysteresis_energy"]) < 1e-5 * w
+    assert steps[-1]["hysteresis_energy"] == hysteresis_energy(steps)
+
+
+def test_johnsons_wave_is_westergaards_without_adhesion_and_jkrs_when_narrow():
+    """At ``w = 0`` the stable branch is all of Westergaard's: the same half-width at every
+    pressure; for ``a << L`` the JKR cylinder's of ``R = L^2/(4 pi^2 Delta)`` per wavelength
+    (the next terms are ``(a/L)^2`` smaller: 4e-4 at ``a = L/100``); the pull-off is the
+    branch's lowest pressure, and the half-width at a pressure is the root there."""
+    amp, lam, modulus, w = 0.01, 2.0, 3.0, 2e-5
+    for p0 in (1e-4, 1e-3, 1e-2):
+        a = westergaard.half_width(p0, amp, lam, modulus)
+        assert johnson_wavy.half_width(p0, amp, lam, modulus, 0.0) == pytest.approx(a, rel=1e-12)
+        assert johnson_wavy.mean_pressure(a, amp, lam, modulus, 0.0) == pytest.approx(p0, rel=1e-12)
+    a, radius = lam / 100, lam**2 / (4 * np.pi**2 * amp)
+    jkr = np.pi * modulus * a**2 / (4 * radius) - np.sqrt(2 * np.pi * modulus * w * a)
+    assert johnson_wavy.mean_pressure(a, amp, lam, modulus, w) * lam == pytest.approx(jkr, rel=1e-3)
+    a_off, a_max = johnson_wavy.stable_branch(amp, lam, modulus, w)
+    p_off = johnson_wavy.pull_off(amp, lam, modulus, w)
+    for a in (0.99 * a_off, 1.01 * a_off):
+        assert johnson_wavy.mean_pressure(a, amp, lam, modulus, w) > p_off
+    p0 = 0.5 * p_off
+    a = johnson_wavy.half_width(p0, amp, lam, modulus, w)
+    assert a_off < a < a_max
+    assert johnson_wavy.mean_pressure(a, amp, lam, modulus, w) == pytest.approx(p0, rel=1e-10)
+    with pytest.raises(ValueError, match="off the stable branch"):
+        johnson_wavy.half_width(1.01 * p_off, amp, lam, modulus, w)
+
+
+WAVE = 0.01, 1.0, 1.0, 2e-5  # Johnson's wave: amplitude, wavelength, E*, w (p* = 0.0314)
+
+
+def wave_cycle(n, rho, loads):
+    """The wave on ``n x 4`` square pixels with Maugis' law of range ``rho``: the steps of
+    ``loads`` from the hard wall's contact at the first (a start off the full contact that
+    an attraction ``w/rho`` above ``p*`` also holds)."""
+    amp, lam, modulus, w = WAVE
+    grid = Grid((n, 4), (lam, 4 * lam / n))
+    x = (np.arange(n) + 0.5) / n * lam
+    h = np.repeat(amp * np.cos(2 * np.pi * x / lam)[:, None], 4, axis=1)
+    with scoped_options(["-tao_type", "blmvm"]):
+        wall = PeriodicProblem(grid, make_fft(grid), h, modulus, PetscBackend())
+        (start,) = sweep(wall, loads[:1], fields=True)
+        law = Adhesion("maugis", w, rho)
+        problem = AdhesivePeriodicProblem(grid, make_fft(grid), h, modulus, law, PetscBackend())
+        return [s.scalars for s in adhesive_sweep(problem, loads, start=start.gap)]
+
+
+def test_the_adhesive_wave_approaches_johnsons_jkr_limit():
+    """Loading to 0.012 and unloading into tension on the stable branch (0.38 p* down to
+    -0.03 p*, the pull-off at -0.056 p*), the contact's half-width (half the area fraction
+    times L) against Johnson's at each mean pressure.  The JKR limit is a crack tip; Maugis'
+    law spreads it over the cohesive zone ``d = (pi/4) E* rho^2 / w`` (Dugdale's at ``K =
+    sqrt(2 E* w)`` and the stress ``w/rho``), within which the contact edge lies: within
+    ``d`` of Johnson's (measured: 0.42-0.57 d) where ``d`` spans 26 and 103 pixels (at fewer
+    the discrete front moves it by more), and closer as ``rho`` shrinks (the JKR limit; by
+    a factor 3 for 4 in ``d``)."""
+    loads = [0.012, 0.006, 0.0, -0.001]
+    n, misses = 4096, {}
+    for rho in (8e-4, 4e-4):
+        d = np.pi / 4 * WAVE[2] * rho**2 / WAVE[3]
+        steps = wave_cycle(n, rho, loads)
+        assert all(s["converged"] and not s["branch_jump"] for s in steps)
+        a = np.array([s["area_fraction"] * WAVE[1] / 2 for s in steps])
+        johnson = np.array([johnson_wavy.half_width(p0, *WAVE) for p0 in loads])
+        misses[rho] = np.abs(a - johnson).max()
+        assert misses[rho] < d and d > 20 * WAVE[1] / n
+    assert misses[4e-4] < misses[8e-4] / 2

@@ -74,7 +74,9 @@ def pull_off(amplitude: float, wavelength: float, modulus: float, work: float) -
     return mean_pressure(a_off, amplitude, wavelength, modulus, work)
 
 
-def half_width(p0: float, amplitude: float, wavelength: float, modulus: float, work: float) -> float:
+def half_width(
+    p0: float, amplitude: float, wavelength: float, modulus: float, work: float
+) -> float:
     """The half-width ``a`` of the stable contact under the mean pressure ``p0``: the root of
     ``p0(a) = p0`` on :func:`stable_branch`; ``ValueError`` where ``p0`` is beyond it (below
     the pull-off, or above the jump into full contact)."""

@@ -29,6 +29,7 @@ from .periodic_steps import problem_solver
 
 MACHINE_RTOL = 1e-6  # displacement control: the mean gap to this of its target
 MACHINE_ITERATIONS = 20  # the anchor's corrections at most (each one solve)
+RESTARTS = 1  # a machine's solve that stopped short is started again from its end this often
 JUMP_AREA = 0.5  # an area this far (of the larger area) off its branch's tangent: a jump
 
 
@@ -114,14 +115,21 @@ def _at_mean_gap(
     monitor: Monitor | None,
 ) -> tuple[Step, Any]:
     """One prescribed mean gap (:func:`adhesive_mean_gap_sweep`): the step and the gap to go
-    on from (``x`` unless it converged)."""
-    anchor, its, elapsed = target, 0, 0.0
-    for _ in range(MACHINE_ITERATIONS):
+    on from (``x`` unless it converged).  A solve that stops short is started once more from
+    where it stopped (:data:`RESTARTS`): a long descent (a pull-off, the whole neck let go)
+    ends where the objective's change from its start, large, hides the last decreases in
+    rounding (TAO's line search fails) or where the limited memory holds the law's curvature
+    of the way there; from its own end neither holds, and the descent goes on."""
+    anchor, its, elapsed, restarts = target, 0, 0.0, RESTARTS
+    for _ in range(MACHINE_ITERATIONS + RESTARTS):
         problem.set_machine(anchor, scale)
         problem.start(x)
         step, x_new = solve_step(solver, problem, problem.start_point, monitor, False, fields)
         its, elapsed = its + step.scalars["iterations"], elapsed + step.scalars["solve_time"]
         miss = target - step.scalars["mean_gap"]
+        if not step.converged and restarts and np.isfinite(miss):
+            x, restarts = x_new, restarts - 1
+            continue
         if not step.converged:
             break
         x, anchor = x_new, anchor + miss

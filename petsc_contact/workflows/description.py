@@ -70,7 +70,9 @@ def swept(
     return [float(v) for v in np.geomspace(lo, hi, int(n))]
 
 
-def cycled(spec: Sequence[float | str], value: Callable[[float | str], float] = float) -> list[float]:
+def cycled(
+    spec: Sequence[float | str], value: Callable[[float | str], float] = float
+) -> list[float]:
     """The nominal pressures of an adhesive load cycle ``(N, PMIN, PMAX)`` (the periodic
     ``--sweep`` with ``--adhesion``; ``value`` turns a bound given with a unit into the run's
     units): ``N`` equally spaced up to ``PMAX`` (``PMAX/N, ..., PMAX``: loading), then ``N``
@@ -79,7 +81,9 @@ def cycled(spec: Sequence[float | str], value: Callable[[float | str], float] = 
     compared here, numbers by the rule: :func:`~petsc_contact.workflows.options.cycle_spec`)."""
     n, low, high = int(float(spec[0])), value(spec[1]), value(spec[2])
     if not (low < high and high > 0):
-        raise ValueError(f"--sweep: a load cycle needs PMIN < PMAX and PMAX > 0, got {low:g}, {high:g}")
+        raise ValueError(
+            f"--sweep: a load cycle needs PMIN < PMAX and PMAX > 0, got {low:g} and {high:g}"
+        )
     loading = high * np.arange(1, n + 1) / n
     unloading = high - (high - low) * np.arange(1, n + 1) / n
     return [float(p) for p in (*loading, *unloading)]
@@ -266,7 +270,9 @@ class Run:
                 raise ValueError("--work-of-adhesion and --interaction-range need --adhesion")
             low = self.sweep[1] if self.sweep is not None and len(self.sweep) == 3 else 1.0
             if not isinstance(low, str) and low < 0:
-                raise ValueError("--sweep: a tensile PMIN < 0 is an adhesive load cycle's (--adhesion)")
+                raise ValueError(
+                    "--sweep: a tensile PMIN < 0 is an adhesive load cycle's (--adhesion)"
+                )
             return
         if work is None or reach is None:
             raise ValueError("--adhesion needs --work-of-adhesion W and --interaction-range RHO")

@@ -2,9 +2,11 @@
 
 usage: .venv/bin/python benchmarks/stability.py [--grid 128] [--solvers cg pk tron ...]
        [--time-limit 20] [--stall-iterations 1000] [--markdown docs/stability.md]
-       [--grids 32 1024] [--no-scenes] [--append] [--match TEXT]
+       [--grids 32 1024] [--no-scenes] [--append] [--match TEXT] [--adhesive]
 For each scene and solver: converged or not (the package's own verification), TAO's reason,
 iterations, wall time and the pressure error reached against a reference solved at 1e-12.
+``--adhesive``: the adhesive scenes instead, each a short load cycle by TAO's gradient
+solvers (BLMVM, BNCG): every step converged, or the first that did not and why.
 """
 
 from __future__ import annotations
@@ -17,14 +19,19 @@ import numpy as np
 from mpi4py import MPI
 
 from petsc_contact.backend import _petsc
+from petsc_contact.backend._petsc import scoped_options
+from petsc_contact.backend.tao import PetscBackend
 from petsc_contact.conventions.grid import Grid
+from petsc_contact.geometries.adhesive_periodic import AdhesivePeriodicProblem
 from petsc_contact.geometries.periodic import PeriodicProblem
 from petsc_contact.geometries.punch import PunchProblem
+from petsc_contact.interactions.adhesion import Adhesion
 from petsc_contact.interactions.hardness import HardnessCap
 from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.substrates.layer import PeriodicLayer
 from petsc_contact.substrates.substrate import PeriodicSubstrate
+from petsc_contact.workflows.adhesive_steps import adhesive_sweep
 from petsc_contact.workflows.compare import DEFAULT_SOLVERS, PressurePosed, compare, posed_cell
 from petsc_contact.workflows.scene import Scene
 
@@ -129,6 +136,62 @@ def capped(kind: str, hardness: float) -> Pose:
     return lambda grid, h, modulus: PressurePosed(PunchProblem(grid, h, modulus, interaction=cap))
 
 
+TABOR = (0.1, 1.0, 10.0)  # Maugis' transition parameter of the adhesive scenes
+ADHESIVE_SOLVERS = ("blmvm", "bncg")  # TAO's gradient solvers (the package's CG is a QP's)
+
+
+def adhesive_scenes(n: int) -> list[tuple[str, np.ndarray, Adhesion, list[float]]]:
+    """(name, heights, law, loads) of the adhesive scenes: Maugis' law on the sphere ``R = 1``
+    and on the rough surface (``R``: the inverse of its rms curvature along ``x``), its
+    attraction ``w/rho`` a tenth of the surface's full-contact pressure (partial contact
+    survives it) and its range from the Tabor parameter ``mu = (R w^2 / (E*^2 rho^3))^(1/3)``,
+    ``rho = (w/rho)^2 R / (mu^3 E*^2)``: at 0.1 (DMT's limit) beyond the heights, at 10
+    (JKR's) far below a pixel.  Each is loaded to half the attraction, unloaded to zero and
+    pulled at half the attraction (beyond the pull-off where contact is sparse)."""
+    x = (np.arange(n) + 0.5) / n - 0.5
+    cap = -(x[:, None] ** 2 + x[None, :] ** 2) / 2.0
+    h = rough(n)
+    curvature = np.sqrt(np.mean((np.gradient(np.gradient(h, 1 / n, axis=0), 1 / n, axis=0)) ** 2))
+    grid, out = Grid(n, 1.0, MPI.COMM_SELF), []
+    for surface, heights, radius in (("sphere", cap, 1.0), ("rough", h, 1 / curvature)):
+        p_full = PeriodicProblem(grid, make_fft(grid), heights, 1.0).full_contact_pressure()
+        strength = 0.1 * p_full
+        for mu in TABOR:
+            rho = strength**2 * radius / mu**3
+            law = Adhesion("maugis", strength * rho, rho)
+            loads = [0.5 * strength, 0.0, -0.5 * strength]
+            out.append((f"{surface}, Maugis, Tabor {mu:g}", heights, law, loads))
+    return out
+
+
+def adhesive_row(name: str, h: np.ndarray, law: Adhesion, loads: list[float]) -> str:
+    """One adhesive scene's row: for each of :data:`ADHESIVE_SOLVERS`, the steps converged
+    (of all), their contact area fractions, iterations and time, or the first step that did
+    not and its verdict (a pull-off, no equilibrium, unmarked; any other **FAIL**)."""
+    grid, cells = Grid(h.shape[0], 1.0, MPI.COMM_SELF), []
+    for solver in ADHESIVE_SOLVERS:
+        with scoped_options(["-tao_type", solver]):
+            problem = AdhesivePeriodicProblem(grid, make_fft(grid), h, 1.0, law, PetscBackend())
+            start = time.perf_counter()
+            steps = [s.scalars for s in adhesive_sweep(problem, loads)]
+            elapsed = time.perf_counter() - start
+        its = sum(s["iterations"] for s in steps)
+        failed = [s for s in steps if not s["converged"]]
+        areas = "/".join(f"{s['area_fraction']:.2g}" for s in steps)
+        cell = f"ok {len(steps)}/{len(steps)} steps, areas {areas}, {its} its, {elapsed:.2g} s"
+        if failed:
+            s = failed[0]
+            mark = "" if s["verification"].startswith("pulled off") else "**FAIL** "
+            cell = (
+                f"{mark}at p0 = {s['nominal_pressure']:.3g}, {its} its, {elapsed:.2g} s "
+                f"({s['verification']})"
+            )
+        cells.append(cell)
+    return (
+        f"| {name} (w = {law.work:.2g}, w/rho = {law.strength:.2g}) | " + " | ".join(cells) + " |"
+    )
+
+
 def parse_args() -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grid", type=int, default=128)
@@ -160,6 +223,11 @@ def parse_args() -> argparse.Namespace:
         action=argparse.BooleanOptionalAction,
         default=True,
         help="run the scenes at --grid (--no-scenes: only the --grids rows)",
+    )
+    ap.add_argument(
+        "--adhesive",
+        action="store_true",
+        help="run the adhesive scenes at --grid instead (their own table)",
     )
     return ap.parse_args()
 
@@ -208,9 +276,35 @@ def write_markdown(lines: list[str], args: argparse.Namespace) -> None:
         )
 
 
+def adhesive_main(args: argparse.Namespace) -> None:
+    """The adhesive scenes' table (``--adhesive``)."""
+    lines = [
+        "| scene | " + " | ".join(ADHESIVE_SOLVERS) + " |",
+        "| --- |" + " --- |" * len(ADHESIVE_SOLVERS),
+    ]
+    start = time.perf_counter()
+    for name, *case in adhesive_scenes(args.grid):
+        if args.match in name:
+            lines.append(adhesive_row(name, *case))
+            print(lines[-1], flush=True)
+    print(f"# {time.perf_counter() - start:.0f} s")
+    if args.markdown:
+        with open(args.markdown, "a" if args.append else "w") as f:
+            f.write(
+                f"{chr(10) if args.append else ''}Adhesive scenes, {args.grid}^2 "
+                "(`benchmarks/stability.py --adhesive`). Each cell: the steps converged, "
+                "their contact area fractions, TAO iterations and wall time of the cycle, or "
+                "the first step that did not and why (a pull-off unmarked, any other "
+                "**FAIL**).\n\n" + "\n".join(lines) + "\n"
+            )
+
+
 def main() -> None:
     args = parse_args()
     _petsc.init([])
+    if args.adhesive:
+        adhesive_main(args)
+        return
     cases: list[tuple] = []
     if args.scenes:
         cases = [*scenes(args.grid), *layer_scenes(args.grid), *hardness_scenes(args.grid)]

@@ -187,9 +187,8 @@ def adhesive_row(name: str, h: np.ndarray, law: Adhesion, loads: list[float]) ->
                 f"({s['verification']})"
             )
         cells.append(cell)
-    return (
-        f"| {name} (w = {law.work:.2g}, w/rho = {law.strength:.2g}) | " + " | ".join(cells) + " |"
-    )
+    scene = f"{name} (w = {law.work:.2g}, w/rho = {law.strength:.2g}, rho = {law.range:.2g})"
+    return f"| {scene} | " + " | ".join(cells) + " |"
 
 
 def parse_args() -> argparse.Namespace:

@@ -148,7 +148,8 @@ class Run:
         hard wall), its work of adhesion ``w`` (units of ``E*`` times the length unit) and
         range ``rho`` (a length, ``"5nm"`` with a unit;
         :class:`~petsc_contact.interactions.adhesion.Adhesion`): the nominal pressures may
-        then be zero or tensile.
+        then be zero or tensile, and a sweep ``(N, PMIN, PMAX)`` is a load cycle
+        (:func:`cycled`).
     output, fields, scalars_only, resume, overwrite, stop_after
         The HDF5 file (none: results only in memory), whether the fields of every step are
         stored, whether the height map is left out, whether an interrupted run is continued

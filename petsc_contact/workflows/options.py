@@ -601,8 +601,10 @@ _ADHESION = (
         "nominal pressure (tension too) or mean gap (held by a stiff loading machine to "
         "1e-6) from the last converged step. Each step records `adhesive_pressure`, "
         "`interaction_energy`, `pressure_scale`, `pull_off_pressure` and `branch_jump`; a "
-        "step under tension whose surfaces came apart is not converged (`pulled off`). "
-        "Takes `--pressures` or `--mean-gaps` on the half-space",
+        "step under tension whose surfaces came apart is not converged (`pulled off`); a "
+        "`--mean-gaps` cycle back to its first mean gap records `hysteresis_energy`, the "
+        "energy per area it lost. Takes `--pressures`, a `--sweep` (a load cycle) or "
+        "`--mean-gaps` on the half-space",
     ),
     _option(
         "work_of_adhesion",

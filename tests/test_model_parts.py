@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from petsc_contact.conventions.grid import Grid
+from petsc_contact.devices.device import get_device
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.geometries.periodic import PeriodicProblem
 from petsc_contact.geometries.punch import PunchProblem
 from petsc_contact.interactions.hard_wall import HARD_WALL, HardWall
-from petsc_contact.numerics.device import get_device
-from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.greens import mean_mode_compliance
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.solver.backends import ArrayBackend

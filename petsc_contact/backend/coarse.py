@@ -42,6 +42,7 @@ import numpy as np
 import scipy.fft
 
 from ..conventions.grid import Grid, block_rows
+from ..devices.device import CPU, Device
 from ..numerics.aggregates import (
     centroids,
     grouped,
@@ -55,7 +56,6 @@ from ..numerics.aggregates import (
     pair_sums_direct,
     spectral_dots,
 )
-from ..numerics.device import CPU, Device
 from ..numerics.schur import BorderedSystem, allgather, held_rows, sum_over_ranks
 from ..solver.driver import SolveSettings
 from .operator import ShellInterface
@@ -158,7 +158,7 @@ def _pair_sums_fft(
 def coarse_matrix(parts: Aggregates, quarter: np.ndarray, grid: Grid) -> np.ndarray:
     """``E = W^T G_BB W`` for the aggregates ``parts``: exact between blocks at most
     :data:`NEAR_REACH` blocks apart, monopoles beyond; only the upper triangle is filled, in
-    Fortran order (factorised in place, :meth:`~petsc_contact.numerics.device.Device.cho_factor`).
+    Fortran order (factorised in place, :meth:`~petsc_contact.devices.device.Device.cho_factor`).
 
     The near sums are taken pixel pair by pixel pair where the aggregates are small and by
     FFTs on ``2b x 2b`` cells where they are large (:func:`_pair_sums_fft`), whichever

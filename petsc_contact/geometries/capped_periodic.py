@@ -31,8 +31,8 @@ import numpy as np
 from ..backend.operator import FourierOperator
 from ..backend.solve import SolveInfo
 from ..conventions.grid import Grid
+from ..devices.fft import FFT, wavevector_magnitude
 from ..interactions.interaction import Interaction
-from ..numerics.fft import FFT, wavevector_magnitude
 from ..physics.observables import contact_resolved, distributions, patch_sizes
 from ..solver.backends import SolverBackend
 from ..substrates.half_space import PeriodicHalfSpace

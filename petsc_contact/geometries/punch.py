@@ -27,7 +27,7 @@ shape factor (``analytic``: ``β = 1.0212`` for the square, 1 for the disk;
 :mod:`~petsc_contact.reference.flat_punch`) or King's estimate ``β = 1.012`` for the square, as
 Pharr, Oliver & Brotzen quote it (``king``).  Each step records ``K_flat`` and its ``β``.
 
-The problem is written once on the arrays of a :class:`~petsc_contact.numerics.device.Device`:
+The problem is written once on the arrays of a :class:`~petsc_contact.devices.device.Device`:
 on ``cpu`` TAO minimises it on PETSc Vecs and ``KSPCG`` solves the held sets of the exact
 stiffness; on ``gpu`` and ``cpu-array`` the package's constrained CG and held-set CG do
 (:mod:`petsc_contact.solver`), with the padded compliance on the device's FFT and no PETSc.
@@ -47,9 +47,9 @@ from ..backend.solve import SolveInfo
 from ..backend.stiffness import punch_stiffness_exact
 from ..conventions.grid import Grid
 from ..conventions.validation import non_negative, positive
+from ..devices.device import CPU, Device
 from ..interactions.hard_wall import HARD_WALL
 from ..interactions.interaction import Interaction
-from ..numerics.device import CPU, Device
 from ..numerics.kernels import compile_kernels
 from ..physics.observables import contact_resolved, distributions, patch_sizes
 from ..reference import flat_punch
@@ -182,7 +182,7 @@ class PunchProblem:
         factor (default: the square's, 1.0212), or ``'king'``, King's ``beta = 1.012`` (a
         square footprint only: :func:`reference_beta`).
     device
-        Where the solver's fields live (:class:`~petsc_contact.numerics.device.Device`): the
+        Where the solver's fields live (:class:`~petsc_contact.devices.device.Device`): the
         ``cpu`` device's are TAO's (NumPy, FFTW); ``gpu`` and ``cpu-array`` run the package's
         own CG on their arrays (no PETSc; ``gpu`` on one rank).  Heights, footprint and the fields a
         step measures stay on the host.

@@ -30,13 +30,13 @@ from typing import Any
 import numpy as np
 
 from ..conventions.grid import Grid
-from .device import CPU, Device
+from ..devices.device import CPU, Device
 
 
 class BorderedSystem:
     """The bordered system ``[[E, w], [w^T, 0]] [a, c] = [f, -r_sum]`` of a symmetric
     positive definite ``E``, solved by ``E``'s Cholesky factor on the device where ``E``
-    lives (:meth:`~petsc_contact.numerics.device.Device.cho_factor`):
+    lives (:meth:`~petsc_contact.devices.device.Device.cho_factor`):
 
         a = y - c E^-1 w,    c = (w.y + r_sum) / (w.E^-1 w),    y = E^-1 f,
 
@@ -59,7 +59,7 @@ class BorderedSystem:
     factorised
         Whether ``E`` was positive definite (otherwise :meth:`solve` must not be used).
     factor
-        The ``cho_factor`` pair of ``E`` (:meth:`~petsc_contact.numerics.device.Device.
+        The ``cho_factor`` pair of ``E`` (:meth:`~petsc_contact.devices.device.Device.
         cho_factor`: SciPy's on the host, cuSOLVER's factor on a GPU), ``None`` when it
         failed.
     """

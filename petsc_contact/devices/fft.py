@@ -386,7 +386,7 @@ class ArrayFFT:
     """Real-to-complex 2-D FFTs of one grid with the array module's ``fft`` (one rank: a
     GPU's arrays on several are not supported yet).
 
-    The interface of :mod:`~petsc_contact.numerics.fft`'s engines: buffers ``real`` (kept by
+    The interface of :mod:`~petsc_contact.devices.fft`'s engines: buffers ``real`` (kept by
     :meth:`forward`), ``spectrum`` and ``result``; both transforms unnormalised, so
     ``backward(forward(x)) = nx ny x``.  CuPy keeps the cuFFT plans of a shape in its plan
     cache, so every transform after the first reuses them.

@@ -15,7 +15,7 @@ petsc_contact.numerics.kernels``, or when a problem is set up), never inside a s
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable
 
 import numpy as np
 from numba import njit, types
@@ -183,7 +183,7 @@ def add_dot(y: np.ndarray, base: np.ndarray, d: np.ndarray) -> float:
     return total
 
 
-def specimen_calls() -> list[tuple[Any, tuple[Any, ...]]]:
+def specimen_calls() -> list[tuple[Callable[..., object], tuple[object, ...]]]:
     """Each kernel of this module with tiny arguments of every type the package passes it, so
     that compiling these compiles what any run calls
     (:func:`~petsc_contact.numerics.kernels.compile_kernels`).
@@ -200,7 +200,7 @@ def specimen_calls() -> list[tuple[Any, tuple[Any, ...]]]:
 
     read_only, mask = np.zeros(2), np.zeros(2, dtype=bool)
     read_only.setflags(write=False)
-    calls: list[tuple[Any, tuple[Any, ...]]] = []
+    calls: list[tuple[Callable[..., object], tuple[object, ...]]] = []
     for upper in (np.inf, read_only):
         calls += [(advance, (vector(), vector(), 1.0, 0.0, upper)), (clip, (vector(), 0.0, upper))]
         for x in (vector(), read_only):  # the CG's own vectors; TAO's, in a preconditioner

@@ -139,9 +139,9 @@ class Device:
         labels, count = ndimage.label(mask)
         return labels, int(count)
 
-    def describe(self) -> dict[str, Any]:
+    def describe(self) -> dict[str, str | int]:
         """What the output records of the device: its name, and the GPU's model and memory."""
-        out: dict[str, Any] = {"device": self.name}
+        out: dict[str, str | int] = {"device": self.name}
         if not self.on_host:
             cuda = self.xp.cuda
             props = cuda.runtime.getDeviceProperties(cuda.Device().id)

@@ -38,6 +38,7 @@ from __future__ import annotations
 import ctypes
 import os
 import platform
+from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -459,7 +460,7 @@ def wavevectors(grid: Grid, fft: FFT) -> tuple[np.ndarray, np.ndarray]:
     return (qx[None, :], qy[:, None]) if fft.transposed else (qx[:, None], qy[None, :])
 
 
-def wavevector_magnitude(grid: Grid, fft: FFT, xp: Any = np) -> Any:
+def wavevector_magnitude(grid: Grid, fft: FFT, xp: ModuleType = np) -> Any:
     """``|q|`` on the local half-spectrum block, an array of ``xp`` (made there: only the
     axes' wavevectors cross)."""
     qx, qy = (xp.asarray(q) for q in wavevectors(grid, fft))

@@ -32,6 +32,12 @@ on ``cpu`` TAO minimises it on PETSc Vecs and ``KSPCG`` solves the held sets of 
 stiffness; on ``gpu`` and ``cpu-array`` the package's constrained CG and held-set CG do
 (:mod:`petsc_contact.solver`), with the padded compliance on the device's FFT and no PETSc.
 The observables are measured on the host.
+
+The QP is one class composed of parts, :class:`PressureProblem`: the body's compliance
+(:class:`Compliance`) and what a step measures (:class:`Measure`), with the interaction, the
+device and the backend.  :class:`PunchProblem` is it with the free padded compliance
+(:class:`FreeCompliance`) and the punch's measure (:class:`PunchMeasure`); the capped periodic
+cell (:mod:`~petsc_contact.geometries.capped_periodic`) with the periodic ones.
 """
 
 from __future__ import annotations
@@ -77,7 +83,7 @@ def disk_footprint(n: int) -> np.ndarray:
     return x[:, None] ** 2 + x[None, :] ** 2 < (n / 2) ** 2
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> float:
     """``PHARR_BETA``, deprecated (a ``DeprecationWarning``): King's 1.012, ``KING_BETA`` of
     :mod:`~petsc_contact.reference.flat_punch`, no longer the square's analytic shape factor
     (``SQUARE_BETA`` there, 1.0212)."""
@@ -93,7 +99,9 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-def footprint_mask(grid: Grid, footprint: str | np.ndarray | None) -> tuple[Any, float]:
+def footprint_mask(
+    grid: Grid, footprint: str | np.ndarray | None
+) -> tuple[np.ndarray | None, float]:
     """A punch's local footprint mask (``None``: the whole grid) and the shape factor of its
     analytic flat-punch stiffness (paper Eq. 2): ``square`` or ``None`` (the square's exact
     1.0212), ``disk`` (the inscribed disk of a square grid; 1), or a full ``nx x ny`` boolean
@@ -423,7 +431,7 @@ class PressureProblem:
         grad *= c
         return c * float(w)
 
-    def flat_stiffness_on_grid(self, petsc: Any = None) -> float:
+    def flat_stiffness_on_grid(self, petsc: object = None) -> float:
         """``dF/dδ`` of the flat punch of the same footprint, on the same grid, on the
         problem's device; the residual of its solve becomes :attr:`flat_residual`.
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import sys
 import time
 import warnings
-from typing import Any
+from collections.abc import Callable
 
 from numba.core import event
 
@@ -29,7 +29,7 @@ COMPILE_SECONDS = 5  # about how long compiling every kernel takes (4.7 s on 2 s
 COLD_CACHE = f"compiling the numba kernels once (about {COMPILE_SECONDS} s)..."
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> Callable[..., object]:
     """A numba pass by its old name here (:data:`PASSES`), deprecated (a
     ``DeprecationWarning``): it is the ``cpu`` device's, :mod:`~petsc_contact.devices.compiled`
     (until 0.3.0)."""
@@ -52,12 +52,12 @@ class _ColdCache(event.Listener):
         self.announce = announce
         self.compiled = False
 
-    def on_start(self, ev: Any) -> None:
+    def on_start(self, ev: event.Event) -> None:
         if self.announce and not self.compiled:
             print(COLD_CACHE, file=sys.stderr, flush=True)
         self.compiled = True
 
-    def on_end(self, ev: Any) -> None:
+    def on_end(self, ev: event.Event) -> None:
         """Nothing to do: the line is said when compiling starts."""
 
 

@@ -25,6 +25,7 @@ contact set; it costs two FFT round trips and an ``m x m`` Cholesky factorisatio
 
 from __future__ import annotations
 
+from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -138,7 +139,9 @@ class ContactSchur:
 SYSTEM_ROWS = 64  # rows of G_BB filled at a time (bounds the temporaries)
 
 
-def compliance_block(xp: Any, quarter: Any, both: Any, shape: tuple[int, int], held: range) -> Any:
+def compliance_block(
+    xp: ModuleType, quarter: Any, both: Any, shape: tuple[int, int], held: range
+) -> Any:
     """``G_BB`` for the bound pixels ``both`` (global ``(row, col)`` pairs, an array of
     ``xp``), this rank's part of it: the entries whose folded row offset is in ``held``
     (:func:`held_rows`, the rows of ``quarter`` from ``held.start``), zero elsewhere; on one

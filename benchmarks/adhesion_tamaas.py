@@ -36,9 +36,9 @@ def ours(h: np.ndarray, law: str, w: float, rho: float, gaps: list[float]) -> li
     from petsc_contact.backend._petsc import scoped_options
     from petsc_contact.backend.tao import PetscBackend
     from petsc_contact.conventions.grid import Grid
+    from petsc_contact.devices.fft import make_fft
     from petsc_contact.geometries.adhesive_periodic import AdhesivePeriodicProblem
     from petsc_contact.interactions.adhesion import Adhesion
-    from petsc_contact.numerics.fft import make_fft
     from petsc_contact.workflows.adhesive_steps import adhesive_mean_gap_sweep
 
     grid = Grid(h.shape[0], 1.0)

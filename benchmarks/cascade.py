@@ -18,8 +18,8 @@ from mpi4py import MPI
 
 from petsc_contact.backend import _petsc
 from petsc_contact.conventions.grid import Grid
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.geometries.periodic import PeriodicProblem
-from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.workflows.periodic_sweep import sweep
 

@@ -34,7 +34,7 @@ from fft_count import TransformCounter
 
 from petsc_contact.backend.preconditioner import MeanModePreconditioner
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.fft import make_fft
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.workflows.periodic_sweep import periodic_contact
 

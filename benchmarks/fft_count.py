@@ -23,7 +23,7 @@ from mpi4py import MPI
 
 from petsc_contact.backend.solve import BoundSolver
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.fft import SerialFFT, make_fft
+from petsc_contact.devices.fft import SerialFFT, make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.workflows.periodic_sweep import periodic_contact
 

@@ -9,14 +9,14 @@ usage (on a machine with CuPy and a CUDA GPU, in the repository's root, no netwo
 2. runs ``pytest -m gpu tests/test_gpu.py tests/test_device_punch.py`` (the device against
    its CPU stand-in: periodic sweeps at 256^2-1024^2, the punch at 128^2 and 256^2);
 3. measures the floor at each grid: a cuFFT double real round trip (``rfft2`` + ``irfft2``
-   through :class:`~petsc_contact.numerics.fft.ArrayFFT`) and one fused pass
+   through :class:`~petsc_contact.devices.fft.ArrayFFT`) and one fused pass
    (``y += a x``, an ``ElementwiseKernel``), CUDA events, median of 10;
 4. times the paper-bandwidth sweep at each grid (H = 0.7, rms slope 0.1, ``L/lambda_r = 1``,
    ``L/lambda_1 = n/2``, seed 1, 12 loads from 1e-7 to 1e-1 E*, ``--stiffness``): wall,
    iterations, seconds per iteration against 3.5 round trips and 10 passes, the stiffness
    solves, and the device memory the pool held (bytes per point);
 5. the 8192^2 sweep again with the unfused passes (:class:`ArrayPasses`: what the fused
-   kernels of :mod:`~petsc_contact.numerics.fused` save), the 8192^2 sweep under cProfile
+   kernels of :mod:`~petsc_contact.devices.fused` save), the 8192^2 sweep under cProfile
    (where the wall goes: ``profile_8192.txt``), one 8192^2 step from first touch
    (``p0 = 1e-3 E*``) and a short sweep at ``--largest``.
 
@@ -78,8 +78,8 @@ def floor(n: int) -> dict[str, float]:
     import cupy
 
     from petsc_contact.conventions.grid import Grid
-    from petsc_contact.numerics.device import get_device
-    from petsc_contact.numerics.fft import ArrayFFT
+    from petsc_contact.devices.device import get_device
+    from petsc_contact.devices.fft import ArrayFFT
 
     fft = ArrayFFT(Grid(n, 1.0), get_device("gpu"))
     x = cupy.random.random((n, n))
@@ -95,8 +95,8 @@ def floor(n: int) -> dict[str, float]:
 
 def surface(n: int, device: str) -> Any:
     from petsc_contact.conventions.grid import Grid
-    from petsc_contact.numerics.device import get_device
-    from petsc_contact.numerics.fft import make_fft
+    from petsc_contact.devices.device import get_device
+    from petsc_contact.devices.fft import make_fft
     from petsc_contact.physics.surface import self_affine
 
     grid = Grid(n, 1.0)
@@ -107,7 +107,7 @@ def sweep(n: int, loads: list[float], floors: dict[str, float] | None) -> dict[s
     """One sweep with the stiffness on the GPU: its table and where the time went."""
     import cupy
 
-    from petsc_contact.numerics.device import get_device
+    from petsc_contact.devices.device import get_device
     from petsc_contact.workflows.periodic_sweep import periodic_contact
 
     pool = cupy.get_default_memory_pool()
@@ -166,8 +166,8 @@ def sweep(n: int, loads: list[float], floors: dict[str, float] | None) -> dict[s
 def plain_passes_sweep(n: int, loads: list[float], report: dict[str, Any]) -> dict[str, Any]:
     """:func:`sweep` with the GPU's passes as :class:`ArrayPasses` (one CuPy kernel per
     operator) instead of the fused kernels: what the fusion saves, on the same surface."""
-    from petsc_contact.numerics import device
-    from petsc_contact.numerics.passes import ArrayPasses
+    from petsc_contact.devices import device
+    from petsc_contact.devices.passes import ArrayPasses
 
     fused = device.Device.__dict__["passes"]
     device.Device.passes = property(lambda self: ArrayPasses(self.xp))
@@ -225,7 +225,7 @@ def main() -> int:
     import cupy
     import numpy
 
-    from petsc_contact.numerics.device import get_device
+    from petsc_contact.devices.device import get_device
 
     report["versions"] = {"cupy": cupy.__version__, "numpy": numpy.__version__}
     report["device"] = get_device("gpu").describe()

@@ -18,7 +18,7 @@ import numpy as np
 
 from petsc_contact.backend import _petsc
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.fft import make_fft
+from petsc_contact.devices.fft import make_fft
 
 
 def best_of(fn, repeats: int = 5, inner: int = 10) -> float:

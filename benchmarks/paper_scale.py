@@ -24,7 +24,7 @@ from mpi4py import MPI
 
 from petsc_contact import periodic_contact
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.fft import make_fft
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 
 

@@ -35,7 +35,7 @@ from projection import project, scaled_local
 from petsc_contact import periodic_contact
 from petsc_contact.backend.operator import FourierOperator
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.fft import SerialFFT, SlabFFT, make_fft
+from petsc_contact.devices.fft import SerialFFT, SlabFFT, make_fft
 from petsc_contact.physics.surface import self_affine
 
 

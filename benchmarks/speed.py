@@ -37,8 +37,8 @@ from peer_env import peer_python
 from petsc_contact import periodic_contact
 from petsc_contact.backend.operator import FourierOperator
 from petsc_contact.conventions.grid import Grid
+from petsc_contact.devices.fft import SerialFFT, make_fft
 from petsc_contact.geometries.periodic import PeriodicProblem
-from petsc_contact.numerics.fft import SerialFFT, make_fft
 from petsc_contact.physics.surface import self_affine
 
 HERE = os.path.dirname(os.path.abspath(__file__))

@@ -20,7 +20,7 @@ import numpy as np
 from mpi4py import MPI
 
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.fft import make_fft
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.workflows.periodic_sweep import periodic_contact
 

@@ -12,7 +12,7 @@ import numpy as np
 from mpi4py import MPI
 
 from petsc_contact.conventions.grid import Grid, fundamental_wavevector
-from petsc_contact.numerics.fft import make_fft
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.paper import figures
 from petsc_contact.paper.paper_study import RMS_SLOPE
 from petsc_contact.physics.surface import radial_psd, rms_of

@@ -41,7 +41,7 @@ def make_map(path: str, n: int) -> None:
     from SurfaceTopography import Topography
 
     from petsc_contact.conventions.grid import Grid
-    from petsc_contact.numerics.fft import SerialFFT
+    from petsc_contact.devices.fft import SerialFFT
     from petsc_contact.physics.surface import self_affine
 
     grid = Grid(n, 50.0)

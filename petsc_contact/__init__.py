@@ -2,7 +2,9 @@
 
 The folders are the layers, and imports run from the later to the earlier ones
 (docs/architecture.md): ``conventions`` (grid, units, input checks, memory estimates),
-``numerics`` (FFT backends, numba kernels, Schur algebra, devices; no PETSc), ``reference``
+``devices`` (where the arrays live: NumPy or CuPy, their FFTs and whole-field passes),
+``numerics`` (the numba kernels' compilation, the coarse sums, Schur algebra; no PETSc),
+``reference``
 (analytic solutions), ``physics`` (pure numpy), ``substrates`` (the elastic body by its
 Green's function), ``interactions`` (the law at the surface, its bounds), ``solver`` (the
 package's own solver on arrays of any device; the solver backend), ``io`` (HDF5, height maps,

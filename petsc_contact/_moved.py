@@ -16,7 +16,7 @@ from collections.abc import Sequence
 from types import ModuleType
 
 MOVED = {  # old path -> new path, below ``petsc_contact.``
-    "conventions.fft": "numerics.fft",  # 0.2.0
+    "conventions.fft": "devices.fft",  # 0.2.0
     "backend.kernels": "numerics.kernels",  # 0.2.0
     "backend.schur": "numerics.schur",  # 0.2.0
     "solver.cg": "solver.constrained_cg",  # 0.2.1
@@ -27,6 +27,10 @@ MOVED = {  # old path -> new path, below ``petsc_contact.``
     "workflows.scenes": "paper.figures",  # 0.2.1
     "workflows.theory_file": "paper.theory_file",  # 0.2.1
     "workflows.theory_run": "paper.theory_run",  # 0.2.1
+    "numerics.device": "devices.device",  # 0.2.1
+    "numerics.fft": "devices.fft",  # 0.2.1
+    "numerics.passes": "devices.passes",  # 0.2.1
+    "numerics.fused": "devices.fused",  # 0.2.1
 }
 PACKAGE = __name__.rpartition(".")[0]
 

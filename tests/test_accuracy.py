@@ -20,7 +20,7 @@ from conftest import cli
 
 from petsc_contact import periodic_contact
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.fft import make_fft
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.solver.linear import StiffnessNotConverged
 from petsc_contact.solver.report import FORCE_ACCURACY, STIFFNESS_ACCURACY, Accuracy, accuracy_limit

@@ -62,8 +62,8 @@ GPU_ON_RANKS = """
 from types import ModuleType
 from mpi4py import MPI
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.device import Device
-from petsc_contact.numerics.fft import make_fft
+from petsc_contact.devices.device import Device
+from petsc_contact.devices.fft import make_fft
 
 try:  # an array module that is not NumPy: a GPU's, as CuPy is
     make_fft(Grid(32, 1.0, MPI.COMM_WORLD), Device("gpu", ModuleType("cupy")))

@@ -70,8 +70,8 @@ def test_stops_at_the_rounding_floor(monkeypatch):
     instead of running to its iteration limit; the verification then flags the step."""
     from petsc_contact import periodic_contact
     from petsc_contact.conventions.grid import Grid
+    from petsc_contact.devices.fft import make_fft
     from petsc_contact.geometries import periodic as problem
-    from petsc_contact.numerics.fft import make_fft
     from petsc_contact.physics.surface import self_affine
 
     grid = Grid(128, 1.0)

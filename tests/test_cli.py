@@ -446,6 +446,7 @@ def test_modules_import_only_from_layers_above():
 
     layers = [
         "conventions",
+        "devices",
         "numerics",
         "reference",
         "physics",

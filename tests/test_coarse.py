@@ -10,9 +10,9 @@ from petsc_contact.backend import _petsc, coarse
 from petsc_contact.backend.coarse import DIAGONAL_INFLATION, CoarseSpace, TwoLevelOptions
 from petsc_contact.backend.tao import PetscBackend
 from petsc_contact.conventions.grid import Grid
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.geometries.periodic import PeriodicProblem
 from petsc_contact.numerics import aggregates
-from petsc_contact.numerics.fft import make_fft
 from petsc_contact.numerics.schur import _fold
 from petsc_contact.physics.surface import self_affine
 
@@ -231,7 +231,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc_contact.backend import coarse
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.device import CPU
+from petsc_contact.devices.device import CPU
 from petsc_contact.numerics import schur as sums
 from petsc_contact.numerics.schur import ContactSchur, _fold, held_rows, quarter
 
@@ -272,7 +272,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc_contact.backend import coarse
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.device import CPU
+from petsc_contact.devices.device import CPU
 from petsc_contact.numerics.schur import _fold, quarter
 
 {even_column}

@@ -11,8 +11,8 @@ from mpi4py import MPI
 
 from petsc_contact import periodic_contact
 from petsc_contact.conventions.grid import Grid
+from petsc_contact.devices.fft import make_fft, wavevector_magnitude
 from petsc_contact.geometries.periodic import PeriodicProblem
-from petsc_contact.numerics.fft import make_fft, wavevector_magnitude
 from petsc_contact.physics.continuation import MAX_EXTRAPOLATION, ConvergedStep, LoadPath
 from petsc_contact.physics.greens import held_compliance, periodic_compliance
 from petsc_contact.physics.surface import self_affine

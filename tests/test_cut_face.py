@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.fft import make_fft
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.physics.preparation import edge_mismatch, rms_slope
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.workflows.description import Run

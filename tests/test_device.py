@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.device import DeviceUnavailable, get_device
-from petsc_contact.numerics.fft import make_fft
+from petsc_contact.devices.device import DeviceUnavailable, get_device
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.solver.driver import SolveSettings
 from petsc_contact.workflows.periodic_sweep import periodic_contact

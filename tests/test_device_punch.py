@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.device import DeviceUnavailable, get_device
-from petsc_contact.numerics.fft import make_fft
+from petsc_contact.devices.device import DeviceUnavailable, get_device
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.reference import flat_punch
 from petsc_contact.workflows.punch_sweep import punch_contact

@@ -4,7 +4,7 @@ from conftest import python
 
 SCRIPT = r"""
 import pyfftw
-from petsc_contact.numerics.fft import SerialFFT, _Wisdom
+from petsc_contact.devices.fft import SerialFFT, _Wisdom
 from petsc_contact.conventions.grid import Grid
 _Wisdom.load(pyfftw)
 before = pyfftw.export_wisdom()

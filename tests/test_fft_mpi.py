@@ -7,7 +7,7 @@ SCRIPT = r"""
 import sys
 import numpy as np
 from mpi4py import MPI
-from petsc_contact.numerics.fft import make_fft, wavevector_magnitude
+from petsc_contact.devices.fft import make_fft, wavevector_magnitude
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.backend.operator import FourierOperator
 

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.device import DeviceUnavailable, get_device
-from petsc_contact.numerics.fft import make_fft
+from petsc_contact.devices.device import DeviceUnavailable, get_device
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.workflows.periodic_sweep import periodic_contact
 
@@ -71,11 +71,11 @@ def test_fields_and_state_come_back_to_the_host(gpu):
 
 
 def test_each_fused_pass_is_the_array_pass(gpu):
-    """The GPU's fused kernels (:mod:`~petsc_contact.numerics.fused`) against the array
+    """The GPU's fused kernels (:mod:`~petsc_contact.devices.fused`) against the array
     module's operators on the same CuPy arrays: masks, counts and updates exactly, sums to
     rounding (1e-12), with bounds given as floats and as arrays."""
-    from petsc_contact.numerics.fused import FusedPasses
-    from petsc_contact.numerics.passes import ArrayPasses
+    from petsc_contact.devices.fused import FusedPasses
+    from petsc_contact.devices.passes import ArrayPasses
 
     xp = gpu.xp
     fused, plain = FusedPasses(xp), ArrayPasses(xp)

@@ -19,9 +19,9 @@ from test_device import surface
 from petsc_contact.backend.coarse import array_coarse_matrix, host_coarse_matrix
 from petsc_contact.backend.preconditioner import MeanModePreconditioner
 from petsc_contact.conventions.grid import Grid
+from petsc_contact.devices.device import CPU, Device, get_device
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.geometries.periodic import PeriodicProblem
-from petsc_contact.numerics.device import CPU, Device, get_device
-from petsc_contact.numerics.fft import make_fft
 from petsc_contact.solver.backends import ArrayBackend
 from petsc_contact.solver.driver import ArraySolver, SolveSettings
 from petsc_contact.workflows.periodic_sweep import periodic_contact, sweep

@@ -13,10 +13,10 @@ from conftest import cli
 from petsc_contact import Run, run_contact
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.conventions.warnings import FullContact
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.geometries.capped_periodic import CappedPeriodicProblem
 from petsc_contact.geometries.punch import PunchProblem
 from petsc_contact.interactions.hardness import HardnessCap
-from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.substrates.half_space import PeriodicHalfSpace
 from petsc_contact.workflows.punch_steps import PunchSolver

@@ -17,7 +17,7 @@ from conftest import ROOT, cli, python
 from petsc_contact import periodic_contact
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.conventions.warnings import Unconverged
-from petsc_contact.numerics.fft import make_fft
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.solver.linear import StiffnessNotConverged
 from petsc_contact.workflows.description import Run

@@ -12,6 +12,7 @@ import h5py
 import pytest
 from conftest import ROOT, cli, python
 
+from petsc_contact.devices import compiled
 from petsc_contact.numerics import aggregates, kernels
 
 SCENE = ("--grid", "32", "--hurst", "0.7", "--rms-slope", "0.1", "--seed", "1", "--quiet")
@@ -48,8 +49,8 @@ def test_setup_compiles_every_kernel_and_runs_compile_nothing(setup_cache, monke
     the step is run again quickly, from the cache."""
     cache, printed = setup_cache
     _seconds(printed)
-    compiled = _cached(cache)
-    assert len(compiled) >= len(kernels.specimen_calls()) + len(aggregates.specimen_calls())
+    cached = _cached(cache)
+    assert len(cached) >= len(compiled.specimen_calls()) + len(aggregates.specimen_calls())
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(cache))
     runs = [
         ("periodic", "--pressures", "1e-3,1e-2", "--stiffness"),
@@ -61,7 +62,7 @@ def test_setup_compiles_every_kernel_and_runs_compile_nothing(setup_cache, monke
         r = cli(*run, *SCENE, "--output", str(cache.parent / f"run{i}.h5"), process=True)
         assert r.returncode == 0, r.stderr
         assert kernels.COLD_CACHE not in r.stderr, run
-        assert _cached(cache) == compiled, f"{run} compiled a kernel for other types"
+        assert _cached(cache) == cached, f"{run} compiled a kernel for other types"
     again = python("-m", "petsc_contact.numerics.kernels")
     assert re.fullmatch(
         r"numba kernels loaded from the cache \(\d+ kernels, [\d.]+ s\)\n", again.stdout
@@ -91,7 +92,7 @@ def test_a_cold_cache_says_so_once_and_no_step_times_it(setup_cache, tmp_path, m
 def _warmed() -> set[tuple[str, str]]:
     """``(module, name)`` of every kernel :func:`~petsc_contact.numerics.kernels.compile_kernels`
     calls."""
-    calls = kernels.specimen_calls() + aggregates.specimen_calls()
+    calls = compiled.specimen_calls() + aggregates.specimen_calls()
     return {(k.py_func.__module__, k.py_func.__name__) for k, _ in calls}
 
 

@@ -92,8 +92,8 @@ def test_importing_the_package_and_its_help_load_no_solver():
 @pytest.mark.parametrize(
     "old, new, name",
     [
-        ("conventions.fft", "numerics.fft", "make_fft"),
-        ("backend.kernels", "numerics.kernels", "free_set"),
+        ("conventions.fft", "devices.fft", "make_fft"),
+        ("backend.kernels", "numerics.kernels", "compile_kernels"),
         ("backend.schur", "numerics.schur", "ContactSchur"),
         ("solver.cg", "solver.constrained_cg", "ConstrainedCG"),
         ("workflows.ensemble", "paper.fits", "power_law_fit"),
@@ -103,6 +103,10 @@ def test_importing_the_package_and_its_help_load_no_solver():
         ("workflows.scenes", "paper.figures", "stiffness_curve"),
         ("workflows.theory_file", "paper.theory_file", "write_theory"),
         ("workflows.theory_run", "paper.theory_run", "line_scan"),
+        ("numerics.device", "devices.device", "Device"),
+        ("numerics.fft", "devices.fft", "make_fft"),
+        ("numerics.passes", "devices.passes", "ArrayPasses"),
+        ("numerics.fused", "devices.fused", "FusedPasses"),
     ],
 )
 def test_moved_modules_warn_and_forward(old, new, name):
@@ -151,3 +155,17 @@ def test_the_source_commit_says_dirty_for_a_change_anywhere_in_the_package(tmp_p
     with open(repo / "petsc_contact" / "solver" / "cg.py", "a") as f:
         f.write("# a local change\n")
     assert commit().endswith("+dirty")
+
+
+def test_the_numba_passes_keep_their_old_names_with_a_warning():
+    """The ``cpu`` device's numba passes, now :mod:`petsc_contact.devices.compiled`, still
+    read from :mod:`petsc_contact.numerics.kernels`, with a DeprecationWarning naming the new
+    path, as the same functions; any other missing name is refused."""
+    from petsc_contact.devices import compiled
+    from petsc_contact.numerics import kernels
+
+    for name in kernels.PASSES:
+        with pytest.warns(DeprecationWarning, match=f"petsc_contact.devices.compiled.{name}"):
+            assert getattr(kernels, name) is getattr(compiled, name)
+    with pytest.raises(AttributeError):
+        kernels.not_a_pass  # noqa: B018

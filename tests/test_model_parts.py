@@ -7,11 +7,17 @@ import numpy as np
 import pytest
 
 from petsc_contact.conventions.grid import Grid
+from petsc_contact.devices.device import get_device
+from petsc_contact.devices.fft import make_fft
+from petsc_contact.geometries.capped_periodic import (
+    CappedPeriodicProblem,
+    CellMeasure,
+    PeriodicCompliance,
+)
 from petsc_contact.geometries.periodic import PeriodicProblem
-from petsc_contact.geometries.punch import PunchProblem
+from petsc_contact.geometries.punch import PressureProblem, PunchProblem
 from petsc_contact.interactions.hard_wall import HARD_WALL, HardWall
-from petsc_contact.numerics.device import get_device
-from petsc_contact.numerics.fft import make_fft
+from petsc_contact.interactions.hardness import HardnessCap
 from petsc_contact.physics.greens import mean_mode_compliance
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.solver.backends import ArrayBackend
@@ -120,3 +126,25 @@ def test_the_punch_uses_the_backend_and_substrate_it_is_given(petsc):
     assert default.backend.name == "petsc"
     assert mine.scalars["force"] == pytest.approx(theirs.scalars["force"], rel=1e-6)
     assert array.k_flat == pytest.approx(default.k_flat, rel=1e-6)
+
+
+def test_the_capped_cell_is_the_problem_in_the_pressure_composed_of_its_parts(petsc):
+    """The capped periodic cell is no punch: it is the one problem posed in the pressure
+    (:class:`PressureProblem`) with the periodic compliance and the cell's measure, and that
+    class composed by hand of those parts gives its step bit for bit (the same arithmetic),
+    Newton's iterations and all; the punch is the same class with its own parts."""
+    grid, h = heights(32)
+    fft, cap = make_fft(grid), HardnessCap(0.02)
+    named = CappedPeriodicProblem(grid, fft, h, 1.0, cap)
+    assert isinstance(named, PressureProblem) and not isinstance(named, PunchProblem)
+    assert isinstance(PunchProblem(grid, h, 1.0, flat="analytic"), PressureProblem)
+    c = PeriodicHalfSpace(1.0).mean_mode_compliance(grid.q0, 0.0)
+    body = PeriodicCompliance(PeriodicHalfSpace(1.0), fft, c)
+    composed = PressureProblem(grid, h, 1.0, body, CellMeasure(c), flat="analytic", interaction=cap)
+    steps = []
+    for problem in (named, composed):
+        with PunchSolver(problem) as solver:
+            steps.append(solver.at_force(5e-3 * grid.area, stiffness=True))
+    assert steps[0].converged and steps[0].scalars["plastic_area_fraction"] > 0  # at the cap
+    mine, theirs = ({k: v for k, v in s.scalars.items() if not k.endswith("_time")} for s in steps)
+    assert repr(mine) == repr(theirs)  # every scalar, NaNs alike

@@ -6,7 +6,7 @@ import pytest
 from petsc_contact import periodic_contact
 from petsc_contact.backend.operator import FourierOperator
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.fft import make_fft, wavevector_magnitude
+from petsc_contact.devices.fft import make_fft, wavevector_magnitude
 from petsc_contact.physics.greens import periodic_stiffness
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.reference import westergaard as wave_solution

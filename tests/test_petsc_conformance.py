@@ -14,7 +14,7 @@ BNCG = ["-tao_type", "bncg"]
 @pytest.fixture(scope="module")
 def heights():
     from petsc_contact.conventions.grid import Grid
-    from petsc_contact.numerics.fft import make_fft
+    from petsc_contact.devices.fft import make_fft
     from petsc_contact.physics.surface import self_affine
 
     grid = Grid(64, 1.0)
@@ -108,9 +108,9 @@ def test_prefix_gives_two_solvers_their_options(heights):
     from petsc_contact.backend import _petsc
     from petsc_contact.backend.solve import BoundSolver
     from petsc_contact.conventions.grid import Grid
+    from petsc_contact.devices.fft import make_fft
     from petsc_contact.geometries.periodic import PeriodicProblem
     from petsc_contact.geometries.step import solve_step
-    from petsc_contact.numerics.fft import make_fft
 
     options = ["-a_tao_type", "bncg", "-b_tao_max_it", "2", "-tao_type", "blmvm"]
     unused = pytest.warns(UserWarning, match="never used: -tao_type")
@@ -192,7 +192,7 @@ def test_a_shifted_shell_adds_and_restores_its_diagonal():
     from petsc_contact.backend import _petsc
     from petsc_contact.backend.operator import DiagonalShift, FourierOperator, shell_matrix
     from petsc_contact.conventions.grid import Grid
-    from petsc_contact.numerics.fft import make_fft
+    from petsc_contact.devices.fft import make_fft
 
     petsc = _petsc.init([])
     grid = Grid(16, 1.0)

@@ -5,8 +5,8 @@ import pytest
 
 from petsc_contact.backend.operator import PaddedOperator
 from petsc_contact.conventions.grid import Grid
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.geometries.punch import flat_punch_stiffness, interfacial_stiffness
-from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.greens import hockney_kernel, love_pixel_displacement
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.reference import flat_punch, hertz

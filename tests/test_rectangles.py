@@ -7,7 +7,7 @@ from conftest import python
 from petsc_contact import periodic_contact, punch_contact
 from petsc_contact.backend.operator import PaddedOperator
 from petsc_contact.conventions.grid import Grid, grid_for
-from petsc_contact.numerics.fft import make_fft
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.physics.greens import hockney_kernel, love_pixel_displacement
 from petsc_contact.physics.surface import rms_of, self_affine
 from petsc_contact.reference import westergaard

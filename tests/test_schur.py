@@ -6,8 +6,8 @@ import pytest
 from petsc_contact.backend.coarse import CoarseSpace
 from petsc_contact.backend.preconditioner import schur_limit
 from petsc_contact.conventions.grid import Grid
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.geometries.periodic import PeriodicProblem
-from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 
 

@@ -8,7 +8,7 @@ import pytest
 
 from petsc_contact import periodic_contact
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.fft import make_fft
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 
 N = 64

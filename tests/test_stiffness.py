@@ -7,7 +7,7 @@ from petsc_contact import periodic_contact
 from petsc_contact.backend.stiffness import sweep_stiffness
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.conventions.warnings import FullContact
-from petsc_contact.numerics.fft import make_fft
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.reference import westergaard
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.numerics.fft import make_fft, wavevector_magnitude
+from petsc_contact.devices.fft import make_fft, wavevector_magnitude
 from petsc_contact.physics.surface import psd_shape, radial_psd, rms_of, self_affine
 
 

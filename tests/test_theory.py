@@ -166,7 +166,7 @@ def test_prediction_from_a_map_matches_the_prescribed_spectrum():
     (0.97-0.99 and 1.01-1.04 over six seeds); at L = lambda_r the map's few lowest modes
     put u0 about 20% lower (docs/measured.md)."""
     from petsc_contact.conventions.grid import Grid
-    from petsc_contact.numerics.fft import make_fft
+    from petsc_contact.devices.fft import make_fft
     from petsc_contact.paper.figures import ideal_spectrum
     from petsc_contact.paper.predictions import predict
     from petsc_contact.physics.surface import self_affine
@@ -264,7 +264,7 @@ def test_the_readings_of_eq13_against_each_other():
 
 def _surface(shape, lengths, hurst=0.7, cutoff=None, seed=1):
     from petsc_contact.conventions.grid import Grid
-    from petsc_contact.numerics.fft import SerialFFT
+    from petsc_contact.devices.fft import SerialFFT
     from petsc_contact.physics.surface import self_affine
 
     grid = Grid(shape, lengths)
@@ -319,7 +319,7 @@ def test_theory_says_when_it_is_unsure():
     import warnings
 
     from petsc_contact.conventions.grid import Grid
-    from petsc_contact.numerics.fft import SerialFFT
+    from petsc_contact.devices.fft import SerialFFT
     from petsc_contact.paper.predictions import TheoryWarning, predict
 
     grid = Grid(128, 1.0)
@@ -433,7 +433,7 @@ def test_persson_area_against_a_periodic_simulation():
     at 0.9 or below, or at 1.6 or above."""
     from petsc_contact import periodic_contact, predict_map
     from petsc_contact.conventions.grid import Grid
-    from petsc_contact.numerics.fft import make_fft
+    from petsc_contact.devices.fft import make_fft
     from petsc_contact.physics.surface import self_affine
 
     grid = Grid(256, 1.0)

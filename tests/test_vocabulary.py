@@ -15,8 +15,8 @@ from petsc_contact import periodic_contact
 from petsc_contact.cli.runs import LOAD_COLUMNS, STEP_COLUMNS
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.conventions.units import format_quantity
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.io.schema import GEOMETRIES
-from petsc_contact.numerics.fft import make_fft
 from petsc_contact.physics.surface import self_affine
 from petsc_contact.workflows.compare import DEFAULT_SOLVERS, solver_options
 

@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from ..numerics.device import CPU
+from ..devices.device import CPU
 from ..solver.constrained_cg import (
     MONITOR,
     ONE_RANK,

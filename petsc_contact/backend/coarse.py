@@ -36,12 +36,14 @@ form is the exact Schur form.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from types import ModuleType
 from typing import Any
 
 import numpy as np
 import scipy.fft
 
 from ..conventions.grid import Grid, block_rows
+from ..devices.device import CPU, Device
 from ..numerics.aggregates import (
     centroids,
     grouped,
@@ -55,7 +57,6 @@ from ..numerics.aggregates import (
     pair_sums_direct,
     spectral_dots,
 )
-from ..numerics.device import CPU, Device
 from ..numerics.schur import BorderedSystem, allgather, held_rows, sum_over_ranks
 from ..solver.driver import SolveSettings
 from .operator import ShellInterface
@@ -158,7 +159,7 @@ def _pair_sums_fft(
 def coarse_matrix(parts: Aggregates, quarter: np.ndarray, grid: Grid) -> np.ndarray:
     """``E = W^T G_BB W`` for the aggregates ``parts``: exact between blocks at most
     :data:`NEAR_REACH` blocks apart, monopoles beyond; only the upper triangle is filled, in
-    Fortran order (factorised in place, :meth:`~petsc_contact.numerics.device.Device.cho_factor`).
+    Fortran order (factorised in place, :meth:`~petsc_contact.devices.device.Device.cho_factor`).
 
     The near sums are taken pixel pair by pixel pair where the aggregates are small and by
     FFTs on ``2b x 2b`` cells where they are large (:func:`_pair_sums_fft`), whichever
@@ -228,7 +229,7 @@ class CoarseMatrix:
 
 
 def aggregate(
-    xp: Any, rows: Any, cols: Any, shape: tuple[int, int], block: int, max_size: int
+    xp: ModuleType, rows: Any, cols: Any, shape: tuple[int, int], block: int, max_size: int
 ) -> tuple[int, Any, Any, Any]:
     """The aggregates of the pixels ``(rows, cols)`` (global indices, arrays of ``xp``): the
     block side ``b >= block`` grown until at most ``max_size`` blocks hold pixels; returns
@@ -257,7 +258,7 @@ def grown(block: int, count: int, max_size: int) -> int:
     return max(block + 1, int(np.ceil(block * np.sqrt(count / max_size))))
 
 
-def block_lookup(xp: Any, ids: Any, shape: tuple[int, int], block: int) -> tuple[Any, Any]:
+def block_lookup(xp: ModuleType, ids: Any, shape: tuple[int, int], block: int) -> tuple[Any, Any]:
     """Each aggregate's block ``(bi, bj)`` and the aggregate of each block (``-1``: none)."""
     bx, by = (-(-n // block) for n in shape)
     block_rc = xp.stack([ids // by, ids % by], axis=1)
@@ -266,7 +267,7 @@ def block_lookup(xp: Any, ids: Any, shape: tuple[int, int], block: int) -> tuple
     return block_rc, lookup
 
 
-def _raise_diagonal(xp: Any, matrix: Any, block: int) -> None:
+def _raise_diagonal(xp: ModuleType, matrix: Any, block: int) -> None:
     """Raise ``E``'s diagonal by :data:`DIAGONAL_INFLATION` (not for single pixels, where the
     monopoles are exact)."""
     if block > 1:

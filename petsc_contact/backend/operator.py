@@ -8,7 +8,7 @@ field and reads back the first block: the free-boundary convolution of the punch
 ``PC`` (``apply``), so one class gives TAO both the exact Hessian and the Fourier preconditioner.
 
 The operators hold their multipliers and apply themselves on the arrays of their FFT's
-:class:`~petsc_contact.numerics.device.Device`: FFTW and NumPy on the ``cpu`` device, the
+:class:`~petsc_contact.devices.device.Device`: FFTW and NumPy on the ``cpu`` device, the
 array module's FFT on ``gpu`` (CuPy) and ``cpu-array``, where no PETSc object is ever made
 of them (the package's own solver calls ``apply_array`` and the two halves directly).
 """
@@ -22,8 +22,8 @@ from typing import Any
 import numpy as np
 
 from ..conventions.grid import Grid, block_rows
-from ..numerics.device import CPU, Device
-from ..numerics.fft import FFT, half_spectrum_weights, make_fft, single_entries
+from ..devices.device import CPU, Device
+from ..devices.fft import FFT, half_spectrum_weights, make_fft, single_entries
 from . import _petsc
 
 

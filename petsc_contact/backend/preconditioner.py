@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..conventions.grid import Grid
-from ..numerics.fft import FFT
+from ..devices.fft import FFT
 from ..numerics.schur import ContactSchur, response_quarter
 from .coarse import CoarseSpace, TwoLevelOptions, add_correction
 from .operator import FourierOperator

@@ -45,8 +45,8 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from ..conventions.grid import Grid
+from ..devices import compiled
 from ..io.progress import IterationReport
-from ..numerics import kernels
 from ..solver.report import DEFAULT_GATOL, DEFAULT_MAX_IT, SolveInfo
 from . import _petsc
 from .cg import ContactPreconditioner, compact_bound
@@ -211,15 +211,15 @@ class FreeSetPreconditioner:
         solution = self.tao.getSolution().array_r
         gradient = self.gradient[0].array_r
         with y as out:  # out is scratch until the operator writes it
-            counts = kernels.free_set(solution, gradient, self.lower, self.upper, self.free, out)
+            counts = compiled.free_set(solution, gradient, self.lower, self.upper, self.free, out)
             changed, n_free = counts[1], counts[3]
             if self.comm.size > 1:
                 changed, n_free = self.comm.allreduce(np.array([changed, n_free]))
             if changed and self.contact is not None:
                 self.contact.adapt(int(self.size - n_free), self.free)
-            kernels.restrict(self.work, x.array_r, self.free)
+            compiled.restrict(self.work, x.array_r, self.free)
             self.op.apply_array(self.work, out)
-            kernels.restrict(out, out, self.free)
+            compiled.restrict(out, out, self.free)
 
     applyTranspose = apply
 

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..conventions.grid import Grid
-from ..numerics.device import CPU
+from ..devices.device import CPU
 from ..solver.linear import Restricted, unconverged
 from ..solver.report import STIFFNESS_RTOL
 from . import _petsc

@@ -13,7 +13,7 @@ from __future__ import annotations
 from typing import Any
 
 from ..conventions.grid import Grid
-from ..numerics.device import Device
+from ..devices.device import Device
 from ..solver.backends import Posed
 from ..solver.driver import SolveSettings
 from ..solver.report import STIFFNESS_RTOL

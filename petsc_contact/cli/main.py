@@ -11,9 +11,9 @@ from collections.abc import Sequence
 from typing import Any
 
 from ..conventions.warnings import FullContact, PetscContactWarning, Unconverged, command_line
+from ..devices.device import DeviceUnavailable
 from ..io.schema import schema_markdown
 from ..io.store import StorageError, check_interrupt, check_writable, forget_interrupts, interrupt
-from ..numerics.device import DeviceUnavailable
 from .arguments import (
     build_parser,
     demo_cutoff,

@@ -28,8 +28,8 @@ import numpy as np
 
 from ..backend.solve import Monitor, SolveInfo
 from ..conventions.grid import Grid
+from ..devices.fft import FFT
 from ..interactions.adhesion import Adhesion
-from ..numerics.fft import FFT
 from ..solver.backends import SolverBackend
 from ..substrates.substrate import PeriodicSubstrate
 from .periodic import PeriodicProblem, verify

@@ -24,31 +24,88 @@ exact ``K_tot = dF/dδ`` with the elastic contact held and the plastic pixels at
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from ..backend.operator import FourierOperator
-from ..backend.solve import SolveInfo
 from ..conventions.grid import Grid
+from ..devices.device import Device
+from ..devices.fft import FFT, wavevector_magnitude
 from ..interactions.interaction import Interaction
-from ..numerics.fft import FFT, wavevector_magnitude
 from ..physics.observables import contact_resolved, distributions, patch_sizes
 from ..solver.backends import SolverBackend
 from ..substrates.half_space import PeriodicHalfSpace
 from ..substrates.substrate import PeriodicSubstrate, of_modulus
-from .punch import PunchProblem
-from .step import Step, contact_fields, mark_full_contact, residual_verdict
+from .punch import Operators, PressureProblem
 
 
-class CappedPeriodicProblem(PunchProblem):
-    """The periodic cell of ``heights`` posed in the pressure, bounded by ``interaction``.
+@dataclass(frozen=True)
+class PeriodicCompliance:
+    """The periodic compliance of ``substrate``: ``1/K(q)`` (the inverse of its stiffness) on
+    every mode but the mean, and ``mean``, the finite compliance ``c`` of the mean mode, on
+    it; on the cell's ``fft``."""
 
-    A :class:`~petsc_contact.geometries.punch.PunchProblem` whose footprint is the whole cell
-    and whose compliance is the periodic one: the objective, the bounds, the gap and the
-    held-set stiffness are the punch's; the operators (:meth:`_operators`) and what a step
-    measures (:meth:`measure`) are the cell's.  The punch's flat reference enters no answer:
-    it is the analytic one (no held-set solve at set-up).
+    substrate: PeriodicSubstrate
+    fft: FFT
+    mean: float
+
+    def operators(self, grid: Grid, device: Device, scale: float) -> Operators:
+        """``G``, its inverse, ``G / s`` and ``s G^-1`` as Fourier multipliers on the
+        device's arrays."""
+        fft, xp = self.fft, device.xp
+        q = wavevector_magnitude(grid, fft, xp)
+        stiffness = self.substrate.stiffness(xp.where(q > 0, q, 1.0))
+        compliance = xp.where(q > 0, 1.0 / stiffness, self.mean)
+        forward = FourierOperator(grid, fft, compliance)
+        inverse = FourierOperator(grid, fft, 1.0 / compliance)
+        return Operators(forward, inverse, forward.scaled(1.0 / scale), inverse.scaled(scale))
+
+
+@dataclass(frozen=True)
+class CellMeasure:
+    """The periodic cell's step: its observables as the periodic geometry names them
+    (:func:`cell_observables`), the total stiffness ``K_tot = dF/dδ`` and the dataset
+    ``stiffness``, ``-dp0/du_bar`` from it, with ``mean`` the mean mode's compliance ``c``."""
+
+    mean: float
+
+    def observables(
+        self, problem: PressureProblem, pressure: np.ndarray, gap: np.ndarray
+    ) -> dict[str, Any]:
+        return cell_observables(problem, pressure, gap)
+
+    def stiffness_scalars(self, held: dict[str, Any]) -> dict[str, Any]:
+        """The total stiffness and its solve's report (no flat punch: the cell has none)."""
+        return {
+            "total_stiffness": held["total_stiffness"],
+            **{k: v for k, v in held.items() if k.startswith("stiffness_")},
+        }
+
+    def stiffness(self, problem: PressureProblem, scalars: dict[str, Any]) -> float:
+        """:meth:`cell_stiffness` of the step's ``total_stiffness``."""
+        return self.cell_stiffness(problem, scalars["total_stiffness"])
+
+    def cell_stiffness(self, problem: PressureProblem, total: float) -> float:
+        """``-dp0/du_bar = 1/(A/K_tot - c)`` from ``K_tot = dF/dδ``: ``u_bar = c p0 +
+        mean(s) - δ``, so ``du_bar/dp0 = c - A/K_tot`` (0 without an elastic contact pixel;
+        NaN where ``K_tot`` is)."""
+        with np.errstate(divide="ignore"):
+            return float(1.0 / (problem.grid.area / np.float64(total) - self.mean))
+
+    def approach_at(self, problem: PressureProblem, p0: float, mean_gap: float) -> float:
+        """The approach at which an answer of nominal pressure ``p0`` has the mean gap
+        ``mean_gap``: ``mean(g) = c p0 + mean(s) - δ``."""
+        return float(self.mean * p0 + problem.recess_sum / problem.grid.size - mean_gap)
+
+
+class CappedPeriodicProblem(PressureProblem):
+    """The periodic cell of ``heights`` posed in the pressure, bounded by ``interaction``: a
+    :class:`~petsc_contact.geometries.punch.PressureProblem` of the periodic compliance
+    (:class:`PeriodicCompliance`) and the cell's measure (:class:`CellMeasure`), whose
+    footprint is the whole cell.  The flat punch's reference enters no answer: it is the
+    analytic one (no held-set solve at set-up), load control's first approach.
 
     Parameters
     ----------
@@ -78,76 +135,24 @@ class CappedPeriodicProblem(PunchProblem):
         body = PeriodicHalfSpace(modulus) if substrate is None else substrate
         self.cell = of_modulus(body, modulus)
         self.mean_compliance = self.cell.mean_mode_compliance(grid.q0, 0.0)  # c
+        self.cell_measure = CellMeasure(self.mean_compliance)
         super().__init__(
-            grid, heights, modulus, flat="analytic", device=fft.device, backend=backend,
+            grid, heights, modulus, PeriodicCompliance(self.cell, fft, self.mean_compliance),
+            self.cell_measure, flat="analytic", device=fft.device, backend=backend,
             interaction=interaction,
         )  # fmt: skip
-        (self.recess_sum,) = grid.sum(self.recess.sum())
-
-    def _operators(self) -> None:
-        """The periodic compliance ``G`` (``c`` on the mean mode), its inverse, and the scaled
-        Hessian ``G / (a sqrt(N) / E*)`` with its inverse as the preconditioner."""
-        grid, fft, xp = self.grid, self.fft, self.device.xp
-        q = wavevector_magnitude(grid, fft, xp)
-        stiffness = self.cell.stiffness(xp.where(q > 0, q, 1.0))
-        compliance = xp.where(q > 0, 1.0 / stiffness, self.mean_compliance)
-        a = np.sqrt(grid.pixel_area)
-        self._scale = a * np.sqrt(grid.size) / self.modulus
-        self.compliance = FourierOperator(grid, fft, compliance)
-        self.inverse = FourierOperator(grid, fft, 1.0 / compliance)
-        self.hessian = self.compliance.scaled(1.0 / self._scale)
-        self.preconditioner = self.inverse.scaled(self._scale)
-        self.pixel_stiffness = 1.0 / self.compliance.diagonal()
-        self.pressure_scale = self.modulus * self.scale_length / a
-
-    def measure(
-        self, x: Any, info: SolveInfo, stiffness: bool = False, fields: bool = False
-    ) -> Step:
-        """The step of a solution ``x`` (the scaled pressure) at the current approach: the
-        periodic cell's observables (:func:`cell_observables`), the solver's report, the
-        verdict, and the exact ``K_tot = dF/dδ`` (Newton's) with ``-dp0/du_bar`` from it
-        (``stiffness`` adds the dataset ``stiffness``)."""
-        device = self.device
-        on_device = x.reshape(self.grid.local_shape) * self.pressure_scale
-        gap = device.to_host(self.gap(on_device))
-        pressure = device.to_host(on_device)
-        obs = cell_observables(self, pressure, gap)
-        contact, plastic = obs.pop("contact"), obs.pop("plastic")
-        verdict = residual_verdict(obs["kkt_residual"], info.effective_tolerance)
-        if info.reason_code <= 0:
-            verdict = f"TAO did not converge ({info.reason})"
-        held = self.held_set_stiffness(contact & ~plastic, verdict == "ok")
-        scalars = {
-            **obs,
-            "force_balance": np.nan,  # under load control: PunchSolver.at_force
-            "total_stiffness": held["total_stiffness"],
-            **{k: v for k, v in held.items() if k.startswith("stiffness_")},
-            **info.scalars(verdict),
-        }
-        if stiffness:
-            scalars["stiffness"] = self.cell_stiffness(held["total_stiffness"])
-        mark_full_contact(scalars)
-        self.accuracy().assess(scalars)
-        if not fields:
-            return Step(scalars)
-        extra = self.interaction.fields(gap, plastic)
-        return Step(scalars, *contact_fields(gap, pressure, contact), contact=contact, extra=extra)
 
     def approach_at(self, p0: float, mean_gap: float) -> float:
-        """The approach at which an answer of nominal pressure ``p0`` has the mean gap
-        ``mean_gap``: ``mean(g) = c p0 + mean(s) - δ``."""
-        return float(self.mean_compliance * p0 + self.recess_sum / self.grid.size - mean_gap)
+        """:meth:`CellMeasure.approach_at` of this cell."""
+        return self.cell_measure.approach_at(self, p0, mean_gap)
 
     def cell_stiffness(self, total: float) -> float:
-        """``-dp0/du_bar = 1/(A/K_tot - c)`` from ``K_tot = dF/dδ``: ``u_bar = c p0 +
-        mean(s) - δ``, so ``du_bar/dp0 = c - A/K_tot`` (0 without an elastic contact pixel;
-        NaN where ``K_tot`` is)."""
-        with np.errstate(divide="ignore"):
-            return float(1.0 / (self.grid.area / np.float64(total) - self.mean_compliance))
+        """:meth:`CellMeasure.cell_stiffness` of this cell."""
+        return self.cell_measure.cell_stiffness(self, total)
 
 
 def cell_observables(
-    problem: CappedPeriodicProblem, pressure: np.ndarray, gap: np.ndarray
+    problem: PressureProblem, pressure: np.ndarray, gap: np.ndarray
 ) -> dict[str, Any]:
     """Scalars of one step of the capped cell (same on every rank), as the periodic geometry
     names them, with its masks ``contact`` and ``plastic`` (see the module docstring)."""

@@ -38,9 +38,9 @@ from ..backend.solve import SolveInfo
 from ..backend.stiffness import periodic_stiffness_exact
 from ..conventions.grid import Grid
 from ..conventions.validation import non_negative, positive
+from ..devices.fft import FFT, wavevector_magnitude
 from ..interactions.hard_wall import HARD_WALL
 from ..interactions.interaction import Interaction
-from ..numerics.fft import FFT, wavevector_magnitude
 from ..numerics.kernels import compile_kernels
 from ..numerics.schur import response_quarter
 from ..physics.observables import step_observables

@@ -27,18 +27,25 @@ shape factor (``analytic``: ``β = 1.0212`` for the square, 1 for the disk;
 :mod:`~petsc_contact.reference.flat_punch`) or King's estimate ``β = 1.012`` for the square, as
 Pharr, Oliver & Brotzen quote it (``king``).  Each step records ``K_flat`` and its ``β``.
 
-The problem is written once on the arrays of a :class:`~petsc_contact.numerics.device.Device`:
+The problem is written once on the arrays of a :class:`~petsc_contact.devices.device.Device`:
 on ``cpu`` TAO minimises it on PETSc Vecs and ``KSPCG`` solves the held sets of the exact
 stiffness; on ``gpu`` and ``cpu-array`` the package's constrained CG and held-set CG do
 (:mod:`petsc_contact.solver`), with the padded compliance on the device's FFT and no PETSc.
 The observables are measured on the host.
+
+The QP is one class composed of parts, :class:`PressureProblem`: the body's compliance
+(:class:`Compliance`) and what a step measures (:class:`Measure`), with the interaction, the
+device and the backend.  :class:`PunchProblem` is it with the free padded compliance
+(:class:`FreeCompliance`) and the punch's measure (:class:`PunchMeasure`); the capped periodic
+cell (:mod:`~petsc_contact.geometries.capped_periodic`) with the periodic ones.
 """
 
 from __future__ import annotations
 
 import time
 import warnings
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -47,9 +54,9 @@ from ..backend.solve import SolveInfo
 from ..backend.stiffness import punch_stiffness_exact
 from ..conventions.grid import Grid
 from ..conventions.validation import non_negative, positive
+from ..devices.device import CPU, Device
 from ..interactions.hard_wall import HARD_WALL
 from ..interactions.interaction import Interaction
-from ..numerics.device import CPU, Device
 from ..numerics.kernels import compile_kernels
 from ..physics.observables import contact_resolved, distributions, patch_sizes
 from ..reference import flat_punch
@@ -76,7 +83,7 @@ def disk_footprint(n: int) -> np.ndarray:
     return x[:, None] ** 2 + x[None, :] ** 2 < (n / 2) ** 2
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> float:
     """``PHARR_BETA``, deprecated (a ``DeprecationWarning``): King's 1.012, ``KING_BETA`` of
     :mod:`~petsc_contact.reference.flat_punch`, no longer the square's analytic shape factor
     (``SQUARE_BETA`` there, 1.0212)."""
@@ -92,7 +99,9 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-def footprint_mask(grid: Grid, footprint: str | np.ndarray | None) -> tuple[Any, float]:
+def footprint_mask(
+    grid: Grid, footprint: str | np.ndarray | None
+) -> tuple[np.ndarray | None, float]:
     """A punch's local footprint mask (``None``: the whole grid) and the shape factor of its
     analytic flat-punch stiffness (paper Eq. 2): ``square`` or ``None`` (the square's exact
     1.0212), ``disk`` (the inscribed disk of a square grid; 1), or a full ``nx x ny`` boolean
@@ -161,28 +170,116 @@ def interfacial_stiffness(total: float, flat: float) -> float:
         return float(1.0 / (np.float64(1.0) / total - np.float64(1.0) / flat))
 
 
-class PunchProblem:
-    """Operators and scaled dual objective of a rigid punch on a free half-space.
+@dataclass(frozen=True)
+class Operators:
+    """A problem posed in the pressure's spectral operators: the compliance ``G``, its
+    inverse, the scaled Hessian ``H = G / s`` (``s = a sqrt(N) / E*``) and its
+    preconditioner ``H^-1``."""
+
+    compliance: SpectralOperator
+    inverse: SpectralOperator
+    hessian: SpectralOperator
+    preconditioner: SpectralOperator
+
+
+class Compliance(Protocol):
+    """The elastic body's part of a problem posed in the pressure: its compliance ``G`` on a
+    grid (the free padded one, :class:`FreeCompliance`; the periodic one with a finite mean
+    mode, :class:`~petsc_contact.geometries.capped_periodic.PeriodicCompliance`)."""
+
+    def operators(self, grid: Grid, device: Device, scale: float) -> Operators:
+        """``G`` and the operators made from it (:class:`Operators`), ``scale`` the Hessian's
+        ``s``, on ``device``'s arrays."""
+        ...
+
+
+@dataclass(frozen=True)
+class FreeCompliance:
+    """The free-boundary compliance of ``substrate``: its pixel kernel convolved on the
+    zero-padded ``2nx x 2ny`` grid (:class:`~petsc_contact.backend.operator.PaddedOperator`)."""
+
+    substrate: FreeSubstrate
+
+    def operators(self, grid: Grid, device: Device, scale: float) -> Operators:
+        """The padded ``G``, its inverse, ``G / s`` and ``s G^-1`` on ``device``'s FFT."""
+        compliance = PaddedOperator(
+            grid,
+            lambda rows: self.substrate.compliance_kernel(grid.shape, grid.spacing, rows),
+            device=device,
+        )
+        inverse = compliance.with_spectrum(compliance.inverse_spectrum())
+        hessian = compliance.with_spectrum(compliance.spectrum / scale)
+        return Operators(
+            compliance, inverse, hessian, inverse.with_spectrum(inverse.spectrum * scale)
+        )
+
+
+class Measure(Protocol):
+    """What a step of a problem posed in the pressure measures beyond the solver's report:
+    the punch's (:class:`PunchMeasure`) or the periodic cell's
+    (:class:`~petsc_contact.geometries.capped_periodic.CellMeasure`)."""
+
+    def observables(
+        self, problem: PressureProblem, pressure: np.ndarray, gap: np.ndarray
+    ) -> dict[str, Any]:
+        """The step's scalars (the same on every rank) and this rank's masks ``contact`` and
+        ``plastic`` (the pixels at the interaction's cap)."""
+        ...
+
+    def stiffness_scalars(self, held: dict[str, Any]) -> dict[str, Any]:
+        """The step's scalars of :meth:`PressureProblem.held_set_stiffness`'s ``held``."""
+        ...
+
+    def stiffness(self, problem: PressureProblem, scalars: dict[str, Any]) -> float:
+        """The dataset ``stiffness`` of a step with ``scalars``."""
+        ...
+
+
+class PunchMeasure:
+    """The punch's step: :func:`punch_observables`, the total and interfacial stiffness (paper
+    Eq. 2), the interfacial one the dataset ``stiffness``."""
+
+    def observables(
+        self, problem: PressureProblem, pressure: np.ndarray, gap: np.ndarray
+    ) -> dict[str, Any]:
+        return punch_observables(problem, pressure, gap)
+
+    def stiffness_scalars(self, held: dict[str, Any]) -> dict[str, Any]:
+        return held
+
+    def stiffness(self, problem: PressureProblem, scalars: dict[str, Any]) -> float:
+        return float(scalars["interfacial_stiffness"])
+
+
+class PressureProblem:
+    """A rigid face pressed into an elastic body, posed in the pressure: the scaled dual QP
+    (module docstring) composed of parts.
 
     Parameters
     ----------
     grid
         The ``nx x ny`` footprint grid (sides ``Lx x Ly``).
     heights
-        This rank's slab of the punch face heights (peaks toward the half-space).
+        This rank's slab of the face's heights (peaks toward the body).
     modulus
         Contact modulus ``E*``.
+    elastic
+        The body's compliance (:class:`Compliance`): the free half-space's padded one, the
+        periodic cell's.
+    measured
+        What a step measures (:class:`Measure`): the punch's, the periodic cell's.
     footprint
-        This rank's slab of a boolean mask of the pixels that belong to the punch
-        (default: the whole square); pressure is held at zero elsewhere.
+        This rank's slab of a boolean mask of the pixels that belong to the face
+        (default: the whole grid); pressure is held at zero elsewhere.
     flat, beta
         The flat-punch stiffness of paper Eq. 2 (:data:`FLAT_REFERENCES`): ``'grid'``, the flat
         punch of the same footprint on the same grid (discretisation errors cancel),
         ``'analytic'``, ``beta 2 E* sqrt(A/pi)`` with ``beta`` the footprint's exact shape
         factor (default: the square's, 1.0212), or ``'king'``, King's ``beta = 1.012`` (a
-        square footprint only: :func:`reference_beta`).
+        square footprint only: :func:`reference_beta`).  Load control's first approach is
+        the analytic one's.
     device
-        Where the solver's fields live (:class:`~petsc_contact.numerics.device.Device`): the
+        Where the solver's fields live (:class:`~petsc_contact.devices.device.Device`): the
         ``cpu`` device's are TAO's (NumPy, FFTW); ``gpu`` and ``cpu-array`` run the package's
         own CG on their arrays (no PETSc; ``gpu`` on one rank).  Heights, footprint and the fields a
         step measures stay on the host.
@@ -190,9 +287,6 @@ class PunchProblem:
         What solves it (:class:`~petsc_contact.solver.backends.SolverBackend`), the held-set
         solves of the exact stiffness among them (the flat punch's, solved here); default:
         PETSc's, with the options of the block it is made in.
-    substrate
-        The elastic body (:class:`~petsc_contact.substrates.substrate.FreeSubstrate`);
-        default: the half-space of ``modulus``, whose modulus a given one must have.
     interaction
         The law at the surface (:class:`~petsc_contact.interactions.interaction.Interaction`);
         default: the hard wall.
@@ -208,19 +302,18 @@ class PunchProblem:
         grid: Grid,
         heights: np.ndarray,
         modulus: float,
+        elastic: Compliance,
+        measured: Measure,
         footprint: np.ndarray | None = None,
         flat: str = "grid",
         beta: float = flat_punch.SQUARE_BETA,
         *,
         device: Device = CPU,
         backend: SolverBackend | None = None,
-        substrate: FreeSubstrate | None = None,
         interaction: Interaction = HARD_WALL,
     ) -> None:
         positive("modulus", modulus)
-        body: FreeSubstrate = FreeHalfSpace(modulus) if substrate is None else substrate
-        self.substrate = of_modulus(body, modulus)
-        self.interaction = interaction
+        self.elastic, self.measured, self.interaction = elastic, measured, interaction
         compile_kernels(announce=grid.comm.rank == 0)  # before any step's timer
         self.flat = flat
         self.grid = grid
@@ -241,13 +334,7 @@ class PunchProblem:
         self.recess, self.scale_length = self._recess(heights)
         self._operators()
         self.approach = np.nan
-        # the solver's copies (the host arrays themselves on the cpu device)
-        self._u = device.xp.empty(grid.local_shape)  # objective buffer, reused every evaluation
-        self._recess_flat = device.asarray(self.recess.reshape(-1))
-        self._footprint_flat = device.asarray(self.footprint.reshape(-1).astype(float))
-        self._footprint = device.asarray(self.footprint)
-        upper = interaction.pressure_upper(self.footprint, np) / self.pressure_scale
-        self._upper = device.asarray(upper.reshape(-1))
+        self._device_arrays()
         area = self.footprint_pixels * grid.pixel_area
         self.k_flat_analytic = flat_punch_stiffness(self.modulus, area, beta)  # the footprint's
         self.flat_residual = 0.0  # the recomputed residual of the flat punch's held-set solve
@@ -260,35 +347,41 @@ class PunchProblem:
         # the shape factor of K_flat: the reference's, or the grid's flat punch's
         self.flat_beta = self.k_flat / flat_punch_stiffness(self.modulus, area, 1.0)
 
+    def _device_arrays(self) -> None:
+        """The solver's copies of the recess, the footprint and the upper bound (the host
+        arrays themselves on the ``cpu`` device), and the objective's buffer."""
+        grid, device = self.grid, self.device
+        self._u = device.xp.empty(grid.local_shape)  # objective buffer, reused every evaluation
+        self._recess_flat = device.asarray(self.recess.reshape(-1))
+        self._footprint_flat = device.asarray(self.footprint.reshape(-1).astype(float))
+        self._footprint = device.asarray(self.footprint)
+        upper = self.interaction.pressure_upper(self.footprint, np) / self.pressure_scale
+        self._upper = device.asarray(upper.reshape(-1))
+
     def _recess(self, heights: np.ndarray) -> tuple[np.ndarray, float]:
         """The recess ``s = max(h) - h`` on the footprint (0 off it) of this rank's heights,
         and the scale length ``l``: its rms about its mean, or the shorter pixel side for a
-        flat punch."""
+        flat punch.  Its sum over the ranks becomes :attr:`recess_sum`."""
         grid = self.grid
         h = np.asarray(heights, dtype=float).reshape(grid.local_shape)
         top = grid.max(float(np.where(self.footprint, h, -np.inf).max(initial=-np.inf)))
         recess = np.where(self.footprint, top - h, 0.0)
-        mean = grid.sum(recess.sum())[0] / self.footprint_pixels
+        self.recess_sum = grid.sum(recess.sum())[0]
+        mean = self.recess_sum / self.footprint_pixels
         dev = np.where(self.footprint, recess - mean, 0.0)
         rms = float(np.sqrt(grid.sum(np.vdot(dev, dev))[0] / self.footprint_pixels))
         return recess, rms if rms > 0 else min(grid.spacing)
 
     def _operators(self) -> None:
-        """The compliance ``G`` on the padded FFT of the device, its inverse, and the scaled
-        Hessian ``H = G / (a sqrt(N) / E*)`` with its preconditioner ``H^-1``."""
+        """The body's compliance ``G`` on the device (:attr:`elastic`), its inverse, and the
+        scaled Hessian ``H = G / (a sqrt(N) / E*)`` with its preconditioner ``H^-1``."""
         grid = self.grid
         a = np.sqrt(grid.pixel_area)  # the pixel's size for the scaling (its side if square)
-        compliance = PaddedOperator(
-            grid,
-            lambda rows: self.substrate.compliance_kernel(grid.shape, grid.spacing, rows),
-            device=self.device,
-        )
-        inverse = compliance.with_spectrum(compliance.inverse_spectrum())
-        self.compliance, self.inverse = compliance, inverse
-        self.pixel_stiffness = 1.0 / compliance.diagonal()
         self._scale = a * np.sqrt(grid.size) / self.modulus  # H = G / _scale
-        self.hessian = compliance.with_spectrum(compliance.spectrum / self._scale)
-        self.preconditioner = inverse.with_spectrum(inverse.spectrum * self._scale)
+        ops = self.elastic.operators(grid, self.device, self._scale)
+        self.compliance, self.inverse = ops.compliance, ops.inverse
+        self.hessian, self.preconditioner = ops.hessian, ops.preconditioner
+        self.pixel_stiffness = 1.0 / self.compliance.diagonal()
         self.pressure_scale = self.modulus * self.scale_length / a
 
     def held_set_solve(self, grid: Grid, op: Any, pc: Any, mask: Any) -> tuple[Any, int]:
@@ -338,7 +431,7 @@ class PunchProblem:
         grad *= c
         return c * float(w)
 
-    def flat_stiffness_on_grid(self, petsc: Any = None) -> float:
+    def flat_stiffness_on_grid(self, petsc: object = None) -> float:
         """``dF/dδ`` of the flat punch of the same footprint, on the same grid, on the
         problem's device; the residual of its solve becomes :attr:`flat_residual`.
 
@@ -364,24 +457,26 @@ class PunchProblem:
         self, x: Any, info: SolveInfo, stiffness: bool = False, fields: bool = False
     ) -> Step:
         """The step of a solution ``x`` (TAO's scaled pressure) at the current approach:
-        observables, TAO's report, the verdict, the measured accuracy (:meth:`accuracy`) and
-        the exact total and interfacial stiffness (always: load control needs ``dF/dδ``;
-        ``stiffness`` adds the dataset ``stiffness``)."""
+        the observables of :attr:`measured`, TAO's report, the verdict, the measured accuracy
+        (:meth:`accuracy`) and the exact total stiffness ``dF/dδ`` (always: load control
+        needs it) with what :attr:`measured` makes of it (``stiffness`` adds the dataset
+        ``stiffness``)."""
         device = self.device
         on_device = x.reshape(self.grid.local_shape) * self.pressure_scale
         gap = device.to_host(self.gap(on_device))
         pressure = device.to_host(on_device)
-        obs = punch_observables(self, pressure, gap)
+        obs = self.measured.observables(self, pressure, gap)
         contact, plastic = obs.pop("contact"), obs.pop("plastic")
         verdict = verify_punch(info, obs)
+        held = self.held_set_stiffness(contact & ~plastic, verdict == "ok")
         scalars = {
             **obs,
             "force_balance": np.nan,  # under load control: PunchSolver.at_force
-            **self.held_set_stiffness(contact & ~plastic, verdict == "ok"),
+            **self.measured.stiffness_scalars(held),
             **info.scalars(verdict),
         }
         if stiffness:
-            scalars["stiffness"] = scalars["interfacial_stiffness"]
+            scalars["stiffness"] = self.measured.stiffness(self, scalars)
         mark_full_contact(scalars)
         self.accuracy().assess(scalars)
         if not fields:
@@ -419,8 +514,45 @@ class PunchProblem:
         }
 
 
+class PunchProblem(PressureProblem):
+    """A rigid rough punch on a free half-space: a :class:`PressureProblem` of the free
+    padded compliance (:class:`FreeCompliance`) and the punch's measure
+    (:class:`PunchMeasure`).
+
+    Parameters
+    ----------
+    grid, heights, modulus, footprint, flat, beta, device, backend, interaction
+        As for :class:`PressureProblem`.
+    substrate
+        The elastic body (:class:`~petsc_contact.substrates.substrate.FreeSubstrate`);
+        default: the half-space of ``modulus``, whose modulus a given one must have.
+    """
+
+    def __init__(
+        self,
+        grid: Grid,
+        heights: np.ndarray,
+        modulus: float,
+        footprint: np.ndarray | None = None,
+        flat: str = "grid",
+        beta: float = flat_punch.SQUARE_BETA,
+        *,
+        device: Device = CPU,
+        backend: SolverBackend | None = None,
+        substrate: FreeSubstrate | None = None,
+        interaction: Interaction = HARD_WALL,
+    ) -> None:
+        positive("modulus", modulus)
+        body: FreeSubstrate = FreeHalfSpace(modulus) if substrate is None else substrate
+        self.substrate = of_modulus(body, modulus)
+        super().__init__(
+            grid, heights, modulus, FreeCompliance(self.substrate), PunchMeasure(), footprint,
+            flat, beta, device=device, backend=backend, interaction=interaction,
+        )  # fmt: skip
+
+
 def punch_observables(
-    problem: PunchProblem, pressure: np.ndarray, gap: np.ndarray
+    problem: PressureProblem, pressure: np.ndarray, gap: np.ndarray
 ) -> dict[str, Any]:
     """Scalars of one punch step (same on every rank; see the module docstring), and this
     rank's masks of the pixels in contact and at the interaction's cap (``plastic``, whose

@@ -18,7 +18,7 @@ from ..backend.operator import SpectralOperator
 from ..backend.solve import Monitor, SolveInfo
 from ..backend.tao import PetscBackend
 from ..conventions.grid import Grid
-from ..numerics.device import CPU, Device
+from ..devices.device import CPU, Device
 from ..physics.continuation import Held
 from ..solver.backends import BoundSolver, SolverBackend
 from ..solver.report import Accuracy

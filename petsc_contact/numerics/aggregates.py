@@ -13,6 +13,8 @@ pixel indices, grouped by :func:`grouped`); ``quarter`` is the compliance ``G`` 
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -190,7 +192,13 @@ CHUNK_ENTRIES = 1 << 22  # the array functions' temporaries hold at most this ma
 
 
 def monopoles_array(
-    xp: Any, rows: Any, cols: Any, labels: Any, sizes: Any, quarter: Any, shape: tuple[int, int]
+    xp: ModuleType,
+    rows: Any,
+    cols: Any,
+    labels: Any,
+    sizes: Any,
+    quarter: Any,
+    shape: tuple[int, int],
 ) -> Any:
     """:func:`monopoles` on arrays of ``xp``, for the pixels ``(rows, cols)`` of aggregates
     ``labels`` (``sizes``: their pixel counts, floats): the full symmetric ``k x k`` matrix,
@@ -211,7 +219,9 @@ def monopoles_array(
     return out
 
 
-def _interpolate_array(xp: Any, quarter: Any, dx: Any, dy: Any, shape: tuple[int, int]) -> Any:
+def _interpolate_array(
+    xp: ModuleType, quarter: Any, dx: Any, dy: Any, shape: tuple[int, int]
+) -> Any:
     """:func:`_interpolate` element by element on arrays of offsets ``|dx| < nx``, ``|dy| < ny``."""
     nx, ny = shape
     dx, dy = xp.abs(dx), xp.abs(dy)
@@ -225,7 +235,7 @@ def _interpolate_array(xp: Any, quarter: Any, dx: Any, dy: Any, shape: tuple[int
     )
 
 
-def near_pairs_array(xp: Any, block_rc: Any, lookup: Any, reach: int) -> Any:
+def near_pairs_array(xp: ModuleType, block_rc: Any, lookup: Any, reach: int) -> Any:
     """:func:`near_pairs` on arrays of ``xp`` (each pair once, ``I <= J``, in the order of
     ``I k + J``)."""
     k = block_rc.shape[0]
@@ -240,7 +250,7 @@ def near_pairs_array(xp: Any, block_rc: Any, lookup: Any, reach: int) -> Any:
 
 
 def offset_kernels(
-    xp: Any, rfft2: Any, offsets: Any, quarter: Any, shape: tuple[int, int], block: int
+    xp: ModuleType, rfft2: Any, offsets: Any, quarter: Any, shape: tuple[int, int], block: int
 ) -> Any:
     """The half spectra ``T^`` on ``2b x 2b`` cells of ``T(w) = G(d + w)``, ``|w| < b``, for
     each block offset ``d`` (rows of ``offsets``, each in ``0 .. n - 1``): the kernels of the
@@ -257,7 +267,7 @@ def offset_kernels(
     return rfft2(cells)
 
 
-def half_spectrum_weights(xp: Any, m: int) -> Any:
+def half_spectrum_weights(xp: ModuleType, m: int) -> Any:
     """Parseval's weights of an ``m x m`` cell's half spectrum over ``m^2`` (each column but
     the first and the Nyquist one counted twice)."""
     weight = xp.full(m // 2 + 1, 2.0 / (m * m))
@@ -266,7 +276,7 @@ def half_spectrum_weights(xp: Any, m: int) -> Any:
 
 
 def pair_sums_cells(
-    xp: Any,
+    xp: ModuleType,
     rows: Any,
     cols: Any,
     labels: Any,
@@ -309,7 +319,7 @@ def pair_sums_cells(
     return out
 
 
-def specimen_calls() -> list[tuple[Any, tuple[Any, ...]]]:
+def specimen_calls() -> list[tuple[Callable[..., object], tuple[object, ...]]]:
     """Each kernel with tiny arguments of the types :mod:`petsc_contact.backend.coarse` passes
     it (int64 pixel indices, float64 compliances, complex128 spectra, Python ints), for
     :func:`~petsc_contact.numerics.kernels.compile_kernels`: one aggregate of two pixels."""

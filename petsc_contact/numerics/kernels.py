@@ -1,13 +1,9 @@
-"""Fused element-wise passes of the constrained CG and of the spectral operators (numba).
+"""Compiling the package's numba kernels once, before any step: the ``cpu`` device's
+whole-field passes (:mod:`~petsc_contact.devices.compiled`) and the coarse matrix's sums
+over aggregates (:mod:`~petsc_contact.numerics.aggregates`).
 
-Every function here does in one pass over memory what numpy does in several: the CG's
-vector work is memory-bound, so the number of passes is its cost (docs/solvers.md).
-Bounds are given as a float (the same everywhere) or an array of the vector's length.
-Sums are reassociated (``fastmath`` reassociation and contraction only: infinite bounds and
-NaNs keep their IEEE meaning), so they differ from numpy's in rounding only.
-
-The kernels are compiled once into numba's cache (beside the package in ``__pycache__``, or
-in ``NUMBA_CACHE_DIR``): by the set-up, ``python -m petsc_contact.numerics.kernels``, or else
+They are compiled into numba's cache (beside the package in ``__pycache__``, or in
+``NUMBA_CACHE_DIR``): by the set-up, ``python -m petsc_contact.numerics.kernels``, or else
 when a problem is set up (:func:`compile_kernels`, which says so in one line while it
 compiles), never inside a step's timer.
 """
@@ -16,212 +12,36 @@ from __future__ import annotations
 
 import sys
 import time
-from typing import Any
+import warnings
+from collections.abc import Callable
 
-import numpy as np
-from numba import njit, types
 from numba.core import event
-from numba.extending import overload
-from scipy.linalg import blas
 
+from ..devices import compiled
 from . import aggregates
 
-FAST = {"reassoc", "contract"}
-Bound = float | np.ndarray  # a bound the same everywhere, or one per entry
-
-
-def _at(bound, i):  # compiled code uses the overload
-    raise NotImplementedError
-
-
-@overload(_at)
-def _at_impl(bound, i):
-    """``bound[i]`` for an array bound, ``bound`` for a float one (chosen when compiling).
-
-    Left unannotated: with annotations, numba 0.56 rejected the overload ("Typing and
-    implementation arguments differ in argument names").
-    """
-    if isinstance(bound, types.Array):
-        return lambda bound, i: bound[i]
-    return lambda bound, i: bound
-
-
-@njit(cache=True, fastmath=FAST, nogil=True)
-def free_set(
-    x: np.ndarray, g: np.ndarray, lower: Bound, upper: Bound, free: np.ndarray, r: np.ndarray
-) -> tuple[float, int, int, int]:
-    """Update the free set and the projected gradient.
-
-    ``free <- (x > lower | g < 0) & ~(x >= upper & g < 0)`` and ``r <- g`` on it, ``0``
-    elsewhere.  Returns ``(r.r, changed, joined, free count)``, where ``changed`` counts the
-    entries whose ``free`` flag changed and ``joined`` those that became free.
-    """
-    rr = 0.0
-    changed = 0
-    joined = 0
-    count = 0
-    for i in range(x.size):
-        pull = g[i] < 0.0
-        f = (x[i] > _at(lower, i) or pull) and not (x[i] >= _at(upper, i) and pull)
-        old = free[i]
-        changed += f != old
-        joined += f and not old
-        count += f
-        free[i] = f
-        v = g[i] if f else 0.0
-        r[i] = v
-        rr += v * v
-    return rr, changed, joined, count
-
-
-@njit(cache=True, fastmath=FAST, nogil=True)
-def restrict_dot(z: np.ndarray, free: np.ndarray, r: np.ndarray) -> float:
-    """``z <- z`` on the free set, ``0`` elsewhere; returns ``r.z``."""
-    rz = 0.0
-    for i in range(z.size):
-        v = z[i] if free[i] else 0.0
-        z[i] = v
-        rz += r[i] * v
-    return rz
-
-
-@njit(cache=True, fastmath=FAST, nogil=True)
-def restrict(out: np.ndarray, x: np.ndarray, free: np.ndarray) -> None:
-    """``out <- x`` on the free set, ``0`` elsewhere (``out`` may be ``x``)."""
-    for i in range(out.size):
-        out[i] = x[i] if free[i] else 0.0
-
-
-@njit(cache=True, fastmath=FAST, nogil=True)
-def fill_outside(out: np.ndarray, x: np.ndarray, inside: np.ndarray) -> None:
-    """``out <- x`` off ``inside`` (``out`` kept on it)."""
-    for i in range(out.size):
-        if not inside[i]:
-            out[i] = x[i]
-
-
-@njit(cache=True, fastmath=FAST, nogil=True)
-def extend_direction(
-    z: np.ndarray, d: np.ndarray, free: np.ndarray, beta: float, r: np.ndarray
-) -> float:
-    """``z <- z + beta d`` with ``d`` restricted to the free set; returns ``r.z``."""
-    rz = 0.0
-    for i in range(z.size):
-        v = z[i] + (beta * d[i] if free[i] else 0.0)
-        z[i] = v
-        rz += r[i] * v
-    return rz
-
-
-@njit(cache=True, fastmath=FAST, nogil=True)
-def advance(
-    x: np.ndarray, d: np.ndarray, alpha: float, lower: Bound, upper: Bound
-) -> tuple[int, int]:
-    """``x <- x + alpha d``; how many entries fell below ``lower`` and rose above ``upper``."""
-    below = 0
-    above = 0
-    for i in range(x.size):
-        v = x[i] + alpha * d[i]
-        x[i] = v
-        below += v < _at(lower, i)
-        above += v > _at(upper, i)
-    return below, above
-
-
-@njit(cache=True, nogil=True)
-def changed_count(before: np.ndarray, now: np.ndarray) -> int:
-    """How many entries of two boolean masks differ."""
-    count = 0
-    for i in range(before.size):
-        count += before[i] != now[i]
-    return count
-
-
-def axpy(a: float, x: np.ndarray, y: np.ndarray) -> None:
-    """``y <- y + a x`` (BLAS)."""
-    blas.daxpy(x, y, a=a)
-
-
-@njit(cache=True, fastmath=FAST, nogil=True)
-def clip(x: np.ndarray, lower: Bound, upper: Bound) -> None:
-    """``x <- min(max(x, lower), upper)``."""
-    for i in range(x.size):
-        x[i] = min(max(x[i], _at(lower, i)), _at(upper, i))
-
-
-@njit(cache=True, fastmath=FAST, nogil=True)
-def scale_spectrum(values: np.ndarray, multiplier: np.ndarray, single: np.ndarray) -> float:
-    """Multiply a spectrum by a real multiplier; return ``sum(w k |s|^2)`` before it.
-
-    ``values`` is the float view of the (contiguous, complex) spectrum block, ``multiplier``
-    holds each real entry ``k`` twice in the same layout
-    (:func:`~petsc_contact.backend.operator.twice`),
-    and ``single`` the complex indices of the entries of multiplicity ``w = 1``
-    (:func:`~petsc_contact.numerics.fft.single_entries`; all others have ``w = 2``).  With a
-    normalised kernel the sum over all ranks is the quadratic form ``x.Kx`` of the
-    transformed field (Parseval).  Flat loops of floats: numba vectorises these, and not a
-    loop over complex entries.
-    """
-    once = 0.0
-    for m in single:
-        a = values[2 * m]
-        b = values[2 * m + 1]
-        once += multiplier[2 * m] * (a * a + b * b)
-    total = 0.0
-    for j in range(values.size):
-        a = values[j]
-        k = multiplier[j]
-        total += k * a * a
-        values[j] = a * k
-    return 2.0 * total - once
-
-
-@njit(cache=True, fastmath=FAST, nogil=True)
-def add_dot(y: np.ndarray, base: np.ndarray, d: np.ndarray) -> float:
-    """``y <- y + base``; returns ``d.base``."""
-    total = 0.0
-    for i in range(y.size):
-        b = base[i]
-        y[i] += b
-        total += d[i] * b
-    return total
-
+PASSES = (  # the numba passes that lived here, now the cpu device's (devices.compiled)
+    "free_set", "restrict_dot", "restrict", "fill_outside", "extend_direction", "advance",
+    "changed_count", "axpy", "clip", "scale_spectrum", "add_dot", "specimen_calls",
+)  # fmt: skip
 
 COMPILE_SECONDS = 5  # about how long compiling every kernel takes (4.7 s on 2 shared cores)
 COLD_CACHE = f"compiling the numba kernels once (about {COMPILE_SECONDS} s)..."
 
 
-def specimen_calls() -> list[tuple[Any, tuple[Any, ...]]]:
-    """Each kernel of this module with tiny arguments of every type the package passes it, so
-    that compiling these compiles what any run calls (:func:`compile_kernels`).
-
-    Vectors are float64, writable or read-only (a PETSc ``Vec.array_r``: the input of the
-    held-set stiffness solve and of
-    :class:`~petsc_contact.backend.solve.FreeSetPreconditioner`); a lower bound is a float
-    (``0``), an upper one a float (``inf``) or a read-only array (the punch's disk
-    footprint); masks are bool arrays.
-    """
-
-    def vector() -> np.ndarray:
-        return np.zeros(2)
-
-    read_only, mask = np.zeros(2), np.zeros(2, dtype=bool)
-    read_only.setflags(write=False)
-    calls: list[tuple[Any, tuple[Any, ...]]] = []
-    for upper in (np.inf, read_only):
-        calls += [(advance, (vector(), vector(), 1.0, 0.0, upper)), (clip, (vector(), 0.0, upper))]
-        for x in (vector(), read_only):  # the CG's own vectors; TAO's, in a preconditioner
-            calls.append((free_set, (x, x, 0.0, upper, mask, vector())))
-    return calls + [
-        (restrict_dot, (vector(), mask, vector())),
-        (restrict, (vector(), vector(), mask)),
-        (restrict, (vector(), read_only, mask)),
-        (fill_outside, (vector(), read_only, mask)),
-        (extend_direction, (vector(), vector(), mask, 1.0, vector())),
-        (changed_count, (mask, mask)),
-        (scale_spectrum, (vector(), vector(), np.zeros(1, dtype=np.int64))),
-        (add_dot, (vector(), vector(), vector())),
-    ]
+def __getattr__(name: str) -> Callable[..., object]:
+    """A numba pass by its old name here (:data:`PASSES`), deprecated (a
+    ``DeprecationWarning``): it is the ``cpu`` device's, :mod:`~petsc_contact.devices.compiled`
+    (until 0.3.0)."""
+    if name not in PASSES:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    warnings.warn(
+        f"{__name__}.{name} is deprecated: import petsc_contact.devices.compiled.{name} "
+        "(removed in 0.3.0)",
+        DeprecationWarning,
+        stacklevel=2,
+    )
+    return getattr(compiled, name)
 
 
 class _ColdCache(event.Listener):
@@ -232,12 +52,12 @@ class _ColdCache(event.Listener):
         self.announce = announce
         self.compiled = False
 
-    def on_start(self, ev: Any) -> None:
+    def on_start(self, ev: event.Event) -> None:
         if self.announce and not self.compiled:
             print(COLD_CACHE, file=sys.stderr, flush=True)
         self.compiled = True
 
-    def on_end(self, ev: Any) -> None:
+    def on_end(self, ev: event.Event) -> None:
         """Nothing to do: the line is said when compiling starts."""
 
 
@@ -265,7 +85,7 @@ def compile_kernels(announce: bool = True) -> bool:
         return False
     watch = _ColdCache(announce)
     with event.install_listener("numba:compile", watch):
-        for kernel, args in specimen_calls() + aggregates.specimen_calls():
+        for kernel, args in compiled.specimen_calls() + aggregates.specimen_calls():
             kernel(*args)
     _done = True
     return watch.compiled
@@ -275,9 +95,9 @@ def main() -> None:
     """``python -m petsc_contact.numerics.kernels`` (run by the set-up): compile every kernel
     into numba's cache and say so in one line."""
     start = time.perf_counter()
-    compiled = compile_kernels(announce=False)
-    count = len({kernel for kernel, _ in specimen_calls() + aggregates.specimen_calls()})
-    done = "compiled" if compiled else "loaded from the cache"
+    fresh = compile_kernels(announce=False)
+    count = len({kernel for kernel, _ in compiled.specimen_calls() + aggregates.specimen_calls()})
+    done = "compiled" if fresh else "loaded from the cache"
     print(f"numba kernels {done} ({count} kernels, {time.perf_counter() - start:.1f} s)")
 
 

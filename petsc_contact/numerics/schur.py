@@ -25,18 +25,19 @@ contact set; it costs two FFT round trips and an ``m x m`` Cholesky factorisatio
 
 from __future__ import annotations
 
+from types import ModuleType
 from typing import Any
 
 import numpy as np
 
 from ..conventions.grid import Grid
-from .device import CPU, Device
+from ..devices.device import CPU, Device
 
 
 class BorderedSystem:
     """The bordered system ``[[E, w], [w^T, 0]] [a, c] = [f, -r_sum]`` of a symmetric
     positive definite ``E``, solved by ``E``'s Cholesky factor on the device where ``E``
-    lives (:meth:`~petsc_contact.numerics.device.Device.cho_factor`):
+    lives (:meth:`~petsc_contact.devices.device.Device.cho_factor`):
 
         a = y - c E^-1 w,    c = (w.y + r_sum) / (w.E^-1 w),    y = E^-1 f,
 
@@ -59,7 +60,7 @@ class BorderedSystem:
     factorised
         Whether ``E`` was positive definite (otherwise :meth:`solve` must not be used).
     factor
-        The ``cho_factor`` pair of ``E`` (:meth:`~petsc_contact.numerics.device.Device.
+        The ``cho_factor`` pair of ``E`` (:meth:`~petsc_contact.devices.device.Device.
         cho_factor`: SciPy's on the host, cuSOLVER's factor on a GPU), ``None`` when it
         failed.
     """
@@ -138,7 +139,9 @@ class ContactSchur:
 SYSTEM_ROWS = 64  # rows of G_BB filled at a time (bounds the temporaries)
 
 
-def compliance_block(xp: Any, quarter: Any, both: Any, shape: tuple[int, int], held: range) -> Any:
+def compliance_block(
+    xp: ModuleType, quarter: Any, both: Any, shape: tuple[int, int], held: range
+) -> Any:
     """``G_BB`` for the bound pixels ``both`` (global ``(row, col)`` pairs, an array of
     ``xp``), this rank's part of it: the entries whose folded row offset is in ``held``
     (:func:`held_rows`, the rows of ``quarter`` from ``held.start``), zero elsewhere; on one

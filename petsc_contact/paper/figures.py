@@ -14,12 +14,12 @@ import numpy as np
 
 from ..backend.stiffness import sweep_stiffness
 from ..conventions.grid import Grid, fundamental_wavevector, self_comm
+from ..devices.fft import make_fft
 from ..io.atomic import atomic_h5
 from ..io.names import is_partial
 from ..io.partial import opened
 from ..io.results import trusted
 from ..io.schema import write_attributes
-from ..numerics.fft import make_fft
 from ..physics import theory
 from ..physics.observables import MIN_CONTACT_PIXELS, contact_resolved
 from ..physics.surface import psd_shape, rms_of, self_affine

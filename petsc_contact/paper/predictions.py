@@ -24,8 +24,8 @@ import numpy as np
 from ..conventions.grid import Grid, grid_for, self_comm
 from ..conventions.validation import keywords_after_first
 from ..conventions.warnings import PetscContactWarning, user_level
+from ..devices.fft import FFT, SerialFFT
 from ..io.topography import Channel, Heights, as_topography, check_given
-from ..numerics.fft import FFT, SerialFFT
 from ..physics import theory
 from ..physics.surface import radial_psd, rms_of
 

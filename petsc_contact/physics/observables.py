@@ -2,7 +2,7 @@
 
 Written once against the device's array module (NumPy on the ``cpu`` device, CuPy on a GPU):
 the fields stay where they are, and only scalars, histograms and the contact patches' sizes
-and edge labels come to the host (:class:`~petsc_contact.numerics.device.Device`).
+and edge labels come to the host (:class:`~petsc_contact.devices.device.Device`).
 
 Contact rule: a pixel is in contact when ``p > k g``, with ``k`` the diagonal of the
 stiffness operator (the pressure a pixel's own unit gap would produce).  It is the
@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..conventions.grid import Grid
-from ..numerics.device import CPU, Device
+from ..devices.device import CPU, Device
 
 MIN_CONTACT_PIXELS = 16
 
@@ -65,7 +65,7 @@ def patch_sizes(
     """The size (pixels) of every contact patch (see :func:`contact_patches`), on every rank,
     on the host.
 
-    Each rank labels its row slab (on its device, :meth:`~petsc_contact.numerics.device.
+    Each rank labels its row slab (on its device, :meth:`~petsc_contact.devices.device.
     Device.label`) and sends its boundary rows and columns and its labels' sizes; rank 0
     joins the labels that touch across slabs (and across the periodic edges) and adds up the
     sizes of each joined patch.  Only those edges and sizes leave the device.

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..conventions.grid import Grid
 from ..conventions.validation import non_negative
-from ..numerics.fft import FFT, half_spectrum_weights, wavevector_magnitude
+from ..devices.fft import FFT, half_spectrum_weights, wavevector_magnitude
 
 
 def psd_shape(q: np.ndarray, q0: float, qr: float, q1: float, hurst: float) -> np.ndarray:

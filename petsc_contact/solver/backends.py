@@ -10,7 +10,7 @@ its prefix.  Two implement :class:`SolverBackend`:
 - :class:`~petsc_contact.backend.tao.PetscBackend`: TAO, any ``-tao_type``, at PETSc's edge.
 
 The geometries take a backend and never ask which one it is; the device (where the arrays
-live, :class:`~petsc_contact.numerics.device.Device`) is chosen on its own.
+live, :class:`~petsc_contact.devices.device.Device`) is chosen on its own.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from __future__ import annotations
 from typing import Any, Protocol
 
 from ..conventions.grid import Grid
-from ..numerics.device import Device
+from ..devices.device import Device
 from .driver import ArraySolver, SolveSettings
 from .linear import held_set_solve
 from .report import SolveInfo

@@ -1,6 +1,6 @@
 """Constrained conjugate gradients for bound-constrained quadratics, on arrays.
 
-The package's own solver, written once against arrays of any :class:`~petsc_contact.numerics.
+The package's own solver, written once against arrays of any :class:`~petsc_contact.devices.
 device.Device`: the PETSc path runs it inside TAO on its Vecs' arrays
 (:mod:`petsc_contact.backend.cg`), the GPU path on CuPy arrays (:mod:`petsc_contact.solver.
 driver`).  It minimises a convex quadratic ``f(x)`` with ``lower <= x <= upper`` using only
@@ -36,8 +36,8 @@ gradient in the spirit of Polonsky & Keer (Wear 231, 206 (1999)).
   preconditioner that knows the Hessian's image of its output (:class:`ExactImage`: the
   exact Schur form, ``H z = r + lambda``) gives ``H d = H z + beta H d_old`` without any
   transform.
-- The element-wise work runs in the device's fused passes (:mod:`petsc_contact.numerics.
-  kernels` on the CPU).
+- The element-wise work runs in the device's fused passes (:mod:`petsc_contact.devices.
+  compiled` on the CPU).
 
 The preconditioner is restricted to ``F`` (``z = P_F M P_F r``); the package gives it the
 Fourier compliance, the inverse of the periodic stiffness, which makes the iteration count
@@ -275,7 +275,7 @@ class ConstrainedCG:
     convergence
         Told every iteration; says when to stop (:class:`Convergence`).
     passes
-        The device's element-wise passes (:class:`~petsc_contact.numerics.passes.ArrayPasses`).
+        The device's element-wise passes (:class:`~petsc_contact.devices.passes.ArrayPasses`).
     vector
         ``vector()`` returns a new work vector like ``x``.
     reduce

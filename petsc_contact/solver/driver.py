@@ -4,7 +4,7 @@
 path: ``solve(objective_gradient, start, ...)`` runs one load step and returns the solution
 with a :class:`~petsc_contact.solver.report.SolveInfo`.  It runs
 :class:`~petsc_contact.solver.constrained_cg.ConstrainedCG` with the problem's Hessian and
-preconditioner on the arrays of a :class:`~petsc_contact.numerics.device.Device` (``gpu``, or its
+preconditioner on the arrays of a :class:`~petsc_contact.devices.device.Device` (``gpu``, or its
 CPU stand-in ``cpu-array``), its sums and minima over the grid's ranks.
 
 Its options are PETSc's names for what it reads (:class:`SolveSettings`), so a command line
@@ -23,7 +23,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ..conventions.grid import Grid
-from ..numerics.device import Device
+from ..devices.device import Device
 from .constrained_cg import (
     MONITOR,
     ONE_RANK,

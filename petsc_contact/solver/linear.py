@@ -16,7 +16,7 @@ import numpy as np
 
 from ..conventions.grid import Grid
 from ..conventions.warnings import PetscContactWarning, user_level
-from ..numerics.device import Device
+from ..devices.device import Device
 
 
 class StiffnessNotConverged(PetscContactWarning):

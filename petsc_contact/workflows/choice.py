@@ -1,9 +1,9 @@
 """The device and the solver backend of a run, chosen once, when it is prepared.
 
-``--device`` names where the arrays live (:func:`~petsc_contact.numerics.device.get_device`);
+``--device`` names where the arrays live (:func:`~petsc_contact.devices.device.get_device`);
 the solver backend that goes with it is :data:`SOLVER_BACKENDS`' (PETSc/TAO on ``cpu``, the
 package's array solver on ``gpu`` and ``cpu-array``).  Everything below this module is handed
-the :class:`~petsc_contact.numerics.device.Device` and the
+the :class:`~petsc_contact.devices.device.Device` and the
 :class:`~petsc_contact.solver.backends.SolverBackend` and never asks for either by name.
 """
 
@@ -14,7 +14,7 @@ from contextlib import AbstractContextManager, nullcontext
 from types import ModuleType
 
 from ..backend import _petsc
-from ..numerics.device import DEVICES
+from ..devices.device import DEVICES
 from ..solver.backends import ArrayBackend, SolverBackend
 from ..solver.driver import SolveSettings
 

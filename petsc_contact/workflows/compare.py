@@ -46,7 +46,7 @@ from ..backend.tao import PetscBackend
 from ..conventions.warnings import user_level
 from ..geometries.capped_periodic import CappedPeriodicProblem
 from ..geometries.periodic import PeriodicProblem
-from ..geometries.punch import PunchProblem
+from ..geometries.punch import PressureProblem
 from ..geometries.step import residual_verdict
 from ..interactions.hard_wall import HARD_WALL
 from ..interactions.interaction import Interaction
@@ -265,7 +265,7 @@ class PressurePosed:
     the punch.  The reference reaches ``mean(p) = p0`` (over the face) by Newton on the
     approach; every solver then solves at that approach, from no pressure."""
 
-    def __init__(self, problem: PunchProblem, wall: PeriodicProblem | None = None) -> None:
+    def __init__(self, problem: PressureProblem, wall: PeriodicProblem | None = None) -> None:
         self.problem, self.wall = problem, wall
         self.grid, self.scale_length = problem.grid, problem.scale_length
         self.approach = self.nominal = np.nan

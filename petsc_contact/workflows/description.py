@@ -164,7 +164,7 @@ class Run:
     skip_memory_check
         Run even when the estimated memory exceeds what the machine has available.
     device
-        Where the solves run (:mod:`~petsc_contact.numerics.device`): ``cpu`` (PETSc/TAO),
+        Where the solves run (:mod:`~petsc_contact.devices.device`): ``cpu`` (PETSc/TAO),
         ``gpu`` (the package's CG on CuPy) or ``cpu-array`` (the GPU's code on NumPy); the
         array devices read ``options`` as :class:`~petsc_contact.solver.driver.SolveSettings`
         does; ``cpu-array`` runs on any number of ranks, ``gpu`` on one.

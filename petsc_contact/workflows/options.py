@@ -29,7 +29,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ..conventions.validation import log_range
-from ..numerics.device import DEVICES
+from ..devices.device import DEVICES
 from ..physics.greens import BASES
 from ..substrates.layer import DEFAULT_POISSON
 

@@ -25,11 +25,11 @@ from ..backend import _petsc
 from ..backend.solve import Monitor
 from ..conventions.grid import grid_for
 from ..conventions.validation import check_finite, keywords_after_first
+from ..devices.device import Device, get_device
+from ..devices.fft import make_fft
 from ..geometries.periodic import verify
 from ..geometries.step import VERIFY_FACTOR, Step, Steps
 from ..io.topography import Heights, map_and_lengths
-from ..numerics.device import Device, get_device
-from ..numerics.fft import make_fft
 from ..solver.backends import SolverBackend
 from .choice import uses_petsc
 from .description import Run

@@ -1,5 +1,6 @@
-"""The punch's steps: a :class:`~petsc_contact.geometries.punch.PunchProblem` pressed along a
-list of approaches or forces, each solve warm-started from the last converged pressure.
+"""The punch's steps: a problem posed in the pressure (:class:`~petsc_contact.geometries.punch.
+PressureProblem`: the punch, the capped periodic cell) pressed along a list of approaches or
+forces, each solve warm-started from the last converged pressure.
 
 Load control (``forces=``) wraps the displacement-controlled solve in a safeguarded Newton
 iteration on ``δ`` that uses the exact ``dF/dδ`` (:mod:`~petsc_contact.workflows.newton`);
@@ -16,7 +17,7 @@ import numpy as np
 from ..backend.solve import Monitor
 from ..conventions.validation import positive
 from ..geometries.capped_periodic import CappedPeriodicProblem
-from ..geometries.punch import PunchProblem
+from ..geometries.punch import PressureProblem
 from ..geometries.step import Step, solve_step
 from ..physics.continuation import Held
 from ..solver.backends import BoundSolver
@@ -27,20 +28,20 @@ FORCE_RTOL = 1e-6
 FORCE_RESOLVED = FORCE_ACCURACY  # a force further than this from its target is not converged
 
 
-def punch_solver(problem: PunchProblem) -> BoundSolver:
+def punch_solver(problem: PressureProblem) -> BoundSolver:
     """The solver of the displacement-controlled ``problem``: its backend's (TAO, or the
     package's CG on the device's arrays)."""
     return problem.backend.solver(problem)
 
 
 class PunchSolver:
-    """Displacement- and load-controlled solves of one :class:`PunchProblem` (warm-started).
+    """Displacement- and load-controlled solves of one :class:`PressureProblem` (warm-started).
 
     The load control (:meth:`at_force`) is written once around the displacement-controlled
     solves of :func:`punch_solver`, whichever backend the problem has.
     """
 
-    def __init__(self, problem: PunchProblem) -> None:
+    def __init__(self, problem: PressureProblem) -> None:
         self.problem = problem
         self.x = problem.device.xp.zeros(int(np.prod(problem.grid.local_shape)))
         self.solver = punch_solver(problem)
@@ -48,7 +49,7 @@ class PunchSolver:
 
     @property
     def k_flat(self) -> float:
-        """The flat-punch stiffness in use (:attr:`PunchProblem.k_flat`)."""
+        """The flat-punch stiffness in use (:attr:`PressureProblem.k_flat`)."""
         return self.problem.k_flat
 
     @property
@@ -116,7 +117,7 @@ class PunchSolver:
         ``force / K_flat`` (a rough punch is never stiffer than the flat one).  The step's
         scalars add ``target_force``, ``newton_iterations`` and ``force_balance``,
         ``|F - force| / force``, which the step's ``accurate`` weighs with the rest of its
-        measured accuracy (:meth:`PunchProblem.accuracy`).
+        measured accuracy (:meth:`PressureProblem.accuracy`).
 
         Newton also stops when TAO accepts its warm start at the new approach without an
         iteration: the solve cannot tell the two approaches apart, and the force (stored next

@@ -19,11 +19,11 @@ from ..backend import _petsc
 from ..backend.solve import Monitor
 from ..conventions.grid import grid_for
 from ..conventions.validation import check_finite, keywords_after_first, non_negative, positive
+from ..devices.device import Device, get_device
 from ..geometries.punch import PunchProblem, footprint_mask
 from ..geometries.step import Step, Steps
 from ..interactions.interaction import Interaction
 from ..io.topography import Heights, map_and_lengths
-from ..numerics.device import Device, get_device
 from ..solver.backends import SolverBackend
 from .description import Run
 from .drivers import PunchDriver

@@ -51,6 +51,8 @@ from ..conventions.warnings import (
     step_warnings,
     user_level,
 )
+from ..devices.device import get_device
+from ..devices.fft import make_fft
 from ..geometries.step import FIELD_NAMES, Step, Steps
 from ..io.names import csv_path
 from ..io.paths import check_input, check_outputs
@@ -70,8 +72,6 @@ from ..io.store import (
     read_resume,
     warn_replaced,
 )
-from ..numerics.device import get_device
-from ..numerics.fft import make_fft
 from ..physics.continuation import Held
 from ..solver.backends import SolverBackend
 from .choice import scoped_options, solver_backend, uses_petsc
@@ -595,7 +595,7 @@ def locked(path: str | None) -> Iterator[None]:
 def provenance(run: Run, petsc: Any | None = None) -> dict[str, Any]:
     """What a record says of how ``run`` was computed: its PETSc options (an array device's
     run, which loads no PETSc: the options it was given), the versions, the MPI ranks and
-    the device (:meth:`~petsc_contact.numerics.device.Device.describe`).  ``petsc``: PETSc,
+    the device (:meth:`~petsc_contact.devices.device.Device.describe`).  ``petsc``: PETSc,
     initialised here for a ``cpu`` run where not given."""
     from ..io.provenance import petsc_options, versions
 

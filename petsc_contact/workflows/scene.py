@@ -28,9 +28,9 @@ from ..conventions.grid import Grid, block_rows, grid_for, world
 from ..conventions.units import Lengths, factor, parse_lengths, unit_name
 from ..conventions.validation import check_finite
 from ..conventions.warnings import DoubtfulMap, option, user_level
+from ..devices.device import get_device
+from ..devices.fft import make_fft
 from ..io.topography import Topography, as_topography, check_guessed_sides
-from ..numerics.device import get_device
-from ..numerics.fft import make_fft
 from .description import Run
 
 SLOPE_LIMIT = 1e6  # heights this many times the cell's side are no contact surface
@@ -101,7 +101,7 @@ def shape_of(run: Run) -> tuple[int, int]:
 def prepare_scene(run: Run, comm: Any = None, default_solver: bool = True) -> Scene:
     """The checked scene of ``run``: its map read and prepared (or its surface generated),
     the memory it will need checked, its grid and FFT made (collective; the FFT of the run's
-    device, :class:`~petsc_contact.numerics.device.DeviceUnavailable` where it cannot be used).
+    device, :class:`~petsc_contact.devices.device.DeviceUnavailable` where it cannot be used).
 
     ``comm`` is the run's communicator (:func:`~petsc_contact.conventions.grid.world` when
     not given).  A measured map is read, prepared and checked on its first rank only, which

@@ -1,6 +1,6 @@
 """The constrained CG's passes as fused CuPy kernels: the GPU's :class:`ArrayPasses`.
 
-:class:`~petsc_contact.numerics.passes.ArrayPasses` writes each pass with the array module's
+:class:`~petsc_contact.devices.passes.ArrayPasses` writes each pass with the array module's
 operators, which on a GPU makes one kernel and one full-size temporary per operator: ``y += a
 x`` reads and writes twice the memory it needs, the free set's test makes seven masks.  Here
 the passes that touch whole fields every iteration are one ``ElementwiseKernel`` each.  The
@@ -10,7 +10,7 @@ use CUB, and took the CG's iterations at 8192^2 from 44 to 209 ms on one H100 (d
 The contracts are :class:`ArrayPasses`'s, which the stand-in (``cpu-array``) runs on NumPy:
 ``pytest -m gpu`` checks the two against each other.
 
-Only the ``gpu`` device uses these passes (:attr:`~petsc_contact.numerics.device.Device.passes`);
+Only the ``gpu`` device uses these passes (:attr:`~petsc_contact.devices.device.Device.passes`);
 CuPy is imported when they are first compiled.
 """
 

@@ -1,9 +1,9 @@
 """Where a solve's arrays live: one small :class:`Device` value chosen once per run.
 
 A device is an array module (NumPy or CuPy), the element-wise passes of the solvers written
-for it (:class:`~petsc_contact.numerics.passes.ArrayPasses`, CuPy's fused kernels, or the
-numba passes of :mod:`~petsc_contact.numerics.kernels` on the PETSc path) and the transfers to
-and from the host; its FFT engine is :func:`~petsc_contact.numerics.fft.make_fft`'s.  The
+for it (:class:`~petsc_contact.devices.passes.ArrayPasses`, CuPy's fused kernels, or the
+numba passes of :mod:`~petsc_contact.devices.compiled` on the PETSc path) and the transfers to
+and from the host; its FFT engine is :func:`~petsc_contact.devices.fft.make_fft`'s.  The
 algorithms of :mod:`petsc_contact.solver` and the operators of the geometries take their
 arrays, passes and transforms from it and never import CuPy themselves.
 
@@ -61,13 +61,14 @@ class Device:
     @cached_property
     def passes(self) -> Any:
         """The element-wise passes: numba's on the ``cpu`` device
-        (:mod:`~petsc_contact.numerics.kernels`), CuPy's fused kernels on the ``gpu``
-        (:class:`~petsc_contact.numerics.fused.FusedPasses`), :class:`ArrayPasses` on the
-        stand-in."""
+        (:mod:`~petsc_contact.devices.compiled`), CuPy's fused kernels on the ``gpu``
+        (:class:`~petsc_contact.devices.fused.FusedPasses`), :class:`ArrayPasses` on the
+        stand-in (numba is loaded when a ``cpu`` run first asks, not when a command is
+        parsed)."""
         if self.compiled:
-            from . import kernels
+            from . import compiled
 
-            return kernels
+            return compiled
         if not self.on_host:
             return FusedPasses(self.xp)
         return ArrayPasses(self.xp)
@@ -138,9 +139,9 @@ class Device:
         labels, count = ndimage.label(mask)
         return labels, int(count)
 
-    def describe(self) -> dict[str, Any]:
+    def describe(self) -> dict[str, str | int]:
         """What the output records of the device: its name, and the GPU's model and memory."""
-        out: dict[str, Any] = {"device": self.name}
+        out: dict[str, str | int] = {"device": self.name}
         if not self.on_host:
             cuda = self.xp.cuda
             props = cuda.runtime.getDeviceProperties(cuda.Device().id)

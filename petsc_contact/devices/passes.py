@@ -1,6 +1,6 @@
 """The element-wise passes of the package's solver, written once with the array module's
 operators (NumPy or CuPy): the ``cpu-array`` device's, and the base of the GPU's fused
-kernels (:mod:`~petsc_contact.numerics.fused`)."""
+kernels (:mod:`~petsc_contact.devices.fused`)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ class ArrayPasses:
     """The element-wise passes of the constrained CG and the spectral operators, written
     once for any array module ``xp`` with NumPy's interface (NumPy or CuPy).
 
-    The same contracts as the numba passes of :mod:`~petsc_contact.numerics.kernels`
+    The same contracts as the numba passes of :mod:`~petsc_contact.devices.compiled`
     (which the PETSc path uses): bounds are a float or an array of the vector's length;
     every reduction is returned as a Python number (one host synchronisation on a GPU).
     """

@@ -38,6 +38,7 @@ from __future__ import annotations
 import ctypes
 import os
 import platform
+from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -386,7 +387,7 @@ class ArrayFFT:
     """Real-to-complex 2-D FFTs of one grid with the array module's ``fft`` (one rank: a
     GPU's arrays on several are not supported yet).
 
-    The interface of :mod:`~petsc_contact.numerics.fft`'s engines: buffers ``real`` (kept by
+    The interface of :mod:`~petsc_contact.devices.fft`'s engines: buffers ``real`` (kept by
     :meth:`forward`), ``spectrum`` and ``result``; both transforms unnormalised, so
     ``backward(forward(x)) = nx ny x``.  CuPy keeps the cuFFT plans of a shape in its plan
     cache, so every transform after the first reuses them.
@@ -459,7 +460,7 @@ def wavevectors(grid: Grid, fft: FFT) -> tuple[np.ndarray, np.ndarray]:
     return (qx[None, :], qy[:, None]) if fft.transposed else (qx[:, None], qy[None, :])
 
 
-def wavevector_magnitude(grid: Grid, fft: FFT, xp: Any = np) -> Any:
+def wavevector_magnitude(grid: Grid, fft: FFT, xp: ModuleType = np) -> Any:
     """``|q|`` on the local half-spectrum block, an array of ``xp`` (made there: only the
     axes' wavevectors cross)."""
     qx, qy = (xp.asarray(q) for q in wavevectors(grid, fft))

@@ -22,8 +22,8 @@ from petsc_contact.backend import _petsc
 from petsc_contact.backend._petsc import scoped_options
 from petsc_contact.backend.tao import PetscBackend
 from petsc_contact.conventions.grid import Grid
-from petsc_contact.geometries.adhesive_periodic import AdhesivePeriodicProblem
 from petsc_contact.devices.fft import make_fft
+from petsc_contact.geometries.adhesive_periodic import AdhesivePeriodicProblem
 from petsc_contact.geometries.periodic import PeriodicProblem
 from petsc_contact.geometries.punch import PunchProblem
 from petsc_contact.interactions.adhesion import Adhesion

@@ -10,10 +10,10 @@ from petsc_contact import Run
 from petsc_contact.backend._petsc import scoped_options
 from petsc_contact.backend.tao import PetscBackend
 from petsc_contact.conventions.grid import Grid
+from petsc_contact.devices.fft import make_fft
 from petsc_contact.geometries.adhesive_periodic import AdhesivePeriodicProblem
 from petsc_contact.geometries.periodic import PeriodicProblem
 from petsc_contact.interactions.adhesion import Adhesion
-from petsc_contact.devices.fft import make_fft
 from petsc_contact.reference import johnson_wavy, westergaard
 from petsc_contact.workflows.adhesive_steps import (
     BranchJump,

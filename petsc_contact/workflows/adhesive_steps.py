@@ -14,7 +14,7 @@ branch; each step records it as it stands.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import nullcontext
 from typing import Any
 
@@ -42,28 +42,35 @@ def adhesive_sweep(
     monitor: Monitor | None = None,
     start: np.ndarray | None = None,
     solver: BoundSolver | None = None,
+    approach: Callable[[float], None] | None = None,
 ) -> Iterator[Step]:
     """Solve the nominal pressures in the given order (a cycle: down into compression and
     back into tension), each from the last converged gap (``start``, a local gap slab, for
     the first; default: first touch).  ``solver`` as :func:`~petsc_contact.workflows.
     periodic_steps.sweep` takes it; every step adds ``branch_jump`` (module docstring) and
-    ``pull_off_pressure``, :func:`pull_off_pressure` of the steps so far."""
+    ``pull_off_pressure``, :func:`pull_off_pressure` of the steps so far.  ``approach``
+    (the punch's :meth:`~petsc_contact.geometries.adhesive_punch.AdhesivePunchProblem.
+    set_approach`) makes the loads approaches, prescribed in its place: displacement
+    control, each branch judged along the approach."""
     ell, device = problem.scale_length, problem.device
     x = (problem.initial_gap() if start is None else device.asarray(start)).reshape(-1) / ell
     held: list[tuple[float, float]] = []  # the converged steps' (p0, area)
     done: list[dict[str, Any]] = []
+    controls: list[float] | None = None if approach is None else []
     with nullcontext(solver) if solver is not None else problem_solver(problem) as solver:
-        for p0 in (float(p) for p in pressures):
-            problem.set_pressure(p0)
+        for load in (float(p) for p in pressures):
+            (problem.set_pressure if approach is None else approach)(load)
             problem.start(x)
             watch = problem.separation_monitor(monitor)
             step, x_new = solve_step(solver, problem, problem.start_point, watch, False, fields)
-            note_jump(step.scalars, held)
+            note_jump(step.scalars, held, None if controls is None else load)
             done.append(step.scalars)
-            step.scalars["pull_off_pressure"] = pull_off_pressure(done)[0]
+            if controls is not None:
+                controls.append(load)
+            step.scalars["pull_off_pressure"] = pull_off_pressure(done, controls)[0]
             if step.converged:
                 x = x_new
-                held.append((p0, step.scalars["area_fraction"]))
+                held.append((load, step.scalars["area_fraction"]))
             yield step
 
 
@@ -162,12 +169,15 @@ def note_jump(
         )
 
 
-def pull_off_pressure(steps: Sequence[dict[str, Any]]) -> tuple[float, bool]:
+def pull_off_pressure(
+    steps: Sequence[dict[str, Any]], controls: Sequence[float] | None = None
+) -> tuple[float, bool]:
     """The pull-off estimate of a load cycle's step ``scalars``: the most tensile converged
     nominal pressure with contact on the unloading branch (the steps after the largest
-    pressure), and whether it is bracketed (a more tensile step of that branch pulled off).
-    NaN where the unloading branch has no converged step in contact."""
-    loads = [s["nominal_pressure"] for s in steps]
+    load: ``controls``, each step's, by default its nominal pressure; the punch's approach
+    under displacement control), and whether it is bracketed (a more tensile step of that
+    branch pulled off).  NaN where the unloading branch has no converged step in contact."""
+    loads = [s["nominal_pressure"] for s in steps] if controls is None else list(controls)
     unloading = steps[int(np.argmax(loads)) :] if loads else []
     held = [s for s in unloading if s["converged"] and s["area_fraction"] > 0]
     if not held:

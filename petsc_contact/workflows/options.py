@@ -575,7 +575,7 @@ _ADHESION = (
         "adhesion",
         "an adhesive law beside the hard wall: exponential (the interaction energy per area "
         "-w exp(-g/rho)) or maugis (Maugis-Dugdale: the attraction w/rho below g = rho)",
-        ("periodic",),
+        ("periodic", "punch"),
         choices=("exponential", "maugis"),
         shown_default="none: the hard wall",
         more="Posed in the gap with the interaction energy added (not convex; "
@@ -585,20 +585,22 @@ _ADHESION = (
         "1e-6) from the last converged step. Each step records `adhesive_pressure`, "
         "`interaction_energy`, `pressure_scale`, `pull_off_pressure` and `branch_jump`; a "
         "step under tension whose surfaces came apart is not converged (`pulled off`). "
-        "Takes `--pressures` or `--mean-gaps` on the half-space",
+        "Takes `--pressures` or `--mean-gaps` on the half-space; the punch (posed in the "
+        "displacement of its zero-padded cell) takes `--approaches` (any sign: negative "
+        "pulls back beyond first touch), `--forces` or `--pressures` (tension too)",
     ),
     _option(
         "work_of_adhesion",
         "the work of adhesion w of --adhesion: an energy per area (units of E* times the "
         "length unit)",
-        ("periodic",),
+        ("periodic", "punch"),
         metavar="W",
         parse=float,
     ),
     _option(
         "interaction_range",
         "the range rho of --adhesion, with an optional unit (5nm)",
-        ("periodic",),
+        ("periodic", "punch"),
         metavar="RHO",
         parse=quantity,
         unit="length",

@@ -147,8 +147,9 @@ def note_jump(
     area misses the one its branch predicts by more than :data:`JUMP_AREA` of the larger of
     it and the last converged step's.  ``held`` are the converged steps' ``(p0, area)`` so
     far (``control``: the load, by default ``p0``; under displacement control minus the mean
-    gap): the prediction is the tangent through the last two (the last area alone after the
-    first); a step that did not converge, or the first, is not judged."""
+    gap, or the punch's approach): the prediction is the tangent through the last two (the
+    last area alone after the first), clipped to ``[0, 1]``; a step that did not converge,
+    or the first, is not judged."""
     area, p0 = scalars["area_fraction"], scalars["nominal_pressure"]
     load = p0 if control is None else control
     jumped = False
@@ -158,6 +159,7 @@ def note_jump(
         if len(held) > 1 and held[-2][0] != p_last:
             p_prev, a_prev = held[-2]
             predicted += (a_last - a_prev) / (p_last - p_prev) * (load - p_last)
+        predicted = min(max(predicted, 0.0), 1.0)  # an area fraction
         jumped = abs(area - predicted) > JUMP_AREA * max(area, a_last)
     scalars["branch_jump"] = jumped
     if jumped:

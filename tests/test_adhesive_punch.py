@@ -13,7 +13,7 @@ from petsc_contact.backend.tao import PetscBackend
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.geometries.adhesive_punch import AdhesivePunchProblem
 from petsc_contact.interactions.adhesion import Adhesion
-from petsc_contact.workflows.adhesive_steps import adhesive_sweep, pull_off_pressure
+from petsc_contact.workflows.adhesive_steps import BranchJump, adhesive_sweep, pull_off_pressure
 
 RHO = 0.01  # the sphere's interaction range (1.28 pixels at 128^2)
 
@@ -102,10 +102,11 @@ def test_the_approach_controlled_cycle_passes_the_load_controlled_pull_off():
     force lies in load control's bracket (0.78 held, 0.80 pulled off, of ``2 pi R w``); the
     path is reversible (the same force at the same approach, to 1e-6 of it: the tolerance's
     1e-8 of ``P`` over the footprint); then it jumps out of contact (the area falls from a
-    tenth to 0 and the force to a few % of the pull-off)."""
+    tenth to 0 and the force to a few % of the pull-off), a branch jump its force tells and
+    warns of (its area's tangent, steep there, predicts little contact)."""
     problem, dmt = sphere_problem("exponential", 2.0)
     approaches = [0.02, 0.0, -0.01, -0.02, -0.03, -0.01, -0.02, -0.04, -0.06]
-    with scoped_options(["-tao_type", "blmvm"]):
+    with scoped_options(["-tao_type", "blmvm"]), pytest.warns(BranchJump, match="force"):
         steps = [s.scalars for s in adhesive_sweep(problem, approaches,
                                                    approach=problem.set_approach)]  # fmt: skip
     assert all(s["converged"] for s in steps)
@@ -114,6 +115,7 @@ def test_the_approach_controlled_cycle_passes_the_load_controlled_pull_off():
         assert steps[again]["force"] == pytest.approx(steps[first]["force"], rel=1e-6)
     assert not any(s["branch_jump"] for s in steps[:7]) and steps[6]["area_fraction"] > 0.1
     assert steps[7]["area_fraction"] == 0 and abs(steps[7]["force"]) < 0.05 * dmt
+    assert steps[7]["branch_jump"]
     assert steps[8]["area_fraction"] == 0 and not steps[8]["branch_jump"]  # stays apart
 
 

@@ -51,12 +51,14 @@ def adhesive_sweep(
     ``pull_off_pressure``, :func:`pull_off_pressure` of the steps so far.  ``approach``
     (the punch's :meth:`~petsc_contact.geometries.adhesive_punch.AdhesivePunchProblem.
     set_approach`) makes the loads approaches, prescribed in its place: displacement
-    control, each branch judged along the approach."""
+    control, each branch judged along the approach, by its area and its force
+    (:func:`note_force_jump`)."""
     ell, device = problem.scale_length, problem.device
     x = (problem.initial_gap() if start is None else device.asarray(start)).reshape(-1) / ell
     held: list[tuple[float, float]] = []  # the converged steps' (p0, area)
     done: list[dict[str, Any]] = []
     controls: list[float] | None = None if approach is None else []
+    forces: list[tuple[float, float]] = []  # the converged steps' (approach, force)
     with nullcontext(solver) if solver is not None else problem_solver(problem) as solver:
         for load in (float(p) for p in pressures):
             (problem.set_pressure if approach is None else approach)(load)
@@ -67,10 +69,14 @@ def adhesive_sweep(
             done.append(step.scalars)
             if controls is not None:
                 controls.append(load)
+                note_force_jump(step.scalars, forces, load)
             step.scalars["pull_off_pressure"] = pull_off_pressure(done, controls)[0]
             if step.converged:
                 x = x_new
                 held.append((load, step.scalars["area_fraction"]))
+                if step.scalars["branch_jump"]:  # the force's branch starts afresh
+                    forces.clear()
+                forces.append((load, step.scalars.get("force", np.nan)))
             yield step
 
 
@@ -154,18 +160,48 @@ def note_jump(
     load = p0 if control is None else control
     jumped = False
     if scalars["converged"] and held:
-        p_last, a_last = held[-1]
-        predicted = a_last
-        if len(held) > 1 and held[-2][0] != p_last:
-            p_prev, a_prev = held[-2]
-            predicted += (a_last - a_prev) / (p_last - p_prev) * (load - p_last)
-        predicted = min(max(predicted, 0.0), 1.0)  # an area fraction
-        jumped = abs(area - predicted) > JUMP_AREA * max(area, a_last)
+        predicted = min(max(tangent(held, load), 0.0), 1.0)  # an area fraction
+        jumped = abs(area - predicted) > JUMP_AREA * max(area, held[-1][1])
     scalars["branch_jump"] = jumped
     if jumped:
         warnings.warn(
             f"at p0 = {p0:.4g} the contact area jumped from {held[-1][1]:.4g} to {area:.4g} "
             "of the cell: the step left its branch (a jump into or out of contact)",
+            BranchJump,
+            stacklevel=2,
+        )
+
+
+def tangent(held: Sequence[tuple[float, float]], load: float) -> float:
+    """What a branch predicts at ``load`` from its converged ``(load, value)`` pairs
+    ``held`` (one at least): the tangent through the last two, the last value alone after
+    the first."""
+    p_last, v_last = held[-1]
+    predicted = v_last
+    if len(held) > 1 and held[-2][0] != p_last:
+        p_prev, v_prev = held[-2]
+        predicted += (v_last - v_prev) / (p_last - p_prev) * (load - p_last)
+    return predicted
+
+
+def note_force_jump(
+    scalars: dict[str, Any], held: Sequence[tuple[float, float]], approach: float
+) -> None:
+    """Under the punch's approach control, where the area may not tell (a contact that
+    shrinks fast before it jumps out of contact): set ``branch_jump`` and warn where the force
+    misses its branch's tangent through the last two converged ``held`` ``(approach,
+    force)`` by more than :data:`JUMP_AREA` of the largest force, in magnitude, of it and
+    them (the steps since the last jump).  A step already flagged, one that did not
+    converge, or one with fewer than two before it is not judged."""
+    force = scalars["force"]
+    if scalars["branch_jump"] or not scalars["converged"] or len(held) < 2:
+        return
+    largest = max(abs(force), *(abs(f) for _, f in held))
+    if abs(force - tangent(held, approach)) > JUMP_AREA * largest:
+        scalars["branch_jump"] = True
+        warnings.warn(
+            f"at the approach {approach:.4g} the force jumped from {held[-1][1]:.4g} to "
+            f"{force:.4g}: the step left its branch (a jump into or out of contact)",
             BranchJump,
             stacklevel=2,
         )

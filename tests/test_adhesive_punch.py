@@ -14,6 +14,7 @@ from petsc_contact.conventions.grid import Grid
 from petsc_contact.geometries.adhesive_punch import AdhesivePunchProblem
 from petsc_contact.interactions.adhesion import Adhesion
 from petsc_contact.workflows.adhesive_steps import BranchJump, adhesive_sweep, pull_off_pressure
+from petsc_contact.workflows.compare import AdhesivePunchPosed, compare
 
 RHO = 0.01  # the sphere's interaction range (1.28 pixels at 128^2)
 
@@ -137,3 +138,18 @@ def test_an_adhesive_punch_on_the_command_line(tmp_path):
     refused = cli(*common, "--output", str(tmp_path / "x.h5"))
     assert refused.returncode != 0 and "-tao_type blmvm" in refused.stderr
     assert len(refused.stderr.strip().splitlines()) == 1
+
+
+def test_compare_on_an_adhesive_punch():
+    """``compare`` on the sphere's adhesive punch (32^2, ``mu = 1``, at a fifth of DMT's
+    pull-off in compression): ``blmvm`` and ``bncg`` reach the tight ``blmvm`` reference
+    (pressure and mean gap within 1e-6: their tolerance is 1e-8 of the pressure scale,
+    rms), and ``pk``, the package's CG, is refused, a failed solver saying why."""
+    problem, dmt = sphere_problem("exponential", 1.0, n=32)
+    posed = AdhesivePunchPosed(problem)
+    reference, found = compare(posed, 0.2 * dmt, ["blmvm", "bncg", "pk"], time_limit=60)
+    assert reference["natural_residual"] < 1e-10
+    for t in found[:2]:
+        assert t.converged, t.verification
+        assert t.pressure_error[-1] < 1e-6 and t.mean_gap_error[-1] < 1e-6
+    assert not found[2].converged and found[2].reason.startswith("refused: --adhesion")

@@ -17,7 +17,9 @@ approach, and the natural residual is the box's (``0 <= p <= H``), in units of `
 With an adhesive law the cell is posed in the gap with the law's energy
 (:class:`AdhesivePosed`): the reference is ``blmvm`` at the same tolerance, the natural
 residual the law's, ``rms(min(k g, p + phi'(g))) / p0``, and the package's CG (``cg``,
-``pk``: a QP solver) is refused, a solver that failed saying why.
+``pk``: a QP solver) is refused, a solver that failed saying why; the punch with an
+adhesive law is compared so from Python (:class:`AdhesivePunchPosed`, measured on its
+footprint).
 
 The reference is the default solver at ``REFERENCE_GATOL`` (or the rounding floor); its own
 natural residual is stored, so the reference's accuracy is stated next to every error.
@@ -49,10 +51,11 @@ from ..backend.solve import BOUND_TYPES, BoundSolver, SolveInfo
 from ..backend.tao import PetscBackend
 from ..conventions.warnings import user_level
 from ..geometries.adhesive_periodic import QP_ONLY, AdhesivePeriodicProblem
+from ..geometries.adhesive_punch import AdhesivePunchProblem
 from ..geometries.capped_periodic import CappedPeriodicProblem
 from ..geometries.periodic import PeriodicProblem
 from ..geometries.punch import PunchProblem
-from ..geometries.step import residual_verdict
+from ..geometries.step import residual_verdict, solve_step
 from ..interactions.adhesion import Adhesion
 from ..interactions.hard_wall import HARD_WALL
 from ..interactions.interaction import Interaction
@@ -65,7 +68,6 @@ from ..io.schema import COMPARE, annotate, write_attributes
 from ..io.store import check_resume_or_overwrite, remove_temporaries, warn_replaced
 from ..physics.observables import natural_residual
 from ..physics.surface import rms_of
-from .adhesive_steps import adhesive_sweep
 from .periodic_steps import sweep
 from .punch_steps import PunchSolver, capped_from_wall
 
@@ -280,31 +282,35 @@ class AdhesivePosed(GapPosed):
 
     def __init__(self, problem: AdhesivePeriodicProblem) -> None:
         super().__init__(problem)
+        self.nominal = np.nan
 
     def reference(self, pressure: float) -> Reference:
         """``blmvm`` at :data:`REFERENCE_GATOL` (or the rounding floor) from first touch;
         raises if it fails.  Its pressure is the elastic one, tension included."""
         problem = self.problem
-        tight = ["-tao_type", "blmvm", "-tao_gatol", str(REFERENCE_GATOL)]
-        with _petsc.scoped_options(tight):
-            problem.use(PetscBackend())
-            (step,) = adhesive_sweep(problem, [pressure], fields=True)
-        if not step.converged or step.gap is None:
+        with _petsc.scoped_options(["-tao_type", "blmvm", "-tao_gatol", str(REFERENCE_GATOL)]):
+            backend = PetscBackend()
+            x0, _ = self.pose(pressure, backend)
+            with backend.solver(problem) as solver:
+                watch = problem.separation_monitor(None)
+                step, x = solve_step(solver, problem, x0, watch)
+        if not step.converged:
             raise RuntimeError(f"reference solve failed: {step.scalars['verification']}")
+        _, p, r = self.fields(x)
+        (r2,) = self.grid.sum(np.vdot(r, r))
         s = step.scalars
-        unit = s["pressure_scale"] / pressure  # its residual over P, stored over p0
-        p = problem.pressure(step.gap)
-        return Reference(p, s["mean_gap"], s["kkt_residual"] * unit, s["tolerance"],
-                         s["iterations"])  # fmt: skip
+        rms = float(np.sqrt(r2 / self.grid.size)) / pressure
+        return Reference(p, s["mean_gap"], rms, s["tolerance"], s["iterations"])
 
     def pose(self, pressure: float, backend: PetscBackend) -> tuple[np.ndarray, float]:
         """As :meth:`GapPosed.pose`, with the law's floor (in units of ``P``)."""
         x0, _ = super().pose(pressure, backend)
+        self.nominal = pressure
         return x0, self.problem.tolerance_floor()
 
     def tolerance_unit(self) -> float:
         """The natural residual over ``p0`` in the unit of TAO's tolerance: ``p0 / P``."""
-        return self.problem.nominal_pressure / self.problem.pressure_scale
+        return self.nominal / self.problem.pressure_scale
 
     def refusal(self, backend: PetscBackend) -> str | None:
         """The package's CG (a QP solver) cannot: its one-line refusal."""
@@ -315,6 +321,28 @@ class AdhesivePosed(GapPosed):
         gap, p, _ = super().fields(x)
         k = self.problem.pixel_stiffness
         return gap, p, k * self.problem.adhesion.residual(gap, p, k)
+
+
+class AdhesivePunchPosed(AdhesivePosed):
+    """The punch with an adhesive law (:class:`~petsc_contact.geometries.adhesive_punch.
+    AdhesivePunchProblem`) at a nominal pressure over its face: as :class:`AdhesivePosed`,
+    measured on the footprint grid (the solver's unknown is the padded cell's; the traction
+    off the face is left out of the natural residual)."""
+
+    problem: AdhesivePunchProblem
+
+    def __init__(self, problem: AdhesivePunchProblem) -> None:
+        super().__init__(problem)
+        self.grid = problem.face_grid
+
+    def fields(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The footprint's gap, pressure and law's natural residual (0 off the footprint)."""
+        problem = self.problem
+        gap = x.reshape(problem.grid.local_shape) * problem.scale_length
+        gap, p = problem.to_face(gap), problem.to_face(problem.pressure(gap))
+        k, on = problem.pixel_stiffness, problem.footprint
+        attraction = problem.adhesion.derivative(np.where(on, gap, np.inf))
+        return gap, p, np.where(on, np.minimum(k * gap, p + attraction), 0.0)
 
 
 class PressurePosed:

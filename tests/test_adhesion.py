@@ -164,14 +164,18 @@ def test_displacement_control_reaches_the_load_controlled_pull_off():
 
 def test_a_jump_of_the_contact_area_is_flagged():
     """A converged step whose area misses its branch's tangent through the last two steps by
-    more than half the larger area is a branch jump, warned about; one on the tangent, one
-    that did not converge, or the first, is not."""
+    more than half the larger area is a branch jump, warned about; one on the tangent (clipped
+    to an area fraction: out of contact after a jump out of it), one that did not converge,
+    or the first, is not."""
     scalars = {"area_fraction": 0.1, "converged": True, "nominal_pressure": -1e-3}
     with pytest.warns(BranchJump, match="jumped from 0.3 to 0.1"):
         note_jump(scalars, [(1e-3, 0.3)])
     assert scalars["branch_jump"]
     note_jump(scalars, [(3e-3, 0.5), (1e-3, 0.3)])  # on the tangent: 0.1 at -1e-3
     assert not scalars["branch_jump"]
+    apart = {"area_fraction": 0.0, "converged": True, "nominal_pressure": -2e-3}
+    note_jump(apart, [(0.0, 0.004), (-1e-3, 0.0)])  # the tangent's -0.004 is no area: 0
+    assert not apart["branch_jump"]
     note_jump(scalars, [])
     assert not scalars["branch_jump"]
     scalars["converged"] = False
@@ -233,3 +237,27 @@ def test_what_adhesion_does_not_take_is_refused(fields, words):
     it), a layer and a work that is not positive: one line naming the option."""
     with pytest.raises(ValueError, match=words):
         Run(grid=32, hurst=0.8, rms_slope=0.1, **fields)
+
+
+def test_compare_on_an_adhesive_scene(tmp_path):
+    """``compare --adhesion`` measures every solver against a tight ``blmvm`` reference: the
+    bound solvers that converge reach it (pressure and mean gap within 1e-6: their tolerance
+    is 1e-8 of the pressure scale, rms), the package's CG is refused in the file and the
+    table with its one-line reason, and no solver counts as converged whose answer is not
+    the reference's (``gpcg``, a QP solver, stops far from it and is not converged)."""
+    out = tmp_path / "compare.h5"
+    done = cli("compare", "--grid", "32", "--hurst", "0.8", "--rms-slope", "0.1",
+               "--pressures", "1e-2", *ADHESIVE, "0.005", "--solvers", "blmvm,bncg,cg,gpcg",
+               "--time-limit", "60", "--output", str(out))  # fmt: skip
+    assert done.returncode == 1  # some solver did not converge: cg refused
+    assert "refused: --adhesion" in done.stdout
+    with h5py.File(out) as f:
+        assert f.attrs["reference_natural_residual"] < 1e-10
+        for name in ("blmvm", "bncg"):
+            g = f[name]
+            assert g.attrs["converged"], g.attrs["verification"]
+            assert g["pressure_error"][-1] < 1e-6 and g["mean_gap_error"][-1] < 1e-6
+        assert not f["cg"].attrs["converged"] and f["cg"].attrs["iterations"] == 0
+        assert f["cg"].attrs["reason"].startswith("refused: --adhesion")
+        gpcg = f["gpcg"]
+        assert gpcg.attrs["converged"] == (gpcg["pressure_error"][-1] < 1e-6)

@@ -325,14 +325,15 @@ class BoundSolver:
         self,
         objgrad: ObjGrad,
         x0: np.ndarray,
-        lower: float = 0.0,
+        lower: float | np.ndarray = 0.0,
         monitor: Monitor | None = None,
         upper: np.ndarray | None = None,
         gatol_floor: float = 0.0,
     ) -> tuple[np.ndarray, SolveInfo]:
         """Run TAO from ``x0`` (local flat array); return the local solution and TAO's report.
 
-        ``upper`` is an optional local array of upper bounds (default: none).
+        ``lower`` is one lower bound for all unknowns or a local array of them (``-inf``:
+        none); ``upper`` is an optional local array of upper bounds (default: none).
         ``monitor(iteration, f, gnorm)`` is called every iteration (the iterate is
         :attr:`x`); returning ``True`` stops the solve with ``DIVERGED_USER``.
         ``gatol_floor`` raises TAO's absolute tolerance to what double precision can resolve
@@ -385,11 +386,15 @@ class BoundSolver:
         attach_h0(tao, self.tao_type, h0)
         self.initial = [h0, pc]
 
-    def _load(self, x0: np.ndarray, lower: float, upper: np.ndarray | None) -> None:
+    def _load(self, x0: np.ndarray, lower: float | np.ndarray, upper: np.ndarray | None) -> None:
         """The start point and the bounds into the solver's Vecs."""
         with self.x as xa:
             xa[...] = x0.reshape(-1)
-        self.lower.set(lower)
+        if np.ndim(lower) == 0:
+            self.lower.set(float(lower))
+        else:
+            with self.lower as la:
+                la[...] = np.asarray(lower).reshape(-1)
         if upper is None:
             self.upper.set(self.petsc.INFINITY)
         else:

@@ -19,6 +19,7 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
     from ..conventions.units import pressure_value
     from ..conventions.validation import positive
     from ..workflows.compare import check_comparison, compare_into, shared_options
+    from ..workflows.drivers import adhesive_law
 
     solvers = check_comparison(args.solvers, args.time_limit, args.stall_iterations, petsc_args)
     unit = describe(args).pressure_unit  # --modulus's
@@ -41,7 +42,7 @@ def run_compare(args: argparse.Namespace, argv: Sequence[str], petsc_args: list[
         args.resume,
         args.overwrite,
         report=_print_trajectory if show else None,
-        interaction=run.interaction,
+        interaction=adhesive_law(run, scene) if run.adhesion else run.interaction,
     )
     if show:
         reference = result.reference

@@ -47,10 +47,12 @@ def _unit(key: str, record: dict[str, Any]) -> str:
 def _columns(description: Any, record: dict[str, Any]) -> tuple[Columns, StepColumns]:
     """The columns of the table of the run ``description``: its geometry's load columns (with
     ``--mean-gaps``, the target mean gap after them; with ``--stiffness``, the stiffness per
-    area ``K``), with their units in the run ``record``; then :data:`STEP_COLUMNS` (with
-    ``--hardness``, the plastic area fraction after the area)."""
+    area ``K``; with ``--adhesion``, no held-set stiffness), with their units in the run
+    ``record``; then :data:`STEP_COLUMNS` (with ``--hardness``, the plastic area fraction
+    after the area)."""
+    held = "total_stiffness" if description.adhesion is not None else ""  # none measured
     titled = (
-        *LOAD_COLUMNS[description.geometry],
+        *(c for c in LOAD_COLUMNS[description.geometry] if c[1] != held),
         *((TARGET_COLUMN,) if description.mean_gaps is not None else ()),
         *((("K", "stiffness"),) if description.stiffness else ()),
     )

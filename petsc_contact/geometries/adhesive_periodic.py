@@ -91,14 +91,14 @@ class AdhesivePeriodicProblem(PeriodicProblem):
         self.nominal_pressure = float(p0)
         self.machine = None
 
-    def set_machine(self, anchor: float, scale: float) -> None:
-        """Displacement control: a loading machine of stiffness ``k_m`` (the pixel stiffness,
-        stiffer than any contact) holds the mean gap near ``anchor``, adding
-        ``N k_m/2 (mean(g) - anchor)^2`` to the energy in place of ``p0 sum(g)``: the
-        nominal pressure is ``k_m (mean(g) - anchor)``, and every branch is stable under it.
-        ``scale`` is the pressure scale (``P``); the preconditioner's mean mode is held by
-        ``k_m`` exactly."""
-        k_m = float(self.pixel_stiffness)
+    def set_machine(self, anchor: float, scale: float, stiffness: float | None = None) -> None:
+        """Displacement control: a loading machine of stiffness ``k_m`` (``stiffness``, by
+        default the pixel stiffness, stiffer than any contact) holds the mean gap near
+        ``anchor``, adding ``N k_m/2 (mean(g) - anchor)^2`` to the energy in place of
+        ``p0 sum(g)``: the nominal pressure is ``k_m (mean(g) - anchor)``, and every branch
+        is stable under it.  ``scale`` is the pressure scale (``P``); the preconditioner's
+        mean mode is held by ``k_m`` exactly."""
+        k_m = float(self.pixel_stiffness if stiffness is None else stiffness)
         self.set_pressure(max(scale, self.adhesion.strength), k_m)
         self.nominal_pressure = 0.0
         self.machine = (k_m, float(anchor))
@@ -111,7 +111,7 @@ class AdhesivePeriodicProblem(PeriodicProblem):
         """The periodic geometry's reference point, and the interaction energy there."""
         super().start(x0)
         xp = self.device.xp
-        self._phi_ref = self.adhesion.energy(self._x_ref * self.scale_length, xp)
+        self._phi_ref = self.adhesion.energy(self.law_gap(self._x_ref), xp)
 
     def _spring(self, x: np.ndarray) -> tuple[float, float]:
         """The change of the loading machine's energy from the reference over the pixel area,
@@ -127,10 +127,14 @@ class AdhesivePeriodicProblem(PeriodicProblem):
         moved = change * ell / n
         return 0.5 * n * k_m * moved * (2 * stretch - moved), k_m * stretch
 
+    def law_gap(self, x: Any) -> Any:
+        """The gap the law sees of the scaled unknown ``x``: ``l x`` on every pixel."""
+        return x * self.scale_length
+
     def _interaction_change(self, x: np.ndarray) -> float:
         """``sum(phi(l x) - phi(l x_ref))`` over the grid, pixel by pixel (the change, not
         the difference of two large sums)."""
-        phi = self.adhesion.energy(x * self.scale_length, self.device.xp)
+        phi = self.adhesion.energy(self.law_gap(x), self.device.xp)
         (total,) = self.grid.sum(float((phi - self._phi_ref).sum()))
         return float(total)
 
@@ -140,11 +144,12 @@ class AdhesivePeriodicProblem(PeriodicProblem):
         (:meth:`set_machine`); ``grad <- s (p + phi'(g) + k_m (mean(g) - t))``."""
         f = super().objective_gradient(x, grad)
         xp, ell = self.device.xp, self.scale_length
+        gap = self.law_gap(x)
         if self.nominal_pressure < 0:  # the gap grows without bound once pulled off
-            lowest = self.grid.min(float(x.min(initial=np.inf)) * ell)
+            lowest = self.grid.min(float(gap.min(initial=np.inf)))
             self.separated = lowest > SEPARATED * self.adhesion.range
         spring, pull = self._spring(x)
-        grad += self._s * (self.adhesion.derivative(x * ell, xp) + pull)
+        grad += self._s * (self.adhesion.derivative(gap, xp) + pull)
         return f + self._s / ell * (self._interaction_change(x) + spring)
 
     def separation_monitor(self, monitor: Monitor | None) -> Monitor:

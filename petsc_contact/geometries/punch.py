@@ -170,6 +170,20 @@ def interfacial_stiffness(total: float, flat: float) -> float:
         return float(1.0 / (np.float64(1.0) / total - np.float64(1.0) / flat))
 
 
+def face_recess(grid: Grid, heights: np.ndarray, footprint: np.ndarray) -> tuple[np.ndarray, float]:
+    """The recess ``s = max(h) - h`` on the ``footprint`` (this rank's mask; 0 off it) of this
+    rank's ``heights``, and the scale length ``l``: its rms about its mean, or the shorter
+    pixel side for a flat punch."""
+    h = np.asarray(heights, dtype=float).reshape(grid.local_shape)
+    top = grid.max(float(np.where(footprint, h, -np.inf).max(initial=-np.inf)))
+    recess = np.where(footprint, top - h, 0.0)
+    pixels = grid.sum(np.count_nonzero(footprint))[0]
+    mean = grid.sum(recess.sum())[0] / pixels
+    dev = np.where(footprint, recess - mean, 0.0)
+    rms = float(np.sqrt(grid.sum(np.vdot(dev, dev))[0] / pixels))
+    return recess, rms if rms > 0 else min(grid.spacing)
+
+
 @dataclass(frozen=True)
 class Operators:
     """A problem posed in the pressure's spectral operators: the compliance ``G``, its
@@ -359,18 +373,11 @@ class PressureProblem:
         self._upper = device.asarray(upper.reshape(-1))
 
     def _recess(self, heights: np.ndarray) -> tuple[np.ndarray, float]:
-        """The recess ``s = max(h) - h`` on the footprint (0 off it) of this rank's heights,
-        and the scale length ``l``: its rms about its mean, or the shorter pixel side for a
-        flat punch.  Its sum over the ranks becomes :attr:`recess_sum`."""
-        grid = self.grid
-        h = np.asarray(heights, dtype=float).reshape(grid.local_shape)
-        top = grid.max(float(np.where(self.footprint, h, -np.inf).max(initial=-np.inf)))
-        recess = np.where(self.footprint, top - h, 0.0)
-        self.recess_sum = grid.sum(recess.sum())[0]
-        mean = self.recess_sum / self.footprint_pixels
-        dev = np.where(self.footprint, recess - mean, 0.0)
-        rms = float(np.sqrt(grid.sum(np.vdot(dev, dev))[0] / self.footprint_pixels))
-        return recess, rms if rms > 0 else min(grid.spacing)
+        """:func:`face_recess` of this rank's heights on the footprint; the recess's sum over
+        the ranks becomes :attr:`recess_sum`."""
+        recess, scale = face_recess(self.grid, heights, self.footprint)
+        self.recess_sum = self.grid.sum(recess.sum())[0]
+        return recess, scale
 
     def _operators(self) -> None:
         """The body's compliance ``G`` on the device (:attr:`elastic`), its inverse, and the

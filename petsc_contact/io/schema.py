@@ -300,7 +300,8 @@ ADHESIVE = _entries(
     pressure_scale=(
         "pressure",
         "--adhesion: the pressure scale P = max(|p0|, w/rho) that kkt_residual, force_balance "
-        "and the tolerance are in units of",
+        "and the tolerance are in units of (punch: p0 the force over the padded cell, 4 Lx Ly, "
+        "or c0 |approach| under approaches, c0 = 1/G(q = 0))",
     ),
     interaction_energy=(
         "pressure*length",
@@ -421,6 +422,8 @@ GEOMETRIES = {
         **DISTRIBUTIONS,
         **PUNCH_COLUMNS,
         **PLASTIC,
+        **ADHESIVE,
+        "min_pressure": PERIODIC_COLUMNS["min_pressure"],
         **FIELDS,
     },
 }

@@ -15,7 +15,7 @@ cycle lost (:func:`hysteresis_energy`) once it is back at its first mean gap.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import nullcontext
 from typing import Any
 
@@ -44,28 +44,41 @@ def adhesive_sweep(
     monitor: Monitor | None = None,
     start: np.ndarray | None = None,
     solver: BoundSolver | None = None,
+    approach: Callable[[float], None] | None = None,
 ) -> Iterator[Step]:
     """Solve the nominal pressures in the given order (a cycle: down into compression and
     back into tension), each from the last converged gap (``start``, a local gap slab, for
     the first; default: first touch).  ``solver`` as :func:`~petsc_contact.workflows.
     periodic_steps.sweep` takes it; every step adds ``branch_jump`` (module docstring) and
-    ``pull_off_pressure``, :func:`pull_off_pressure` of the steps so far."""
+    ``pull_off_pressure``, :func:`pull_off_pressure` of the steps so far.  ``approach``
+    (the punch's :meth:`~petsc_contact.geometries.adhesive_punch.AdhesivePunchProblem.
+    set_approach`) makes the loads approaches, prescribed in its place: displacement
+    control, each branch judged along the approach, by its area and its force
+    (:func:`note_force_jump`)."""
     ell, device = problem.scale_length, problem.device
     x = (problem.initial_gap() if start is None else device.asarray(start)).reshape(-1) / ell
     held: list[tuple[float, float]] = []  # the converged steps' (p0, area)
     done: list[dict[str, Any]] = []
+    controls: list[float] | None = None if approach is None else []
+    forces: list[tuple[float, float]] = []  # the converged steps' (approach, force)
     with nullcontext(solver) if solver is not None else problem_solver(problem) as solver:
-        for p0 in (float(p) for p in pressures):
-            problem.set_pressure(p0)
+        for load in (float(p) for p in pressures):
+            (problem.set_pressure if approach is None else approach)(load)
             problem.start(x)
             watch = problem.separation_monitor(monitor)
             step, x_new = solve_step(solver, problem, problem.start_point, watch, False, fields)
-            note_jump(step.scalars, held)
+            note_jump(step.scalars, held, None if controls is None else load)
             done.append(step.scalars)
-            step.scalars["pull_off_pressure"] = pull_off_pressure(done)[0]
+            if controls is not None:
+                controls.append(load)
+                note_force_jump(step.scalars, forces, load)
+            step.scalars["pull_off_pressure"] = pull_off_pressure(done, controls)[0]
             if step.converged:
                 x = x_new
-                held.append((p0, step.scalars["area_fraction"]))
+                held.append((load, step.scalars["area_fraction"]))
+                if step.scalars["branch_jump"]:  # the force's branch starts afresh
+                    forces.clear()
+                forces.append((load, step.scalars.get("force", np.nan)))
             yield step
 
 
@@ -151,18 +164,16 @@ def note_jump(
     area misses the one its branch predicts by more than :data:`JUMP_AREA` of the larger of
     it and the last converged step's.  ``held`` are the converged steps' ``(p0, area)`` so
     far (``control``: the load, by default ``p0``; under displacement control minus the mean
-    gap): the prediction is the tangent through the last two (the last area alone after the
-    first); a step that did not converge, or the first, is not judged, and one whose area is
-    the last one's (still apart, say) never jumped."""
+    gap, or the punch's approach): the prediction is the tangent through the last two (the
+    last area alone after the first), clipped to ``[0, 1]``; a step that did not converge,
+    or the first, is not judged, and one whose area is the last one's (still apart, say)
+    never jumped."""
     area, p0 = scalars["area_fraction"], scalars["nominal_pressure"]
     load = p0 if control is None else control
     jumped = False
     if scalars["converged"] and held:
-        p_last, a_last = held[-1]
-        predicted = a_last
-        if len(held) > 1 and held[-2][0] != p_last:
-            p_prev, a_prev = held[-2]
-            predicted += (a_last - a_prev) / (p_last - p_prev) * (load - p_last)
+        a_last = held[-1][1]
+        predicted = min(max(tangent(held, load), 0.0), 1.0)  # an area fraction
         jumped = area != a_last and abs(area - predicted) > JUMP_AREA * max(area, a_last)
     scalars["branch_jump"] = jumped
     if jumped:
@@ -174,12 +185,50 @@ def note_jump(
         )
 
 
-def pull_off_pressure(steps: Sequence[dict[str, Any]]) -> tuple[float, bool]:
+def tangent(held: Sequence[tuple[float, float]], load: float) -> float:
+    """What a branch predicts at ``load`` from its converged ``(load, value)`` pairs
+    ``held`` (one at least): the tangent through the last two, the last value alone after
+    the first."""
+    p_last, v_last = held[-1]
+    predicted = v_last
+    if len(held) > 1 and held[-2][0] != p_last:
+        p_prev, v_prev = held[-2]
+        predicted += (v_last - v_prev) / (p_last - p_prev) * (load - p_last)
+    return predicted
+
+
+def note_force_jump(
+    scalars: dict[str, Any], held: Sequence[tuple[float, float]], approach: float
+) -> None:
+    """Under the punch's approach control, where the area may not tell (a contact that
+    shrinks fast before it jumps out of contact): set ``branch_jump`` and warn where the force
+    misses its branch's tangent through the last two converged ``held`` ``(approach,
+    force)`` by more than :data:`JUMP_AREA` of the largest force, in magnitude, of it and
+    them (the steps since the last jump).  A step already flagged, one that did not
+    converge, or one with fewer than two before it is not judged."""
+    force = scalars["force"]
+    if scalars["branch_jump"] or not scalars["converged"] or len(held) < 2:
+        return
+    largest = max(abs(force), *(abs(f) for _, f in held))
+    if abs(force - tangent(held, approach)) > JUMP_AREA * largest:
+        scalars["branch_jump"] = True
+        warnings.warn(
+            f"at the approach {approach:.4g} the force jumped from {held[-1][1]:.4g} to "
+            f"{force:.4g}: the step left its branch (a jump into or out of contact)",
+            BranchJump,
+            stacklevel=2,
+        )
+
+
+def pull_off_pressure(
+    steps: Sequence[dict[str, Any]], controls: Sequence[float] | None = None
+) -> tuple[float, bool]:
     """The pull-off estimate of a load cycle's step ``scalars``: the most tensile converged
     nominal pressure with contact on the unloading branch (the steps after the largest
-    pressure), and whether it is bracketed (a more tensile step of that branch pulled off).
-    NaN where the unloading branch has no converged step in contact."""
-    loads = [s["nominal_pressure"] for s in steps]
+    load: ``controls``, each step's, by default its nominal pressure; the punch's approach
+    under displacement control), and whether it is bracketed (a more tensile step of that
+    branch pulled off).  NaN where the unloading branch has no converged step in contact."""
+    loads = [s["nominal_pressure"] for s in steps] if controls is None else list(controls)
     unloading = steps[int(np.argmax(loads)) :] if loads else []
     held = [s for s in unloading if s["converged"] and s["area_fraction"] > 0]
     if not held:

@@ -14,6 +14,12 @@ each TAO iteration (never TAO's own gnorm, which means different things for diff
 With a hardness cap the scene is posed in the pressure (:class:`PressurePosed`): the
 reference reaches ``mean(p) = p0`` by Newton on the approach, every solver solves at that
 approach, and the natural residual is the box's (``0 <= p <= H``), in units of ``p0``.
+With an adhesive law the cell is posed in the gap with the law's energy
+(:class:`AdhesivePosed`): the reference is ``blmvm`` at the same tolerance, the natural
+residual the law's, ``rms(min(k g, p + phi'(g))) / p0``, and the package's CG (``cg``,
+``pk``: a QP solver) is refused, a solver that failed saying why; the punch with an
+adhesive law is compared so from Python (:class:`AdhesivePunchPosed`, measured on its
+footprint).
 
 The reference is the default solver at ``REFERENCE_GATOL`` (or the rounding floor); its own
 natural residual is stored, so the reference's accuracy is stated next to every error.
@@ -44,10 +50,13 @@ from ..backend import _petsc
 from ..backend.solve import BOUND_TYPES, BoundSolver, SolveInfo
 from ..backend.tao import PetscBackend
 from ..conventions.warnings import user_level
+from ..geometries.adhesive_periodic import QP_ONLY, AdhesivePeriodicProblem
+from ..geometries.adhesive_punch import AdhesivePunchProblem
 from ..geometries.capped_periodic import CappedPeriodicProblem
 from ..geometries.periodic import PeriodicProblem
 from ..geometries.punch import PressureProblem
-from ..geometries.step import residual_verdict
+from ..geometries.step import residual_verdict, solve_step
+from ..interactions.adhesion import Adhesion
 from ..interactions.hard_wall import HARD_WALL
 from ..interactions.interaction import Interaction
 from ..io.atomic import atomic_h5, on_root, replaced, storage
@@ -251,12 +260,89 @@ class GapPosed:
         """The natural residual over ``p0`` is in the unit of TAO's tolerance: 1."""
         return 1.0
 
+    def refusal(self, backend: PetscBackend) -> str | None:
+        """Why ``backend``'s solver cannot solve the problem: never."""
+        return None
+
     def fields(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The gap, the pressure and the natural residual (a pressure) of TAO's iterate."""
         problem = self.problem
         gap = x.reshape(problem.grid.local_shape) * problem.scale_length
         p = problem.pressure(gap)
         return gap, p, natural_residual(gap, p, problem.pixel_stiffness)
+
+
+class AdhesivePosed(GapPosed):
+    """The periodic cell with an adhesive law, posed in the gap with the law's energy
+    (:class:`~petsc_contact.geometries.adhesive_periodic.AdhesivePeriodicProblem`): what
+    :func:`compare` asks of it, as of :class:`GapPosed`, with the law's natural residual and
+    pressure scale, a ``blmvm`` reference and the package's CG refused."""
+
+    problem: AdhesivePeriodicProblem
+
+    def __init__(self, problem: AdhesivePeriodicProblem) -> None:
+        super().__init__(problem)
+        self.nominal = np.nan
+
+    def reference(self, pressure: float) -> Reference:
+        """``blmvm`` at :data:`REFERENCE_GATOL` (or the rounding floor) from first touch;
+        raises if it fails.  Its pressure is the elastic one, tension included."""
+        problem = self.problem
+        with _petsc.scoped_options(["-tao_type", "blmvm", "-tao_gatol", str(REFERENCE_GATOL)]):
+            backend = PetscBackend()
+            x0, _ = self.pose(pressure, backend)
+            with backend.solver(problem) as solver:
+                watch = problem.separation_monitor(None)
+                step, x = solve_step(solver, problem, x0, watch)
+        if not step.converged:
+            raise RuntimeError(f"reference solve failed: {step.scalars['verification']}")
+        _, p, r = self.fields(x)
+        (r2,) = self.grid.sum(np.vdot(r, r))
+        s = step.scalars
+        rms = float(np.sqrt(r2 / self.grid.size)) / pressure
+        return Reference(p, s["mean_gap"], rms, s["tolerance"], s["iterations"])
+
+    def pose(self, pressure: float, backend: PetscBackend) -> tuple[np.ndarray, float]:
+        """As :meth:`GapPosed.pose`, with the law's floor (in units of ``P``)."""
+        x0, _ = super().pose(pressure, backend)
+        self.nominal = pressure
+        return x0, self.problem.tolerance_floor()
+
+    def tolerance_unit(self) -> float:
+        """The natural residual over ``p0`` in the unit of TAO's tolerance: ``p0 / P``."""
+        return self.nominal / self.problem.pressure_scale
+
+    def refusal(self, backend: PetscBackend) -> str | None:
+        """The package's CG (a QP solver) cannot: its one-line refusal."""
+        return QP_ONLY if backend.runs_default_type else None
+
+    def fields(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The gap, the pressure and the law's natural residual, ``min(k g, p + phi'(g))``."""
+        gap, p, _ = super().fields(x)
+        k = self.problem.pixel_stiffness
+        return gap, p, k * self.problem.adhesion.residual(gap, p, k)
+
+
+class AdhesivePunchPosed(AdhesivePosed):
+    """The punch with an adhesive law (:class:`~petsc_contact.geometries.adhesive_punch.
+    AdhesivePunchProblem`) at a nominal pressure over its face: as :class:`AdhesivePosed`,
+    measured on the footprint grid (the solver's unknown is the padded cell's; the traction
+    off the face is left out of the natural residual)."""
+
+    problem: AdhesivePunchProblem
+
+    def __init__(self, problem: AdhesivePunchProblem) -> None:
+        super().__init__(problem)
+        self.grid = problem.face_grid
+
+    def fields(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The footprint's gap, pressure and law's natural residual (0 off the footprint)."""
+        problem = self.problem
+        gap = x.reshape(problem.grid.local_shape) * problem.scale_length
+        gap, p = problem.to_face(gap), problem.to_face(problem.pressure(gap))
+        k, on = problem.pixel_stiffness, problem.footprint
+        attraction = problem.adhesion.derivative(np.where(on, gap, np.inf))
+        return gap, p, np.where(on, np.minimum(k * gap, p + attraction), 0.0)
 
 
 class PressurePosed:
@@ -315,6 +401,10 @@ class PressurePosed:
         gap = problem.gap(p)
         k = problem.pixel_stiffness
         return gap, p, k * problem.interaction.residual(gap, p, k)
+
+    def refusal(self, backend: PetscBackend) -> str | None:
+        """Why ``backend``'s solver cannot solve the problem: never."""
+        return None
 
 
 Posed = GapPosed | PressurePosed
@@ -459,6 +549,10 @@ def _trajectory(
     problem = posed.problem
     with _petsc.scoped_options(traj.options):
         backend = PetscBackend()  # this solver's options, its two-level form's among them
+        refused = posed.refusal(backend)
+        if refused is not None:  # a failed solver, saying why
+            traj.reason = traj.verification = f"refused: {refused}"
+            return traj
         x0, floor = posed.pose(pressure, backend)
         with backend.solver(problem) as s:
             recorder = _Recorder(posed, reference, pressure, traj, s, time_limit, stall_iterations)
@@ -533,7 +627,8 @@ def compare_into(
     (:func:`finished_solvers`); a finished solver whose options changed is solved again.
     ``report(trajectory)`` is called with each finished solver: first those an interrupted
     comparison kept, then each as it is committed.  An ``interaction`` that caps the pressure
-    (a hardness) poses the cell in the pressure (:class:`PressurePosed`).
+    (a hardness) poses the cell in the pressure (:class:`PressurePosed`), an adhesive law in
+    the gap with its energy (:class:`AdhesivePosed`).
     """
     grid, fft, heights = scene.grid, scene.fft, scene.heights
     problem = posed_cell(scene, modulus, interaction)
@@ -570,11 +665,14 @@ def compare_into(
 
 
 def posed_cell(scene: Any, modulus: float, interaction: Interaction) -> PeriodicProblem | Posed:
-    """The periodic cell of ``scene``: posed in the gap (the hard wall), or in the pressure
-    for an ``interaction`` that caps it (:class:`PressurePosed`)."""
+    """The periodic cell of ``scene``: posed in the gap (the hard wall; with an adhesive law's
+    energy, :class:`AdhesivePosed`), or in the pressure for an ``interaction`` that caps it
+    (:class:`PressurePosed`)."""
     grid, fft, heights = scene.grid, scene.fft, scene.heights
     if interaction is HARD_WALL:
         return PeriodicProblem(grid, fft, heights, modulus)
+    if isinstance(interaction, Adhesion):
+        return AdhesivePosed(AdhesivePeriodicProblem(grid, fft, heights, modulus, interaction))
     capped = CappedPeriodicProblem(grid, fft, heights, modulus, interaction)
     return PressurePosed(capped, PeriodicProblem(grid, fft, heights, modulus))
 

@@ -144,12 +144,12 @@ class Run:
         :class:`~petsc_contact.interactions.hardness.HardnessCap`); whether every step adds
         the exact stiffness.
     adhesion, work_of_adhesion, interaction_range
-        An adhesive law on the periodic half-space (``exponential``, ``maugis``; ``None``: the
-        hard wall), its work of adhesion ``w`` (units of ``E*`` times the length unit) and
-        range ``rho`` (a length, ``"5nm"`` with a unit;
-        :class:`~petsc_contact.interactions.adhesion.Adhesion`): the nominal pressures may
-        then be zero or tensile, and a sweep ``(N, PMIN, PMAX)`` is a load cycle
-        (:func:`cycled`).
+        An adhesive law on the half-space, periodic or under the punch (``exponential``,
+        ``maugis``; ``None``: the hard wall), its work of adhesion ``w`` (units of ``E*``
+        times the length unit) and range ``rho`` (a length, ``"5nm"`` with a unit;
+        :class:`~petsc_contact.interactions.adhesion.Adhesion`): the nominal pressures and
+        the punch's forces and approaches may then be zero or negative, and a periodic sweep
+        ``(N, PMIN, PMAX)`` is a load cycle (:func:`cycled`).
     output, fields, scalars_only, resume, overwrite, stop_after
         The HDF5 file (none: results only in memory), whether the fields of every step are
         stored, whether the height map is left out, whether an interrupted run is continued
@@ -245,8 +245,8 @@ class Run:
             if len(values) == 0:
                 raise ValueError(f"{flag} needs at least one value")
             check = non_negative if name == "approaches" else positive  # an approach may be 0
-            if name == "pressures" and self.adhesion is not None:
-                continue  # tension is held by the attraction: any finite pressure
+            if name != "mean_gaps" and self.adhesion is not None:
+                continue  # tension is held by the attraction: any finite load
             for v in values:
                 check(flag, parse_quantity(v, units, flag).value)
 
@@ -279,11 +279,17 @@ class Run:
             raise ValueError("--adhesion needs --work-of-adhesion W and --interaction-range RHO")
         others = ("thickness", "hardness", "stiffness")
         given_others = [o for o in others if getattr(self, o) not in (None, False)]
-        if self.geometry != "periodic" or given_others:
-            flags = ", ".join("--" + o.replace("_", "-") for o in given_others) or "the punch"
+        if given_others:
+            flags = ", ".join("--" + o.replace("_", "-") for o in given_others)
             raise ValueError(
-                f"--adhesion with {flags}: an adhesive run is periodic, on the "
-                "half-space, and takes --pressures, a --sweep (a load cycle) or --mean-gaps"
+                f"--adhesion with {flags}: an adhesive run is on the half-space and takes "
+                "--pressures, a --sweep (a load cycle) or --mean-gaps (periodic), --approaches, "
+                "--forces or --pressures (punch)"
+            )
+        if self.sweep is not None and self.geometry != "periodic":
+            raise ValueError(
+                "--sweep with --adhesion is the periodic cell's load cycle: give the punch "
+                "--approaches, --forces or --pressures"
             )
         if self.sweep is not None and len(self.sweep) != 3:
             raise ValueError("--sweep with --adhesion is a load cycle: give N,PMIN,PMAX")

@@ -29,6 +29,7 @@ import numpy as np
 from ..backend.solve import Monitor
 from ..conventions.units import force_value, format_quantity, length_value, pressure_value
 from ..geometries.adhesive_periodic import AdhesivePeriodicProblem, check_solver
+from ..geometries.adhesive_punch import AdhesivePunchProblem
 from ..geometries.capped_periodic import CappedPeriodicProblem
 from ..geometries.periodic import LARGEST_LOAD, PeriodicProblem
 from ..geometries.punch import PunchProblem, footprint_mask
@@ -97,6 +98,8 @@ def driver_for(run: Run, scene: Scene, backend: SolverBackend) -> Driver:
     (:class:`CappedPeriodicDriver`), one with adhesion in the gap with the law's energy
     (:class:`AdhesivePeriodicDriver`)."""
     if run.geometry == "punch":
+        if run.adhesion is not None:
+            return AdhesivePunchDriver(run, scene, backend)
         return PunchDriver(run, scene, backend)
     if run.adhesion is not None:
         return AdhesivePeriodicDriver(run, scene, backend)
@@ -260,10 +263,7 @@ class AdhesivePeriodicDriver:
 
     def __init__(self, run: Run, scene: Scene, backend: SolverBackend) -> None:
         check_solver(backend)
-        assert run.adhesion and run.work_of_adhesion and run.interaction_range  # Run checked
-        unit = scene.resolved["length_unit"] or None
-        rho = length_value(run.interaction_range, unit, "--interaction-range")
-        law = Adhesion(run.adhesion, run.work_of_adhesion, rho)
+        law = adhesive_law(run, scene)
         self.by_mean_gap = run.mean_gaps is not None
         if self.by_mean_gap:
             self.loads, self.resolved = _mean_gaps(run, scene.resolved["length_unit"])
@@ -276,7 +276,7 @@ class AdhesivePeriodicDriver:
         )
         problem.filled = scene.filled
         self.run, self.problem, self.solver = run, problem, problem_solver(problem)
-        self.intro = f", {law.law} adhesion w = {law.work:.4g}, rho = {rho:.4g}"
+        self.intro = adhesive_intro(law)
         self.backend = type(problem.stiffness.fft).__name__
 
     def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
@@ -284,6 +284,70 @@ class AdhesivePeriodicDriver:
         state = start[0] if start else None
         solve = adhesive_mean_gap_sweep if self.by_mean_gap else adhesive_sweep
         return solve(self.problem, loads, self.run.fields, monitor, state, self.solver)
+
+    def close(self) -> None:
+        """Release the solver."""
+        self.solver.close()
+
+
+def adhesive_law(run: Run, scene: Scene) -> Adhesion:
+    """The adhesive law of ``run`` (its range in the scene's length unit)."""
+    assert run.adhesion and run.work_of_adhesion and run.interaction_range  # Run checked
+    unit = scene.resolved["length_unit"] or None
+    rho = length_value(run.interaction_range, unit, "--interaction-range")
+    return Adhesion(run.adhesion, run.work_of_adhesion, rho)
+
+
+def adhesive_intro(law: Adhesion) -> str:
+    """The line an adhesive run's intro adds."""
+    return f", {law.law} adhesion w = {law.work:.4g}, rho = {law.range:.4g}"
+
+
+class AdhesivePunchDriver:
+    """A punch run with an adhesive law: approaches (any sign) or forces (``forces``, or
+    nominal pressures over the face; any sign) in order, each from the last converged step
+    (:func:`~petsc_contact.workflows.adhesive_steps.adhesive_sweep`, the approaches by
+    :meth:`~petsc_contact.geometries.adhesive_punch.AdhesivePunchProblem.set_approach`), by
+    one of TAO's bound solvers (the package's CG refused).  Its problem is posed on
+    ``scene`` with ``run``'s footprint, or given (the Python API's)."""
+
+    def __init__(
+        self,
+        run: Run,
+        scene: Scene,
+        backend: SolverBackend,
+        problem: AdhesivePunchProblem | None = None,
+    ) -> None:
+        check_solver(backend)
+        law = adhesive_law(run, scene)
+        if problem is None:
+            mask, _ = footprint_mask(scene.grid, run.footprint)
+            problem = AdhesivePunchProblem(
+                scene.grid, scene.heights, run.modulus_value, law, mask, backend,
+                device=scene.fft.device,
+            )  # fmt: skip
+        if sum(v is not None for v in (run.forces, run.approaches, run.pressures)) != 1:
+            raise ValueError("give one of --approaches, --forces and --pressures")
+        self.by_approach = run.approaches is not None
+        self.loads, self.resolved = _punch_loads(run, problem, scene.resolved["length_unit"])
+        for load in self.loads:
+            law.check_nominal(load, "--approaches" if self.by_approach else "the force")
+        self.run, self.problem, self.solver = run, problem, problem_solver(problem)
+        self.intro = adhesive_intro(law)
+        self.backend = type(problem.stiffness.fft).__name__
+
+    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
+        """The cycle of ``loads`` from first touch (``start`` refused: an adhesive punch run
+        is not resumed)."""
+        if start is not None:
+            raise ValueError("an adhesive punch run starts from first touch: it is not resumed")
+        pb = self.problem
+        if self.by_approach:
+            return adhesive_sweep(
+                pb, loads, self.run.fields, monitor, None, self.solver, pb.set_approach
+            )
+        pressures = [force / pb.face_area for force in loads]
+        return adhesive_sweep(pb, pressures, self.run.fields, monitor, None, self.solver)
 
     def close(self) -> None:
         """Release the solver."""
@@ -411,7 +475,7 @@ def _check_forces(forces: list[float], problem: PunchProblem, run: Run) -> None:
 
 
 def _punch_loads(
-    run: Run, problem: PunchProblem, length_unit: str
+    run: Run, problem: PunchProblem | AdhesivePunchProblem, length_unit: str
 ) -> tuple[list[float], dict[str, Any]]:
     """The punch's approaches or forces in the run's units (their signs checked by
     :class:`Run`), and what its record adds: a sweep's approaches, or the forces of loads given

@@ -592,7 +592,7 @@ _ADHESION = (
         "adhesion",
         "an adhesive law beside the hard wall: exponential (the interaction energy per area "
         "-w exp(-g/rho)) or maugis (Maugis-Dugdale: the attraction w/rho below g = rho)",
-        ("periodic",),
+        ("periodic", "punch", "compare"),
         choices=("exponential", "maugis"),
         shown_default="none: the hard wall",
         more="Posed in the gap with the interaction energy added (not convex; "
@@ -604,20 +604,24 @@ _ADHESION = (
         "step under tension whose surfaces came apart is not converged (`pulled off`); a "
         "`--mean-gaps` cycle back to its first mean gap records `hysteresis_energy`, the "
         "energy per area it lost. Takes `--pressures`, a `--sweep` (a load cycle) or "
-        "`--mean-gaps` on the half-space",
+        "`--mean-gaps` on the periodic half-space; the punch (posed in the "
+        "displacement of its zero-padded cell) takes `--approaches` (any sign: negative "
+        "pulls back beyond first touch), `--forces` or `--pressures` (tension too). `compare` "
+        "solves its scene with the law (the reference: `blmvm` at 1e-12; `cg` and `pk` "
+        "refused)",
     ),
     _option(
         "work_of_adhesion",
         "the work of adhesion w of --adhesion: an energy per area (units of E* times the "
         "length unit)",
-        ("periodic",),
+        ("periodic", "punch", "compare"),
         metavar="W",
         parse=float,
     ),
     _option(
         "interaction_range",
         "the range rho of --adhesion, with an optional unit (5nm)",
-        ("periodic",),
+        ("periodic", "punch", "compare"),
         metavar="RHO",
         parse=quantity,
         unit="length",

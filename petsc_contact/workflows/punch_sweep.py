@@ -17,16 +17,17 @@ import numpy as np
 
 from ..backend import _petsc
 from ..backend.solve import Monitor
-from ..conventions.grid import grid_for
+from ..conventions.grid import Grid, grid_for
 from ..conventions.validation import check_finite, keywords_after_first, non_negative, positive
 from ..devices.device import Device, get_device
+from ..geometries.adhesive_punch import AdhesivePunchProblem
 from ..geometries.punch import PunchProblem, footprint_mask
 from ..geometries.step import Step, Steps
 from ..interactions.interaction import Interaction
 from ..io.topography import Heights, map_and_lengths
 from ..solver.backends import SolverBackend
 from .description import Run
-from .drivers import PunchDriver
+from .drivers import AdhesivePunchDriver, PunchDriver, adhesive_law
 from .newton import MAX_NEWTON
 from .periodic_steps import Progress
 from .periodic_sweep import api_run
@@ -78,34 +79,33 @@ def punch_contact(
     flat: str | None = None,
     device: str = "cpu",
     hardness: float | None = None,
+    adhesion: str | None = None,
+    work_of_adhesion: float | None = None,
+    interaction_range: float | str | None = None,
 ) -> Steps:
     """Press a rigid punch with face ``heights`` into a free elastic half-space.
 
-    The parameters after ``heights`` are keywords, named as ``Run``'s fields and the command
-    line's options (by position they work until 0.3.0, with a ``DeprecationWarning``).
+    Keywords after ``heights``, as ``Run``'s (by position until 0.3.0, deprecated).
 
     Parameters
     ----------
     heights, length, modulus
-        The punch face's full ``nx x ny`` height map in any form, the footprint's sides
-        (``Lp`` for a square patch) and the contact modulus ``E*``, as for
-        :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact`.
+        The face's full ``nx x ny`` map in any form, its sides (``Lp``: a square) and ``E*``,
+        as for :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact`.
     approaches, forces
-        Exactly one of them: rigid approaches ``δ`` beyond first touch (displacement
-        control), or total forces ``F`` (load control).  Solved in order, warm-started; one
-        number is one load.
+        Exactly one: rigid approaches ``δ`` beyond first touch (displacement control), or
+        total forces ``F`` (load control), solved in order, warm-started (one number: one).
     options, fields, progress, monitor, comm, device
-        As for :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact` (``device``
-        too: ``cpu``, TAO; ``gpu`` or ``cpu-array``, the package's CG without petsc4py).
-    stiffness, hardness
-        Add the exact interfacial stiffness to every step, and cap the pressure at
-        ``hardness`` (``None``: no cap), as ``Run``'s ``stiffness`` and ``hardness`` do.
-    footprint
-        ``square`` (default) or ``disk``, as ``Run``'s, or a full ``nx x ny`` boolean mask.
-    flat_stiffness, beta
-        Paper Eq. 2's flat punch, ``grid``, ``analytic`` (``beta 2 E* sqrt(A/pi)``, ``beta``
-        by default the footprint's, :func:`footprint_mask`) or ``king`` (square only);
-        ``flat``, its deprecated name (a ``DeprecationWarning``; removed in 0.3.0).
+        As for :func:`~petsc_contact.workflows.periodic_sweep.periodic_contact` (``device``:
+        ``cpu``, TAO; ``gpu`` or ``cpu-array``, the package's CG without petsc4py).
+    stiffness, hardness, adhesion, work_of_adhesion, interaction_range
+        As ``Run``'s: every step's exact interfacial stiffness, a cap on the pressure, an
+        adhesive law (``-tao_type blmvm``, ``bncg``; approaches and forces of any sign).
+    footprint, flat_stiffness, beta
+        ``square`` (default), ``disk`` or a full ``nx x ny`` boolean mask; paper Eq. 2's flat
+        punch, ``grid``, ``analytic`` (``beta 2 E* sqrt(A/pi)``, ``beta`` by default the
+        footprint's, :func:`footprint_mask`) or ``king`` (square only); ``flat``, its
+        deprecated name (a ``DeprecationWarning``; removed in 0.3.0).
 
     Returns
     -------
@@ -113,8 +113,9 @@ def punch_contact(
         A list, one per load in order (``to_dataframe()``: a table); the last keeps ``state``.
     """
     face = (footprint, _renamed_flat(flat, flat_stiffness), beta)
-    kept = {"fields": fields, "stiffness": stiffness, **_punch_loads(approaches, forces)}
-    kept |= {"hardness": hardness}
+    kept: dict[str, Any] = {**_punch_loads(approaches, forces, adhesion is not None)}
+    kept.update(fields=fields, stiffness=stiffness, hardness=hardness, adhesion=adhesion)
+    kept.update(work_of_adhesion=work_of_adhesion, interaction_range=interaction_range)
     array, sides, _ = map_and_lengths(heights, length)
     run = api_run(array, sides, modulus, options, device, geometry="punch", **kept)
     posing = partial(_posed, array, sides, modulus, face, comm)
@@ -122,17 +123,19 @@ def punch_contact(
 
 
 def _punch_loads(
-    approaches: float | Sequence[float] | None, forces: float | Sequence[float] | None
+    approaches: float | Sequence[float] | None,
+    forces: float | Sequence[float] | None,
+    adhesive: bool = False,
 ) -> dict[str, list[float]]:
     """The loads of :func:`punch_contact`, ``{"approaches": [...]}`` or ``{"forces": [...]}``
     as :class:`Run` takes them: exactly one of them given, at least one load, every force
-    positive and no approach negative (``ValueError`` otherwise, as
+    positive and no approach negative unless ``adhesive`` (``ValueError`` otherwise, as
     :meth:`PunchSolver.at_force` and the problem say it)."""
     given, label = (approaches, "approach") if approaches is not None else (forces, "force")
     values = [float(v) for v in np.atleast_1d(given if given is not None else [])]
     if (approaches is None) == (forces is None) or not values:
         raise ValueError("give either approaches or forces, at least one of them")
-    for value in values:  # as the problem and the solver check them, before any is solved
+    for value in [] if adhesive else values:  # as the problem and the solver check them
         (positive if forces is not None else non_negative)(label, value)
     return {"approaches" if forces is None else "forces": values}
 
@@ -145,10 +148,17 @@ def _posed(
     comm: Any,
     run: Run,
     backend: SolverBackend,
-) -> tuple[Scene, PunchDriver]:
+) -> tuple[Scene, PunchDriver | AdhesivePunchDriver]:
     """:func:`punch_contact`'s scene and driver: its problem (:func:`_punch_problem`) on
     ``run``'s device, with the footprint, flat punch and shape factor ``described``."""
     face = _PunchFace(*described, get_device(run.device), backend, run.interaction)
+    if run.adhesion is not None:
+        grid, local, (mask, _) = _face_map(array, sides, face, comm)
+        scene = posed_scene(grid)
+        law = adhesive_law(run, scene)
+        posed = AdhesivePunchProblem(grid, local, modulus, law, mask, backend, device=face.device)
+        check_map(array, grid, periodic=False)
+        return scene, AdhesivePunchDriver(run, scene, backend, posed)
     problem = _punch_problem(array, sides, modulus, face, comm)
     scene = posed_scene(problem.grid)
     return scene, PunchDriver(run, scene, backend, problem)
@@ -173,10 +183,7 @@ def _punch_problem(
 ) -> PunchProblem:
     """:func:`punch_contact`'s problem: the map and the footprint scattered on its grid; the
     map checked as a run's scene checks it (:func:`check_map`)."""
-    grid = grid_for(array.shape, sides, comm)
-    local = grid.scatter(array)
-    check_finite(grid, local)
-    mask, shape = footprint_mask(grid, face.footprint)
+    grid, local, (mask, shape) = _face_map(array, sides, face, comm)
     beta = shape if face.beta is None else face.beta
     problem = PunchProblem(
         grid,
@@ -191,6 +198,17 @@ def _punch_problem(
     )
     check_map(array, grid, periodic=False)
     return problem
+
+
+def _face_map(
+    array: np.ndarray, sides: tuple[float, float], face: _PunchFace, comm: Any
+) -> tuple[Grid, np.ndarray, tuple[Any, float]]:
+    """The grid of :func:`punch_contact`'s map, its local slab (checked finite) and the
+    footprint's mask and shape factor (:func:`footprint_mask`)."""
+    grid = grid_for(array.shape, sides, comm)
+    local = grid.scatter(array)
+    check_finite(grid, local)
+    return grid, local, footprint_mask(grid, face.footprint)
 
 
 def _renamed_flat(flat: str | None, flat_stiffness: str) -> str:

@@ -165,15 +165,14 @@ def note_jump(
     it and the last converged step's.  ``held`` are the converged steps' ``(p0, area)`` so
     far (``control``: the load, by default ``p0``; under displacement control minus the mean
     gap, or the punch's approach): the prediction is the tangent through the last two (the
-    last area alone after the first), clipped to ``[0, 1]``; a step that did not converge,
-    or the first, is not judged, and one whose area is the last one's (still apart, say)
-    never jumped."""
+    last area alone after the first); a step that did not converge, or the first, is not
+    judged, and one whose area is the last one's (still apart, say) never jumped."""
     area, p0 = scalars["area_fraction"], scalars["nominal_pressure"]
     load = p0 if control is None else control
     jumped = False
     if scalars["converged"] and held:
         a_last = held[-1][1]
-        predicted = min(max(tangent(held, load), 0.0), 1.0)  # an area fraction
+        predicted = tangent(held, load)
         jumped = area != a_last and abs(area - predicted) > JUMP_AREA * max(area, a_last)
     scalars["branch_jump"] = jumped
     if jumped:

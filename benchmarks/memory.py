@@ -3,9 +3,13 @@ peak memory per rank of a run on several ranks.
 
 usage: .venv/bin/python benchmarks/memory.py [--grids 1024 2048 4096] [--punch-grids 512 1024]
        [--loads N]  (N > 1: a sweep of N loads with the exact stiffness at each, as the study's)
+       [--stiffness]  (the exact stiffness also of a single load)
        .venv/bin/python benchmarks/memory.py --ranks 1 2 4 8 [--grids 4096] [--loads 2]
 Each case runs in a fresh process; peak resident memory (ru_maxrss) minus the resident memory
 of the same process before the grid is allocated, divided by n^2, is bytes per grid point.
+Between consecutive grids of a geometry and solver, the difference of the peaks over the points
+added is the marginal cost per point, free of every per-process constant (the compiled kernels,
+PETSc, the FFT's plans): the figure a large grid's memory is estimated from.
 
 With ``--ranks``, each grid runs as ``petsc-contact periodic --fields --stiffness`` would,
 written to a file (``--loads`` loads from 1e-3 to 1e-2 of the modulus), under
@@ -36,13 +40,14 @@ from petsc_contact.backend import _petsc
 from petsc_contact.workflows import scenes
 _petsc.init([])
 geometry, n, solver, loads = sys.argv[1], int(sys.argv[2]), sys.argv[3], int(sys.argv[4])
+stiffness = loads > 1 or sys.argv[5] == "1"
 opts = [] if solver == "cg" else ["-tao_type", solver]
 h, _ = scenes.surface(n, 0.7, 2.0, n / 4, 1)
 base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 t = time.perf_counter()
 scale = np.geomspace(1e-3, 1.0, loads) if loads > 1 else np.ones(1)
 if geometry == "periodic":
-    steps = periodic_contact(h, 1.0, 1.0, 1e-2 * scale, options=opts, stiffness=loads > 1)
+    steps = periodic_contact(h, 1.0, 1.0, 1e-2 * scale, options=opts, stiffness=stiffness)
 else:
     approaches = 3 * h.std() * scale
     steps = punch_contact(h, 1.0, 1.0, approaches=approaches, options=opts)
@@ -129,12 +134,31 @@ def rank_table(grids: list[int], sizes: list[int], loads: int, small: int) -> No
                   f"{r['time']:.0f} |", flush=True)  # fmt: skip
 
 
+def case(geometry: str, n: int, solver: str, loads: int, stiffness: bool) -> dict | None:
+    """One case in a fresh process: its peak, bytes per point, iterations, time."""
+    command = [sys.executable, "-c", CHILD, geometry, str(n), solver, str(loads)]
+    out = subprocess.run([*command, str(int(stiffness))], capture_output=True, text=True)
+    line = [text for text in out.stdout.splitlines() if text.startswith("{")]
+    if not line:
+        print(f"{geometry} {n} {solver}: failed: {out.stderr.strip().splitlines()[-1:]}")
+        return None
+    r = json.loads(line[0])
+    print(
+        f"{geometry:>8} {n:>5} {solver:>6}: {r['bytes_per_point']:6.0f} B/point, "
+        f"peak {r['peak_GiB']:.3f} GiB, {r['iterations']} its, {r['time']:.1f} s, "
+        f"converged {r['converged']}",
+        flush=True,
+    )
+    return r
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grids", type=int, nargs="+", default=[1024, 2048, 4096])
     ap.add_argument("--punch-grids", type=int, nargs="*", default=[512, 1024, 2048])
     ap.add_argument("--solvers", nargs="+", default=["cg", "tron", "bqnls"])
     ap.add_argument("--loads", type=int, default=1, help="loads per run (default: one step)")
+    ap.add_argument("--stiffness", action="store_true", help="the exact stiffness of one load too")
     ap.add_argument("--ranks", type=int, nargs="*", help="peak memory per rank on these ranks")
     ap.add_argument("--constant-grid", type=int, default=128, help="the per-process constant's")
     args = ap.parse_args()
@@ -143,23 +167,15 @@ def main() -> None:
         return
     cases = [("periodic", n, s) for n in args.grids for s in args.solvers]
     cases += [("punch", n, "cg") for n in args.punch_grids]
+    peaks: dict[tuple[str, str], list[tuple[int, float]]] = {}
     for geometry, n, solver in cases:
-        out = subprocess.run(
-            [sys.executable, "-c", CHILD, geometry, str(n), solver, str(args.loads)],
-            capture_output=True,
-            text=True,
-        )
-        line = [text for text in out.stdout.splitlines() if text.startswith("{")]
-        if not line:
-            print(f"{geometry} {n} {solver}: failed: {out.stderr.strip().splitlines()[-1:]}")
-            continue
-        r = json.loads(line[0])
-        print(
-            f"{geometry:>8} {n:>5} {solver:>6}: {r['bytes_per_point']:6.0f} B/point, "
-            f"peak {r['peak_GiB']:.2f} GiB, {r['iterations']} its, {r['time']:.1f} s, "
-            f"converged {r['converged']}",
-            flush=True,
-        )
+        r = case(geometry, n, solver, args.loads, args.stiffness)
+        if r is not None:
+            peaks.setdefault((geometry, solver), []).append((n, r["peak_GiB"] * 2.0**30))
+    for (geometry, solver), runs in peaks.items():  # the marginal cost: free of constants
+        for (m, low), (n, high) in zip(runs, runs[1:], strict=False):
+            added = (high - low) / (n * n - m * m)
+            print(f"{geometry} {solver}, {m}^2 -> {n}^2: {added:.0f} B per point added")
 
 
 if __name__ == "__main__":

@@ -49,42 +49,36 @@ __all__ += ["check_converged", "compact_bound"]
 
 class _VecArrays:
     """The arrays of a solve's Vecs, each remembering its Vec (the ``PC`` and ``Mat`` take
-    Vecs).  The work Vecs are kept from one solve to the next while the solution's layout
-    stays the same."""
+    Vecs).  The work Vecs are made for a solve and destroyed after it (:meth:`close`): the
+    exact stiffness solved after it, and a sweep's fields, take their place."""
 
     def __init__(self) -> None:
-        self.work: list[tuple[Any, Any]] = []  # (Vec, its array)
+        self.work: list[tuple[Any, Any]] = []  # (Vec, its array): the ids stay unique
         self.vecs: dict[int, Any] = {}
         self.template: Any = None
-        self.handed = 0
 
     def begin(self, x: Any) -> Any:
-        """Start a solve on the solution ``x``: its array; the work Vecs handed out afresh."""
-        if self.work and self.work[0][0].getSizes() != x.getSizes():
-            self.close()
-        self.template, self.handed = x, 0
-        self.solution = x.array
-        self.vecs = {id(array): vec for vec, array in self.work}
-        self.vecs[id(self.solution)] = x
-        return self.solution
+        """Start a solve on the solution ``x``: its array."""
+        self.template, solution = x, x.array
+        self.vecs = {id(solution): x}
+        return solution
 
     def new(self) -> Any:
-        """A work vector's array (a kept one, or a new Vec like the solution's)."""
-        if self.handed == len(self.work):
-            vec = self.template.duplicate()
-            self.work.append((vec, vec.array))
-            self.vecs[id(self.work[-1][1])] = vec
-        self.handed += 1
-        return self.work[self.handed - 1][1]
+        """A work vector's array, of a new Vec like the solution's."""
+        vec = self.template.duplicate()
+        array = vec.array
+        self.work.append((vec, array))
+        self.vecs[id(array)] = vec
+        return array
 
     def vec(self, array: Any) -> Any:
         return self.vecs[id(array)]
 
     def close(self) -> None:
-        """Destroy the work Vecs."""
+        """Destroy the work Vecs (no array of theirs may be used after)."""
         for vec, _ in self.work:
             vec.destroy()
-        self.work, self.vecs = [], {}
+        self.work, self.vecs, self.template = [], {}, None
 
 
 @cache
@@ -247,7 +241,10 @@ class PolonskyKeer:
             _reductions(tao.getComm()),
             x.getSize(),
         )
-        outcome = cg.run()
+        try:
+            outcome = cg.run()
+        finally:
+            arrays.close()
         if outcome.reason != MONITOR:
             tao.setConvergedReason(getattr(PETSc.TAO.Reason, outcome.reason))
 

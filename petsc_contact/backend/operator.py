@@ -204,6 +204,11 @@ class FourierOperator(SpectralOperator):
         """Another operator on the same FFT with the multiplier times ``factor``."""
         return self._with(self.multiplier * factor)
 
+    def sharing(self, multiplier: np.ndarray) -> FourierOperator:
+        """Another operator on the same FFT whose multiplier is ``multiplier``, an array of
+        this one's layout shared (not copied): what it is given it holds."""
+        return self._with(multiplier)
+
     def set_inverse(self, op: FourierOperator, support: float) -> None:
         """Become the inverse of ``op + support I`` on the same grid, in place.
 

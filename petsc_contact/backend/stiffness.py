@@ -52,7 +52,8 @@ def restricted_solve(
         The local slab of ``y`` (zero off the mask) and the CG iterations; NaN if CG did not
         converge (:func:`~petsc_contact.solver.linear.unconverged`).
     """
-    a_ctx, m_ctx = _Shell(op, mask, CPU), _Shell(pc, mask, CPU)
+    a_ctx = _Shell(op, mask, CPU)
+    m_ctx = _Shell(pc, mask, CPU, a_ctx.scratch)
     petsc = _petsc.petsc()
     mat = shell_matrix(petsc, a_ctx)
     # a PC of its own: one taken from ksp.getPC() keeps its Python context alive after
@@ -75,13 +76,13 @@ def restricted_solve(
         ksp.solve(b, y)
         reason = ksp.getConvergedReason()
         its = ksp.getIterationNumber()
-        out = y.array_r.copy().reshape(grid.local_shape)
-        for v in (b, y):
-            v.destroy()
     finally:
-        ksp.destroy()
+        ksp.destroy()  # its work Vecs freed before y is copied out
         pcobj.destroy()
         mat.destroy()
+    b.destroy()
+    out = y.array_r.copy().reshape(grid.local_shape)
+    y.destroy()
     if reason <= 0:
         names = {v: k for k, v in vars(petsc.KSP.ConvergedReason).items() if isinstance(v, int)}
         out = unconverged(out, f"KSP {names.get(reason, reason)}")

@@ -244,13 +244,15 @@ class PeriodicProblem:
             **info.scalars(verdict),
             "preconditioner_stiffness": self.interfacial_stiffness,
         }
+        kept = (gap, pressure) if fields else ()
+        del gap, pressure  # the stiffness solve's fields take their place unless kept
         if stiffness:
             scalars.update(self.held_set_stiffness(contact, verdict == "ok"))
         mark_full_contact(scalars)
         self.accuracy().assess(scalars)
         if not fields:
             return Step(scalars)
-        gap, pressure, contact = (device.to_host(a) for a in (gap, pressure, contact))
+        gap, pressure, contact = (device.to_host(a) for a in (*kept, contact))
         return Step(scalars, *contact_fields(gap, pressure, contact), contact=contact)
 
     def held_set_stiffness(self, contact: np.ndarray, converged: bool) -> dict[str, Any]:
@@ -322,9 +324,11 @@ class PeriodicProblem:
         return CoarseCorrected(compliance, space, work)
 
     def _compliance(self, support: float) -> FourierOperator:
-        """``1/(K + support)`` (normalised ``support``) in the one operator kept for it."""
+        """``1/(K + support)`` (normalised ``support``) in the one operator kept for it, whose
+        multiplier is the contact preconditioner's: the contact solve is over, and the next
+        :meth:`set_pressure` fills it again (no field more for the stiffness solve)."""
         if self._held is None:
-            self._held = self.stiffness.scaled(1.0)
+            self._held = self.stiffness.sharing(self.preconditioner.multiplier)
         self._held.set_inverse(self.stiffness, support)
         return self._held
 

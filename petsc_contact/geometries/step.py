@@ -158,13 +158,22 @@ def held_set_residual(
     """
     xp = device.xp
     held = device.asarray(mask).reshape(y.shape)
-    ay = op.apply_array(xp.where(held, y, 0.0), xp.empty_like(y))
+    off = ~held
+    work = xp.where(held, y, 0.0)
+    image = op.apply_array(work, xp.empty_like(y))
+    xp.subtract(1.0, image, out=image)  # 1 - A y: two fields beside y, each reused
 
     def preconditioned(v: Any) -> float:
-        mv = pc.apply_array(xp.where(held, v, 0.0), xp.empty_like(y))
-        return float(xp.vdot(mv, xp.where(held, mv, 0.0)))
+        """``|P M P v|^2`` (``v`` overwritten, ``work`` holds ``M P v``)."""
+        xp.copyto(v, 0.0, where=off)
+        mv = pc.apply_array(v, work)
+        xp.copyto(v, mv)
+        xp.copyto(v, 0.0, where=off)
+        return float(xp.vdot(mv, v))
 
-    r2, b2 = grid.sum(preconditioned(1.0 - ay), preconditioned(xp.ones_like(y)))
+    r2 = preconditioned(image)
+    image.fill(1.0)
+    r2, b2 = grid.sum(r2, preconditioned(image))
     if not b2 > 0:
         return 0.0
     residual = float(np.sqrt(r2 / b2))

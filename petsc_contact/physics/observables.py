@@ -243,18 +243,19 @@ def step_observables(
     xp = device.xp
     contact = contact_mask(gap, pressure, pixel_stiffness)
     sizes = patch_sizes(grid, contact, device=device)
+    # each field-sized temporary reduced and dropped before the next: two at a time at most
     p_plus = xp.maximum(pressure, 0.0)
     p_contact = xp.where(contact, p_plus, 0.0)
+    pc_sum, pc_largest = p_contact.sum(), largest(p_contact)
+    del p_contact
+    pg, p_sum = xp.vdot(p_plus, gap), p_plus.sum()
+    del p_plus
     r = natural_residual(gap, pressure, pixel_stiffness, device)
+    r2 = xp.vdot(r, r)
+    del r
+    work = xp.vdot(gap + heights, pressure - nominal_pressure)
     sums = grid.sum(
-        gap.sum(),
-        xp.count_nonzero(contact),
-        p_contact.sum(),
-        xp.vdot(gap + heights, pressure - nominal_pressure),
-        xp.vdot(p_plus, gap),
-        p_plus.sum(),
-        xp.vdot(r, r),
-        xp.vdot(heights, heights),
+        gap.sum(), xp.count_nonzero(contact), pc_sum, work, pg, p_sum, r2, xp.vdot(heights, heights)
     )
     g_sum, n_contact, pc_sum, work, pg, p_sum, r2, h2 = sums
     n = grid.size
@@ -266,7 +267,7 @@ def step_observables(
         "contact_patches": sizes.size,
         "contact_pressure_mean": pc_sum / n,
         "elastic_energy": 0.5 * work / n,
-        "max_pressure": grid.max(largest(p_contact)),
+        "max_pressure": grid.max(pc_largest),
         "min_gap": grid.min(float(gap.min())),
         "min_pressure": grid.min(float(pressure.min())),
         "complementarity": pg / (p_sum * h_rms) if p_sum > 0 and h_rms > 0 else 0.0,

@@ -47,22 +47,26 @@ class Restricted:
         ``P`` as a boolean array of ``op``'s fields.
     device
         Where the fields live (its element-wise passes).
+    scratch
+        A field of the device that every application overwrites (``P x``); give one
+        :class:`Restricted`'s :attr:`scratch` to another applied in turn with it (the
+        operator and the preconditioner of one solve) to share it; default: a new one.
     """
 
-    def __init__(self, op: Any, mask: Any, device: Device) -> None:
+    def __init__(self, op: Any, mask: Any, device: Device, scratch: Any = None) -> None:
         self.op = op
         self.grid = op.grid
         self.mask = mask.reshape(-1)
         self.passes = device.passes
-        self._masked = device.xp.empty(self.mask.shape)  # reused by every application
+        self.scratch = device.xp.empty(self.mask.shape) if scratch is None else scratch
         self.applications = 0
 
     def apply_array(self, x: Any, out: Any) -> Any:
         self.applications += 1
         out = out.reshape(-1)
         flat = x.reshape(-1)
-        self.passes.restrict(self._masked, flat, self.mask)
-        self.op.apply_array(self._masked, out)
+        self.passes.restrict(self.scratch, flat, self.mask)
+        self.op.apply_array(self.scratch, out)
         self.passes.fill_outside(out, flat, self.mask)
         return out
 
@@ -95,7 +99,8 @@ def held_set_solve(
     """
     xp = device.xp
     mask = device.asarray(mask).reshape(-1)
-    a, m = Restricted(op, mask, device), Restricted(pc, mask, device)
+    a = Restricted(op, mask, device)
+    m = Restricted(pc, mask, device, a.scratch)
     limit = max_it or 10 * grid.size
     b = mask.astype(float)
     y, r = xp.zeros_like(b), b.copy()

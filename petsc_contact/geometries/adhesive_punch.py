@@ -32,9 +32,9 @@ import numpy as np
 from ..backend.operator import RowExchange
 from ..backend.solve import SolveInfo
 from ..conventions.grid import Grid
+from ..devices.device import CPU, Device
+from ..devices.fft import make_fft
 from ..interactions.adhesion import Adhesion
-from ..numerics.device import CPU, Device
-from ..numerics.fft import make_fft
 from ..solver.backends import SolverBackend
 from ..substrates.half_space import FreeHalfSpace
 from ..substrates.padded import PaddedCell

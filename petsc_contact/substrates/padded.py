@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..conventions.grid import Grid
-from ..numerics.fft import FFT
+from ..devices.fft import FFT
 from .substrate import FreeSubstrate
 
 

@@ -6,7 +6,7 @@ solves a list of loads as a generator of steps, from first touch or a resumed st
 
     driver = driver_for(run, scene, backend)   # PeriodicDriver or PunchDriver
     try:
-        for step in driver.solve(driver.loads, None, None):
+        for step in driver.solve(driver.loads, None, None, []):
             ...
     finally:
         driver.close()
@@ -51,6 +51,10 @@ from .scene import Scene
 Start = tuple[np.ndarray, Held | None] | None
 """Where a resumed run's sweep goes on from: its last state (a local slab) and what the sweep
 held beside it (``None`` in a state file of an earlier version); ``None``: first touch."""
+Earlier = Sequence[dict[str, Any]]
+"""The scalars of the steps a resumed run finished (its committed table; none from the
+start): an adhesive cycle's history (its jumps, pull-off and hysteresis energy are of all
+its steps)."""
 
 
 class Driver(Protocol):
@@ -73,9 +77,11 @@ class Driver(Protocol):
     intro: str
     backend: str
 
-    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
-        """The steps of ``loads`` in order, from ``start`` (``None``: first touch); ``monitor``
-        sees every TAO iteration."""
+    def solve(
+        self, loads: list[float], start: Start, monitor: Monitor | None, earlier: Earlier
+    ) -> Iterator[Step]:
+        """The steps of ``loads`` in order, from ``start`` (``None``: first touch) after the
+        steps ``earlier``; ``monitor`` sees every TAO iteration."""
         ...
 
     def close(self) -> None:
@@ -145,7 +151,9 @@ class PeriodicDriver:
         )
         self.backend = type(problem.stiffness.fft).__name__
 
-    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
+    def solve(
+        self, loads: list[float], start: Start, monitor: Monitor | None, earlier: Earlier
+    ) -> Iterator[Step]:
         """The sweep of ``loads`` (:func:`~petsc_contact.workflows.periodic_sweep.sweep`)."""
         state, held = start or (None, None)
         run = self.run
@@ -206,7 +214,9 @@ class CappedPeriodicDriver:
         self.intro = f"{self.wall.intro}, hardness {hardness}"
         self.backend = self.wall.backend
 
-    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
+    def solve(
+        self, loads: list[float], start: Start, monitor: Monitor | None, earlier: Earlier
+    ) -> Iterator[Step]:
         """Each load on the hard wall along its load path (resumed from ``start``, a hard-wall
         state), then, where the cap is reached, capped (:meth:`capped_step`)."""
         state, held = start or (None, None)
@@ -279,11 +289,14 @@ class AdhesivePeriodicDriver:
         self.intro = f", {law.law} adhesion w = {law.work:.4g}, rho = {rho:.4g}"
         self.backend = type(problem.stiffness.fft).__name__
 
-    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
-        """The cycle of ``loads`` from ``start``'s gap (first touch without one)."""
+    def solve(
+        self, loads: list[float], start: Start, monitor: Monitor | None, earlier: Earlier
+    ) -> Iterator[Step]:
+        """The cycle of ``loads`` from ``start``'s gap (first touch without one), its history
+        the steps ``earlier``."""
         state = start[0] if start else None
         solve = adhesive_mean_gap_sweep if self.by_mean_gap else adhesive_sweep
-        return solve(self.problem, loads, self.run.fields, monitor, state, self.solver)
+        return solve(self.problem, loads, self.run.fields, monitor, state, self.solver, earlier)
 
     def close(self) -> None:
         """Release the solver."""
@@ -382,7 +395,9 @@ class PunchDriver:
         )
         self.backend = type(problem.compliance.fft).__name__
 
-    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
+    def solve(
+        self, loads: list[float], start: Start, monitor: Monitor | None, earlier: Earlier
+    ) -> Iterator[Step]:
         """The punch along ``loads`` (:func:`~petsc_contact.workflows.punch_sweep.punch_sweep`)."""
         state, held = start or (None, None)
         run = self.run

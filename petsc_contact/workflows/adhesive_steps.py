@@ -45,6 +45,7 @@ def adhesive_sweep(
     monitor: Monitor | None = None,
     start: np.ndarray | None = None,
     solver: BoundSolver | None = None,
+    *,
     earlier: Sequence[dict[str, Any]] = (),
 ) -> Iterator[Step]:
     """Solve the nominal pressures in the given order (a cycle: down into compression and
@@ -78,6 +79,7 @@ def adhesive_mean_gap_sweep(
     monitor: Monitor | None = None,
     start: np.ndarray | None = None,
     solver: BoundSolver | None = None,
+    *,
     earlier: Sequence[dict[str, Any]] = (),
 ) -> Iterator[Step]:
     """Solve the prescribed mean gaps in the given order (displacement control: down into

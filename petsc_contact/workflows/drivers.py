@@ -296,7 +296,9 @@ class AdhesivePeriodicDriver:
         the steps ``earlier``."""
         state = start[0] if start else None
         solve = adhesive_mean_gap_sweep if self.by_mean_gap else adhesive_sweep
-        return solve(self.problem, loads, self.run.fields, monitor, state, self.solver, earlier)
+        return solve(
+            self.problem, loads, self.run.fields, monitor, state, self.solver, earlier=earlier
+        )
 
     def close(self) -> None:
         """Release the solver."""

@@ -1,12 +1,18 @@
 """The adhesive periodic cell through a cycle: the load cycle a ``--sweep`` is, the energy a
 displacement-controlled cycle loses, and Johnson's (1995) adhesive wave in the JKR limit."""
 
+import json
+import signal
+from pathlib import Path
+from typing import Any
+
 import h5py
 import numpy as np
 import pytest
-from conftest import cli
+from conftest import ROOT, cli, python
+from kill_at import EXACT
 
-from petsc_contact import Run
+from petsc_contact import Run, run_contact
 from petsc_contact.backend._petsc import scoped_options
 from petsc_contact.backend.tao import PetscBackend
 from petsc_contact.conventions.grid import Grid
@@ -190,3 +196,90 @@ def test_the_adhesive_wave_approaches_johnsons_jkr_limit():
         misses[rho] = np.abs(a - johnson).max()
         assert misses[rho] < d and d > 20 * WAVE[1] / n
     assert misses[4e-4] < misses[8e-4] / 2
+
+
+CYCLE = dict(grid=32, hurst=0.8, rms_slope=0.1, adhesion="exponential", work_of_adhesion=1e-4,
+             interaction_range=5e-3, options=("-tao_type", "blmvm"))  # fmt: skip
+LOAD_CYCLE = (4, -6e-3, 2e-2)  # loading to 2e-2, unloading to 5e-4 in contact, -6e-3 pulled off
+APPROACH_RETRACT = (0.014, 0.008, 0.004, 0.008, 0.014)  # w = 1e-3: a loop of 3e-6 lost
+PATH = ("preconditioner_applications", "objective_gradient_evaluations", "hessian_applications")
+# a step's path inside the solver: its preconditioner keeps between solves the contact set it
+# was last adapted to, which a resumed run's fresh solver has not (the pulled-off step of the
+# load cycle applies it once more: 13 against 12)
+RESIDUALS = ("force_balance", "kkt_residual", "gradient_norm", "mean_gap_mismatch")  # of P
+
+
+def paused_at_every_step(out: Path, **run: Any) -> list[str]:
+    """``run`` into ``out``, paused after every step (``stop_after=0``) and resumed until it
+    is complete; the status of each call."""
+    statuses = [run_contact(Run(**run, output=str(out), stop_after=0), progress=False).status]
+    while statuses[-1] == "paused":
+        resumed = Run(**run, output=str(out), resume=True, stop_after=0)
+        statuses.append(run_contact(resumed, progress=False).status)
+    return statuses
+
+
+def same_datasets(whole: Path, cut: Path, rtol: float, unlike: tuple[str, ...] = ()) -> None:
+    """Every dataset of run ``cut`` (paused or killed and resumed, each time from its saved
+    state) that of the uninterrupted run ``whole`` but the solve times and ``unlike``: the
+    same names, integers, flags and words exactly, numbers to ``rtol`` of the dataset's
+    largest magnitude, the residuals (:data:`RESIDUALS`, fractions near zero) to ``rtol``,
+    the mean gaps to ``rtol`` each."""
+    with h5py.File(whole) as a, h5py.File(cut) as b:
+        assert set(a) == set(b) and b.attrs["complete"]
+        segments = json.loads(str(b.attrs["resumed"]))
+        assert segments and all(s["from_saved_state"] for s in segments)
+        for name in sorted(set(a) - {"solve_time", *unlike}):
+            x, y = a[name][()], b[name][()]
+            if x.dtype.kind == "f":
+                scale = rtol * (1.0 if name in RESIDUALS else np.nanmax(np.abs(x), initial=0.0))
+                assert np.allclose(y, x, rtol=rtol, atol=scale, equal_nan=True), name
+            else:
+                assert np.array_equal(y, x), name
+        assert np.allclose(b["mean_gap"][()], a["mean_gap"][()], rtol=rtol, atol=0)
+
+
+def test_a_paused_load_cycle_goes_on_exactly(tmp_path):
+    """The load cycle paused after every step (after the first, on the unloading branch and
+    after the step that pulled off) and resumed from its saved gap, its history (the jumps
+    and the pull-off are of every step) the committed table's: every dataset the
+    uninterrupted run's, to rounding (:data:`~kill_at.EXACT`) and in iterations."""
+    whole = tmp_path / "whole.h5"
+    run_contact(Run(**CYCLE, sweep=LOAD_CYCLE, output=str(whole)), progress=False)
+    statuses = paused_at_every_step(tmp_path / "cut.h5", **CYCLE, sweep=LOAD_CYCLE)
+    assert statuses == ["paused"] * 7 + ["complete"]
+    with h5py.File(whole) as f:  # the cycle tests what it should: a pull-off bracketed
+        assert not f["converged"][-1] and f["pull_off_pressure"][-1] == f["nominal_pressure"][-2]
+    same_datasets(whole, tmp_path / "cut.h5", EXACT, PATH)
+
+
+def test_a_paused_approach_and_retraction_goes_on_to_the_same_loop(tmp_path):
+    """Displacement control down and back up, paused after every step and resumed: every
+    dataset the uninterrupted run's, the energy the loop lost (of every step) too.  Each
+    step's loading machine takes a few hundred iterations, along which the saved gap's
+    rounding (``g/l`` of ``g = x l``) and the fresh solver (:data:`PATH`) lead another way
+    to the same point: to the machine's solves' tolerance (``1e-8`` of the pressure scale;
+    measured: ``2e-12`` relative, ``1e-10`` in the loop's energy, a difference of nearly
+    equal works), not in iterations."""
+    gaps = dict(CYCLE, work_of_adhesion=1e-3, mean_gaps=APPROACH_RETRACT)
+    whole = tmp_path / "whole.h5"
+    run_contact(Run(**gaps, output=str(whole)), progress=False)
+    assert paused_at_every_step(tmp_path / "cut.h5", **gaps)[-1] == "complete"
+    with h5py.File(whole) as f:  # the retraction holds the most tensile step, the loop closes
+        assert f["converged"][()].all() and f["hysteresis_energy"][-1] > 0
+        assert np.argmin(f["pull_off_pressure"][()]) == 3
+    same_datasets(whole, tmp_path / "cut.h5", 1e-8, ("iterations", *PATH))
+
+
+def test_a_load_cycle_killed_on_its_unloading_branch_comes_back_whole(tmp_path):
+    """SIGKILL once the state after the first unloading step is written (tests/kill_at.py):
+    ``--resume`` ends the cycle as the uninterrupted run did, every dataset to rounding."""
+    command = ["periodic", "--grid", "32", "--hurst", "0.8", "--rms-slope", "0.1", *ADHESIVE,
+               "0.005", "--sweep", "4,-6e-3,2e-2", "-tao_type", "blmvm", "--quiet"]  # fmt: skip
+    whole, out = tmp_path / "whole.h5", tmp_path / "cut.h5"
+    assert cli(*command, "--output", str(whole)).returncode == 1  # the last step pulled off
+    killed = python(str(ROOT / "tests" / "kill_at.py"), "after:state:5", "--", *command,
+                    "--output", str(out))  # fmt: skip
+    assert killed.returncode == -signal.SIGKILL, killed.stderr
+    assert cli(*command, "--output", str(out), "--resume").returncode == 1
+    same_datasets(whole, out, EXACT, PATH)

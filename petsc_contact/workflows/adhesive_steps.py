@@ -24,6 +24,7 @@ import numpy as np
 from ..backend.solve import Monitor
 from ..geometries.adhesive_periodic import AdhesivePeriodicProblem
 from ..geometries.step import Step, solve_step
+from ..physics.continuation import Held
 from ..solver.backends import BoundSolver
 from .periodic_steps import problem_solver
 
@@ -45,20 +46,25 @@ def adhesive_sweep(
     start: np.ndarray | None = None,
     solver: BoundSolver | None = None,
     approach: Callable[[float], None] | None = None,
+    *,
+    earlier: Sequence[dict[str, Any]] = (),
 ) -> Iterator[Step]:
     """Solve the nominal pressures in the given order (a cycle: down into compression and
     back into tension), each from the last converged gap (``start``, a local gap slab, for
     the first; default: first touch).  ``solver`` as :func:`~petsc_contact.workflows.
     periodic_steps.sweep` takes it; every step adds ``branch_jump`` (module docstring) and
-    ``pull_off_pressure``, :func:`pull_off_pressure` of the steps so far.  ``approach``
-    (the punch's :meth:`~petsc_contact.geometries.adhesive_punch.AdhesivePunchProblem.
-    set_approach`) makes the loads approaches, prescribed in its place: displacement
-    control, each branch judged along the approach, by its area and its force
-    (:func:`note_force_jump`)."""
-    ell, device = problem.scale_length, problem.device
-    x = (problem.initial_gap() if start is None else device.asarray(start)).reshape(-1) / ell
-    held: list[tuple[float, float]] = []  # the converged steps' (p0, area)
-    done: list[dict[str, Any]] = []
+    ``pull_off_pressure``, :func:`pull_off_pressure` of the steps so far: ``earlier`` (the
+    scalars of the steps of the sweep that ended with ``start``, a resumed run's committed
+    table) and these.  Each step's state (:attr:`~petsc_contact.geometries.step.Step.state`)
+    is the gap the next starts from.  ``approach`` (the punch's
+    :meth:`~petsc_contact.geometries.adhesive_punch.AdhesivePunchProblem.set_approach`) makes
+    the loads approaches, prescribed in its place: displacement control, each branch judged
+    along the approach, by its area and its force (:func:`note_force_jump`), from first
+    touch (no ``earlier``)."""
+    if approach is not None and earlier:
+        raise ValueError("an approach-controlled adhesive sweep starts from first touch")
+    x = _first_gap(problem, start)
+    done = list(earlier)
     controls: list[float] | None = None if approach is None else []
     forces: list[tuple[float, float]] = []  # the converged steps' (approach, force)
     with nullcontext(solver) if solver is not None else problem_solver(problem) as solver:
@@ -67,18 +73,9 @@ def adhesive_sweep(
             problem.start(x)
             watch = problem.separation_monitor(monitor)
             step, x_new = solve_step(solver, problem, problem.start_point, watch, False, fields)
-            note_jump(step.scalars, held, None if controls is None else load)
-            done.append(step.scalars)
-            if controls is not None:
-                controls.append(load)
-                note_force_jump(step.scalars, forces, load)
-            step.scalars["pull_off_pressure"] = pull_off_pressure(done, controls)[0]
-            if step.converged:
-                x = x_new
-                held.append((load, step.scalars["area_fraction"]))
-                if step.scalars["branch_jump"]:  # the force's branch starts afresh
-                    forces.clear()
-                forces.append((load, step.scalars.get("force", np.nan)))
+            _judge(step.scalars, done, controls, forces, load)
+            x = x_new if step.converged else x
+            step.resume = _resume_point(problem, x)
             yield step
 
 
@@ -89,33 +86,95 @@ def adhesive_mean_gap_sweep(
     monitor: Monitor | None = None,
     start: np.ndarray | None = None,
     solver: BoundSolver | None = None,
+    *,
+    earlier: Sequence[dict[str, Any]] = (),
 ) -> Iterator[Step]:
     """Solve the prescribed mean gaps in the given order (displacement control: down into
     contact and back up through the pull-off), each from the last converged gap, held by the
     loading machine (:meth:`~petsc_contact.geometries.adhesive_periodic.
     AdhesivePeriodicProblem.set_machine`) whose anchor is moved by the miss until the mean gap
-    is within :data:`MACHINE_RTOL` of its target.  Each step adds ``target_mean_gap``,
+    is within :data:`MACHINE_RTOL` of its target, its pressure scale the last converged
+    step's.  Each step adds ``target_mean_gap``,
     ``mean_gap_mismatch`` (beyond :data:`MACHINE_RTOL` after :data:`MACHINE_ITERATIONS`: not
     converged), ``branch_jump``, ``pull_off_pressure`` (the most tensile ``p0`` with
     contact from the smallest mean gap on) and ``hysteresis_energy`` (:func:`hysteresis_energy`
-    of the steps so far); ``iterations`` and ``solve_time`` are summed."""
-    ell, device = problem.scale_length, problem.device
-    x = (problem.initial_gap() if start is None else device.asarray(start)).reshape(-1) / ell
-    held: list[tuple[float, float]] = []
-    done: list[dict[str, Any]] = []
-    scale = problem.adhesion.strength
+    of the steps so far: ``earlier`` and these, as :func:`adhesive_sweep`'s); ``iterations``
+    and ``solve_time`` are summed."""
+    x = _first_gap(problem, start)
+    done = list(earlier)
     with nullcontext(solver) if solver is not None else problem_solver(problem) as solver:
         for target in (float(g) for g in mean_gaps):
+            held = converged_loads(done, by_mean_gap=True)
+            scale = _machine_scale(problem, done)
             step, x = _at_mean_gap(problem, solver, x, target, scale, fields, monitor)
             s = step.scalars
             note_jump(s, held, -target)  # a smaller gap is a larger load
             done.append(s)
             s["pull_off_pressure"] = pull_off_pressure(done)[0]
             s["hysteresis_energy"] = hysteresis_energy(done)
-            if step.converged:
-                held.append((-target, s["area_fraction"]))
-                scale = max(abs(s["nominal_pressure"]), problem.adhesion.strength)
+            step.resume = _resume_point(problem, x)
             yield step
+
+
+def _judge(
+    scalars: dict[str, Any],
+    done: list[dict[str, Any]],
+    controls: list[float] | None,
+    forces: list[tuple[float, float]],
+    load: float,
+) -> None:
+    """Add a step's ``branch_jump`` and ``pull_off_pressure`` to its ``scalars``, the steps
+    ``done`` before it (appended to) its history: judged along the nominal pressure, or
+    along the approaches ``controls`` (appended to) by its area and, since the last jump, by
+    its force against ``forces`` (:func:`note_force_jump`; updated)."""
+    if controls is None:
+        note_jump(scalars, converged_loads(done))
+    else:
+        held = [(c, s["area_fraction"]) for c, s in zip(controls, done, strict=True)]
+        note_jump(scalars, [h for h, s in zip(held, done, strict=True) if s["converged"]], load)
+        controls.append(load)
+        note_force_jump(scalars, forces, load)
+        if scalars["converged"]:
+            if scalars["branch_jump"]:  # the force's branch starts afresh
+                forces.clear()
+            forces.append((load, scalars.get("force", np.nan)))
+    done.append(scalars)
+    scalars["pull_off_pressure"] = pull_off_pressure(done, controls)[0]
+
+
+def _first_gap(problem: AdhesivePeriodicProblem, start: np.ndarray | None) -> Any:
+    """The first step's start in the solver's units: the local gap slab ``start`` (a
+    resumed run's state), or first touch."""
+    gap = problem.initial_gap() if start is None else problem.device.asarray(start)
+    return gap.reshape(-1) / problem.scale_length
+
+
+def _resume_point(
+    problem: AdhesivePeriodicProblem, x: Any
+) -> Callable[[], tuple[np.ndarray, Held]]:
+    """What makes a step's state: the gap ``x`` the next step starts from, a local slab on
+    the host; the sweep holds nothing else (its history is its steps' scalars).  Taken when
+    read (``x`` is never changed in place)."""
+    shape, ell, device = problem.grid.local_shape, problem.scale_length, problem.device
+    return lambda: (device.to_host(x).reshape(shape) * ell, Held())
+
+
+def converged_loads(
+    steps: Sequence[dict[str, Any]], by_mean_gap: bool = False
+) -> list[tuple[float, float]]:
+    """The ``(load, area)`` of the converged ``steps`` (``scalars``), as :func:`note_jump`
+    judges a step against: the load is ``p0``, or minus the prescribed mean gap under
+    displacement control (``by_mean_gap``: a smaller gap is a larger load)."""
+    load = "target_mean_gap" if by_mean_gap else "nominal_pressure"
+    sign = -1.0 if by_mean_gap else 1.0
+    return [(sign * s[load], s["area_fraction"]) for s in steps if s["converged"]]
+
+
+def _machine_scale(problem: AdhesivePeriodicProblem, steps: Sequence[dict[str, Any]]) -> float:
+    """The loading machine's pressure scale: the last converged step's ``|p0|``, at least
+    the law's strength ``w/rho``."""
+    held = [abs(s["nominal_pressure"]) for s in steps if s["converged"]]
+    return max(held[-1], problem.adhesion.strength) if held else problem.adhesion.strength
 
 
 def _at_mean_gap(

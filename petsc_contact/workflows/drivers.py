@@ -6,7 +6,7 @@ solves a list of loads as a generator of steps, from first touch or a resumed st
 
     driver = driver_for(run, scene, backend)   # PeriodicDriver or PunchDriver
     try:
-        for step in driver.solve(driver.loads, None, None):
+        for step in driver.solve(driver.loads, None, None, []):
             ...
     finally:
         driver.close()
@@ -52,6 +52,10 @@ from .scene import Scene
 Start = tuple[np.ndarray, Held | None] | None
 """Where a resumed run's sweep goes on from: its last state (a local slab) and what the sweep
 held beside it (``None`` in a state file of an earlier version); ``None``: first touch."""
+Earlier = Sequence[dict[str, Any]]
+"""The scalars of the steps a resumed run finished (its committed table; none from the
+start): an adhesive cycle's history (its jumps, pull-off and hysteresis energy are of all
+its steps)."""
 
 
 class Driver(Protocol):
@@ -74,9 +78,11 @@ class Driver(Protocol):
     intro: str
     backend: str
 
-    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
-        """The steps of ``loads`` in order, from ``start`` (``None``: first touch); ``monitor``
-        sees every TAO iteration."""
+    def solve(
+        self, loads: list[float], start: Start, monitor: Monitor | None, earlier: Earlier
+    ) -> Iterator[Step]:
+        """The steps of ``loads`` in order, from ``start`` (``None``: first touch) after the
+        steps ``earlier``; ``monitor`` sees every TAO iteration."""
         ...
 
     def close(self) -> None:
@@ -148,7 +154,9 @@ class PeriodicDriver:
         )
         self.backend = type(problem.stiffness.fft).__name__
 
-    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
+    def solve(
+        self, loads: list[float], start: Start, monitor: Monitor | None, earlier: Earlier
+    ) -> Iterator[Step]:
         """The sweep of ``loads`` (:func:`~petsc_contact.workflows.periodic_sweep.sweep`)."""
         state, held = start or (None, None)
         run = self.run
@@ -209,7 +217,9 @@ class CappedPeriodicDriver:
         self.intro = f"{self.wall.intro}, hardness {hardness}"
         self.backend = self.wall.backend
 
-    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
+    def solve(
+        self, loads: list[float], start: Start, monitor: Monitor | None, earlier: Earlier
+    ) -> Iterator[Step]:
         """Each load on the hard wall along its load path (resumed from ``start``, a hard-wall
         state), then, where the cap is reached, capped (:meth:`capped_step`)."""
         state, held = start or (None, None)
@@ -279,11 +289,16 @@ class AdhesivePeriodicDriver:
         self.intro = adhesive_intro(law)
         self.backend = type(problem.stiffness.fft).__name__
 
-    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
-        """The cycle of ``loads`` from ``start``'s gap (first touch without one)."""
+    def solve(
+        self, loads: list[float], start: Start, monitor: Monitor | None, earlier: Earlier
+    ) -> Iterator[Step]:
+        """The cycle of ``loads`` from ``start``'s gap (first touch without one), its history
+        the steps ``earlier``."""
         state = start[0] if start else None
         solve = adhesive_mean_gap_sweep if self.by_mean_gap else adhesive_sweep
-        return solve(self.problem, loads, self.run.fields, monitor, state, self.solver)
+        return solve(
+            self.problem, loads, self.run.fields, monitor, state, self.solver, earlier=earlier
+        )
 
     def close(self) -> None:
         """Release the solver."""
@@ -336,10 +351,12 @@ class AdhesivePunchDriver:
         self.intro = adhesive_intro(law)
         self.backend = type(problem.stiffness.fft).__name__
 
-    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
-        """The cycle of ``loads`` from first touch (``start`` refused: an adhesive punch run
-        is not resumed)."""
-        if start is not None:
+    def solve(
+        self, loads: list[float], start: Start, monitor: Monitor | None, earlier: Earlier
+    ) -> Iterator[Step]:
+        """The cycle of ``loads`` from first touch (``start`` and ``earlier`` refused: an
+        adhesive punch run is not resumed)."""
+        if start is not None or earlier:
             raise ValueError("an adhesive punch run starts from first touch: it is not resumed")
         pb = self.problem
         if self.by_approach:
@@ -446,7 +463,9 @@ class PunchDriver:
         )
         self.backend = type(problem.compliance.fft).__name__
 
-    def solve(self, loads: list[float], start: Start, monitor: Monitor | None) -> Iterator[Step]:
+    def solve(
+        self, loads: list[float], start: Start, monitor: Monitor | None, earlier: Earlier
+    ) -> Iterator[Step]:
         """The punch along ``loads`` (:func:`~petsc_contact.workflows.punch_sweep.punch_sweep`)."""
         state, held = start or (None, None)
         run = self.run

@@ -249,7 +249,7 @@ class Prepared:
         began = time.perf_counter()
         limit = np.inf if run.stop_after is None else 60.0 * run.stop_after
         todo = self.loads[len(table) :]
-        steps_of = self.driver.solve(todo, start, monitor) if todo else iter(())
+        steps_of = self.driver.solve(todo, start, monitor, tuple(table)) if todo else iter(())
         for i, step in enumerate(steps_of, len(table)):
             if store is not None:
                 fields: dict[str, Any] | None = (

@@ -138,6 +138,11 @@ def test_an_adhesive_punch_on_the_command_line(tmp_path):
     refused = cli(*common, "--output", str(tmp_path / "x.h5"))
     assert refused.returncode != 0 and "-tao_type blmvm" in refused.stderr
     assert len(refused.stderr.strip().splitlines()) == 1
+    paused = cli(*common, "-tao_type", "bncg", "--output", str(out), "--overwrite",
+                 "--stop-after", "0")  # fmt: skip
+    assert paused.returncode == 75 and not (tmp_path / "punch.h5.state.npz").exists()
+    resumed = cli(*common, "-tao_type", "bncg", "--output", str(out), "--resume")
+    assert resumed.returncode == 2 and "it is not resumed" in resumed.stderr
 
 
 def test_compare_on_an_adhesive_punch():

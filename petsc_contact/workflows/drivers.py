@@ -360,11 +360,15 @@ class AdhesivePunchDriver:
             raise ValueError("an adhesive punch run starts from first touch: it is not resumed")
         pb = self.problem
         if self.by_approach:
-            return adhesive_sweep(
+            steps = adhesive_sweep(
                 pb, loads, self.run.fields, monitor, None, self.solver, pb.set_approach
             )
-        pressures = [force / pb.face_area for force in loads]
-        return adhesive_sweep(pb, pressures, self.run.fields, monitor, None, self.solver)
+        else:
+            pressures = [force / pb.face_area for force in loads]
+            steps = adhesive_sweep(pb, pressures, self.run.fields, monitor, None, self.solver)
+        for step in steps:
+            step.resume = None  # its gap is the padded cell's, not a state of the run's grid
+            yield step
 
     def close(self) -> None:
         """Release the solver."""

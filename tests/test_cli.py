@@ -6,7 +6,7 @@ import os
 import h5py
 import numpy as np
 import pytest
-from conftest import cli, python
+from conftest import cli
 
 GEN = "--grid 64 --hurst 0.7 --rms-slope 0.1 --rolloff-ratio 2 --cutoff-ratio 16 --seed 4".split()
 
@@ -720,24 +720,22 @@ def test_demo_on_a_small_grid(tmp_path):
         assert r.returncode == 0 and f.attrs["cutoff_ratio"] == 64
 
 
-def test_demo_runs_again_over_its_own_output(tmp_path):
+def test_demo_runs_again_over_its_own_output(tmp_path, monkeypatch):
     """The README's first command run a second time replaces ``demo.h5`` without the warning
     that a run over an existing output gives (``demo`` overwrites its own file); another
     ``--output`` is warned as any run's."""
-    code = (
-        "import os, sys; os.chdir(sys.argv[1]); from petsc_contact.cli.main import main; "
-        "sys.exit(main(['demo', '--grid', '64', '--quiet', *sys.argv[2:]]))"
-    )
+    monkeypatch.chdir(tmp_path)  # demo writes demo.h5 and demo.png where it is run
+    demo = ("demo", "--grid", "64", "--quiet")
     for _ in range(2):
-        r = python("-c", code, str(tmp_path))
+        r = cli(*demo)
         assert r.returncode == 0 and not r.stderr, r.stderr
     assert (tmp_path / "demo.h5").exists() and (tmp_path / "demo.png").exists()
     for warned in (False, True):
-        r = python("-c", code, str(tmp_path), "--output", "other.h5")
+        r = cli(*demo, "--output", "other.h5")
         assert r.returncode == 0 and ("is replaced when this run ends" in r.stderr) is warned
-    paused = python("-c", code, str(tmp_path), "--stop-after", "1e-9")
+    paused = cli(*demo, "--stop-after", "1e-9")
     assert paused.returncode == 75, paused.stderr  # an interrupted demo's steps: not deleted
-    r = python("-c", code, str(tmp_path))
+    r = cli(*demo)
     assert r.returncode == 2 and "--resume continues it" in r.stderr, r.stderr
     assert (tmp_path / "demo.h5.partial").exists()
 

@@ -1,7 +1,7 @@
 """A run's HDF5 files laid out, and ``OUT.h5`` assembled from the parts when the run ends.
 
-The step table (every step's scalars on the dimension ``step``, the ``.partial``'s and the
-final file's alike), the fields' chunks (:func:`field_layout`), and the assembly: every
+The final file's step table (every step's scalars on the dimension ``step``, with their
+units and descriptions), the fields' chunks (:func:`field_layout`), and the assembly: every
 part checked against its checksum, then ``OUT.h5`` written by rank 0 a band of rows at a
 time, the fields' compressed chunks copied as they are where a slab's rows fall on whole
 chunks (:mod:`~petsc_contact.io.store` describes the files).
@@ -18,8 +18,9 @@ import numpy as np
 
 from .atomic import StorageError, atomic_h5, check_room, storage
 from .names import HEIGHTS_PART, step_part
+from .partial import step_columns
 from .parts import _steps, part_problem, slab_rows, slabs
-from .schema import SECOND_DIMENSION, describe, h5_dtype, write_attributes
+from .schema import SECOND_DIMENSION, describe, write_attributes
 
 if TYPE_CHECKING:
     from .store import StepStore
@@ -59,16 +60,16 @@ def _check_parts(store: StepStore) -> None:
 
 
 def write_table(store: StepStore, f: Any) -> None:
-    """The scalars of every step, on the dimension ``step`` (1, 2, ...)."""
-    count = len(next(iter(store.table.values()), []))  # the steps committed with this table
-    # contiguous columns (the table is rewritten whole at every commit): a chunked column's
-    # index and 8 KB chunk made a study piece's file 300 KB instead of 80 KB
-    step = f.create_dataset("step", data=np.arange(1, count + 1))
+    """The scalars of every step, on the dimension ``step`` (1, 2, ...), each with its units
+    and description (the complete output's; a ``.partial`` holds them bare,
+    :func:`~petsc_contact.io.partial.write_steps`)."""
+    # contiguous columns: a chunked column's index and 8 KB chunk made a study piece's file
+    # 300 KB instead of 80 KB
+    columns = step_columns(store.table)
+    step = f.create_dataset("step", data=columns.pop("step"))
     describe(step, store.entry("step"))
     step.make_scale("step")
-    for key, column in store.table.items():
-        dtype = h5_dtype(column[0]) if column else np.float64
-        values = np.array(column, dtype=dtype)
+    for key, values in columns.items():
         d = f.create_dataset(key, data=values)
         describe(d, store.entry(key))
         d.dims[0].attach_scale(step)

@@ -32,7 +32,7 @@ from ..conventions.warnings import ResumeWarning, user_level
 from ..substrates.layer import DEFAULT_POISSON
 from .atomic import _reason, atomic_h5
 from .names import partial_path
-from .schema import COORDINATES, write_attributes
+from .schema import COORDINATES, h5_dtype, write_attributes
 
 RESUME_FREE = ("resume", "overwrite", "quiet", "stop_after", "device")
 """The options a resume may change: none changes the result (a device, its rounding only:
@@ -125,8 +125,28 @@ def read_committed(path: str) -> Committed:
         return Committed(dict(f.attrs.items()), read_table(f))
 
 
+def step_columns(table: dict[str, list[Any]]) -> dict[str, np.ndarray]:
+    """The step table's columns as arrays of their HDF5 dtypes, ``step`` (1, 2, ...) first."""
+    count = len(next(iter(table.values()), []))  # the steps committed with this table
+    columns = {"step": np.arange(1, count + 1)}
+    for key, column in table.items():
+        columns[key] = np.array(column, dtype=h5_dtype(column[0]) if column else np.float64)
+    return columns
+
+
+def write_steps(f: Any, table: dict[str, list[Any]]) -> None:
+    """The step table of a ``.partial``: bare contiguous datasets, one per column, without
+    the units, descriptions and dimension scales that the complete output labels them with
+    (:func:`~petsc_contact.io.assemble.write_table`): each commit writes the table whole,
+    and those labels made most of its cost."""
+    for key, values in step_columns(table).items():
+        f.create_dataset(key, data=values)
+
+
 def read_table(f: Any) -> dict[str, list[Any]]:
-    """The per-step datasets of a run's open HDF5 file ``f``, as lists."""
+    """The per-step datasets of a run's open HDF5 file ``f``, as lists: a ``.partial``'s
+    bare columns (:func:`write_steps`) or the labelled ones of a complete output or of an
+    earlier version's ``.partial`` alike."""
     return {
         k: list(_values(f[k]))
         for k in f

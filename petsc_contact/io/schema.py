@@ -20,8 +20,9 @@ from ..physics.observables import MIN_CONTACT_PIXELS
 
 def write_attributes(obj: Any, attributes: dict[str, Any]) -> None:
     """HDF5 attributes of a file or group: dicts and lists as JSON, ``None`` as ``''``."""
+    attrs = obj.attrs
     for key, value in attributes.items():
-        obj.attrs[key] = (
+        attrs[key] = (
             json.dumps(value)
             if isinstance(value, (dict, list, tuple))
             else ("" if value is None else value)
@@ -542,7 +543,9 @@ def _introduction() -> list[str]:
         "Every file of `periodic`, `demo`, `punch` and `compare` also records, as root",
         "attributes, what reproduces it: " + ", ".join(f"`{a}`" for a in RUN_ATTRIBUTES) + ".",
         "While a run is under way its finished steps are committed to `OUT.h5.partial` (the",
-        "run record and every finished step's scalars, replaced whole after each step), its",
+        "run record and every finished step's scalars as bare datasets, without the units,",
+        "descriptions and dimension scales that the finished file gives them; replaced whole",
+        "after each step), its",
         "heights and fields to `OUT.h5.parts/`, and the state a `--resume` starts from to",
         "`OUT.h5.state.npz` (on P ranks each rank its own rows: `heights.RofP.h5`,",
         "`step-00000k.RofP.h5` and `OUT.h5.state.RofP.npz`, R of P) (array `state`, the gap",

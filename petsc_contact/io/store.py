@@ -9,7 +9,8 @@ files, :mod:`~petsc_contact.io.parts`: no rank ever holds a whole field):
     that a second run on the same output is refused at once.  The kernel drops the lock when
     the process dies, however it dies; a lock file left behind is free.
 ``OUT.h5.partial``
-    an HDF5 file with the run record and the scalars of every finished step, replaced whole
+    an HDF5 file with the run record and the scalars of every finished step (bare columns:
+    the units, descriptions and dimension scales are the final file's), replaced whole
     after each step (:func:`~petsc_contact.io.partial.commit`): whatever instant the process
     dies at, this file is the last step's or the one before, never a torn one.  It is the
     commit point: a step is finished when it is in this file.
@@ -67,7 +68,7 @@ import numpy as np
 
 from ..conventions.warnings import ReplacedOutput, option
 from ..physics.continuation import Held
-from .assemble import FIELD_CHUNK, assemble_output, field_layout, write_table
+from .assemble import FIELD_CHUNK, assemble_output, field_layout
 from .atomic import (
     StorageError,
     _reason,
@@ -105,6 +106,7 @@ from .partial import (
     leftover_table,
     read_attributes,
     read_committed,
+    write_steps,
 )
 from .parts import PartsCheck, check_parts, part_problem, slab_name, slab_of
 from .provenance import source_commit
@@ -486,7 +488,9 @@ class StepStore:
     def _commit(self) -> None:
         """Replace the ``.partial`` file by one holding every finished step."""
         commit(
-            self.path, {**self.attributes, "parts": self.digests}, lambda f: write_table(self, f)
+            self.path,
+            {**self.attributes, "parts": self.digests},
+            lambda f: write_steps(f, self.table),
         )
 
     def _write_part(self, name: str, arrays: dict[str, np.ndarray], chunked: bool) -> None:

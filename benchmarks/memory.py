@@ -37,7 +37,7 @@ import numpy as np
 import petsc_contact
 from petsc_contact import periodic_contact, punch_contact
 from petsc_contact.backend import _petsc
-from petsc_contact.workflows import scenes
+from petsc_contact.paper import figures as scenes
 _petsc.init([])
 geometry, n, solver, loads = sys.argv[1], int(sys.argv[2]), sys.argv[3], int(sys.argv[4])
 stiffness = loads > 1 or sys.argv[5] == "1"

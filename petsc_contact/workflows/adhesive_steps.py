@@ -29,6 +29,13 @@ from .periodic_steps import problem_solver
 MACHINE_RTOL = 1e-6  # displacement control: the mean gap to this of its target
 MACHINE_ITERATIONS = 20  # the anchor's corrections at most (each one solve)
 JUMP_AREA = 0.5  # an area this far (of the larger area) off its branch's tangent: a jump
+SUMMED = (  # a mean gap's solver counts, summed over its solves
+    "iterations",
+    "objective_gradient_evaluations",
+    "hessian_applications",
+    "preconditioner_applications",
+    "solve_time",
+)
 
 
 class BranchJump(UserWarning):
@@ -86,19 +93,34 @@ def adhesive_mean_gap_sweep(
     ell, device = problem.scale_length, problem.device
     x = (problem.initial_gap() if start is None else device.asarray(start)).reshape(-1) / ell
     held: list[tuple[float, float]] = []
+    branch: list[tuple[float, float]] = []  # the converged steps' (mean gap, p0)
     done: list[dict[str, Any]] = []
     scale = problem.adhesion.strength
     with nullcontext(solver) if solver is not None else problem_solver(problem) as solver:
         for target in (float(g) for g in mean_gaps):
-            step, x = _at_mean_gap(problem, solver, x, target, scale, fields, monitor)
+            guess = predicted_pressure(branch, target)
+            step, x = _at_mean_gap(problem, solver, x, target, (scale, guess), fields, monitor)
             s = step.scalars
             note_jump(s, held, -target)  # a smaller gap is a larger load
             done.append(s)
             s["pull_off_pressure"] = pull_off_pressure(done)[0]
             if step.converged:
                 held.append((-target, s["area_fraction"]))
+                branch.append((target, s["nominal_pressure"]))
                 scale = max(abs(s["nominal_pressure"]), problem.adhesion.strength)
             yield step
+
+
+def predicted_pressure(branch: Sequence[tuple[float, float]], target: float) -> float:
+    """The nominal pressure at the mean gap ``target`` on the tangent of its branch through the
+    last two converged ``(mean gap, p0)`` (the last ``p0`` after the first; 0 before)."""
+    if not branch:
+        return 0.0
+    g_last, p_last = branch[-1]
+    if len(branch) == 1 or branch[-2][0] == g_last:
+        return p_last
+    g_prev, p_prev = branch[-2]
+    return p_last + (p_last - p_prev) / (g_last - g_prev) * (target - g_last)
 
 
 def _at_mean_gap(
@@ -106,27 +128,37 @@ def _at_mean_gap(
     solver: BoundSolver,
     x: Any,
     target: float,
-    scale: float,
+    pressures: tuple[float, float],
     fields: bool,
     monitor: Monitor | None,
 ) -> tuple[Step, Any]:
     """One prescribed mean gap (:func:`adhesive_mean_gap_sweep`): the step and the gap to go
-    on from (``x`` unless it converged)."""
-    anchor, its, elapsed = target, 0, 0.0
+    on from (``x`` unless it converged).  ``pressures`` are the pressure scale and the
+    predicted nominal pressure ``p*`` (:func:`predicted_pressure`): the first anchor is
+    ``t - p*/k_m``, where the machine holds ``t`` under ``p*``; each next one corrects the last
+    by its miss times the secant ``da/dg`` of the solves so far (1 after the first: the machine
+    is stiffer than the contact)."""
+    scale, guess = pressures
+    anchor = target - guess / float(problem.pixel_stiffness)
+    counts: dict[str, float] = dict.fromkeys(SUMMED, 0)
+    last: tuple[float, float] | None = None  # the last solve's (anchor, mean gap)
     for _ in range(MACHINE_ITERATIONS):
         problem.set_machine(anchor, scale)
         problem.start(x)
         step, x_new = solve_step(solver, problem, problem.start_point, monitor, False, fields)
-        its, elapsed = its + step.scalars["iterations"], elapsed + step.scalars["solve_time"]
-        miss = target - step.scalars["mean_gap"]
+        counts = {k: v + step.scalars[k] for k, v in counts.items()}
+        reached = step.scalars["mean_gap"]
+        miss = target - reached
         if not step.converged:
             break
-        x, anchor = x_new, anchor + miss
+        slope = 1.0  # da/dg before a secant: the machine is far stiffer than the contact
+        if last is not None and reached != last[1]:
+            slope = (anchor - last[0]) / (reached - last[1])
+        x, last, anchor = x_new, (anchor, reached), anchor + miss * slope
         if abs(miss) <= MACHINE_RTOL * target:
             break
     s = step.scalars
-    s.update(target_mean_gap=target, mean_gap_mismatch=abs(miss) / target)
-    s.update(iterations=its, solve_time=elapsed)
+    s.update(target_mean_gap=target, mean_gap_mismatch=abs(miss) / target, **counts)
     if s["converged"] and abs(miss) > MACHINE_RTOL * target:
         s["converged"] = False
         s["verification"] = f"mean gap {s['mean_gap']:.6g} reached, not {target:.6g}"

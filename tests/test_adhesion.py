@@ -21,6 +21,7 @@ from petsc_contact.workflows.adhesive_steps import (
     adhesive_mean_gap_sweep,
     adhesive_sweep,
     note_jump,
+    predicted_pressure,
     pull_off_pressure,
 )
 from petsc_contact.workflows.periodic_steps import sweep
@@ -160,6 +161,36 @@ def test_displacement_control_reaches_the_load_controlled_pull_off():
     assert all(s["area_fraction"] > 0 for s in steps)
     assert 0.80 < -pull_off_pressure(steps)[0] / (2 * np.pi * w) < 0.85
     assert steps[3]["nominal_pressure"] == pytest.approx(steps[0]["nominal_pressure"], rel=1e-5)
+
+
+def test_a_mean_gaps_counts_cover_all_its_solves(rough):
+    """Every solve of a prescribed mean gap (the loading machine's corrections) is counted:
+    BLMVM evaluates the objective at least once an iteration (its line search), so the sums
+    keep ``iterations <= evaluations <= 3 iterations`` (More-Thuente's 1.4-2.2 measured; a
+    line search that backtracks on every step, as Armijo's does here, takes 5-7), and
+    applies its ``H0`` once an iteration (and at a reset): one FFT pair of the preconditioner,
+    two in its Schur and two-level forms, so at most two pairs an iteration (1.0-1.83
+    measured)."""
+    grid, h = rough
+    rms = float(np.sqrt(np.mean(h**2)))
+    with scoped_options(["-tao_type", "blmvm"]):
+        problem = AdhesivePeriodicProblem(
+            grid, make_fft(grid), h, 1.0, Adhesion("exponential", 1e-4, 5e-3), PetscBackend()
+        )
+        steps = [s.scalars for s in adhesive_mean_gap_sweep(problem, [1.2 * rms, 0.6 * rms])]
+    for s in steps:
+        assert s["converged"], s["verification"]
+        its = s["iterations"]
+        assert its <= s["objective_gradient_evaluations"] <= 3 * its
+        assert s["preconditioner_applications"] <= 2 * its
+
+
+def test_the_anchor_follows_the_branchs_tangent():
+    """The first anchor's pressure: none before a step, the last one after one, then the
+    tangent through the last two (exact on a straight branch)."""
+    assert predicted_pressure([], 1.0) == 0.0
+    assert predicted_pressure([(2.0, -1.0)], 1.0) == -1.0
+    assert predicted_pressure([(3.0, -2.0), (2.0, -1.0)], 0.5) == pytest.approx(0.5, rel=1e-15)
 
 
 def test_a_jump_of_the_contact_area_is_flagged():

@@ -85,11 +85,12 @@ def adhesive_mean_gap_sweep(
     """Solve the prescribed mean gaps in the given order (displacement control: down into
     contact and back up through the pull-off), each from the last converged gap, held by the
     loading machine (:meth:`~petsc_contact.geometries.adhesive_periodic.
-    AdhesivePeriodicProblem.set_machine`) whose anchor is moved by the miss until the mean gap
-    is within :data:`MACHINE_RTOL` of its target.  Each step adds ``target_mean_gap``,
-    ``mean_gap_mismatch`` (beyond :data:`MACHINE_RTOL` after :data:`MACHINE_ITERATIONS`: not
-    converged), ``branch_jump`` and ``pull_off_pressure`` (the most tensile ``p0`` with
-    contact from the smallest mean gap on); ``iterations`` and ``solve_time`` are summed."""
+    AdhesivePeriodicProblem.set_machine`) whose anchor starts on the branch's tangent and is
+    corrected until the mean gap is within :data:`MACHINE_RTOL` of its target
+    (:func:`_at_mean_gap`).  Each step adds ``target_mean_gap``, ``mean_gap_mismatch``
+    (beyond :data:`MACHINE_RTOL` after :data:`MACHINE_ITERATIONS`: not converged),
+    ``branch_jump`` and ``pull_off_pressure`` (the most tensile ``p0`` with contact from the
+    smallest mean gap on); the counts of :data:`SUMMED` are summed over its solves."""
     ell, device = problem.scale_length, problem.device
     x = (problem.initial_gap() if start is None else device.asarray(start)).reshape(-1) / ell
     held: list[tuple[float, float]] = []

@@ -21,6 +21,7 @@ from petsc_contact.workflows.adhesive_steps import (
     adhesive_mean_gap_sweep,
     adhesive_sweep,
     note_jump,
+    predicted_pressure,
     pull_off_pressure,
 )
 from petsc_contact.workflows.periodic_steps import sweep
@@ -162,11 +163,47 @@ def test_displacement_control_reaches_the_load_controlled_pull_off():
     assert steps[3]["nominal_pressure"] == pytest.approx(steps[0]["nominal_pressure"], rel=1e-5)
 
 
+def test_a_mean_gaps_counts_cover_all_its_solves(rough):
+    """Every solve of a prescribed mean gap (the loading machine's corrections) is counted:
+    BLMVM evaluates the objective at least once an iteration (its line search), so the sums
+    keep ``iterations <= evaluations <= 3 iterations`` (More-Thuente's 1.4-2.2 measured; a
+    line search that backtracks on every step, as Armijo's does here, takes 5-7), and
+    applies its ``H0`` once an iteration (and at a reset): one FFT pair of the preconditioner,
+    two in its Schur and two-level forms, so at most two pairs an iteration (1.0-1.83
+    measured)."""
+    grid, h = rough
+    rms = float(np.sqrt(np.mean(h**2)))
+    with scoped_options(["-tao_type", "blmvm"]):
+        problem = AdhesivePeriodicProblem(
+            grid, make_fft(grid), h, 1.0, Adhesion("exponential", 1e-4, 5e-3), PetscBackend()
+        )
+        steps = [s.scalars for s in adhesive_mean_gap_sweep(problem, [1.2 * rms, 0.6 * rms])]
+    for s in steps:
+        assert s["converged"], s["verification"]
+        its = s["iterations"]
+        assert its <= s["objective_gradient_evaluations"] <= 3 * its
+        assert s["preconditioner_applications"] <= 2 * its
+
+
+def test_the_anchor_follows_the_branchs_tangent():
+    """The first anchor's pressure: none before a step, the last one after one, then the
+    tangent through the last two (exact on a straight branch)."""
+
+    def steps(*branch):
+        return [{"target_mean_gap": g, "nominal_pressure": p, "converged": True} for g, p in branch]
+
+    assert predicted_pressure([], 1.0) == 0.0
+    assert predicted_pressure(steps((2.0, -1.0)), 1.0) == -1.0
+    assert predicted_pressure(steps((3.0, -2.0), (2.0, -1.0)), 0.5) == pytest.approx(0.5, rel=1e-15)
+    unconverged = [*steps((3.0, -2.0), (2.0, -1.0)), {**steps((1.0, 9.0))[0], "converged": False}]
+    assert predicted_pressure(unconverged, 0.5) == pytest.approx(0.5, rel=1e-15)
+
+
 def test_a_jump_of_the_contact_area_is_flagged():
     """A converged step whose area misses its branch's tangent through the last two steps by
-    more than half the larger area is a branch jump, warned about; one on the tangent (clipped
-    to an area fraction: out of contact after a jump out of it), one that did not converge,
-    or the first, is not."""
+    more than half the larger area is a branch jump, warned about; one on the tangent, one
+    whose area is the last one's (still out of contact after a jump out of it), one that did
+    not converge, or the first, is not."""
     scalars = {"area_fraction": 0.1, "converged": True, "nominal_pressure": -1e-3}
     with pytest.warns(BranchJump, match="jumped from 0.3 to 0.1"):
         note_jump(scalars, [(1e-3, 0.3)])
@@ -174,7 +211,7 @@ def test_a_jump_of_the_contact_area_is_flagged():
     note_jump(scalars, [(3e-3, 0.5), (1e-3, 0.3)])  # on the tangent: 0.1 at -1e-3
     assert not scalars["branch_jump"]
     apart = {"area_fraction": 0.0, "converged": True, "nominal_pressure": -2e-3}
-    note_jump(apart, [(0.0, 0.004), (-1e-3, 0.0)])  # the tangent's -0.004 is no area: 0
+    note_jump(apart, [(0.0, 0.004), (-1e-3, 0.0)])  # off the tangent's -0.004, but still 0
     assert not apart["branch_jump"]
     note_jump(scalars, [])
     assert not scalars["branch_jump"]

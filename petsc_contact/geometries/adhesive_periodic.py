@@ -131,17 +131,17 @@ class AdhesivePeriodicProblem(PeriodicProblem):
         """The gap the law sees of the scaled unknown ``x``: ``l x`` on every pixel."""
         return x * self.scale_length
 
-    def _interaction_change(self, x: np.ndarray) -> float:
-        """``sum(phi(l x) - phi(l x_ref))`` over the grid, pixel by pixel (the change, not
-        the difference of two large sums)."""
-        phi = self.adhesion.energy(self.law_gap(x), self.device.xp)
+    def _interaction_change(self, phi: np.ndarray) -> float:
+        """``sum(phi - phi(l x_ref))`` over the grid of the energies ``phi`` at the law's gap,
+        pixel by pixel (the change, not the difference of two large sums)."""
         (total,) = self.grid.sum(float((phi - self._phi_ref).sum()))
         return float(total)
 
     def objective_gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
         """The periodic geometry's scaled objective (relative to the reference) plus
         ``s/l (sum(phi(l x)) - sum(phi(l x_ref)))`` and the loading machine's change
-        (:meth:`set_machine`); ``grad <- s (p + phi'(g) + k_m (mean(g) - t))``."""
+        (:meth:`set_machine`); ``grad <- s (p + phi'(g) + k_m (mean(g) - t))``: one FFT pair
+        (the periodic geometry's) and one pass of the law per evaluation."""
         f = super().objective_gradient(x, grad)
         xp, ell = self.device.xp, self.scale_length
         gap = self.law_gap(x)
@@ -149,8 +149,9 @@ class AdhesivePeriodicProblem(PeriodicProblem):
             lowest = self.grid.min(float(gap.min(initial=np.inf)))
             self.separated = lowest > SEPARATED * self.adhesion.range
         spring, pull = self._spring(x)
-        grad += self._s * (self.adhesion.derivative(gap, xp) + pull)
-        return f + self._s / ell * (self._interaction_change(x) + spring)
+        phi, slope = self.adhesion.energy_and_derivative(gap, xp)
+        grad += self._s * (slope + pull)
+        return f + self._s / ell * (self._interaction_change(phi) + spring)
 
     def separation_monitor(self, monitor: Monitor | None) -> Monitor:
         """``monitor`` that also stops the solve once the surfaces separated under tension

@@ -65,21 +65,22 @@ class Adhesion:
 
     def energy(self, gap: Any, xp: Any = np) -> Any:
         """The interaction energy per area ``phi(g)`` on each pixel."""
+        return self.energy_and_derivative(gap, xp)[0]
+
+    def derivative(self, gap: Any, xp: Any = np) -> Any:
+        """``phi'(g)``, minus the attraction, on each pixel (non-negative)."""
+        return self.energy_and_derivative(gap, xp)[1]
+
+    def energy_and_derivative(self, gap: Any, xp: Any = np) -> tuple[Any, Any]:
+        """``phi(g)`` and ``phi'(g)`` on each pixel, from one exponential (or one ramp)."""
         if self.law == "exponential":
-            return -self.work * xp.exp(-gap / self.range)
+            decay = xp.exp(-gap / self.range)
+            return -self.work * decay, self.strength * decay
         eps, rho = MAUGIS_SMOOTHING, self.range
         t = xp.clip((gap - rho * (1 - eps)) / (2 * eps * rho), 0.0, 1.0)  # 0 to 1 on the ramp
         # minus the attraction's integral beyond g: the flat part's, then the ramp's
         flat = xp.maximum(rho * (1 - eps) - gap, 0.0)
-        return -self.strength * (flat + eps * rho * (1.0 - t) ** 2)
-
-    def derivative(self, gap: Any, xp: Any = np) -> Any:
-        """``phi'(g)``, minus the attraction, on each pixel (non-negative)."""
-        if self.law == "exponential":
-            return self.strength * xp.exp(-gap / self.range)
-        eps, rho = MAUGIS_SMOOTHING, self.range
-        t = xp.clip((gap - rho * (1 - eps)) / (2 * eps * rho), 0.0, 1.0)
-        return self.strength * (1.0 - t)
+        return -self.strength * (flat + eps * rho * (1.0 - t) ** 2), self.strength * (1.0 - t)
 
     @property
     def field_names(self) -> tuple[str, ...]:

@@ -32,6 +32,13 @@ MACHINE_RTOL = 1e-6  # displacement control: the mean gap to this of its target
 MACHINE_ITERATIONS = 20  # the anchor's corrections at most (each one solve)
 RESTARTS = 1  # a machine's solve that stopped short is started again from its end this often
 JUMP_AREA = 0.5  # an area this far (of the larger area) off its branch's tangent: a jump
+SUMMED = (  # a mean gap's solver counts, summed over its solves
+    "iterations",
+    "objective_gradient_evaluations",
+    "hessian_applications",
+    "preconditioner_applications",
+    "solve_time",
+)
 
 
 class BranchJump(UserWarning):
@@ -92,21 +99,22 @@ def adhesive_mean_gap_sweep(
     """Solve the prescribed mean gaps in the given order (displacement control: down into
     contact and back up through the pull-off), each from the last converged gap, held by the
     loading machine (:meth:`~petsc_contact.geometries.adhesive_periodic.
-    AdhesivePeriodicProblem.set_machine`) whose anchor is moved by the miss until the mean gap
-    is within :data:`MACHINE_RTOL` of its target, its pressure scale the last converged
-    step's.  Each step adds ``target_mean_gap``,
-    ``mean_gap_mismatch`` (beyond :data:`MACHINE_RTOL` after :data:`MACHINE_ITERATIONS`: not
-    converged), ``branch_jump``, ``pull_off_pressure`` (the most tensile ``p0`` with
-    contact from the smallest mean gap on) and ``hysteresis_energy`` (:func:`hysteresis_energy`
-    of the steps so far: ``earlier`` and these, as :func:`adhesive_sweep`'s); ``iterations``
-    and ``solve_time`` are summed."""
+    AdhesivePeriodicProblem.set_machine`) whose anchor starts on the branch's tangent and is
+    corrected until the mean gap is within :data:`MACHINE_RTOL` of its target
+    (:func:`_at_mean_gap`), its pressure scale the last converged step's.  Each step adds
+    ``target_mean_gap``, ``mean_gap_mismatch`` (beyond :data:`MACHINE_RTOL` after
+    :data:`MACHINE_ITERATIONS`: not converged), ``branch_jump``, ``pull_off_pressure`` (the
+    most tensile ``p0`` with contact from the smallest mean gap on) and
+    ``hysteresis_energy`` (:func:`hysteresis_energy` of the steps so far: ``earlier`` and
+    these, as :func:`adhesive_sweep`'s); the counts of :data:`SUMMED` are summed over its
+    solves."""
     x = _first_gap(problem, start)
     done = list(earlier)
     with nullcontext(solver) if solver is not None else problem_solver(problem) as solver:
         for target in (float(g) for g in mean_gaps):
             held = converged_loads(done, by_mean_gap=True)
-            scale = _machine_scale(problem, done)
-            step, x = _at_mean_gap(problem, solver, x, target, scale, fields, monitor)
+            pressures = (_machine_scale(problem, done), predicted_pressure(done, target))
+            step, x = _at_mean_gap(problem, solver, x, target, pressures, fields, monitor)
             s = step.scalars
             note_jump(s, held, -target)  # a smaller gap is a larger load
             done.append(s)
@@ -177,39 +185,58 @@ def _machine_scale(problem: AdhesivePeriodicProblem, steps: Sequence[dict[str, A
     return max(held[-1], problem.adhesion.strength) if held else problem.adhesion.strength
 
 
+def predicted_pressure(steps: Sequence[dict[str, Any]], target: float) -> float:
+    """The nominal pressure at the mean gap ``target`` on its branch's :func:`tangent`
+    through the converged ``steps`` (``scalars``: their ``target_mean_gap`` and ``p0``); 0
+    before the first."""
+    branch = [(s["target_mean_gap"], s["nominal_pressure"]) for s in steps if s["converged"]]
+    return tangent(branch, target) if branch else 0.0
+
+
 def _at_mean_gap(
     problem: AdhesivePeriodicProblem,
     solver: BoundSolver,
     x: Any,
     target: float,
-    scale: float,
+    pressures: tuple[float, float],
     fields: bool,
     monitor: Monitor | None,
 ) -> tuple[Step, Any]:
     """One prescribed mean gap (:func:`adhesive_mean_gap_sweep`): the step and the gap to go
-    on from (``x`` unless it converged).  A solve that stops short is started once more from
-    where it stopped (:data:`RESTARTS`): a long descent (a pull-off, the whole neck let go)
-    ends where the objective's change from its start, large, hides the last decreases in
-    rounding (TAO's line search fails) or where the limited memory holds the law's curvature
-    of the way there; from its own end neither holds, and the descent goes on."""
-    anchor, its, elapsed, restarts = target, 0, 0.0, RESTARTS
+    on from (``x`` unless it converged).  ``pressures`` are the pressure scale and the
+    predicted nominal pressure ``p*`` (:func:`predicted_pressure`): the first anchor is
+    ``t - p*/k_m``, where the machine holds ``t`` under ``p*``; each next one corrects the last
+    by its miss times the secant ``da/dg`` of the solves so far (1 after the first: the machine
+    is stiffer than the contact).  A solve that stops short is started once more from where it
+    stopped (:data:`RESTARTS`): a long descent (a pull-off, the whole neck let go) ends where
+    the objective's change from its start, large, hides the last decreases in rounding (TAO's
+    line search fails) or where the limited memory holds the law's curvature of the way
+    there; from its own end neither holds, and the descent goes on."""
+    scale, guess = pressures
+    anchor = target - guess / float(problem.pixel_stiffness)
+    counts: dict[str, float] = dict.fromkeys(SUMMED, 0)
+    last: tuple[float, float] | None = None  # the last solve's (anchor, mean gap)
+    restarts = RESTARTS
     for _ in range(MACHINE_ITERATIONS + RESTARTS):
         problem.set_machine(anchor, scale)
         problem.start(x)
         step, x_new = solve_step(solver, problem, problem.start_point, monitor, False, fields)
-        its, elapsed = its + step.scalars["iterations"], elapsed + step.scalars["solve_time"]
-        miss = target - step.scalars["mean_gap"]
+        counts = {k: v + step.scalars[k] for k, v in counts.items()}
+        reached = step.scalars["mean_gap"]
+        miss = target - reached
         if not step.converged and restarts and np.isfinite(miss):
             x, restarts = x_new, restarts - 1
             continue
         if not step.converged:
             break
-        x, anchor = x_new, anchor + miss
+        slope = 1.0  # da/dg before a secant: the machine is far stiffer than the contact
+        if last is not None and reached != last[1]:
+            slope = (anchor - last[0]) / (reached - last[1])
+        x, last, anchor = x_new, (anchor, reached), anchor + miss * slope
         if abs(miss) <= MACHINE_RTOL * target:
             break
     s = step.scalars
-    s.update(target_mean_gap=target, mean_gap_mismatch=abs(miss) / target)
-    s.update(iterations=its, solve_time=elapsed)
+    s.update(target_mean_gap=target, mean_gap_mismatch=abs(miss) / target, **counts)
     if s["converged"] and abs(miss) > MACHINE_RTOL * target:
         s["converged"] = False
         s["verification"] = f"mean gap {s['mean_gap']:.6g} reached, not {target:.6g}"

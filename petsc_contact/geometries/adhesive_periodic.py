@@ -176,8 +176,16 @@ class AdhesivePeriodicProblem(PeriodicProblem):
         gap = device.to_host(x.reshape(grid.local_shape) * ell)
         pressure = device.to_host(self.pressure(device.asarray(gap)))
         obs = adhesive_observables(self, gap, pressure)
+        return self.judged(info, obs, fields, gap, pressure)
+
+    def judged(
+        self, info: SolveInfo, obs: dict[str, Any], fields: bool, gap: Any, pressure: Any
+    ) -> Step:
+        """The step of a solution's observables ``obs`` (this rank's ``contact`` mask among
+        them, taken out) and the solver's report ``info``: the verdict (a pull-off said), the
+        accuracy's assessment, and the host fields ``gap`` and ``pressure`` if asked."""
         contact = obs.pop("contact")
-        verdict = verify(info, obs, ell, self.interaction)
+        verdict = verify(info, obs, self.scale_length, self.interaction)
         if self.separated:
             verdict = f"pulled off: the surfaces separated (min gap > {SEPARATED:g} ranges)"
         scalars = {**obs, **info.scalars(verdict)}

@@ -39,10 +39,9 @@ from ..solver.backends import SolverBackend
 from ..substrates.half_space import FreeHalfSpace
 from ..substrates.padded import PaddedCell
 from ..substrates.substrate import FreeSubstrate, of_modulus
-from .adhesive_periodic import SEPARATED, AdhesivePeriodicProblem
-from .periodic import verify
+from .adhesive_periodic import AdhesivePeriodicProblem
 from .punch import face_recess
-from .step import Step, contact_fields, mark_full_contact
+from .step import Step
 
 
 class AdhesivePunchProblem(AdhesivePeriodicProblem):
@@ -156,17 +155,7 @@ class AdhesivePunchProblem(AdhesivePeriodicProblem):
         gap = x.reshape(self.grid.local_shape) * ell
         pressure = self.device.to_host(self.pressure(gap))
         obs = adhesive_punch_observables(self, self.device.to_host(gap), pressure)
-        contact = obs.pop("contact")
-        verdict = verify(info, obs, ell, self.interaction)
-        if self.separated:
-            verdict = f"pulled off: the surfaces separated (min gap > {SEPARATED:g} ranges)"
-        scalars = {**obs, **info.scalars(verdict)}
-        mark_full_contact(scalars)
-        self.accuracy().assess(scalars)
-        if not fields:
-            return Step(scalars)
-        face = self.to_face(gap), self.to_face(pressure)
-        return Step(scalars, *contact_fields(*face, contact), contact=contact)
+        return self.judged(info, obs, fields, self.to_face(gap), self.to_face(pressure))
 
 
 def adhesive_punch_observables(

@@ -294,10 +294,10 @@ class AdhesivePeriodicDriver:
     def solve(
         self, loads: list[float], start: Start, monitor: Monitor | None, earlier: Earlier
     ) -> Iterator[Step]:
-        """The cycle of ``loads`` from ``start``'s gap (a fresh run's from
-        :meth:`_hard_wall_start`), its history the steps ``earlier``."""
+        """The cycle of ``loads`` from ``start``'s gap (a fresh run's: first touch, or
+        :meth:`_hard_wall_start`'s by mean gaps), its history the steps ``earlier``."""
         state = start[0] if start else None
-        if state is None and not earlier and loads:
+        if state is None and not earlier and loads and self.by_mean_gap:
             state = self._hard_wall_start(loads[0])
         solve = adhesive_mean_gap_sweep if self.by_mean_gap else adhesive_sweep
         return solve(
@@ -305,23 +305,22 @@ class AdhesivePeriodicDriver:
         )
 
     def _hard_wall_start(self, load: float) -> np.ndarray | None:
-        """The first step's start: the hard wall's gap at its ``load`` (a local slab, by the
-        package's CG under its own options prefix, :data:`HARD_WALL_START`), nearer the
-        adhesive answer than first touch (docs/performance.md: a 1024^2 mean gap's first
-        solve 1934 -> 238 iterations); ``None`` (first touch) where the hard wall does not
-        reach the load (a mean gap above first touch, a pressure not positive) or did not
-        converge."""
+        """A fresh displacement-controlled run's first start: the hard wall's gap at its mean
+        gap ``load`` (a local slab, by the package's CG under its own options prefix,
+        :data:`HARD_WALL_START`), nearer the adhesive answer than first touch (over 12
+        seeds at 256^2 8092 -> 1214 BLMVM iterations, docs/performance.md; under load control
+        it saved none); ``None`` (first touch) where the hard wall does not reach it (above
+        first touch) or did not converge."""
         scene = self.scene
         wall = PeriodicProblem(
             scene.grid, scene.fft, scene.heights, self.run.modulus_value,
             PetscBackend(HARD_WALL_START),
         )  # fmt: skip
         try:
-            (wall.check_mean_gap if self.by_mean_gap else wall.check_pressure)(load)
+            wall.check_mean_gap(load)
         except ValueError:
             return None
-        solve = mean_gap_sweep if self.by_mean_gap else sweep
-        step = next(iter(solve(wall, [load], True)))
+        step = next(iter(mean_gap_sweep(wall, [load], True)))
         return step.gap if step.converged else None
 
     def close(self) -> None:

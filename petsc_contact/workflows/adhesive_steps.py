@@ -30,7 +30,7 @@ from .periodic_steps import problem_solver
 
 MACHINE_RTOL = 1e-6  # displacement control: the mean gap to this of its target
 MACHINE_ITERATIONS = 20  # the anchor's corrections at most (each one solve)
-RESTARTS = 1  # a machine's solve that stopped short is started again from its end this often
+RESTARTS = 3  # a machine's solve that stopped short is started again from its end this often
 JUMP_AREA = 0.5  # an area this far (of the larger area) off its branch's tangent: a jump
 SUMMED = (  # a mean gap's solver counts, summed over its solves
     "iterations",
@@ -207,11 +207,12 @@ def _at_mean_gap(
     predicted nominal pressure ``p*`` (:func:`predicted_pressure`): the first anchor is
     ``t - p*/k_m``, where the machine holds ``t`` under ``p*``; each next one corrects the last
     by its miss times the secant ``da/dg`` of the solves so far (1 after the first: the machine
-    is stiffer than the contact).  A solve that stops short is started once more from where it
-    stopped (:data:`RESTARTS`): a long descent (a pull-off, the whole neck let go) ends where
-    the objective's change from its start, large, hides the last decreases in rounding (TAO's
-    line search fails) or where the limited memory holds the law's curvature of the way
-    there; from its own end neither holds, and the descent goes on."""
+    is stiffer than the contact).  A solve that stops short is started again from where it
+    stopped, at most :data:`RESTARTS` times: a long descent (a pull-off, the whole neck let
+    go) ends where the objective's change from its start, large, hides the last decreases in
+    rounding (TAO's line search fails) or where the limited memory holds the law's curvature
+    of the way there (BLMVM then stalls just above ``gatol``); from its own end neither
+    holds, and the descent goes on."""
     scale, guess = pressures
     anchor = target - guess / float(problem.pixel_stiffness)
     counts: dict[str, float] = dict.fromkeys(SUMMED, 0)

@@ -301,7 +301,8 @@ def test_the_array_fft_transforms_in_its_buffers_as_numpy_does():
 def test_the_array_fft_in_float32_computes_in_float32():
     """With ``dtype=float32`` the transforms run in single precision (NumPy 2, as cuFFT's
     C2R/R2C): a round trip is good to float32's rounding, not float64's, and writes into a
-    float64 field through the staging buffer."""
+    float64 field through the staging buffer, the one field it makes (not ``real`` nor
+    ``result``: the preconditioner's float32 transforms cost a spectrum and one field)."""
     grid = Grid(64, 1.0)
     fft = ArrayFFT(grid, get_device("cpu-array"), np.float32)
     x = np.random.default_rng(4).standard_normal(grid.shape)
@@ -311,3 +312,4 @@ def test_the_array_fft_in_float32_computes_in_float32():
     fft.backward_into(out)
     error = np.abs(out / grid.size - x).max() / np.abs(x).max()
     assert 1e-12 < error < 1e-5, error
+    assert set(fft._fields) == {"staging"}

@@ -437,7 +437,9 @@ class ArrayFFT:
     :meth:`forward`), ``spectrum`` and ``result``; both transforms unnormalised, so
     ``backward(forward(x)) = nx ny x`` (the ``1/N`` is folded into the operators'
     multipliers: :meth:`~petsc_contact.backend.operator.SpectralOperator.normalised`), and
-    :meth:`backward` may overwrite ``spectrum``.  The transforms are
+    :meth:`backward` may overwrite ``spectrum``.  ``real`` and ``result`` are made when first
+    asked for (zero): the preconditioner's float32 transforms, run on the CG's fields, never
+    make them.  The transforms are
     :class:`ArrayModuleTransforms` (NumPy's, or CuPy's with its plan cache), or on a GPU with
     ``PETSC_CONTACT_CUFFT_PLANS=on`` :class:`CuFFTPlans`; either way a field of the
     transforms' dtype that is C-contiguous is read, and written, in place, any other through
@@ -458,17 +460,32 @@ class ArrayFFT:
         self.shape = grid.shape
         self.dtype = np.dtype(dtype)
         nx, m = grid.shape[0], grid.half
-        self.real = xp.zeros(grid.shape, dtype=self.dtype)
         self.spectrum = xp.zeros((nx, m), dtype=np.result_type(self.dtype, np.complex64))
-        self.result = xp.zeros(grid.shape, dtype=self.dtype)
         self.spectral_index = (slice(0, nx), slice(0, m))
-        self._staging: Any = None  # a field of the transforms' dtype, for any other
+        self._fields: dict[str, Any] = {}  # real, result and the staging field, when made
         planned = not device.on_host and os.environ.get(CUFFT_PLANS_VARIABLE, "off") == "on"
         self.transforms = (
-            CuFFTPlans(self.real, self.spectrum)
+            CuFFTPlans(xp.empty(grid.shape, dtype=self.dtype), self.spectrum)
             if planned
             else ArrayModuleTransforms(xp, grid.shape)
         )
+
+    @property
+    def real(self) -> Any:
+        """The field :meth:`forward` transforms (kept by it)."""
+        return self._field("real")
+
+    @property
+    def result(self) -> Any:
+        """The field :meth:`backward` writes."""
+        return self._field("result")
+
+    def _field(self, name: str) -> Any:
+        """A field of the grid in the transforms' dtype, made (zero) when first asked for:
+        ``real``, ``result``, or ``staging`` (for a field of another dtype or layout)."""
+        if name not in self._fields:
+            self._fields[name] = self.device.xp.zeros(self.shape, dtype=self.dtype)
+        return self._fields[name]
 
     def forward(self) -> None:
         """``spectrum <- FFT(real)``."""
@@ -482,7 +499,7 @@ class ArrayFFT:
         """``spectrum <- FFT(x)`` for an array of the grid's size (``real`` untouched)."""
         field = x.reshape(self.shape)
         if not self._direct(field):
-            staging = self._staged()
+            staging = self._field("staging")
             staging[...] = field
             field = staging
         self.transforms.forward(field, self.spectrum)
@@ -492,18 +509,13 @@ class ArrayFFT:
         if self._direct(out):  # a C-contiguous array's reshape is a view of it
             self.transforms.backward(self.spectrum, out.reshape(self.shape))
             return
-        staging = self._staged()
+        staging = self._field("staging")
         self.transforms.backward(self.spectrum, staging)
         out[...] = staging.reshape(out.shape)
 
     def _direct(self, field: Any) -> bool:
         """Whether ``field`` can be a transform's own buffer (its dtype, C-contiguous)."""
         return bool(field.dtype == self.dtype and field.flags.c_contiguous)
-
-    def _staged(self) -> Any:
-        if self._staging is None:
-            self._staging = self.device.xp.empty(self.shape, dtype=self.dtype)
-        return self._staging
 
 
 def _aligned(size: int, dtype: Any) -> np.ndarray:

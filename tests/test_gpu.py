@@ -101,3 +101,47 @@ def test_each_fused_pass_is_the_array_pass(gpu):
     ra = fused.extend_direction(za, d, old, 0.7, x)
     assert ra == pytest.approx(plain.extend_direction(zb, d, old, 0.7, x), rel=1e-12)
     assert float(xp.abs(za - zb).max()) <= 1e-15
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_the_cufft_plans_transform_as_cupy_s_functions(gpu, monkeypatch, dtype):
+    """:class:`~petsc_contact.devices.fft.CuFFTPlans` (``PETSC_CONTACT_CUFFT_PLANS=on``: cuFFT's
+    plans on the kept buffers) against CuPy's ``rfft2`` and ``irfft2`` on the same field: the
+    spectrum and the unnormalised round trip to rounding (1e-12 in float64, 1e-5 in float32),
+    through the buffers in place and through the staging buffer."""
+    from petsc_contact.devices.fft import CUFFT_PLANS_VARIABLE, ArrayFFT, CuFFTPlans
+
+    xp = gpu.xp
+    monkeypatch.setenv(CUFFT_PLANS_VARIABLE, "on")
+    grid = Grid(96, 1.0)
+    fft = ArrayFFT(grid, gpu, dtype)
+    assert isinstance(fft.transforms, CuFFTPlans)
+    tol = 1e-12 if dtype == np.float64 else 1e-5
+    x = xp.asarray(np.random.default_rng(6).standard_normal(grid.shape))
+    fft.forward_from(x)
+    expected = xp.fft.rfft2(x.astype(dtype))
+    assert float(xp.abs(fft.spectrum - expected).max()) <= tol * float(xp.abs(expected).max())
+    for out in (xp.empty(grid.shape, dtype=dtype), xp.empty(grid.shape)[:, ::-1]):
+        fft.forward_from(x)
+        fft.backward_into(out)
+        assert float(xp.abs(out / grid.size - x).max()) <= 10 * tol * float(xp.abs(x).max())
+
+
+def test_the_gpu_with_its_plans_and_float32_solves_as_its_stand_in_does(gpu, monkeypatch):
+    """A 512^2 sweep on the GPU with its cuFFT plans and the preconditioner in float32
+    against the stand-in in float64: what :func:`test_the_gpu_solves_as_its_stand_in_does`
+    asks (the float32 preconditioner steers the path only: tests/test_gpu_prepared.py)."""
+    from petsc_contact.devices.fft import CUFFT_PLANS_VARIABLE
+
+    h = surface(512)
+    loads = list(np.logspace(-6, -1, 6))
+    run = {"length": 1.0, "modulus": 1.0, "pressures": loads, "stiffness": True}
+    host = periodic_contact(h, device="cpu-array", **run)
+    monkeypatch.setenv(CUFFT_PLANS_VARIABLE, "on")
+    device = periodic_contact(h, device="gpu", options=["-petsc_contact_pc_float32"], **run)
+    for a, b in zip(host, device, strict=True):
+        sa, sb = a.scalars, b.scalars
+        assert sb["converged"], sb["verification"]
+        assert abs(sb["iterations"] - sa["iterations"]) <= 2
+        assert sb["mean_gap"] == pytest.approx(sa["mean_gap"], rel=1e-9)
+        assert sb["stiffness"] == pytest.approx(sa["stiffness"], rel=1e-8)

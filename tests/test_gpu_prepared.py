@@ -6,6 +6,10 @@
   crosses to the host, and a sweep's resume state crosses only when it is read.
 - The held-set stiffness's preconditioner takes ``G``'s column from the contact solve's
   preconditioner instead of transforming an impulse again, with the same stiffness.
+- The preconditioner's round trips in float32 (``-petsc_contact_pc_float32``) give the
+  float64 answers and iterations; the option is refused where the FFT is FFTW's.
+- :class:`~petsc_contact.devices.fft.ArrayFFT` transforms in its kept buffers as NumPy does,
+  in float64 and in float32 (the stand-in of the GPU's cuFFT plans).
 """
 
 from __future__ import annotations
@@ -17,10 +21,11 @@ import pytest
 from test_device import surface
 
 from petsc_contact.backend.coarse import array_coarse_matrix, host_coarse_matrix
+from petsc_contact.backend.operator import FourierOperator
 from petsc_contact.backend.preconditioner import MeanModePreconditioner
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.devices.device import CPU, Device, get_device
-from petsc_contact.devices.fft import make_fft
+from petsc_contact.devices.fft import ArrayFFT, make_fft
 from petsc_contact.geometries.periodic import PeriodicProblem
 from petsc_contact.solver.backends import ArrayBackend
 from petsc_contact.solver.driver import ArraySolver, SolveSettings
@@ -220,3 +225,91 @@ def test_a_sweep_keeps_its_forms_and_checks_on_the_device(monkeypatch):
     assert all(s.converged for s in steps)
     assert max(made) > 0 > min(made), made  # both forms were used (coarse: negative)
     assert device.moved and max(device.moved) <= n, sorted(device.moved)[-5:]
+
+
+FLOAT32_LOADS = [1e-4, 1e-3, 1e-2, 1e-1]  # the Schur form, the two-level one, the Fourier one
+
+
+@pytest.mark.parametrize(("hurst", "cutoff"), [(0.7, 32), (0.3, 64)])
+def test_the_preconditioner_in_float32_gives_the_float64_answers(monkeypatch, hurst, cutoff):
+    """``-petsc_contact_pc_float32`` makes most of the preconditioner's round trips in float32
+    (all but the exact Schur form's), and the sweep keeps its answers and its iterations: the
+    residual, the Hessian and the stopping test stay float64, so the preconditioner steers the
+    CG's path, never where it stops.  Any path that passes the stopping test lands within
+    1e-10 of the answer (the stand-in against the PETSc path, tests/test_device.py); measured
+    over 32 surfaces (8 seeds x H 0.3/0.7 x 256^2/512^2, 6 loads from 1e-4 to 1e-1): the same
+    iterations at all 192 steps, mean gaps to 8.5e-15, stiffnesses equal (docs/gpu.md)."""
+    h = surface(128, hurst, cutoff)
+    run = {"length": 1.0, "modulus": 1.0, "pressures": FLOAT32_LOADS, "stiffness": True}
+    double = periodic_contact(h, device="cpu-array", **run)
+    spectra: list[np.dtype] = []
+    original = MeanModePreconditioner._single_round_trip
+
+    def counted(self, x, out):
+        spectra.append(self._fft32.spectrum.dtype)
+        return original(self, x, out)
+
+    monkeypatch.setattr(MeanModePreconditioner, "_single_round_trip", counted)
+    single = periodic_contact(h, device="cpu-array", options=["-petsc_contact_pc_float32"], **run)
+    trips = sum(int(s.scalars["preconditioner_applications"]) for s in single)
+    assert 2 * len(spectra) > trips and set(spectra) == {np.dtype(np.complex64)}
+    for a, b in zip(double, single, strict=True):
+        sa, sb = a.scalars, b.scalars
+        assert sb["converged"], sb["verification"]
+        assert abs(sb["iterations"] - sa["iterations"]) <= 1
+        assert sb["mean_gap"] == pytest.approx(sa["mean_gap"], rel=1e-10)
+        assert sb["stiffness"] == pytest.approx(sa["stiffness"], rel=1e-10)
+
+
+def test_the_float32_preconditioner_is_read_and_refused_off_the_array_fft():
+    """The option reads as PETSc's flags do, and a problem whose FFT is FFTW's (the ``cpu``
+    device, or several ranks) refuses it in one line rather than ignoring it."""
+    assert SolveSettings.from_options(["-petsc_contact_pc_float32"], "cpu-array").pc_float32
+    off = SolveSettings.from_options(["-petsc_contact_pc_float32", "0"], "cpu-array")
+    assert not off.pc_float32 and not SolveSettings().pc_float32
+    grid = Grid(32, 1.0)
+    h = np.random.default_rng(1).standard_normal(grid.shape)
+    backend = ArrayBackend(SolveSettings(pc_float32=True))
+    with pytest.raises(ValueError, match="^-petsc_contact_pc_float32 needs the array module's"):
+        PeriodicProblem(grid, make_fft(grid, CPU), h, 1.0, backend)
+
+
+def test_the_array_fft_transforms_in_its_buffers_as_numpy_does():
+    """:class:`ArrayFFT`'s transforms (the stand-in of the GPU's kept-buffer plans): the
+    spectrum is NumPy's ``rfft2`` bit for bit, the inverse unnormalised (the ``1/N`` is the
+    operators' multipliers': an operator's answer is NumPy's normalised round trip to
+    rounding), ``real`` is never written by :meth:`forward_from`, and a field of another
+    dtype or layout goes through the staging buffer both ways."""
+    grid = Grid(48, 1.0)
+    fft = make_fft(grid, get_device("cpu-array"))
+    x = np.random.default_rng(2).standard_normal(grid.shape)
+    fft.forward_from(x)
+    np.testing.assert_array_equal(fft.spectrum, np.fft.rfft2(x))
+    assert not fft.real.any()
+    fft.forward_from(np.asfortranarray(x))
+    np.testing.assert_array_equal(fft.spectrum, np.fft.rfft2(x))
+    out = np.zeros((48, 96))[:, ::2]  # not contiguous: through the staging buffer
+    fft.backward_into(out)
+    np.testing.assert_allclose(out, grid.size * x, rtol=1e-12, atol=1e-12 * grid.size)
+    kernel = np.random.default_rng(3).random(fft.spectrum.shape)
+    op = FourierOperator(grid, fft, kernel)
+    expected = np.fft.irfft2(kernel * np.fft.rfft2(x), s=grid.shape)
+    scale = 1e-13 * np.abs(expected).max()  # rounding, of the largest entry
+    np.testing.assert_allclose(op.apply_array(x, np.empty(grid.shape)), expected, atol=scale)
+
+
+def test_the_array_fft_in_float32_computes_in_float32():
+    """With ``dtype=float32`` the transforms run in single precision (NumPy 2, as cuFFT's
+    C2R/R2C): a round trip is good to float32's rounding, not float64's, and writes into a
+    float64 field through the staging buffer, the one field it makes (not ``real`` nor
+    ``result``: the preconditioner's float32 transforms cost a spectrum and one field)."""
+    grid = Grid(64, 1.0)
+    fft = ArrayFFT(grid, get_device("cpu-array"), np.float32)
+    x = np.random.default_rng(4).standard_normal(grid.shape)
+    fft.forward_from(x)
+    assert fft.spectrum.dtype == np.complex64
+    out = np.empty(grid.shape)
+    fft.backward_into(out)
+    error = np.abs(out / grid.size - x).max() / np.abs(x).max()
+    assert 1e-12 < error < 1e-5, error
+    assert set(fft._fields) == {"staging"}

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..conventions.grid import Grid
-from ..devices.fft import FFT
+from ..devices.fft import FFT, ArrayFFT
 from ..numerics.schur import ContactSchur, response_quarter
 from .coarse import CoarseSpace, TwoLevelOptions, add_correction
 from .operator import FourierOperator
@@ -52,6 +52,12 @@ class MeanModePreconditioner(FourierOperator):
     the coarse space of an older set is kept (it stays symmetric positive semi-definite) and
     the recurrence goes on.
     Called by :class:`~petsc_contact.backend.cg.PolonskyKeer` through :meth:`adapt`.
+
+    With :meth:`use_single` the Fourier form's round trip, alone and within the two-level
+    form, is made in ``float32`` (``-petsc_contact_pc_float32``): the field, its spectrum
+    and the multiplier, the answer written back into the CG's ``float64`` field.  The CG's
+    residual, the Hessian and the exact Schur form stay ``float64`` (the Schur form's image
+    ``H z = r + lambda`` stands in for a Hessian application, which needs ``z`` exact).
     """
 
     def __init__(self, grid: Grid, fft: FFT, hessian: FourierOperator, schur_max: int) -> None:
@@ -72,6 +78,8 @@ class MeanModePreconditioner(FourierOperator):
         self._quarter: Any = None  # G's quarter (of the device), made by a set-dependent form
         self._spread: np.ndarray | None = None  # work fields of the set-dependent forms
         self._reactions: np.ndarray | None = None  # the Schur form's, of the last application
+        self._fft32: ArrayFFT | None = None  # the float32 round trip's FFT (use_single)
+        self._multiplier32: Any = None  # the multiplier in float32, made when first used
 
     @property
     def schur(self) -> ContactSchur | None:
@@ -116,10 +124,25 @@ class MeanModePreconditioner(FourierOperator):
         self.correction = self._built_free = None
         self._last_count = self.builds = 0
 
+    def use_single(self, single: bool) -> None:
+        """Make the Fourier form's round trip in ``float32`` (``single``) or ``float64``
+        (class docstring); ``ValueError`` in one line where the FFT is not the array module's
+        (``--device cpu``, or several MPI ranks)."""
+        if not single:
+            self._fft32 = self._multiplier32 = None
+        elif self._fft32 is None:
+            if not isinstance(self.fft, ArrayFFT):
+                raise ValueError(
+                    "-petsc_contact_pc_float32 needs the array module's FFT: --device gpu or "
+                    "cpu-array, on one MPI rank"
+                )
+            self._fft32 = ArrayFFT(self.grid, self.device, np.float32)
+
     def _fill(self, support: float) -> None:
         """The multiplier ``N^-2/(c K/N + support)`` in place (``q = 0``: set separately)."""
         self.set_inverse(self._hessian, support)
         self._filled = support
+        self._multiplier32 = None
 
     def adapt(self, bound_count: int, free: np.ndarray) -> bool:
         """Adapt to ``bound_count`` variables at their bound (``free``: this rank's free mask).
@@ -163,6 +186,7 @@ class MeanModePreconditioner(FourierOperator):
         is ``k x k``, on every rank); the next :meth:`invert` starts without it anyway.  The
         quarter of ``G`` and :meth:`work_fields` are kept."""
         self.correction = self._built_free = self._reactions = None
+        self._multiplier32 = None  # the stiffness solve may write the shared multiplier
 
     def _exact_compliance(self) -> Any:
         """Become ``G = 1/K`` with a zero ``q = 0`` entry (the set-dependent forms); returns
@@ -215,17 +239,31 @@ class MeanModePreconditioner(FourierOperator):
     def _set_mean_mode(self, value: float) -> None:
         self.mean_mode = value
         set_mean_mode(self, value)
+        self._multiplier32 = None
 
     def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
         """``out <- M x``; in the Schur form ``x`` must vanish on the bound set."""
-        super().apply_array(x, out)
+        exact = self._fft32 is None or self.schur is not None
+        round_trip = super().apply_array if exact else self._single_round_trip
+        round_trip(x, out)
         self._reactions = None
         if self.correction is not None:
-            reactions = add_correction(
-                super().apply_array, self.correction, x, out, self.work_fields()
-            )
+            reactions = add_correction(round_trip, self.correction, x, out, self.work_fields())
             if self.schur is not None:
                 self._reactions = reactions
+        return out
+
+    def _single_round_trip(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """``out <- G x``, the Fourier form's round trip in ``float32`` (:meth:`use_single`)."""
+        fft = self._fft32
+        assert fft is not None
+        if self._multiplier32 is None:
+            self._multiplier32 = self.multiplier.astype(np.float32).reshape(-1)
+        self.applications += 1
+        fft.forward_from(x)
+        values = fft.spectrum.view(np.float32).reshape(-1)
+        self.device.xp.multiply(values, self._multiplier32, out=values)
+        fft.backward_into(out)
         return out
 
     def hessian_image(self, r: np.ndarray, out: np.ndarray, beta: float) -> bool:

@@ -369,7 +369,9 @@ def build_parser() -> argparse.ArgumentParser:
         "bntr, bntl); the default solver's two-level preconditioner: "
         "-petsc_contact_two_level 0 (off), -petsc_contact_two_level_block B (aggregate "
         "block side, pixels; default 16), -petsc_contact_two_level_max_fraction F (largest "
-        "contact fraction it is used at; default 0.1).",
+        "contact fraction it is used at; default 0.1); on --device gpu and cpu-array, "
+        "-petsc_contact_pc_float32 (the periodic preconditioner's Fourier round trips in "
+        "float32, the residual float64; default off).",
         epilog="Exit status: 0 converged, 1 a step did not converge or is not accurate, 2 bad "
         "input or an output "
         "in use, 69 a package cannot be loaded, 74 results cannot be written (disk full, "

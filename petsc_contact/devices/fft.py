@@ -383,29 +383,109 @@ class FFTWMPI:
         out.reshape(self.result.shape)[...] = self._plans.padded
 
 
+CUFFT_PLANS_VARIABLE = "PETSC_CONTACT_CUFFT_PLANS"  # "on": the GPU's own cuFFT plans
+
+
+class ArrayModuleTransforms:
+    """The array module's ``rfft2`` and ``irfft2`` written into given buffers: the stand-in's
+    transforms (NumPy), and the GPU's unless :class:`CuFFTPlans` are asked for (CuPy, whose
+    plan cache keeps a plan per shape; each call allocates its output, which is then copied,
+    and copies the spectrum before the inverse, cuFFT's C2R overwriting its input)."""
+
+    def __init__(self, xp: ModuleType, shape: tuple[int, int]) -> None:
+        self.fft, self.shape = xp.fft, shape
+
+    def forward(self, real: Any, spectrum: Any) -> None:
+        """``spectrum <- FFT(real)``."""
+        spectrum[...] = self.fft.rfft2(real)
+
+    def backward(self, spectrum: Any, real: Any) -> None:
+        """``real <- IFFT(spectrum)`` without the ``1/(nx ny)`` (``norm="forward"``)."""
+        real[...] = self.fft.irfft2(spectrum, s=self.shape, norm="forward")
+
+
+class CuFFTPlans:
+    """cuFFT's plans of one grid, made once by CuPy (``cupyx.scipy.fft.get_fft_plan``, each
+    with its work area) and run on the caller's buffers (``PlanNd.fft``): no output is
+    allocated, nothing copied, and no ``1/N`` pass (the operators' multipliers hold it).  The
+    inverse (C2R) overwrites the spectrum, as FFTW's does on the ``cpu`` device.  Used on a
+    GPU when ``PETSC_CONTACT_CUFFT_PLANS=on`` (prepared, not yet measured: docs/gpu.md)."""
+
+    def __init__(self, real: Any, spectrum: Any) -> None:
+        from cupy.cuda import cufft
+        from cupyx.scipy.fft import get_fft_plan
+
+        shape, axes = real.shape, (0, 1)
+        self._forward = get_fft_plan(real, shape=shape, axes=axes, value_type="R2C")
+        self._backward = get_fft_plan(spectrum, shape=shape, axes=axes, value_type="C2R")
+        self._directions = (cufft.CUFFT_FORWARD, cufft.CUFFT_INVERSE)
+
+    def forward(self, real: Any, spectrum: Any) -> None:
+        """``spectrum <- FFT(real)`` (C-contiguous, the plan's dtypes)."""
+        self._forward.fft(real, spectrum, self._directions[0])
+
+    def backward(self, spectrum: Any, real: Any) -> None:
+        """``real <- IFFT(spectrum)``, unnormalised; ``spectrum`` is overwritten."""
+        self._backward.fft(spectrum, real, self._directions[1])
+
+
 class ArrayFFT:
     """Real-to-complex 2-D FFTs of one grid with the array module's ``fft`` (one rank: a
     GPU's arrays on several are not supported yet).
 
     The interface of :mod:`~petsc_contact.devices.fft`'s engines: buffers ``real`` (kept by
     :meth:`forward`), ``spectrum`` and ``result``; both transforms unnormalised, so
-    ``backward(forward(x)) = nx ny x``.  CuPy keeps the cuFFT plans of a shape in its plan
-    cache, so every transform after the first reuses them.
+    ``backward(forward(x)) = nx ny x`` (the ``1/N`` is folded into the operators'
+    multipliers: :meth:`~petsc_contact.backend.operator.SpectralOperator.normalised`), and
+    :meth:`backward` may overwrite ``spectrum``.  ``real`` and ``result`` are made when first
+    asked for (zero): the preconditioner's float32 transforms, run on the CG's fields, never
+    make them.  The transforms are
+    :class:`ArrayModuleTransforms` (NumPy's, or CuPy's with its plan cache), or on a GPU with
+    ``PETSC_CONTACT_CUFFT_PLANS=on`` :class:`CuFFTPlans`; either way a field of the
+    transforms' dtype that is C-contiguous is read, and written, in place, any other through
+    a staging buffer (made when first needed).
+
+    ``dtype`` is the transforms' precision, ``float64`` or ``float32`` (``spectrum`` then
+    ``complex64``; NumPy 2 and cuFFT compute in it): :meth:`forward_from` takes a field of
+    any real dtype, :meth:`backward_into` writes into one (cast there).
     """
 
     transposed = False
 
-    def __init__(self, grid: Grid, device: Device) -> None:
+    def __init__(self, grid: Grid, device: Device, dtype: Any = np.float64) -> None:
         if grid.comm.size != 1:
             raise ValueError(f"the {device.name} device runs on one MPI rank, not {grid.comm.size}")
         xp = device.xp
         self.device = device
         self.shape = grid.shape
+        self.dtype = np.dtype(dtype)
         nx, m = grid.shape[0], grid.half
-        self.real = xp.zeros(grid.shape)
-        self.spectrum = xp.zeros((nx, m), dtype=complex)
-        self.result = xp.zeros(grid.shape)
+        self.spectrum = xp.zeros((nx, m), dtype=np.result_type(self.dtype, np.complex64))
         self.spectral_index = (slice(0, nx), slice(0, m))
+        self._fields: dict[str, Any] = {}  # real, result and the staging field, when made
+        planned = not device.on_host and os.environ.get(CUFFT_PLANS_VARIABLE, "off") == "on"
+        self.transforms = (
+            CuFFTPlans(xp.empty(grid.shape, dtype=self.dtype), self.spectrum)
+            if planned
+            else ArrayModuleTransforms(xp, grid.shape)
+        )
+
+    @property
+    def real(self) -> Any:
+        """The field :meth:`forward` transforms (kept by it)."""
+        return self._field("real")
+
+    @property
+    def result(self) -> Any:
+        """The field :meth:`backward` writes."""
+        return self._field("result")
+
+    def _field(self, name: str) -> Any:
+        """A field of the grid in the transforms' dtype, made (zero) when first asked for:
+        ``real``, ``result``, or ``staging`` (for a field of another dtype or layout)."""
+        if name not in self._fields:
+            self._fields[name] = self.device.xp.zeros(self.shape, dtype=self.dtype)
+        return self._fields[name]
 
     def forward(self) -> None:
         """``spectrum <- FFT(real)``."""
@@ -416,13 +496,26 @@ class ArrayFFT:
         self.backward_into(self.result)
 
     def forward_from(self, x: Any) -> None:
-        """``spectrum <- FFT(x)`` for an array of the grid's size."""
-        self.spectrum[...] = self.device.xp.fft.rfft2(x.reshape(self.shape))
+        """``spectrum <- FFT(x)`` for an array of the grid's size (``real`` untouched)."""
+        field = x.reshape(self.shape)
+        if not self._direct(field):
+            staging = self._field("staging")
+            staging[...] = field
+            field = staging
+        self.transforms.forward(field, self.spectrum)
 
     def backward_into(self, out: Any) -> None:
-        """``out <- IFFT(spectrum)`` (unnormalised)."""
-        fft = self.device.xp.fft
-        out.reshape(self.shape)[...] = fft.irfft2(self.spectrum, s=self.shape, norm="forward")
+        """``out <- IFFT(spectrum)`` (unnormalised; ``spectrum`` may be overwritten)."""
+        if self._direct(out):  # a C-contiguous array's reshape is a view of it
+            self.transforms.backward(self.spectrum, out.reshape(self.shape))
+            return
+        staging = self._field("staging")
+        self.transforms.backward(self.spectrum, staging)
+        out[...] = staging.reshape(out.shape)
+
+    def _direct(self, field: Any) -> bool:
+        """Whether ``field`` can be a transform's own buffer (its dtype, C-contiguous)."""
+        return bool(field.dtype == self.dtype and field.flags.c_contiguous)
 
 
 def _aligned(size: int, dtype: Any) -> np.ndarray:

@@ -152,7 +152,9 @@ class PeriodicProblem:
         self.interfacial_stiffness = np.nan
         self._s = np.nan
         self._held: FourierOperator | None = None
-        self._backend = backend
+        self._backend: SolverBackend | None = None
+        if backend is not None:
+            self.use(backend)
 
     @property
     def backend(self) -> SolverBackend:
@@ -163,7 +165,9 @@ class PeriodicProblem:
 
     def use(self, backend: SolverBackend) -> None:
         """Be solved by ``backend`` from now on (its settings: the two-level form's, the
-        stiffness solve's)."""
+        preconditioner's precision, the stiffness solve's; ``ValueError`` in one line for a
+        precision this problem's FFT cannot make)."""
+        self.preconditioner.use_single(backend.settings.pc_float32)
         self._backend = backend
 
     def held_set_solve(self, grid: Grid, op: Any, pc: Any, mask: Any) -> tuple[Any, int]:

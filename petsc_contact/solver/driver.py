@@ -65,6 +65,11 @@ class SolveSettings:
         ``-petsc_contact_two_level_max_fraction`` (the preconditioner's two-level form).
     stiffness_rtol, stiffness_max_it
         ``-stiffness_ksp_rtol``, ``-stiffness_ksp_max_it`` (the held-set stiffness solve).
+    pc_float32
+        ``-petsc_contact_pc_float32``: the periodic contact's preconditioner makes its
+        Fourier round trips in ``float32``, the residual staying ``float64`` (the array path
+        on one rank; :class:`~petsc_contact.backend.preconditioner.MeanModePreconditioner`).
+        Off by default.
     """
 
     gatol: float = DEFAULT_GATOL
@@ -76,6 +81,7 @@ class SolveSettings:
     max_fraction: float | None = None
     stiffness_rtol: float = STIFFNESS_RTOL
     stiffness_max_it: int = 0
+    pc_float32: bool = False
 
     READS: ClassVar[dict[str, tuple[str, Callable[[Any], Any]]]] = {
         "tao_gatol": ("gatol", float),
@@ -87,6 +93,7 @@ class SolveSettings:
         "petsc_contact_two_level_max_fraction": ("max_fraction", float),
         "stiffness_ksp_rtol": ("stiffness_rtol", float),
         "stiffness_ksp_max_it": ("stiffness_max_it", int),
+        "petsc_contact_pc_float32": ("pc_float32", _flag),
     }
 
     @classmethod

@@ -160,6 +160,14 @@ WARM = ("petsc_contact.cli.main", "petsc_contact.cli.runs", "petsc_contact.cli.s
         "h5py", "matplotlib.pyplot", "mpi4py.MPI", "pandas", "scipy.sparse")  # fmt: skip
 
 
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """The tests marked ``slow`` first, in their order, then the rest: ``-n 2`` hands tests
+    out in this order as its workers free up, so the longest are not left for the end, when
+    one worker would run them while the other idles (the longest first: a worker's last
+    test is a short one)."""
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+
+
 def pytest_collection_finish(session: pytest.Session) -> None:
     """Exempt what a test process keeps for its whole life from Python's cyclic garbage
     collection (``gc.freeze``): the modules the command line's runs import (:data:`WARM`),

@@ -146,6 +146,7 @@ def test_the_readme_block_is_parsed():
     assert any(argv[0] == "mpiexec" for argv in COMMANDS)
 
 
+@pytest.mark.slow
 def test_the_readme_commands_run_in_order(folder, monkeypatch):
     """Every command of the README's block, in its order, in one folder: a command reads what
     earlier ones wrote (``theory --compare``, ``plot``), so they are one test, whichever

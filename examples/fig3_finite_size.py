@@ -84,7 +84,7 @@ def eq12_ratios(r: dict, hurst: float) -> tuple[float, np.ndarray, np.ndarray]:
     return ratio(r["stiffness_mean"], float(r["h_rms"].mean())), seeds, interval
 
 
-def _arguments() -> argparse.Namespace:
+def _arguments(argv: list[str] | None = None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--grid", type=int, default=512, help="pixels per side (default 512)")
     ap.add_argument("--cutoff-ratio", type=float, default=None, help="L/lambda_1 (default grid/4)")
@@ -98,7 +98,7 @@ def _arguments() -> argparse.Namespace:
     ap.add_argument("--seeds", type=int, default=4, help="surfaces per H (default 4)")
     add_pressures_option(ap, 1e-8, 1e-3, 16)
     add_redraw_options(ap, 2, "fig3")
-    return ap.parse_args()
+    return ap.parse_args(argv)
 
 
 def _draw(args: argparse.Namespace, results: dict) -> None:
@@ -162,8 +162,9 @@ def _draw(args: argparse.Namespace, results: dict) -> None:
     fig.savefig(f"{args.output}.png", dpi=120)
 
 
-def main() -> None:
-    args = _arguments()
+def main(argv: list[str] | None = None) -> None:
+    """Run the script with ``argv`` (default: the command line's)."""
+    args = _arguments(argv)
     p, results = (_from_data if args.data else _computed)(args)
     for h in args.hursts:
         r = results[f"H{h}"]

@@ -274,10 +274,11 @@ def draw(output: str, variants: dict) -> None:
     fig.savefig(f"{output}.png", dpi=120)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
+    """Run the script with ``argv`` (default: the command line's)."""
     ap = argparse.ArgumentParser(description=__doc__)
     add_data_options(ap, "cells", "punch_own_cell", required=True, partial=False)
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     try:
         variants = {r: rows for r in PUNCH_RATIOS if (rows := pairs(args.data, r))}
     except ValueError as exc:  # a damaged piece: named, never compared

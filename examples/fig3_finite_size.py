@@ -72,16 +72,17 @@ def eq12_ratios(r: dict, hurst: float) -> tuple[float, np.ndarray, np.ndarray]:
     resampled with replacement (``figures.seed_bootstrap``)."""
     p = r["nominal_pressure"][0][r["fitted"]]
 
-    def ratio(k: np.ndarray, h_rms: float) -> float:
-        eq12 = theory.finite_size_stiffness(p, 1.0, h_rms, hurst, 1.0, 1.0)
-        return float(np.exp(np.mean(np.log(k[r["fitted"]] / eq12))))
+    def ratio(k: np.ndarray, h_rms: np.ndarray) -> np.ndarray:  # per row of k, its own h_rms
+        eq12 = theory.finite_size_stiffness(p, 1.0, h_rms[..., None], hurst, 1.0, 1.0)
+        return np.exp(np.mean(np.log(k[..., r["fitted"]] / eq12), axis=-1))
 
-    def resampled(rows: np.ndarray) -> float:
-        return ratio(np.nanmean(r["stiffness"][rows], axis=0), float(r["h_rms"][rows].mean()))
+    def resampled(rows: np.ndarray) -> np.ndarray:  # every resample (a row of seeds) at once
+        k = np.nanmean(r["stiffness"][rows.T], axis=0)
+        return ratio(k, r["h_rms"][rows].mean(axis=1))
 
-    seeds = np.array([ratio(k, h) for k, h in zip(r["stiffness"], r["h_rms"], strict=True)])
-    interval = figures.seed_bootstrap(len(seeds), resampled)
-    return ratio(r["stiffness_mean"], float(r["h_rms"].mean())), seeds, interval
+    seeds = ratio(r["stiffness"], r["h_rms"])
+    interval = figures.seed_bootstrap(len(seeds), resampled, batched=True)
+    return float(ratio(r["stiffness_mean"], r["h_rms"].mean())), seeds, interval
 
 
 def _arguments(argv: list[str] | None = None) -> argparse.Namespace:

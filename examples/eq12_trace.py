@@ -416,7 +416,8 @@ def draw(args: argparse.Namespace, rows: dict[float, dict[str, float]]) -> None:
     print(f"wrote {args.output}.png")
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
+    """Run the script with ``argv`` (default: the command line's)."""
     ap = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
@@ -430,7 +431,7 @@ def main() -> None:
     ap.add_argument("--output", default="eq12_trace", help="prefix of the files written")
     ap.add_argument("--figure", action="store_true", help="draw OUTPUT.png (solves seed 1 again)")
     add_pressures_option(ap, 1e-8, 1e-5, 13)
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     rows = {}
     for hurst in args.hursts:
         runs = [solve_seed(args, hurst, seed) for seed in range(1, args.seeds + 1)]

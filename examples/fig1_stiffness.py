@@ -104,7 +104,7 @@ def with_analytic_references(punch: dict, modulus: float, area: float) -> dict:
     return out
 
 
-def _arguments() -> argparse.Namespace:
+def _arguments(argv: list[str] | None = None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--grid", type=int, default=512, help="pixels per side (default 512)")
     ap.add_argument("--hurst", type=float, default=0.7, help="Hurst exponent H (default 0.7)")
@@ -120,7 +120,7 @@ def _arguments() -> argparse.Namespace:
     add_pressures_option(ap, 1e-7, 5e-2, 16)
     ap.add_argument("--punch-grid", type=int, default=None, help="default grid/2")
     add_data_options(ap, "1", "fig1", partial=False)
-    return ap.parse_args()
+    return ap.parse_args(argv)
 
 
 def _periodic_curves(args: argparse.Namespace) -> tuple[dict, int]:
@@ -291,8 +291,9 @@ def punch_table(data: dict) -> list[str]:
     return rows
 
 
-def main() -> None:
-    args = _arguments()
+def main(argv: list[str] | None = None) -> None:
+    """Run the script with ``argv`` (default: the command line's)."""
+    args = _arguments(argv)
     data, n = _periodic_curves(args)
     punch, hp_rms, n_punch = (_read_punch if args.data else _solved_punch)(args)
     top = punch["area_fraction"][punch["converged"]].max(initial=0.0)

@@ -8,10 +8,11 @@ from petsc_contact.paper import figures
 from petsc_contact.physics import theory
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
+    """Run the script with ``argv`` (default: the command line's)."""
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--output", default="fig2", help="prefix of the PNG and HDF5 files")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     h = np.linspace(0.02, 1.0, 99)
     inv0, inv1 = theory.inverse_theta_parts(h)
     figures.save(

@@ -72,19 +72,20 @@ def eq12_ratios(r: dict, hurst: float) -> tuple[float, np.ndarray, np.ndarray]:
     resampled with replacement (``figures.seed_bootstrap``)."""
     p = r["nominal_pressure"][0][r["fitted"]]
 
-    def ratio(k: np.ndarray, h_rms: float) -> float:
-        eq12 = theory.finite_size_stiffness(p, 1.0, h_rms, hurst, 1.0, 1.0)
-        return float(np.exp(np.mean(np.log(k[r["fitted"]] / eq12))))
+    def ratio(k: np.ndarray, h_rms: np.ndarray) -> np.ndarray:  # per row of k, its own h_rms
+        eq12 = theory.finite_size_stiffness(p, 1.0, h_rms[..., None], hurst, 1.0, 1.0)
+        return np.exp(np.mean(np.log(k[..., r["fitted"]] / eq12), axis=-1))
 
-    def resampled(rows: np.ndarray) -> float:
-        return ratio(np.nanmean(r["stiffness"][rows], axis=0), float(r["h_rms"][rows].mean()))
+    def resampled(rows: np.ndarray) -> np.ndarray:  # every resample (a row of seeds) at once
+        k = np.nanmean(r["stiffness"][rows.T], axis=0)
+        return ratio(k, r["h_rms"][rows].mean(axis=1))
 
-    seeds = np.array([ratio(k, h) for k, h in zip(r["stiffness"], r["h_rms"], strict=True)])
-    interval = figures.seed_bootstrap(len(seeds), resampled)
-    return ratio(r["stiffness_mean"], float(r["h_rms"].mean())), seeds, interval
+    seeds = ratio(r["stiffness"], r["h_rms"])
+    interval = figures.seed_bootstrap(len(seeds), resampled, batched=True)
+    return float(ratio(r["stiffness_mean"], r["h_rms"].mean())), seeds, interval
 
 
-def _arguments() -> argparse.Namespace:
+def _arguments(argv: list[str] | None = None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--grid", type=int, default=512, help="pixels per side (default 512)")
     ap.add_argument("--cutoff-ratio", type=float, default=None, help="L/lambda_1 (default grid/4)")
@@ -98,7 +99,7 @@ def _arguments() -> argparse.Namespace:
     ap.add_argument("--seeds", type=int, default=4, help="surfaces per H (default 4)")
     add_pressures_option(ap, 1e-8, 1e-3, 16)
     add_redraw_options(ap, 2, "fig3")
-    return ap.parse_args()
+    return ap.parse_args(argv)
 
 
 def _draw(args: argparse.Namespace, results: dict) -> None:
@@ -162,8 +163,9 @@ def _draw(args: argparse.Namespace, results: dict) -> None:
     fig.savefig(f"{args.output}.png", dpi=120)
 
 
-def main() -> None:
-    args = _arguments()
+def main(argv: list[str] | None = None) -> None:
+    """Run the script with ``argv`` (default: the command line's)."""
+    args = _arguments(argv)
     p, results = (_from_data if args.data else _computed)(args)
     for h in args.hursts:
         r = results[f"H{h}"]

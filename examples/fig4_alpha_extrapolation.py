@@ -75,7 +75,7 @@ def _from_data(args: argparse.Namespace) -> tuple[list[float], np.ndarray, dict]
     return ratios, results[f"ratio{ratios[0]:g}"]["nominal_pressure"][0], results
 
 
-def _arguments() -> argparse.Namespace:
+def _arguments(argv: list[str] | None = None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--grid", type=int, default=512, help="pixels per side (default 512)")
     ap.add_argument("--hurst", type=float, default=0.3, help="Hurst exponent H (default 0.3)")
@@ -89,7 +89,7 @@ def _arguments() -> argparse.Namespace:
     ap.add_argument("--seeds", type=int, default=4, help="surfaces per ratio (default 4)")
     add_pressures_option(ap, 1e-8, 1e-3, 16)
     add_redraw_options(ap, 3, "fig4")
-    return ap.parse_args()
+    return ap.parse_args(argv)
 
 
 def extrapolation(hurst: float, ratios: list[float], results: dict) -> dict:
@@ -190,8 +190,9 @@ def _draw(args: argparse.Namespace, ratios: list[float], results: dict, fit: dic
     fig.savefig(f"{args.output}.png", dpi=120)
 
 
-def main() -> None:
-    args = _arguments()
+def main(argv: list[str] | None = None) -> None:
+    """Run the script with ``argv`` (default: the command line's)."""
+    args = _arguments(argv)
     ratios, p, results = (_from_data if args.data else _computed)(args)
     fit = extrapolation(args.hurst, ratios, results)
     figures.save(

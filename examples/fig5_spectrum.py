@@ -69,7 +69,8 @@ def panel(ax, data: dict, ratio: float, cutoff: float, title: str) -> None:
     ax.grid(alpha=0.3, which="both")
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
+    """Run the script with ``argv`` (default: the command line's)."""
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--grid", type=int, default=1024, help="pixels per side (default 1024)")
     ap.add_argument("--hurst", type=float, default=0.7, help="Hurst exponent H (default 0.7)")
@@ -77,7 +78,7 @@ def main() -> None:
     ap.add_argument("--cutoff-ratio", type=float, default=None, help="default grid/4")
     ap.add_argument("--seed", type=int, default=1, help="surface seed (default 1)")
     ap.add_argument("--output", default="fig5", help="prefix of the PNG and HDF5 files")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     cutoff = args.cutoff_ratio or args.grid / 4
     ratios = {"a": 1.0, "b": args.rolloff_ratio}
     data = {k: spectra(args.grid, args.hurst, r, cutoff, args.seed) for k, r in ratios.items()}

@@ -256,7 +256,7 @@ def _draw(args: argparse.Namespace, data: dict) -> None:
     fig.savefig(f"{args.output}.png", dpi=120)
 
 
-def _arguments() -> argparse.Namespace:
+def _arguments(argv: list[str] | None = None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--grid", type=int, default=128, help="pixels per side (default 128)")
     ap.add_argument(
@@ -285,11 +285,12 @@ def _arguments() -> argparse.Namespace:
     )
     add_pressures_option(ap, 1e-9, 1e-2, 29)
     add_data_options(ap, "hertz", "fig6", partial=False)
-    return ap.parse_args()
+    return ap.parse_args(argv)
 
 
-def main() -> None:
-    args = _arguments()
+def main(argv: list[str] | None = None) -> None:
+    """Run the script with ``argv`` (default: the command line's)."""
+    args = _arguments(argv)
     if args.refine:
         for pixels in args.pixels:
             for seed in args.refine:

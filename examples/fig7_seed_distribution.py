@@ -290,7 +290,7 @@ def _correlation(h: np.ndarray, values: np.ndarray) -> float:
     return float(np.corrcoef(np.log(h[ok]), np.log(values[ok]))[0, 1]) if ok.sum() > 2 else np.nan
 
 
-def _arguments() -> argparse.Namespace:
+def _arguments(argv: list[str] | None = None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--grid", type=int, default=128, help="pixels per side (default 128)")
     ap.add_argument("--seeds", type=int, default=8, help="seeds 1..N (default 8)")
@@ -305,11 +305,12 @@ def _arguments() -> argparse.Namespace:
     )
     ap.add_argument("--fit-points", type=int, default=4, help="loads of each seed's fit (4)")
     add_data_options(ap, "seeds", "fig7")
-    return ap.parse_args()
+    return ap.parse_args(argv)
 
 
-def main() -> None:
-    args = _arguments()
+def main(argv: list[str] | None = None) -> None:
+    """Run the script with ``argv`` (default: the command line's)."""
+    args = _arguments(argv)
     curves, n = (_read if args.data else _solved)(args)
     at = args.at or ([1e-6, 1e-4] if args.data else [1e-3, 1e-2])
     d = analyse(curves, n, 1.0, at, args.fit_points)

@@ -385,14 +385,15 @@ def report(face: str, ratio: int, rows: list) -> list[str]:
     return lines
 
 
-def _arguments() -> argparse.Namespace:
+def _arguments(argv: list[str] | None = None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__)
     add_data_options(ap, "punch", "fig8", required=True)
-    return ap.parse_args()
+    return ap.parse_args(argv)
 
 
-def main() -> None:
-    args = _arguments()
+def main(argv: list[str] | None = None) -> None:
+    """Run the script with ``argv`` (default: the command line's)."""
+    args = _arguments(argv)
     variants, references, data = {}, {}, {}
     references[("fig1 punch", 1)] = punch_rows(piece_files(args.data, "fig1", "punch"))
     for ratio in PUNCH_RATIOS:

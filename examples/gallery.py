@@ -15,6 +15,7 @@ import os
 import shlex
 import subprocess
 import sys
+from collections.abc import Callable
 
 import numpy as np
 
@@ -55,22 +56,37 @@ def make_map(path: str, n: int) -> None:
     Topography(np.ma.masked_array(nm, mask), (5e4, 5e4), unit="nm").to_x3p(path)
 
 
-def main() -> None:
+def arguments(command: str) -> list[str]:
+    """A command of :data:`COMMANDS` as ``petsc-contact``'s arguments (quiet, but for a plot)."""
+    words = shlex.split(command)
+    return words if command.startswith("plot") else [*words, "--quiet"]
+
+
+def in_a_process(words: list[str], folder: str) -> None:
+    """``petsc-contact WORDS`` in ``folder``, a process of its own, as a user types it."""
+    subprocess.run([sys.executable, "-m", "petsc_contact.cli", *words], cwd=folder, check=True)
+
+
+def draw(output: str, grid: int, run: Callable[[list[str], str], None] = in_a_process) -> None:
+    """The map (``grid`` pixels a side) and every picture of :data:`COMMANDS` in ``output``,
+    each command run by ``run(arguments, folder)``; only the PNGs are kept."""
+    os.makedirs(output, exist_ok=True)
+    make_map(os.path.join(output, "scan.x3p"), grid)
+    for command in COMMANDS:
+        print(f"$ petsc-contact {command}", flush=True)
+        run(arguments(command), output)
+    for name in os.listdir(output):
+        if not name.endswith(".png"):
+            os.remove(os.path.join(output, name))
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Run the script with ``argv`` (default: the command line's)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--output", default=os.path.join("docs", "gallery"))
     ap.add_argument("--grid", type=int, default=256)
-    args = ap.parse_args()
-    os.makedirs(args.output, exist_ok=True)
-    make_map(os.path.join(args.output, "scan.x3p"), args.grid)
-    for command in COMMANDS:
-        print(f"$ petsc-contact {command}", flush=True)
-        run = [sys.executable, "-m", "petsc_contact.cli", *shlex.split(command), "--quiet"]
-        if command.startswith("plot"):
-            run.remove("--quiet")
-        subprocess.run(run, cwd=args.output, check=True)
-    for name in os.listdir(args.output):
-        if not name.endswith(".png"):
-            os.remove(os.path.join(args.output, name))
+    args = ap.parse_args(argv)
+    draw(args.output, args.grid)
 
 
 if __name__ == "__main__":

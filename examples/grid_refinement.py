@@ -78,7 +78,8 @@ def table(args: argparse.Namespace, runs: list[dict[str, np.ndarray]]) -> list[s
     return lines
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
+    """Run the script with ``argv`` (default: the command line's)."""
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--grid", type=int, default=256, help="the coarsest grid (default 256)")
     ap.add_argument("--pixels", type=int, default=2, help="lambda_1 in its pixels (default 2)")
@@ -88,7 +89,7 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=4, help="seeds 1..N (default 4)")
     ap.add_argument("--output", default="refinement", help="prefix of the files written")
     add_pressures_option(ap, 1e-7, 1e-2, 16)
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     runs = [solve_seed(args, seed) for seed in range(1, args.seeds + 1)]
     print("\n".join(table(args, runs)))
 

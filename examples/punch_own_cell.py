@@ -14,6 +14,8 @@ over seeds and loads resampled, beside Persson's closed form for the face's spec
 """
 
 import argparse
+import functools
+from collections.abc import Callable
 
 import numpy as np
 
@@ -141,31 +143,58 @@ COMPARISON_HEADER = (
 )
 
 
-def u0_by_stiffness(p: np.ndarray, k: np.ndarray, gap: np.ndarray) -> float:
-    """``u0 = p/K`` (paper Eq. 1), the median over the loads given."""
-    return float(np.median(p / k))
+def u0_by_stiffness(p: np.ndarray, k: np.ndarray, gap: np.ndarray) -> np.ndarray:
+    """``u0 = p/K`` (paper Eq. 1), the median over the loads given (the last axis: one value
+    per row of resampled loads)."""
+    return np.median(p / k, axis=-1)
 
 
-def u0_by_gap(p: np.ndarray, k: np.ndarray, gap: np.ndarray) -> float:
-    """``u0 = -du_bar/d ln p`` (paper Eq. 3), a least-squares line (NaN under 2 loads)."""
-    if np.unique(p).size < 2:
-        return float("nan")
-    return float(-np.polyfit(np.log(p), gap, 1)[0])
+def u0_by_gap(p: np.ndarray, k: np.ndarray, gap: np.ndarray) -> np.ndarray:
+    """``u0 = -du_bar/d ln p`` (paper Eq. 3), the least-squares line's slope in closed form
+    over the loads given (the last axis; NaN where they are under 2 distinct loads)."""
+    x = np.log(p)
+    dx = x - x.mean(axis=-1, keepdims=True)
+    dy = gap - gap.mean(axis=-1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        slope = (dx * dy).sum(axis=-1) / (dx * dx).sum(axis=-1)
+    return np.where(np.ptp(p, axis=-1) > 0, -slope, np.nan)
 
 
-def seeds_and_loads(windows: list[tuple[np.ndarray, ...]], estimator: object) -> np.ndarray:
+@functools.cache
+def resampled(sizes: tuple[int, ...]) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The bootstrap's draws over seeds whose windows hold ``sizes`` loads: for each seed,
+    the loads of every resample that drew it (a row each) and where each lands among the
+    :data:`~petsc_contact.paper.figures.BOOTSTRAP_RESAMPLES` x seeds slots. Drawn one
+    resample at a time from a fixed stream (the seeds, then each seed drawn's loads), so
+    the same sizes give the same draws: made once, shared by both estimators."""
+    rng = np.random.default_rng(figures.BOOTSTRAP_SEED)
+    count = len(sizes)
+    drawn: list[list[np.ndarray]] = [[] for _ in sizes]
+    where: list[list[int]] = [[] for _ in sizes]
+    for resample in range(figures.BOOTSTRAP_RESAMPLES):
+        for slot, i in enumerate(rng.integers(0, count, count)):
+            drawn[i].append(rng.integers(0, sizes[i], sizes[i]))
+            where[i].append(resample * count + slot)
+    return [
+        (np.array(d, dtype=int).reshape(len(d), n), np.array(w, dtype=int))
+        for d, w, n in zip(drawn, where, sizes, strict=True)
+    ]
+
+
+def seeds_and_loads(
+    windows: list[tuple[np.ndarray, ...]], estimator: Callable[..., np.ndarray]
+) -> np.ndarray:
     """The 68% percentile interval of the median over seeds of ``estimator(p, K, u_bar)``,
     seeds resampled and, within each seed drawn, its window's loads resampled
-    (:data:`~petsc_contact.paper.figures.BOOTSTRAP_RESAMPLES` times, a fixed stream)."""
-    rng = np.random.default_rng(figures.BOOTSTRAP_SEED)
-    values = []
-    for _ in range(figures.BOOTSTRAP_RESAMPLES):
-        per_seed = []
-        for i in rng.integers(0, len(windows), len(windows)):
-            picked = rng.integers(0, windows[i][0].size, windows[i][0].size)
-            per_seed.append(estimator(*(c[picked] for c in windows[i])))  # type: ignore[operator]
-        values.append(np.nanmedian(per_seed))
-    return np.percentile(values, [16, 84])
+    (:func:`resampled`); the estimator runs once per seed, over every resample of its loads."""
+    count = len(windows)
+    values = np.full(figures.BOOTSTRAP_RESAMPLES * count, np.nan)
+    draws = resampled(tuple(w[0].size for w in windows))
+    for window, (rows, slots) in zip(windows, draws, strict=True):
+        if slots.size:
+            values[slots] = estimator(*(column[rows] for column in window))
+    medians = np.nanmedian(values.reshape(figures.BOOTSTRAP_RESAMPLES, count), axis=1)
+    return np.percentile(medians, [16, 84])
 
 
 def _windows(rows: list[tuple[dict, dict]], unit: list[float]) -> list[tuple[np.ndarray, ...]]:
@@ -245,10 +274,11 @@ def draw(output: str, variants: dict) -> None:
     fig.savefig(f"{output}.png", dpi=120)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
+    """Run the script with ``argv`` (default: the command line's)."""
     ap = argparse.ArgumentParser(description=__doc__)
     add_data_options(ap, "cells", "punch_own_cell", required=True, partial=False)
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     try:
         variants = {r: rows for r in PUNCH_RATIOS if (rows := pairs(args.data, r))}
     except ValueError as exc:  # a damaged piece: named, never compared

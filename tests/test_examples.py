@@ -1,23 +1,47 @@
-"""The figure scripts run end to end at toy size and write their PNG and HDF5 files."""
+"""The figure scripts run end to end at toy size and write their PNG and HDF5 files.
 
+The scripts run in this process (their ``main(argv)``, reported as a process would be:
+:func:`script`), and so do the studies whose files they redraw (:func:`conftest.cli`): what
+is checked is what they compute and print, not a process. One script runs as a user starts
+it, a process of its own (``test_example_runs``' ``fig2_theta.py``)."""
+
+import functools
+import importlib.util
+import os
 import subprocess
 import sys
+from types import ModuleType
 
 import h5py
 import pytest
-from conftest import ROOT
+from conftest import ROOT, cli, cli_in_process, in_process
 
-# a study run in a subprocess: this checkout, a plain PATH, mpiexec allowed as root
-STUDY_ENV = {
-    "PYTHONPATH": str(ROOT),
-    "PATH": "/usr/bin:/bin",
-    "OMPI_ALLOW_RUN_AS_ROOT": "1",
-    "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
-}
+
+@functools.cache
+def example(name: str) -> ModuleType:
+    """The script ``examples/NAME`` as a module (loaded once), its ``main(argv)`` to call."""
+    spec = importlib.util.spec_from_file_location(f"examples_{name[:-3]}", ROOT / "examples" / name)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def script(name: str, *args: str) -> subprocess.CompletedProcess:
+    """``python examples/NAME ARGS`` run in this process (its ``main(ARGS)``), reported as the
+    process would be (:func:`conftest.in_process`: the exit status, what it printed); the
+    figures it left open closed."""
+    import matplotlib.pyplot as plt
+
+    module = example(name)
+    argv = [sys.executable, str(ROOT / "examples" / name), *args]
+    try:
+        return in_process(argv, lambda: module.main(list(args)))
+    finally:
+        plt.close("all")
 
 
 @pytest.mark.parametrize(
-    "script, args",
+    "name, args",
     [
         ("fig2_theta.py", []),
         ("fig5_spectrum.py", ["--grid", "64"]),
@@ -47,15 +71,21 @@ STUDY_ENV = {
         ),
     ],
 )
-def test_example_runs(tmp_path, script, args):
-    out = tmp_path / "fig"
-    r = subprocess.run(
-        [sys.executable, str(ROOT / "examples" / script), *args, "--output", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=600,
-        env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
-    )
+def test_example_runs(tmp_path, name, args):
+    """Each figure script at a toy size (grids of 32^2 and 64^2, a few seeds and loads: enough
+    for its fits to have points) writes its picture and its numbers; ``fig2_theta.py`` (the
+    quickest, theory only) as a process of its own, as a user starts it."""
+    out = str(tmp_path / "fig")
+    if name == "fig2_theta.py":
+        r = subprocess.run(
+            [sys.executable, str(ROOT / "examples" / name), *args, "--output", out],
+            capture_output=True,
+            text=True,
+            timeout=600,
+            env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
+        )
+    else:
+        r = script(name, *args, "--output", out)
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "fig.png").stat().st_size > 1000
     with h5py.File(tmp_path / "fig.h5") as f:
@@ -63,32 +93,12 @@ def test_example_runs(tmp_path, script, args):
 
 
 def test_figure_1_redraws_from_study_files(tmp_path):
-    """Fig. 1 from the study's two sweeps and punch at a toy size (grids divided by 128)."""
-    data = tmp_path / "paper"
-    env = STUDY_ENV
-    study = ["-m", "petsc_contact.cli", "study", "--figure", "1", "--shrink", "128", "--data"]
-    r = subprocess.run(
-        [sys.executable, *study, str(data), "--quiet"],
-        capture_output=True,
-        text=True,
-        timeout=600,
-        env=env,
-    )
+    """Fig. 1 from the study's two sweeps and punch at a toy size (grids divided by 128, the
+    most the study allows: 64^2 cells, a 16^2 punch), every step converged."""
+    data = str(tmp_path / "paper")
+    r = cli("study", "--figure", "1", "--shrink", "128", "--data", data, "--quiet")
     assert r.returncode == 0, r.stderr
-    r = subprocess.run(
-        [
-            sys.executable,
-            str(ROOT / "examples" / "fig1_stiffness.py"),
-            "--data",
-            str(data),
-            "--output",
-            str(tmp_path / "f1"),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        env=env,
-    )
+    r = script("fig1_stiffness.py", "--data", data, "--output", str(tmp_path / "f1"))
     assert r.returncode == 0, r.stderr
     assert "64^2: 16/16 converged" in r.stdout and "punch 16^2: 16/16" in r.stdout
     with h5py.File(tmp_path / "f1.h5") as f:
@@ -96,55 +106,24 @@ def test_figure_1_redraws_from_study_files(tmp_path):
 
 
 def test_figures_redraw_from_study_files(tmp_path):
-    """The study's files at a toy size (grids divided by 64) redraw Figs. 2 and 3 of the paper
+    """The study's files at a toy size (grids divided by 64: 128^2 for Fig. 2, so that every
+    ratio of Fig. 3 keeps a grid of its own, 16^2 to 128^2) redraw Figs. 2 and 3 of the paper
     (scripts fig3 and fig4 with --data) without solving anything; the shared H = 0.3 run
     serves both, and the fits report how many loads lie below p_c."""
-    data = tmp_path / "paper"
+    data = str(tmp_path / "paper")
     for figure in ("2", "3"):
-        r = subprocess.run(
-            [
-                sys.executable,
-                "-m",
-                "petsc_contact.cli",
-                "study",
-                "--figure",
-                figure,
-                "--shrink",
-                "64",
-                "--data",
-                str(data),
-                "--quiet",
-            ],
-            capture_output=True,
-            text=True,
-            timeout=900,
-            env=STUDY_ENV,
-        )
+        r = cli("study", "--figure", figure, "--shrink", "64", "--data", data, "--quiet")
         assert r.returncode == 0, r.stderr
     redraws = (
         ("fig3_finite_size.py", "f2", []),
         ("fig4_alpha_extrapolation.py", "f3", []),
         ("fig4_alpha_extrapolation.py", "f3_any", ["--min-contact-pixels", "1"]),
     )
-    for script, figure, extra in redraws:
-        r = subprocess.run(
-            [
-                sys.executable,
-                str(ROOT / "examples" / script),
-                "--data",
-                str(data),
-                "--output",
-                str(tmp_path / figure),
-                *extra,
-            ],
-            capture_output=True,
-            text=True,
-            timeout=120,
-            env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
-        )
+    for name, figure, extra in redraws:
+        r = script(name, "--data", data, "--output", str(tmp_path / figure), *extra)
         assert r.returncode == 0, r.stderr
         assert "below p_c" in r.stdout or "alpha" in r.stdout
-        assert script.startswith("fig3") or extra or "512: not fitted" in r.stdout
+        assert name.startswith("fig3") or extra or "512: not fitted" in r.stdout
         assert (tmp_path / f"{figure}.png").stat().st_size > 1000
     with h5py.File(tmp_path / "f3.h5") as f:
         # 32^2 (lambda_r/lambda_1 = 512 shrunk) has too few resolved loads: skipped, said so
@@ -160,15 +139,9 @@ def test_figures_redraw_from_study_files(tmp_path):
 def test_a_ratio_with_one_seed_is_drawn_but_not_fitted():
     """The alpha extrapolation leaves out a ratio whose error lacks the seed spread: the line
     through the other three is the one it would be without that ratio."""
-    import importlib.util
-
     import numpy as np
 
-    spec = importlib.util.spec_from_file_location(
-        "fig4", ROOT / "examples" / "fig4_alpha_extrapolation.py"
-    )
-    fig4 = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(fig4)
+    fig4 = example("fig4_alpha_extrapolation.py")
     ratios = [512.0, 768.0, 2048.0, 4096.0]
     alphas, seeds = [0.70, 0.72, 0.75, 0.95], [4, 4, 4, 1]
     results = {
@@ -256,17 +229,8 @@ def test_an_unfinished_study_is_read_over_the_loads_every_seed_has(tmp_path):
     _sweep_file(tmp_path / "shorter.h5", 1, 5, True)  # complete, but one load fewer
     with pytest.raises(ValueError, match="same loads"):
         curves_from_files([paths[0], str(tmp_path / "shorter.h5")])
-    r = subprocess.run(
-        [
-            sys.executable,
-            str(ROOT / "examples" / "fig3_finite_size.py"),
-            *("--data", data, "--with-partial", "--output", str(tmp_path / "f2")),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
-    )
+    r = script("fig3_finite_size.py", "--data", data, "--with-partial", "--output",
+               str(tmp_path / "f2"))  # fmt: skip
     assert r.returncode == 0, r.stderr
     assert "H = 0.7: unfinished pieces read, 4 loads; 4 fitted below p_c" in r.stdout
     with h5py.File(tmp_path / "f2.h5") as f:
@@ -275,22 +239,21 @@ def test_an_unfinished_study_is_read_over_the_loads_every_seed_has(tmp_path):
 
 
 def test_the_gallery_draws_every_picture(tmp_path):
-    """examples/gallery.py at 64^2: every command of docs/gallery.md runs and draws."""
-    r = subprocess.run(
-        [
-            sys.executable,
-            str(ROOT / "examples" / "gallery.py"),
-            "--grid",
-            "64",
-            "--output",
-            str(tmp_path),
-        ],  # fmt: skip
-        capture_output=True,
-        text=True,
-        timeout=600,
-        env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
-    )
-    assert r.returncode == 0, r.stderr
+    """examples/gallery.py at 64^2 (each map still has pixels in and out of contact): every
+    command of docs/gallery.md runs and draws, each in this process
+    (:func:`conftest.cli_in_process`) in the gallery's folder, as the script runs it."""
+    gallery = example("gallery.py")
+
+    def in_this_process(words: list[str], folder: str) -> None:
+        here = os.getcwd()
+        os.chdir(folder)
+        try:
+            r = cli_in_process(*words)
+        finally:
+            os.chdir(here)
+        assert r.returncode == 0, r.stderr
+
+    gallery.draw(str(tmp_path), 64, run=in_this_process)
     drawn = sorted(p.name for p in tmp_path.iterdir())
     documented = (ROOT / "docs" / "gallery.md").read_text()
     assert drawn and all(f"gallery/{name}" in documented for name in drawn), drawn
@@ -298,19 +261,15 @@ def test_the_gallery_draws_every_picture(tmp_path):
 
 
 def test_punch_figure_redraws_from_study_files(tmp_path):
-    """The punch pieces at a toy size (16^2 faces, the cut ones from 64^2) draw the punch
-    figure: every variant has its 8 seeds, -dp/du_bar stands beside Eq. 2, and each variant's
-    summary over its seeds is one table row."""
+    """The punch pieces at a toy size (grids divided by 128, the most the study allows: 16^2
+    faces, the cut ones from 64^2) draw the punch figure: every variant has its 8 seeds,
+    -dp/du_bar stands beside Eq. 2, and each variant's summary over its seeds is one table
+    row."""
     data = tmp_path / "paper"
-    study = ["-m", "petsc_contact.cli", "study", "--figure", "punch", "--shrink", "128"]
-    r = _run([sys.executable, *study, "--data", str(data), "--quiet"], timeout=300)
+    r = cli("study", "--figure", "punch", "--shrink", "128", "--data", str(data), "--quiet")
     assert r.returncode == 0, r.stderr
     out = tmp_path / "f8"
-    r = _run(
-        [sys.executable, str(ROOT / "examples" / "fig8_punch.py"), "--data", str(data)]
-        + ["--output", str(out)],
-        timeout=120,
-    )
+    r = script("fig8_punch.py", "--data", str(data), "--output", str(out))
     assert r.returncode == 0, r.stderr
     lines = r.stdout.splitlines()
     assert sum(", seed " in line and "-dp/du_bar" in line for line in lines) == 32
@@ -326,28 +285,21 @@ def _punch_against_its_own_cell(data, tmp_path):
     """The cells of the punch's periodic faces: each seed's punch is compared with the cell
     of its own face (one row per ``L_p/lambda_r``, 8 seeds), and a cell whose face is not its
     punch's is refused in one line."""
-    cells = ["-m", "petsc_contact.cli", "study", "--figure", "cells", "--shrink", "128"]
-    r = _run([sys.executable, *cells, "--data", str(data), "--quiet"], timeout=300)
+    r = cli("study", "--figure", "cells", "--shrink", "128", "--data", str(data), "--quiet")
     assert r.returncode == 0, r.stderr
-    script = [sys.executable, str(ROOT / "examples" / "punch_own_cell.py"), "--data", str(data)]
-    r = _run([*script, "--output", str(tmp_path / "own")], timeout=120)
+    r = script("punch_own_cell.py", "--data", str(data), "--output", str(tmp_path / "own"))
     assert r.returncode == 0, r.stderr
     rows = [line for line in r.stdout.splitlines() if line.startswith("| `L")]
     assert len(rows) == 4 and all(line.split(" | ")[1] == "8" for line in rows), rows
     assert (tmp_path / "own.png").stat().st_size > 5000
     with h5py.File(data / "cells" / "periodic_r8_seed3.h5", "r+") as f:  # another face
         f.attrs["rms_height"] = 1.01 * f.attrs["rms_height"]
-    r = _run([*script, "--output", str(tmp_path / "own2")], timeout=120)
+    r = script("punch_own_cell.py", "--data", str(data), "--output", str(tmp_path / "own2"))
     assert r.returncode == 1 and "not the same face" in r.stderr and "seed 3" in r.stderr
     damaged = data / "cells" / "periodic_r1_seed2.h5"
     damaged.write_bytes(bytes(range(256)) * 16)  # bad bytes: named in one line
-    r = _run([*script, "--output", str(tmp_path / "own3")], timeout=120)
+    r = script("punch_own_cell.py", "--data", str(data), "--output", str(tmp_path / "own3"))
     assert r.returncode == 1 and str(damaged) in r.stderr and r.stderr.count("\n") == 1, r.stderr
-
-
-def _run(argv: list[str], timeout: int) -> subprocess.CompletedProcess:
-    """``argv`` run as the study's tests run it (this checkout, a plain PATH)."""
-    return subprocess.run(argv, capture_output=True, text=True, timeout=timeout, env=STUDY_ENV)
 
 
 def test_sweeps_whose_loads_differ_by_rounding_are_one_sweep(tmp_path):
@@ -369,27 +321,26 @@ def test_sweeps_whose_loads_differ_by_rounding_are_one_sweep(tmp_path):
 
 def test_the_grid_refinement_reuses_what_it_solved(tmp_path):
     """``examples/grid_refinement.py``: a table of K on the coarser grids over the finest's,
-    binned by contact pixels; each seed's curves kept, so that a second run solves nothing."""
+    binned by contact pixels; each seed's curves kept, so that a second run solves nothing.
+    32^2 to 128^2, two seeds, five loads: the table has rows and each seed a file."""
     import numpy as np
 
-    script = str(ROOT / "examples" / "grid_refinement.py")
-    args = [sys.executable, script, "--grid", "32", "--seeds", "2", "--pressures", "1e-4",
-            "3e-2", "5", "--output", str(tmp_path / "r")]  # fmt: skip
-    env = {"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"}
-    first = subprocess.run(args, capture_output=True, text=True, timeout=600, env=env)
+    args = ["--grid", "32", "--seeds", "2", "--pressures", "1e-4", "3e-2", "5",
+            "--output", str(tmp_path / "r")]  # fmt: skip
+    first = script("grid_refinement.py", *args)
     assert first.returncode == 0, first.stderr
     assert first.stdout.count("solved") == 6 and "| contact pixels" in first.stdout
-    again = subprocess.run(args, capture_output=True, text=True, timeout=600, env=env)
+    again = script("grid_refinement.py", *args)
     assert "solved" not in again.stdout
     assert again.stdout.splitlines()[-3:] == first.stdout.splitlines()[-3:]
     with np.load(tmp_path / "r_seed1.npz") as kept:
         assert kept["stiffness_4"].shape == (5,) and np.isfinite(kept["stiffness_4"]).all()
     # other loads with the same files: refused in one line, not a table of the old curves
     other = [*args[:-5], "1e-4", "1e-2", "5", *args[-2:]]
-    refused = subprocess.run(other, capture_output=True, text=True, timeout=600, env=env)
+    refused = script("grid_refinement.py", *other)
     assert refused.returncode == 1 and "holds another run's curves" in refused.stderr
     (tmp_path / "r_seed2.npz").write_bytes(b"not a numpy file")  # bad bytes
-    damaged = subprocess.run(args, capture_output=True, text=True, timeout=600, env=env)
+    damaged = script("grid_refinement.py", *args)
     assert damaged.returncode == 1 and "r_seed2.npz is damaged" in damaged.stderr
 
 
@@ -397,15 +348,9 @@ def test_the_knee_of_a_curve_is_its_crossover():
     """``fig7``'s second ``p_c``: on ``c p^0.77`` and ``p/u0`` joined smoothly the local
     slope reaches (0.77 + 1)/2 at the laws' crossing within a quarter of a decade; one steep
     pair among the low loads is not taken for it, and a curve that never steepens has none."""
-    import importlib.util
-
     import numpy as np
 
-    spec = importlib.util.spec_from_file_location(
-        "fig7", ROOT / "examples" / "fig7_seed_distribution.py"
-    )
-    fig7 = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(fig7)
+    fig7 = example("fig7_seed_distribution.py")
     p = np.geomspace(1e-8, 1e-2, 25)
     crossing = 1e-5  # c p^0.77 = p/u0 there, with u0 = 1
     k = np.hypot(crossing**0.23 * p**0.77, p)  # the two laws joined smoothly
@@ -420,22 +365,19 @@ def test_the_knee_of_a_curve_is_its_crossover():
 def test_the_eq12_trace_tabulates_and_reuses_what_it_solved(tmp_path):
     """``examples/eq12_trace.py``: the fields' measurements against Appendix B in two tables;
     Appendix B's energy gives Eq. 12 back; each seed kept (a second run with ``--figure``
-    solves only the figure's loads), another run's file refused."""
-    script = str(ROOT / "examples" / "eq12_trace.py")
-    args = [sys.executable, script, "--grid", "64", "--seeds", "2", "--hursts", "0.7",
+    solves only the figure's loads), another run's file refused. 64^2, two seeds, eight
+    loads: a few contact clusters at the lowest loads, a fit over several loads."""
+    args = ["--grid", "64", "--seeds", "2", "--hursts", "0.7",
             "--pressures", "1e-4", "3e-2", "8", "--output", str(tmp_path / "t")]  # fmt: skip
-    env = {"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"}
-    first = subprocess.run(args, capture_output=True, text=True, timeout=600, env=env)
+    first = script("eq12_trace.py", *args)
     assert first.returncode == 0, first.stderr
     assert first.stdout.count("solved") == 2 and "K over Eq. 12 1.0000" in first.stdout
     assert "| H | clusters |" in first.stdout and "| 0.7 |" in first.stdout
-    again = subprocess.run(
-        [*args, "--figure"], capture_output=True, text=True, timeout=600, env=env
-    )
+    again = script("eq12_trace.py", *args, "--figure")
     assert again.returncode == 0, again.stderr
     assert "solved" not in again.stdout
     assert again.stdout.splitlines()[-5:-1] == first.stdout.splitlines()[-4:]
     assert (tmp_path / "t.png").stat().st_size > 5000
     other = [*args[:-5], "1e-4", "1e-2", "8", *args[-2:]]
-    refused = subprocess.run(other, capture_output=True, text=True, timeout=600, env=env)
+    refused = script("eq12_trace.py", *other)
     assert refused.returncode == 1 and "holds another run's measurements" in refused.stderr

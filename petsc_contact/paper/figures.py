@@ -186,7 +186,7 @@ def finite_size_fit(
     the 68% percentile interval of ``alpha`` over the seeds resampled with replacement
     (:func:`seed_bootstrap`; with four seeds a coarse one, 35 distinct resamples).
     """
-    from .fits import ensemble_statistics, power_law_fit
+    from .fits import ensemble_statistics, power_law_alphas, power_law_fit
 
     p = np.asarray(curves["nominal_pressure"], dtype=float)
     p = p[0] if p.ndim == 2 else p
@@ -202,9 +202,9 @@ def finite_size_fit(
     alphas = np.array([power_law_fit(p[fitted], k[fitted], fit_points).alpha for k in stiffness])
     spread = alphas.std(ddof=1) / np.sqrt(alphas.size) if alphas.size > 1 else 0.0
 
-    def alpha_of(rows: np.ndarray) -> float:
-        k = ensemble_statistics(stiffness[rows])["mean"]
-        return power_law_fit(p[fitted], k[fitted], fit_points).alpha
+    def alphas_of(rows: np.ndarray) -> np.ndarray:  # resamples x seeds: their mean's alpha
+        k = ensemble_statistics(stiffness[rows.T])["mean"]
+        return power_law_alphas(p[fitted], k[:, fitted], fit_points)
 
     return {
         "stiffness_mean": mean_k,
@@ -215,7 +215,7 @@ def finite_size_fit(
         "alpha": fit.alpha,
         "alphas": alphas,
         "alpha_error": float(np.hypot(np.nan_to_num(fit.alpha_error), spread)),
-        "alpha_interval": seed_bootstrap(len(stiffness), alpha_of),
+        "alpha_interval": seed_bootstrap(len(stiffness), alphas_of, batched=True),
         "prefactor": fit.prefactor,
     }
 
@@ -224,16 +224,25 @@ BOOTSTRAP_RESAMPLES = 4000
 BOOTSTRAP_SEED = 20261126  # a fixed stream: the same interval from the same files
 
 
+def seed_resamples(seeds: int) -> np.ndarray:
+    """:func:`seed_bootstrap`'s resamples of ``seeds`` rows with replacement: an array
+    :data:`BOOTSTRAP_RESAMPLES` x ``seeds`` of row indices, drawn one resample at a time
+    from the fixed stream :data:`BOOTSTRAP_SEED`."""
+    rng = np.random.default_rng(BOOTSTRAP_SEED)
+    return np.array([rng.integers(0, seeds, seeds) for _ in range(BOOTSTRAP_RESAMPLES)])
+
+
 def seed_bootstrap(
-    seeds: int, statistic: Callable[[np.ndarray], float], level: float = 0.68
+    seeds: int, statistic: Callable[[np.ndarray], Any], level: float = 0.68, batched: bool = False
 ) -> np.ndarray:
     """The ``level`` percentile interval of ``statistic(rows)`` over :data:`BOOTSTRAP_RESAMPLES`
-    resamples of the ``seeds`` rows with replacement (Efron's percentile bootstrap);
-    ``[nan, nan]`` for one seed."""
+    resamples of the ``seeds`` rows with replacement (Efron's percentile bootstrap,
+    :func:`seed_resamples`); ``[nan, nan]`` for one seed. ``batched``: ``statistic`` takes
+    every resample at once (an array resamples x seeds) and returns one value per resample."""
     if seeds < 2:
         return np.full(2, np.nan)
-    rng = np.random.default_rng(BOOTSTRAP_SEED)
-    values = [statistic(rng.integers(0, seeds, seeds)) for _ in range(BOOTSTRAP_RESAMPLES)]
+    rows = seed_resamples(seeds)
+    values = statistic(rows) if batched else [statistic(row) for row in rows]
     tail = 50 * (1 - level)
     return np.percentile(values, [tail, 100 - tail])
 

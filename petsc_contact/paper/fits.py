@@ -41,7 +41,7 @@ def power_law_fit(pressure: np.ndarray, stiffness: np.ndarray, points: int = 4) 
     order = np.argsort(p)[:points]
     x, y = np.log(p[order]), np.log(k[order])
     xm = x - x.mean()
-    slope = float(np.dot(xm, y - y.mean()) / np.dot(xm, xm))
+    slope = float(_slopes(x, y))
     intercept = float(y.mean() - slope * x.mean())
     if points > 2:
         resid = y - (intercept + slope * x)
@@ -49,3 +49,22 @@ def power_law_fit(pressure: np.ndarray, stiffness: np.ndarray, points: int = 4) 
     else:
         error = float("nan")
     return PowerLaw(slope, error, float(np.exp(intercept)), points)
+
+
+def power_law_alphas(pressure: np.ndarray, stiffness: np.ndarray, points: int = 4) -> np.ndarray:
+    """:func:`power_law_fit`'s ``alpha`` of each row of ``stiffness`` (rows x pressures) at
+    the same ``pressure``, all rows at once where every value is positive and finite (the
+    fits then take the same points), else row by row."""
+    p = np.asarray(pressure, dtype=float)
+    k = np.atleast_2d(np.asarray(stiffness, dtype=float))
+    usable = np.isfinite(p).all() and (p > 0).all() and np.isfinite(k).all() and (k > 0).all()
+    if not usable or p.size < points or points < 2:  # as power_law_fit takes (or refuses) them
+        return np.array([power_law_fit(p, row, points).alpha for row in k])
+    order = np.argsort(p)[:points]
+    return _slopes(np.log(p[order]), np.log(k[:, order]))
+
+
+def _slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The least-squares slope of ``y`` on ``x`` along ``y``'s last axis (one per row)."""
+    xm = x - x.mean()
+    return np.asarray((y - y.mean(axis=-1, keepdims=True)) @ xm / np.dot(xm, xm))

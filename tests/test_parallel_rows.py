@@ -8,6 +8,7 @@ import json
 import shutil
 import textwrap
 from pathlib import Path
+from subprocess import CompletedProcess
 
 import h5py
 import numpy as np
@@ -82,12 +83,20 @@ def test_four_and_eight_ranks_write_the_serial_file(tmp_path, serial, watched):
 def test_paused_on_eight_goes_on_on_three_then_one(serial, paused_on_eight):
     """Paused after each step (``--stop-after 0``) on 8 ranks, then 3, then finished on one:
     each resume reads its rows of the other rank count's state slabs, and the file is the
-    uninterrupted serial run's to rounding."""
+    uninterrupted serial run's to rounding. Before the resume on 3 ranks, in its launch
+    (:func:`_read_on_three`), each rank reads the state saved on 8: it opens (and
+    CRC-checks) only the slabs that hold its rows (20 of 60: 3 or 4 of the 8), and reads its
+    rows right."""
+    from petsc_contact.conventions.grid import block_rows
+
     folder, args = _paused_again(paused_on_eight)
     out = folder / "paused.h5"
     assert len(list(folder.glob("paused.h5.state.*of8.npz"))) == 8
-    r = cli(*args, "--stop-after", "0", "--resume", mpi=3)
+    said, r = _read_on_three(folder, *args, "--stop-after", "0", "--resume")
     assert r.returncode == 75, r.stderr
+    for rank, mine in enumerate(said):
+        assert mine["opened"] == _slabs_holding(block_rows(60, 3, rank)), mine
+        assert mine["problem"] == "" and mine["rows"] is True
     assert sorted(p.name for p in folder.glob("paused.h5.state*")) == [
         f"paused.h5.state.{k}of3.npz" for k in range(3)
     ]  # the 8 slabs of the older state removed once the 3 were written
@@ -199,6 +208,10 @@ if rows is not None:  # against every slab read whole
     said["rows"] = bool(np.array_equal(rows, whole[grid.rows]))
 with open(os.path.join(seen, str(grid.comm.rank)), "w") as f:
     json.dump(said, f)
+if len(sys.argv) > 3:  # then the run resumed on these ranks by the command line
+    from petsc_contact.cli.main import main
+
+    sys.exit(main(sys.argv[3:]))
 """
 
 
@@ -229,14 +242,16 @@ def _paused_again(paused: Path) -> tuple[Path, list[str]]:
     return paused / "run", _paused_args(paused / "run")
 
 
-def _read_on_three(folder: Path) -> list[dict]:
-    """What each of 3 ranks opened and found reading the resume state of ``folder``."""
+def _read_on_three(folder: Path, *resume: str) -> tuple[list[dict], CompletedProcess]:
+    """What each of 3 ranks opened and found reading the resume state of ``folder``, then
+    the command line ``resume`` run on those ranks in the same launch (if given): the
+    launch's result."""
     script, seen = folder / "reader.py", folder / "seen"
     script.write_text(textwrap.dedent(READER))
     seen.mkdir()
-    r = python(str(script), str(folder / "paused.h5"), str(seen), mpi=3)
-    assert r.returncode == 0, r.stderr
-    return [json.loads((seen / str(rank)).read_text()) for rank in range(3)]
+    r = python(str(script), str(folder / "paused.h5"), str(seen), *resume, mpi=3)
+    said = [json.loads((seen / str(rank)).read_text()) for rank in range(3)]
+    return said, r
 
 
 def _slabs_holding(rows: slice) -> list[str]:
@@ -248,23 +263,11 @@ def _slabs_holding(rows: slice) -> list[str]:
     return [f"paused.h5.state.{k}of8.npz" for k in held]
 
 
-def test_a_resuming_rank_opens_only_the_state_slabs_that_hold_its_rows(paused_on_eight):
-    """A state saved on 8 ranks read on 3: each rank opens (and CRC-checks) only the slabs
-    that hold its rows (20 of 60: 3 or 4 of the 8), and reads its rows right."""
-    from petsc_contact.conventions.grid import block_rows
-
-    folder, _ = _paused_again(paused_on_eight)
-    said = _read_on_three(folder)
-    for rank, mine in enumerate(said):
-        assert mine["opened"] == _slabs_holding(block_rows(60, 3, rank)), mine
-        assert mine["problem"] == "" and mine["rows"] is True
-
-
 def test_a_damaged_state_slab_is_refused_on_every_rank(serial, paused_on_eight):
     """Bad bytes in one state slab of a run paused on 8 ranks, which only the last of 3
     resuming ranks reads: every rank refuses the state with the same words, and the resume
-    on 3 ranks says so once, starts its next step from first touch and ends on the serial
-    run's result."""
+    on 3 ranks (in the readers' launch) says so once, starts its next step from first touch
+    and ends on the serial run's result."""
     from petsc_contact.io.parts import mapped
 
     folder, args = _paused_again(paused_on_eight)
@@ -273,11 +276,10 @@ def test_a_damaged_state_slab_is_refused_on_every_rank(serial, paused_on_eight):
     data = bytearray(damaged.read_bytes())
     data[offset : offset + 64] = bytes(b ^ 0xFF for b in data[offset : offset + 64])
     damaged.write_bytes(bytes(data))
-    said = _read_on_three(folder)
+    said, r = _read_on_three(folder, *args, "--resume")
     assert [s["problem"] for s in said] == [f"{damaged} is damaged (state.npy fails its CRC)"] * 3
     assert [s["rows"] for s in said] == [None] * 3
     assert damaged.name not in said[0]["opened"] + said[1]["opened"]
-    r = cli(*args, "--resume", mpi=3)
     assert r.returncode == 0, r.stderr
     assert r.stderr.count("6of8.npz is damaged") == 1, r.stderr
     assert "step 2 starts from first touch" in r.stderr

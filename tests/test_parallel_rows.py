@@ -5,8 +5,10 @@ rank count goes on on another (docs/parallel.md)."""
 from __future__ import annotations
 
 import json
+import shutil
 import textwrap
 from pathlib import Path
+from subprocess import CompletedProcess
 
 import h5py
 import numpy as np
@@ -57,19 +59,19 @@ def _same_file(a: Path, b: Path) -> None:
         assert fa["gap"].chunks == fb["gap"].chunks
 
 
-def test_four_and_eight_ranks_write_the_serial_file(tmp_path, serial):
-    """--fields --stiffness on 4 and 8 ranks: the file is the serial run's, and every reader
-    reads it."""
+def test_four_and_eight_ranks_write_the_serial_file(tmp_path, serial, watched):
+    """--fields --stiffness on 4 ranks (the watched run, :func:`watched`) and 8: the file is
+    the serial run's, and every reader reads it."""
     import xarray
 
     from petsc_contact import read_frame
 
-    for ranks in (4, 8):
-        out = tmp_path / f"mpi{ranks}.h5"
-        r = cli(*SWEEP.split(), "--fields", "--quiet", "--output", str(out), mpi=ranks)
-        assert r.returncode == 0, r.stderr
+    outputs = {4: watched / "mpi4.h5", 8: tmp_path / "mpi8.h5"}
+    r = cli(*SWEEP.split(), "--fields", "--quiet", "--output", str(outputs[8]), mpi=8)
+    assert r.returncode == 0, r.stderr
+    for ranks, out in outputs.items():
         _same_file(serial, out)
-        assert sorted(p.name for p in tmp_path.glob(f"mpi{ranks}.*")) == [
+        assert sorted(p.name for p in out.parent.glob(f"mpi{ranks}.*")) == [
             f"mpi{ranks}.csv",
             f"mpi{ranks}.h5",
         ]
@@ -78,18 +80,24 @@ def test_four_and_eight_ranks_write_the_serial_file(tmp_path, serial):
         assert data["gap"].dims == ("step", "x", "y")
 
 
-def test_paused_on_eight_goes_on_on_three_then_one(tmp_path, serial):
+def test_paused_on_eight_goes_on_on_three_then_one(serial, paused_on_eight):
     """Paused after each step (``--stop-after 0``) on 8 ranks, then 3, then finished on one:
     each resume reads its rows of the other rank count's state slabs, and the file is the
-    uninterrupted serial run's to rounding."""
-    out = tmp_path / "paused.h5"
-    args = [*SWEEP.split(), "--fields", "--quiet", "--output", str(out)]
-    r = cli(*args, "--stop-after", "0", mpi=8)
+    uninterrupted serial run's to rounding. Before the resume on 3 ranks, in its launch
+    (:func:`_read_on_three`), each rank reads the state saved on 8: it opens (and
+    CRC-checks) only the slabs that hold its rows (20 of 60: 3 or 4 of the 8), and reads its
+    rows right."""
+    from petsc_contact.conventions.grid import block_rows
+
+    folder, args = _paused_again(paused_on_eight)
+    out = folder / "paused.h5"
+    assert len(list(folder.glob("paused.h5.state.*of8.npz"))) == 8
+    said, r = _read_on_three(folder, *args, "--stop-after", "0", "--resume")
     assert r.returncode == 75, r.stderr
-    assert len(list(tmp_path.glob("paused.h5.state.*of8.npz"))) == 8
-    r = cli(*args, "--stop-after", "0", "--resume", mpi=3)
-    assert r.returncode == 75, r.stderr
-    assert sorted(p.name for p in tmp_path.glob("paused.h5.state*")) == [
+    for rank, mine in enumerate(said):
+        assert mine["opened"] == _slabs_holding(block_rows(60, 3, rank)), mine
+        assert mine["problem"] == "" and mine["rows"] is True
+    assert sorted(p.name for p in folder.glob("paused.h5.state*")) == [
         f"paused.h5.state.{k}of3.npz" for k in range(3)
     ]  # the 8 slabs of the older state removed once the 3 were written
     r = cli(*args, "--resume")
@@ -114,13 +122,13 @@ def test_a_rank_killed_on_four_resumed_on_two(tmp_path, serial):
 
 
 WATCHED = """
+import os
 import sys
 import h5py
 import numpy as np
 from mpi4py import MPI
-from petsc_contact import Run, run_contact
+from petsc_contact.cli.main import main
 from petsc_contact.conventions import grid as grids
-from petsc_contact.io import store
 
 def refuse(self, local):
     raise AssertionError("a field gathered")
@@ -144,25 +152,34 @@ h5py.Dataset.__getitem__ = wrapped(h5py.Dataset.__getitem__, lambda a, k, out: n
 h5py.Dataset.__setitem__ = wrapped(h5py.Dataset.__setitem__, lambda a, k, out: np.size(a[1]))
 savez = np.savez
 np.savez = lambda f, **arrays: (watch(max(np.size(v) for v in arrays.values())), savez(f, **arrays))
-run = Run(grid=60, hurst=0.7, rms_slope=0.1, seed=3, sweep=(3, 1e-4, 1e-2), stiffness=True,
-          fields=True, output=sys.argv[1])
-run_contact(run)
-with open(f"{sys.argv[1]}.largest.{MPI.COMM_WORLD.rank}", "w") as out:
+if main([*sys.argv[2:], "--output", sys.argv[1]]):
+    sys.exit("the run failed")
+with open(os.path.join(os.path.dirname(sys.argv[1]), f"largest.{MPI.COMM_WORLD.rank}"), "w") as out:
     out.write(str(largest[0]))
 """
 
 
-def test_no_rank_holds_a_field_to_write_it(tmp_path):
+@pytest.fixture(scope="module")
+def watched(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The folder of the sweep with ``--fields`` run on 4 ranks by :data:`WATCHED` (the
+    command line's ``main`` with ``Grid.gather`` refusing and every array handed to HDF5 or
+    ``np.savez`` measured): ``mpi4.h5``, its table, and each rank's largest array."""
+    folder = tmp_path_factory.mktemp("watched")
+    script = folder / "watched.py"
+    script.write_text(textwrap.dedent(WATCHED))
+    out = folder / "mpi4.h5"
+    r = python(str(script), str(out), *SWEEP.split(), "--fields", "--quiet", mpi=4)
+    assert r.returncode == 0, r.stderr
+    return folder
+
+
+def test_no_rank_holds_a_field_to_write_it(watched):
     """On 4 ranks with ``Grid.gather`` refusing, the largest array any rank hands HDF5 or
     ``np.savez``, or reads back to assemble the file, is at most a slab (15 of 60 rows) or a
     band of the assembly (at most one chunk's rows of one slab)."""
-    script = tmp_path / "watched.py"
-    script.write_text(textwrap.dedent(WATCHED))
-    r = python(str(script), str(tmp_path / "watched.h5"), mpi=4)
-    assert r.returncode == 0, r.stderr
-    sizes = [int(p.read_text()) for p in tmp_path.glob("watched.h5.largest.*")]
+    sizes = [int(p.read_text()) for p in watched.glob("largest.*")]
     assert len(sizes) == 4 and max(sizes) <= 15 * 60, sizes
-    assert (tmp_path / "watched.h5").exists()
+    assert (watched / "mpi4.h5").exists()
 
 
 READER = """
@@ -191,25 +208,50 @@ if rows is not None:  # against every slab read whole
     said["rows"] = bool(np.array_equal(rows, whole[grid.rows]))
 with open(os.path.join(seen, str(grid.comm.rank)), "w") as f:
     json.dump(said, f)
+if len(sys.argv) > 3:  # then the run resumed on these ranks by the command line
+    from petsc_contact.cli.main import main
+
+    sys.exit(main(sys.argv[3:]))
 """
 
 
-def _paused_on_eight(folder: Path) -> list[str]:
-    """Run the sweep on 8 ranks paused after its first step, in ``folder``: its arguments."""
-    args = [*SWEEP.split(), "--fields", "--quiet", "--output", str(folder / "paused.h5")]
-    r = cli(*args, "--stop-after", "0", mpi=8)
+@pytest.fixture(scope="module")
+def paused_on_eight(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The sweep with ``--fields`` run on 8 ranks and paused after its first step
+    (``--stop-after 0``), in ``run/``: ``paused.h5.partial``, its parts and 8 state slabs,
+    kept whole in ``pristine/``. A resume is of the output it was started on, so each test
+    resumes or damages ``run/`` put back as it was paused (:func:`_paused_again`)."""
+    folder = tmp_path_factory.mktemp("paused8")
+    (folder / "run").mkdir()
+    r = cli(*_paused_args(folder / "run"), "--stop-after", "0", mpi=8)
     assert r.returncode == 75, r.stderr
-    return args
+    shutil.copytree(folder / "run", folder / "pristine")
+    return folder
 
 
-def _read_on_three(folder: Path) -> list[dict]:
-    """What each of 3 ranks opened and found reading the resume state of ``folder``."""
+def _paused_args(folder: Path) -> list[str]:
+    """The paused sweep's arguments, its output in ``folder``."""
+    return [*SWEEP.split(), "--fields", "--quiet", "--output", str(folder / "paused.h5")]
+
+
+def _paused_again(paused: Path) -> tuple[Path, list[str]]:
+    """The run paused on 8 ranks put back as it was paused: its folder and the arguments
+    that resume it."""
+    shutil.rmtree(paused / "run")
+    shutil.copytree(paused / "pristine", paused / "run")
+    return paused / "run", _paused_args(paused / "run")
+
+
+def _read_on_three(folder: Path, *resume: str) -> tuple[list[dict], CompletedProcess]:
+    """What each of 3 ranks opened and found reading the resume state of ``folder``, then
+    the command line ``resume`` run on those ranks in the same launch (if given): the
+    launch's result."""
     script, seen = folder / "reader.py", folder / "seen"
     script.write_text(textwrap.dedent(READER))
     seen.mkdir()
-    r = python(str(script), str(folder / "paused.h5"), str(seen), mpi=3)
-    assert r.returncode == 0, r.stderr
-    return [json.loads((seen / str(rank)).read_text()) for rank in range(3)]
+    r = python(str(script), str(folder / "paused.h5"), str(seen), *resume, mpi=3)
+    said = [json.loads((seen / str(rank)).read_text()) for rank in range(3)]
+    return said, r
 
 
 def _slabs_holding(rows: slice) -> list[str]:
@@ -221,41 +263,28 @@ def _slabs_holding(rows: slice) -> list[str]:
     return [f"paused.h5.state.{k}of8.npz" for k in held]
 
 
-def test_a_resuming_rank_opens_only_the_state_slabs_that_hold_its_rows(tmp_path):
-    """A state saved on 8 ranks read on 3: each rank opens (and CRC-checks) only the slabs
-    that hold its rows (20 of 60: 3 or 4 of the 8), and reads its rows right."""
-    from petsc_contact.conventions.grid import block_rows
-
-    _paused_on_eight(tmp_path)
-    said = _read_on_three(tmp_path)
-    for rank, mine in enumerate(said):
-        assert mine["opened"] == _slabs_holding(block_rows(60, 3, rank)), mine
-        assert mine["problem"] == "" and mine["rows"] is True
-
-
-def test_a_damaged_state_slab_is_refused_on_every_rank(tmp_path, serial):
+def test_a_damaged_state_slab_is_refused_on_every_rank(serial, paused_on_eight):
     """Bad bytes in one state slab of a run paused on 8 ranks, which only the last of 3
     resuming ranks reads: every rank refuses the state with the same words, and the resume
-    on 3 ranks says so once, starts its next step from first touch and ends on the serial
-    run's result."""
+    on 3 ranks (in the readers' launch) says so once, starts its next step from first touch
+    and ends on the serial run's result."""
     from petsc_contact.io.parts import mapped
 
-    args = _paused_on_eight(tmp_path)
-    damaged = tmp_path / "paused.h5.state.6of8.npz"
+    folder, args = _paused_again(paused_on_eight)
+    damaged = folder / "paused.h5.state.6of8.npz"
     offset = mapped(str(damaged), "state").offset
     data = bytearray(damaged.read_bytes())
     data[offset : offset + 64] = bytes(b ^ 0xFF for b in data[offset : offset + 64])
     damaged.write_bytes(bytes(data))
-    said = _read_on_three(tmp_path)
+    said, r = _read_on_three(folder, *args, "--resume")
     assert [s["problem"] for s in said] == [f"{damaged} is damaged (state.npy fails its CRC)"] * 3
     assert [s["rows"] for s in said] == [None] * 3
     assert damaged.name not in said[0]["opened"] + said[1]["opened"]
-    r = cli(*args, "--resume", mpi=3)
     assert r.returncode == 0, r.stderr
     assert r.stderr.count("6of8.npz is damaged") == 1, r.stderr
     assert "step 2 starts from first touch" in r.stderr
-    same_result(serial, tmp_path / "paused.h5", fields=True)
-    with h5py.File(tmp_path / "paused.h5") as f:
+    same_result(serial, folder / "paused.h5", fields=True)
+    with h5py.File(folder / "paused.h5") as f:
         assert [s["from_saved_state"] for s in json.loads(f.attrs["resumed"])] == [False]
 
 
@@ -295,17 +324,20 @@ def test_a_saved_state_is_read_a_rank_s_rows_at_a_time(tmp_path):
 
 
 def test_a_rank_without_spectrum_columns_takes_part(tmp_path):
-    """64^2 on 8 ranks: FFTW-MPI's transposed spectrum leaves a rank no columns (its empty
-    range starting at 0); that rank must not take the q = 0 entry for its own and stop while
-    the others wait in the transform. The run finishes and equals the serial one."""
-    args = "periodic --grid 64 --hurst 0.7 --rms-slope 0.1 --pressures 1e-3,1e-2 --stiffness"
+    """16^2 on 4 ranks: FFTW-MPI's transposed spectrum (its default blocks, ceil(9/4) = 3 of
+    the 9 columns ``qy`` per rank) leaves the last rank no columns (its empty range starting
+    at 0), as 64^2 does on 8 ranks (5 of 33); that rank must not take the q = 0 entry for
+    its own and stop while the others wait in the transform. The run finishes and equals
+    the serial one. (Fewer ranks leave a rank empty only on grids of 7 columns or fewer: on
+    3 ranks, 6 or 7; on 2, none.)"""
+    args = "periodic --grid 16 --hurst 0.7 --rms-slope 0.1 --pressures 1e-3,1e-2 --stiffness"
     runs = {}
-    for ranks in (0, 8):
+    for ranks in (0, 4):
         runs[ranks] = tmp_path / f"r{ranks}.h5"
         r = cli(*args.split(), "--quiet", "--output", str(runs[ranks]), mpi=ranks, timeout=120)
         assert r.returncode == 0, r.stderr
-    with h5py.File(runs[0]) as a, h5py.File(runs[8]) as b:
-        assert b.attrs["fft_backend"] == "FFTWMPI" and b.attrs["mpi_size"] == 8
+    with h5py.File(runs[0]) as a, h5py.File(runs[4]) as b:
+        assert b.attrs["fft_backend"] == "FFTWMPI" and b.attrs["mpi_size"] == 4
         np.testing.assert_allclose(b["mean_gap"][:], a["mean_gap"][:], rtol=1e-10)
         np.testing.assert_allclose(b["stiffness"][:], a["stiffness"][:], rtol=1e-10)
 

@@ -114,12 +114,13 @@ class SpectralOperator(ShellInterface):
     constrained CG uses the halves to learn ``d.Hd`` for its step before deciding whether
     it needs ``Hd`` at all (after a projection it evaluates the gradient afresh instead).
     No other transform on the same FFT may run between the two.  Subclasses define
-    :meth:`_forward` and :meth:`_backward`, and hold :attr:`multiplier` (:func:`twice` of
-    the normalised spectrum) and :attr:`fft`.
+    :meth:`_forward` and :meth:`_backward`, and hold :attr:`multiplier` (the normalised
+    spectrum, :func:`real_block`) and :attr:`fft`.
     """
 
     fft: FFT
     multiplier: np.ndarray
+    factor = 1.0  # the operator is ``factor`` times :attr:`multiplier`'s (see ``times``)
     transform_size: int  # N, the points of the transform: a round trip multiplies by N
     _single: np.ndarray
 
@@ -142,7 +143,8 @@ class SpectralOperator(ShellInterface):
         self._forward(x)
         values = self.fft.spectrum.view(np.float64).reshape(-1)  # a view: spectra are dense
         passes = self.fft.device.passes
-        return float(passes.scale_spectrum(values, self.multiplier.reshape(-1), self._single))
+        multiplier, factor = self.multiplier.reshape(-1), self.factor
+        return float(passes.scale_spectrum(values, multiplier, self._single, factor))
 
     def end_mult(self, out: np.ndarray) -> np.ndarray:
         """``out <- A x`` for the ``x`` of the last :meth:`begin_mult`."""
@@ -156,13 +158,15 @@ class SpectralOperator(ShellInterface):
 
     @property
     def spectrum(self) -> np.ndarray:
-        """The normalised real multiplier on the local spectrum block (a view: read only)."""
-        return self.multiplier[:, ::2]
+        """The normalised real multiplier on the local spectrum block (a view: read only; a
+        new array where :attr:`factor` is not 1)."""
+        values = self.multiplier[:, ::2]
+        return values if self.factor == 1.0 else values * self.factor
 
     def _with(self, multiplier: np.ndarray) -> Any:
         """Another operator of this kind on the same FFT, with ``multiplier``."""
         other = copy.copy(self)
-        other.multiplier = multiplier
+        other.multiplier, other.factor = multiplier, 1.0
         other.applications = 0
         return other
 
@@ -202,12 +206,27 @@ class FourierOperator(SpectralOperator):
 
     def scaled(self, factor: float) -> FourierOperator:
         """Another operator on the same FFT with the multiplier times ``factor``."""
-        return self._with(self.multiplier * factor)
+        return self._with(self.multiplier * (self.factor * factor))
+
+    def times(self, factor: float) -> FourierOperator:
+        """Another operator on the same FFT, ``factor`` times this one, that shares its
+        multiplier (no field): its :attr:`factor` may be set again in place; the products
+        are formed where the spectrum is scaled, the same numbers as a multiplier stored
+        scaled."""
+        other = self._with(self.multiplier)
+        other.factor = self.factor * factor
+        return other
 
     def sharing(self, multiplier: np.ndarray) -> FourierOperator:
         """Another operator on the same FFT whose multiplier is ``multiplier``, an array of
         this one's layout shared (not copied): what it is given it holds."""
         return self._with(multiplier)
+
+    @property
+    def input_field(self) -> np.ndarray:
+        """Its FFT's input buffer, flat: an application reads it as its input and never
+        writes it (:class:`~petsc_contact.solver.linear.ReadsInputFirst`)."""
+        return self.fft.real.reshape(-1)
 
     def set_inverse(self, op: FourierOperator, support: float) -> None:
         """Become the inverse of ``op + support I`` on the same grid, in place.
@@ -216,7 +235,8 @@ class FourierOperator(SpectralOperator):
         the normalised multiplier is ``N^-2/(op.multiplier + support)``, so a zero entry
         of ``op`` gives ``inf`` when ``support`` is 0 (the caller sets that entry).
         """
-        np.add(op.multiplier, support, out=self.multiplier)
+        np.multiply(op.multiplier, op.factor, out=self.multiplier)  # op's spectrum
+        np.add(self.multiplier, support, out=self.multiplier)
         with np.errstate(divide="ignore"):  # 1/(N a) normalised: N^-2 / a
             np.divide(self.normalised(self.normalised(1.0)), self.multiplier, out=self.multiplier)
 

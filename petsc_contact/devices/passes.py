@@ -68,10 +68,13 @@ class ArrayPasses:
         """``y <- y + a x``."""
         y += a * x
 
-    def scale_spectrum(self, values: Any, multiplier: Any, single: Any) -> float:
-        """Multiply a spectrum's float view by a real multiplier (each entry twice); return
-        ``sum(w k |s|^2)`` before it (``w = 1`` on ``single``, 2 elsewhere; Parseval)."""
+    def scale_spectrum(self, values: Any, multiplier: Any, single: Any, factor: float) -> float:
+        """Multiply a spectrum's float view by a real multiplier (each entry twice) times
+        ``factor``; return ``sum(w k |s|^2)`` before it (``w = 1`` on ``single``, 2
+        elsewhere; Parseval)."""
         xp = self.xp
+        if factor != 1.0:
+            multiplier = multiplier * factor  # a temporary of the pass
         re, im = values[2 * single], values[2 * single + 1]
         once = xp.dot(multiplier[2 * single], re * re + im * im)
         total = xp.dot(multiplier, values * values)

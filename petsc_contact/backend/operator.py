@@ -144,7 +144,16 @@ class SpectralOperator(ShellInterface):
         values = self.fft.spectrum.view(np.float64).reshape(-1)  # a view: spectra are dense
         passes = self.fft.device.passes
         multiplier, factor = self.multiplier.reshape(-1), self.factor
+        if self.stored_once:
+            return float(passes.scale_entries(values, multiplier, self._single, factor))
         return float(passes.scale_spectrum(values, multiplier, self._single, factor))
+
+    @property
+    def stored_once(self) -> bool:
+        """Whether :attr:`multiplier` holds each entry once (the spectrum block's shape), not
+        twice (:func:`twice`): an operator whose ``x.Ax`` is not used (a preconditioner) keeps
+        half the floats; the product is the same, the sum rounds otherwise."""
+        return bool(self.multiplier.shape == self.fft.spectrum.shape)
 
     def end_mult(self, out: np.ndarray) -> np.ndarray:
         """``out <- A x`` for the ``x`` of the last :meth:`begin_mult`."""
@@ -160,7 +169,7 @@ class SpectralOperator(ShellInterface):
     def spectrum(self) -> np.ndarray:
         """The normalised real multiplier on the local spectrum block (a view: read only; a
         new array where :attr:`factor` is not 1)."""
-        values = self.multiplier[:, ::2]
+        values = self.multiplier if self.stored_once else self.multiplier[:, ::2]
         return values if self.factor == 1.0 else values * self.factor
 
     def _with(self, multiplier: np.ndarray) -> Any:
@@ -195,12 +204,15 @@ class FourierOperator(SpectralOperator):
         or on ``fft``'s device.
     """
 
-    def __init__(self, grid: Grid, fft: FFT, kernel: np.ndarray) -> None:
+    def __init__(self, grid: Grid, fft: FFT, kernel: np.ndarray, once: bool = False) -> None:
         self.grid = grid
         self.fft = fft
         self.transform_size = grid.size
         device = fft.device  # the multiplier made where the kernel is moved to, once
-        self.multiplier = twice(self.normalised(device.asarray(kernel, dtype=float)), device.xp)
+        values = self.normalised(device.asarray(kernel, dtype=float))
+        self.multiplier = (
+            device.xp.array(values, order="C") if once else twice(values, device.xp)
+        )  # each entry once: :attr:`stored_once`
         self._single = fft.device.asarray(single_entries(grid, fft))
         self.applications = 0
 
@@ -235,14 +247,22 @@ class FourierOperator(SpectralOperator):
         the normalised multiplier is ``N^-2/(op.multiplier + support)``, so a zero entry
         of ``op`` gives ``inf`` when ``support`` is 0 (the caller sets that entry).
         """
-        np.multiply(op.multiplier, op.factor, out=self.multiplier)  # op's spectrum
+        entries = op.multiplier
+        if op.stored_once != self.stored_once:
+            if not self.stored_once:
+                raise ValueError("an inverse kept twice per entry of one kept once")
+            entries = op.multiplier[:, ::2]  # each entry once, as this one keeps them
+        np.multiply(entries, op.factor, out=self.multiplier)  # op's spectrum
         np.add(self.multiplier, support, out=self.multiplier)
         with np.errstate(divide="ignore"):  # 1/(N a) normalised: N^-2 / a
             np.divide(self.normalised(self.normalised(1.0)), self.multiplier, out=self.multiplier)
 
     def set_entry(self, row: int, column: int, value: float) -> None:
         """Set one entry of the normalised multiplier (local spectrum indices)."""
-        self.multiplier[row, 2 * column : 2 * column + 2] = value
+        if self.stored_once:
+            self.multiplier[row, column] = value
+        else:
+            self.multiplier[row, 2 * column : 2 * column + 2] = value
 
     def _forward(self, x: np.ndarray) -> None:
         self.fft.forward_from(x)

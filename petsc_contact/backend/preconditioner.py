@@ -55,7 +55,8 @@ class MeanModePreconditioner(FourierOperator):
     """
 
     def __init__(self, grid: Grid, fft: FFT, hessian: FourierOperator, schur_max: int) -> None:
-        super().__init__(grid, fft, fft.device.xp.zeros(fft.spectrum.shape))  # filled by invert
+        zeros = fft.device.xp.zeros(fft.spectrum.shape)
+        super().__init__(grid, fft, zeros, once=True)  # filled by invert; x.Mx is never used
         self._hessian = hessian
         self.schur_max = schur_max  # the Schur form's largest bound set
         self.options = TwoLevelOptions()  # the two-level form's: the solve's settings

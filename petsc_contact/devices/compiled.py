@@ -178,6 +178,29 @@ def scale_spectrum(
 
 
 @njit(cache=True, fastmath=FAST, nogil=True)
+def scale_entries(
+    values: np.ndarray, multiplier: np.ndarray, single: np.ndarray, factor: float
+) -> float:
+    """:func:`scale_spectrum` with each real entry stored once (``multiplier[i]`` scales
+    ``values[2i]`` and ``values[2i + 1]``): the same products, a sum that rounds otherwise
+    (the loop reads the multiplier otherwise and is vectorised otherwise)."""
+    once = 0.0
+    for m in single:
+        a = values[2 * m]
+        b = values[2 * m + 1]
+        once += multiplier[m] * factor * (a * a + b * b)
+    total = 0.0
+    for i in range(multiplier.size):
+        k = multiplier[i] * factor
+        a = values[2 * i]
+        b = values[2 * i + 1]
+        total += k * (a * a + b * b)
+        values[2 * i] = a * k
+        values[2 * i + 1] = b * k
+    return 2.0 * total - once
+
+
+@njit(cache=True, fastmath=FAST, nogil=True)
 def add_dot(y: np.ndarray, base: np.ndarray, d: np.ndarray) -> float:
     """``y <- y + base``; returns ``d.base``."""
     total = 0.0
@@ -218,5 +241,6 @@ def specimen_calls() -> list[tuple[Callable[..., object], tuple[object, ...]]]:
         (extend_direction, (vector(), vector(), mask, 1.0, vector())),
         (changed_count, (mask, mask)),
         (scale_spectrum, (vector(), vector(), np.zeros(1, dtype=np.int64), 1.0)),
+        (scale_entries, (vector(), np.zeros(1), np.zeros(1, dtype=np.int64), 1.0)),
         (add_dot, (vector(), vector(), vector())),
     ]

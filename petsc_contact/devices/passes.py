@@ -81,6 +81,18 @@ class ArrayPasses:
         values *= multiplier
         return float(2.0 * total - once)
 
+    def scale_entries(self, values: Any, multiplier: Any, single: Any, factor: float) -> float:
+        """:meth:`scale_spectrum` with each real entry stored once."""
+        xp = self.xp
+        if factor != 1.0:
+            multiplier = multiplier * factor  # a temporary of the pass
+        pairs = values.reshape(-1, 2)
+        power = (pairs * pairs).sum(axis=1)
+        once = xp.dot(multiplier[single], power[single])
+        total = xp.dot(multiplier, power)
+        pairs *= multiplier[:, None]
+        return float(2.0 * total - once)
+
     def add_dot(self, y: Any, base: Any, d: Any) -> float:
         """``y <- y + base``; returns ``d.base``."""
         y += base

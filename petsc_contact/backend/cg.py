@@ -81,6 +81,13 @@ class _VecArrays:
         self.work, self.vecs, self.template = [], {}, None
 
 
+def _read_only(values: Any) -> np.ndarray:
+    """A flat read-only view of an array (a copy only if it is not contiguous)."""
+    view = np.ascontiguousarray(values, dtype=float).reshape(-1).view()
+    view.setflags(write=False)
+    return view
+
+
 @cache
 def _default_test() -> Any:
     lib = ctypes.CDLL(_petsc.library_path())
@@ -184,13 +191,13 @@ class PolonskyKeer:
         self.bounds = (lower, upper)
 
     def _bounds(self, tao: Any) -> tuple[Any, Any]:
-        """The solve's bounds, each a float or a flat array (:func:`compact_bound`)."""
+        """The solve's bounds, each a float or a flat read-only array (:func:`compact_bound`;
+        read-only as a Vec's ``array_r`` is, the type the kernels were compiled for)."""
         if self.bounds is None:
             lower_vec, upper_vec = tao.getVariableBounds()
             return compact_bound(lower_vec.array_r), compact_bound(upper_vec.array_r)
         return tuple(  # type: ignore[return-value]
-            float(b) if np.ndim(b) == 0 else compact_bound(np.asarray(b).reshape(-1))
-            for b in self.bounds
+            float(b) if np.ndim(b) == 0 else compact_bound(_read_only(b)) for b in self.bounds
         )
 
     def set_preconditioner(self, pc: Any) -> None:

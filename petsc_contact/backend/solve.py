@@ -470,6 +470,8 @@ class BoundSolver:
             tao.setPythonType(DEFAULT_PYTHON_TYPE)
         tao.setObjectiveGradient(tao_objgrad, None)
         tao.setHessian(tao_hessian, self.hessian, self.hessian if self.pmat is None else self.pmat)
+        if self.tao_type != "python":  # TAO's own types read them (before their options)
+            self._bound_vecs(tao)
         tao.setTolerances(gatol=DEFAULT_GATOL, grtol=0.0, gttol=0.0)
         tao.setMaximumIterations(DEFAULT_MAX_IT)
         tao.setMaximumFunctionEvaluations(10 * DEFAULT_MAX_IT)
@@ -491,8 +493,8 @@ class BoundSolver:
                 opts.delValue("tao_bncg_mat_type")
         self.requested_gatol = tao.getTolerances()[0]
         context = tao.getPythonContext() if self.tao_type == "python" else None
-        if not isinstance(context, TakesBounds):
-            self._bound_vecs(tao)
+        if self.lower is None and not isinstance(context, TakesBounds):
+            self._bound_vecs(tao)  # a Python type of the user's
         if self.pc is not None and self.tao_type in J0_TYPES:
             attach_lmvm_j0(tao, self.pc)
         if self.use_h0:

@@ -81,6 +81,13 @@ class _VecArrays:
         self.work, self.vecs, self.template = [], {}, None
 
 
+def _read_only(values: Any) -> np.ndarray:
+    """A flat read-only view of an array (a copy only if it is not contiguous)."""
+    view = np.ascontiguousarray(values, dtype=float).reshape(-1).view()
+    view.setflags(write=False)
+    return view
+
+
 @cache
 def _default_test() -> Any:
     lib = ctypes.CDLL(_petsc.library_path())
@@ -175,6 +182,23 @@ class PolonskyKeer:
     def __init__(self) -> None:
         self.preconditioner: Any = None
         self.arrays = _VecArrays()
+        self.bounds: tuple[Any, Any] | None = None  # given by set_bounds, else TAO's Vecs
+
+    def set_bounds(self, lower: Any, upper: Any) -> None:
+        """Take the next solves' bounds as they are, a float or a local array each (the
+        package's :class:`~petsc_contact.backend.solve.BoundSolver` then makes no bound Vecs:
+        two fields less); without it they are read from TAO's ``getVariableBounds``."""
+        self.bounds = (lower, upper)
+
+    def _bounds(self, tao: Any) -> tuple[Any, Any]:
+        """The solve's bounds, each a float or a flat read-only array (:func:`compact_bound`;
+        read-only as a Vec's ``array_r`` is, the type the kernels were compiled for)."""
+        if self.bounds is None:
+            lower_vec, upper_vec = tao.getVariableBounds()
+            return compact_bound(lower_vec.array_r), compact_bound(upper_vec.array_r)
+        return tuple(  # type: ignore[return-value]
+            float(b) if np.ndim(b) == 0 else compact_bound(_read_only(b)) for b in self.bounds
+        )
 
     def set_preconditioner(self, pc: Any) -> None:
         """Use ``pc.apply(r, z)`` as the preconditioner (ignored by :class:`PolonskyKeer`)."""
@@ -212,7 +236,7 @@ class PolonskyKeer:
         x = tao.getSolution()
         arrays = self.arrays
         xa = arrays.begin(x)
-        lower_vec, upper_vec = tao.getVariableBounds()
+        lower, upper = self._bounds(tao)
         hessian = tao.getHessian()[0]
         pc = self.preconditioner
         context = _context(pc)
@@ -229,8 +253,8 @@ class PolonskyKeer:
 
         cg = ConstrainedCG(
             xa,
-            compact_bound(lower_vec.array_r),
-            compact_bound(upper_vec.array_r),
+            lower,
+            upper,
             gradient,
             split if isinstance(split, SplitHessian) else mult,
             precondition if pc is not None else None,

@@ -518,15 +518,17 @@ def add_correction(
 
     ``apply(x, out)`` applies ``G``; ``correction`` is a :class:`CoarseSpace` or a
     :class:`~petsc_contact.numerics.schur.ContactSchur` (``solve`` and ``local``);
-    ``work`` is two flat field-sized arrays, the first zero (it is left zero).  Returns the
-    reactions on this rank's pixels of ``correction.local``.
+    ``work`` is two flat field-sized arrays, overwritten once ``G x`` and the sum of ``x``
+    are made (:meth:`~petsc_contact.backend.preconditioner.MeanModePreconditioner.
+    work_fields`: the FFT's input buffer twice; the first may be ``x``, neither ``out``).
+    Returns the reactions on this rank's pixels of ``correction.local``.
     """
     reactions, shift = correction.solve(out, float(correction.grid.sum(x.sum())[0]))
     spread, response = work
+    spread.fill(0.0)
     spread[correction.local] = reactions
     out += apply(spread, response).reshape(out.shape)
     out += shift
-    spread[correction.local] = 0.0
     return reactions
 
 
@@ -541,15 +543,21 @@ class CoarseCorrected(ShellInterface):
     correction
         The coarse space of the held contact set.
     work
-        Two flat field-sized arrays, the first zero (:func:`add_correction`).
+        Two flat field-sized arrays to compute in (:func:`add_correction`).
     """
 
-    def __init__(self, compliance: Any, correction: CoarseSpace, work: np.ndarray) -> None:
+    def __init__(self, compliance: Any, correction: CoarseSpace, work: Any) -> None:
         self.op = compliance
         self.grid = compliance.grid
         self.correction = correction
         self._work = work
         self.applications = 0
+
+    @property
+    def input_field(self) -> Any:
+        """The first work field: :func:`add_correction` reads its input before it writes
+        there (:class:`~petsc_contact.solver.linear.ReadsInputFirst`)."""
+        return self._work[0]
 
     def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
         self.applications += 1

@@ -114,12 +114,13 @@ class SpectralOperator(ShellInterface):
     constrained CG uses the halves to learn ``d.Hd`` for its step before deciding whether
     it needs ``Hd`` at all (after a projection it evaluates the gradient afresh instead).
     No other transform on the same FFT may run between the two.  Subclasses define
-    :meth:`_forward` and :meth:`_backward`, and hold :attr:`multiplier` (:func:`twice` of
-    the normalised spectrum) and :attr:`fft`.
+    :meth:`_forward` and :meth:`_backward`, and hold :attr:`multiplier` (the normalised
+    spectrum, :func:`real_block`) and :attr:`fft`.
     """
 
     fft: FFT
     multiplier: np.ndarray
+    factor = 1.0  # the operator is ``factor`` times :attr:`multiplier`'s (see ``times``)
     transform_size: int  # N, the points of the transform: a round trip multiplies by N
     _single: np.ndarray
 
@@ -142,7 +143,17 @@ class SpectralOperator(ShellInterface):
         self._forward(x)
         values = self.fft.spectrum.view(np.float64).reshape(-1)  # a view: spectra are dense
         passes = self.fft.device.passes
-        return float(passes.scale_spectrum(values, self.multiplier.reshape(-1), self._single))
+        multiplier, factor = self.multiplier.reshape(-1), self.factor
+        if self.stored_once:
+            return float(passes.scale_entries(values, multiplier, self._single, factor))
+        return float(passes.scale_spectrum(values, multiplier, self._single, factor))
+
+    @property
+    def stored_once(self) -> bool:
+        """Whether :attr:`multiplier` holds each entry once (the spectrum block's shape), not
+        twice (:func:`twice`): an operator whose ``x.Ax`` is not used (a preconditioner) keeps
+        half the floats; the product is the same, the sum rounds otherwise."""
+        return bool(self.multiplier.shape == self.fft.spectrum.shape)
 
     def end_mult(self, out: np.ndarray) -> np.ndarray:
         """``out <- A x`` for the ``x`` of the last :meth:`begin_mult`."""
@@ -156,13 +167,15 @@ class SpectralOperator(ShellInterface):
 
     @property
     def spectrum(self) -> np.ndarray:
-        """The normalised real multiplier on the local spectrum block (a view: read only)."""
-        return self.multiplier[:, ::2]
+        """The normalised real multiplier on the local spectrum block (a view: read only; a
+        new array where :attr:`factor` is not 1)."""
+        values = self.multiplier if self.stored_once else self.multiplier[:, ::2]
+        return values if self.factor == 1.0 else values * self.factor
 
     def _with(self, multiplier: np.ndarray) -> Any:
         """Another operator of this kind on the same FFT, with ``multiplier``."""
         other = copy.copy(self)
-        other.multiplier = multiplier
+        other.multiplier, other.factor = multiplier, 1.0
         other.applications = 0
         return other
 
@@ -191,23 +204,41 @@ class FourierOperator(SpectralOperator):
         or on ``fft``'s device.
     """
 
-    def __init__(self, grid: Grid, fft: FFT, kernel: np.ndarray) -> None:
+    def __init__(self, grid: Grid, fft: FFT, kernel: np.ndarray, once: bool = False) -> None:
         self.grid = grid
         self.fft = fft
         self.transform_size = grid.size
         device = fft.device  # the multiplier made where the kernel is moved to, once
-        self.multiplier = twice(self.normalised(device.asarray(kernel, dtype=float)), device.xp)
+        values = self.normalised(device.asarray(kernel, dtype=float))
+        self.multiplier = (
+            device.xp.array(values, order="C") if once else twice(values, device.xp)
+        )  # each entry once: :attr:`stored_once`
         self._single = fft.device.asarray(single_entries(grid, fft))
         self.applications = 0
 
     def scaled(self, factor: float) -> FourierOperator:
         """Another operator on the same FFT with the multiplier times ``factor``."""
-        return self._with(self.multiplier * factor)
+        return self._with(self.multiplier * (self.factor * factor))
+
+    def times(self, factor: float) -> FourierOperator:
+        """Another operator on the same FFT, ``factor`` times this one, that shares its
+        multiplier (no field): its :attr:`factor` may be set again in place; the products
+        are formed where the spectrum is scaled, the same numbers as a multiplier stored
+        scaled."""
+        other = self._with(self.multiplier)
+        other.factor = self.factor * factor
+        return other
 
     def sharing(self, multiplier: np.ndarray) -> FourierOperator:
         """Another operator on the same FFT whose multiplier is ``multiplier``, an array of
         this one's layout shared (not copied): what it is given it holds."""
         return self._with(multiplier)
+
+    @property
+    def input_field(self) -> np.ndarray:
+        """Its FFT's input buffer, flat: an application reads it as its input and never
+        writes it (:class:`~petsc_contact.solver.linear.ReadsInputFirst`)."""
+        return self.fft.real.reshape(-1)
 
     def set_inverse(self, op: FourierOperator, support: float) -> None:
         """Become the inverse of ``op + support I`` on the same grid, in place.
@@ -216,13 +247,22 @@ class FourierOperator(SpectralOperator):
         the normalised multiplier is ``N^-2/(op.multiplier + support)``, so a zero entry
         of ``op`` gives ``inf`` when ``support`` is 0 (the caller sets that entry).
         """
-        np.add(op.multiplier, support, out=self.multiplier)
+        entries = op.multiplier
+        if op.stored_once != self.stored_once:
+            if not self.stored_once:
+                raise ValueError("an inverse kept twice per entry of one kept once")
+            entries = op.multiplier[:, ::2]  # each entry once, as this one keeps them
+        np.multiply(entries, op.factor, out=self.multiplier)  # op's spectrum
+        np.add(self.multiplier, support, out=self.multiplier)
         with np.errstate(divide="ignore"):  # 1/(N a) normalised: N^-2 / a
             np.divide(self.normalised(self.normalised(1.0)), self.multiplier, out=self.multiplier)
 
     def set_entry(self, row: int, column: int, value: float) -> None:
         """Set one entry of the normalised multiplier (local spectrum indices)."""
-        self.multiplier[row, 2 * column : 2 * column + 2] = value
+        if self.stored_once:
+            self.multiplier[row, column] = value
+        else:
+            self.multiplier[row, 2 * column : 2 * column + 2] = value
 
     def _forward(self, x: np.ndarray) -> None:
         self.fft.forward_from(x)

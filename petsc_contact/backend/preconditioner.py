@@ -61,7 +61,8 @@ class MeanModePreconditioner(FourierOperator):
     """
 
     def __init__(self, grid: Grid, fft: FFT, hessian: FourierOperator, schur_max: int) -> None:
-        super().__init__(grid, fft, fft.device.xp.zeros(fft.spectrum.shape))  # filled by invert
+        zeros = fft.device.xp.zeros(fft.spectrum.shape)
+        super().__init__(grid, fft, zeros, once=True)  # filled by invert; x.Mx is never used
         self._hessian = hessian
         self.schur_max = schur_max  # the Schur form's largest bound set
         self.options = TwoLevelOptions()  # the two-level form's: the solve's settings
@@ -76,7 +77,6 @@ class MeanModePreconditioner(FourierOperator):
         self._last_count = 0  # the bound count of the last adapt
         self._built_free: np.ndarray | None = None  # the free set the coarse space was built on
         self._quarter: Any = None  # G's quarter (of the device), made by a set-dependent form
-        self._spread: np.ndarray | None = None  # work fields of the set-dependent forms
         self._reactions: np.ndarray | None = None  # the Schur form's, of the last application
         self._fft32: ArrayFFT | None = None  # the float32 round trip's FFT (use_single)
         self._multiplier32: Any = None  # the multiplier in float32, made when first used
@@ -173,7 +173,7 @@ class MeanModePreconditioner(FourierOperator):
         # there, with one more array: 1694 at 512^2; at 1024^2 and p0 = 1e-3 809, the
         # restart 807, this 797; docs/performance.md, "The lost iterations")
         leaving = self.coarse is not None
-        self.correction = self._spread = self._built_free = None
+        self.correction = self._built_free = None
         if self._filled != self.support:
             self._fill(self.support)
         self._set_mean_mode(
@@ -184,7 +184,7 @@ class MeanModePreconditioner(FourierOperator):
     def release(self) -> None:
         """Drop the set-dependent form once the solve is over (the two-level form's factor
         is ``k x k``, on every rank); the next :meth:`invert` starts without it anyway.  The
-        quarter of ``G`` and :meth:`work_fields` are kept."""
+        quarter of ``G`` is kept."""
         self.correction = self._built_free = self._reactions = None
         self._multiplier32 = None  # the stiffness solve may write the shared multiplier
 
@@ -206,13 +206,15 @@ class MeanModePreconditioner(FourierOperator):
         Hessian at every :meth:`invert`); ``None`` before a set-dependent form made it."""
         return None if self._quarter is None else self._quarter * scale
 
-    def work_fields(self) -> np.ndarray:
-        """Two flat field-sized arrays, the first zero, kept while a set-dependent form is in
-        use (:func:`~petsc_contact.backend.coarse.add_correction`); lent to the held-set
-        stiffness solve after a contact solve."""
-        if self._spread is None:
-            self._spread = self.device.xp.zeros((2, int(np.prod(self.grid.local_shape))))
-        return self._spread
+    def work_fields(self) -> tuple[Any, Any]:
+        """Two flat field-sized arrays for the set-dependent forms to compute in
+        (:func:`~petsc_contact.backend.coarse.add_correction`): the FFT's input buffer
+        twice, which a round trip uses only while it runs (for a caller's array it cannot
+        transform in place), so that no field is kept for them: an application to it reads
+        it into the spectrum before the transform back writes it; lent to the held-set
+        stiffness solve."""
+        real = self.fft.real.reshape(-1)
+        return real, real
 
     def _stale(self, free: np.ndarray, bound_count: int) -> bool:
         """Whether more than :data:`REBUILD_FRACTION` of the set changed since the build."""
@@ -257,8 +259,11 @@ class MeanModePreconditioner(FourierOperator):
         """``out <- G x``, the Fourier form's round trip in ``float32`` (:meth:`use_single`)."""
         fft = self._fft32
         assert fft is not None
-        if self._multiplier32 is None:
-            self._multiplier32 = self.multiplier.astype(np.float32).reshape(-1)
+        if self._multiplier32 is None:  # laid out as the spectrum's float view
+            entries = self.multiplier * self.factor
+            if self.stored_once:
+                entries = self.device.xp.repeat(entries, 2, axis=-1)
+            self._multiplier32 = entries.astype(np.float32).reshape(-1)
         self.applications += 1
         fft.forward_from(x)
         values = fft.spectrum.view(np.float32).reshape(-1)

@@ -28,10 +28,12 @@ restricts it to the free set like the Hessian, so the KSP is preconditioned by
 
 A :class:`BoundSolver` makes its TAO at its first solve and keeps it, with its Hessian, Vecs
 and initial matrices, for every later one (a sweep's steps): each solve sets the new start,
-bounds and tolerance floor.  It reads its options with an options prefix (``a_``:
-``-a_tao_type``, ``-a_petsc_contact_no_j0``; by default the prefix of the
-:func:`~petsc_contact.backend._petsc.scoped_options` block it is made in), so that solvers
-side by side take different options.
+bounds and tolerance floor.  Each solve's answer is its solution Vec's own array, handed out
+(the next solve gets a new one); the package's own solver takes the bounds as they are (a
+float, or an array), so that no bound Vecs are made for it (TAO's types get two).  It reads
+its options with an options prefix (``a_``: ``-a_tao_type``, ``-a_petsc_contact_no_j0``; by
+default the prefix of the :func:`~petsc_contact.backend._petsc.scoped_options` block it is
+made in), so that solvers side by side take different options.
 """
 
 from __future__ import annotations
@@ -85,6 +87,14 @@ class TakesPreconditioner(Protocol):
     """A Python TAO type that is given the Fourier preconditioner (a ``PC``) before it runs."""
 
     def set_preconditioner(self, pc: Any) -> None: ...
+
+
+@runtime_checkable
+class TakesBounds(Protocol):
+    """A Python TAO type that is given each solve's bounds as they are (a float or a local
+    array each) before it runs: the solver then makes no bound Vecs (two fields less)."""
+
+    def set_bounds(self, lower: Any, upper: Any) -> None: ...
 
 
 def _reason_names(petsc: Any) -> dict[int, str]:
@@ -294,10 +304,12 @@ class BoundSolver:
         self.tao_type = check_tao_type(petsc, self.prefix)
         shifted = self.tao_type in SHIFT_TYPES
         self.hessian = shell_matrix(petsc, DiagonalShift(hessian) if shifted else hessian)
-        self.x = self.hessian.createVecRight()
-        self.lower = self.x.duplicate()
-        self.upper = self.x.duplicate()
-        self.upper.set(petsc.INFINITY)
+        self.x: Any = None  # the solution Vec, on an array handed out as the answer
+        self.answer: np.ndarray | None = None  # that array, while the Vec still holds it
+        self._solution()
+        self.lower: Any = None  # the bound Vecs, made for a TAO type that reads them
+        self.upper: Any = None
+        self.bounds: tuple[Any, Any] = (0.0, petsc.INFINITY)  # the solve's, as given
         self.pc = None
         self.pmat = None
         if (
@@ -342,6 +354,8 @@ class BoundSolver:
         """
         self._load(x0, lower, upper)
         tao = self.tao if self.tao is not None else self._create()
+        if self.lower is None:  # a type that takes the bounds as they are
+            tao.getPythonContext().set_bounds(*self.bounds)
         if self.free_set is not None:
             self.free_set.load_bounds()
         self.current = current = _Solve(objgrad, monitor)
@@ -373,7 +387,23 @@ class BoundSolver:
             objective=float(f),
             gradient_ratio_tolerance=float(gttol),
         )
-        return self.x.array_r.copy(), info
+        answer, self.answer = self.answer, None  # the next solve gets a Vec of its own
+        assert answer is not None
+        return answer, info
+
+    def _solution(self) -> None:
+        """A new solution Vec on an array of its own, which :meth:`solve` hands out as the
+        answer (no copy: a field less while the step is measured).  TAO lets go of the old
+        Vec when it is given the new one."""
+        n_local = int(np.prod(self.grid.local_shape))
+        self.answer = np.empty(n_local)
+        comm = _petsc.petsc_comm(self.grid.comm)
+        old = self.x
+        self.x = self.petsc.Vec().createWithArray(
+            self.answer, size=(n_local, self.grid.size), comm=comm
+        )
+        if old is not None:
+            old.destroy()
 
     def _attach_h0(self, tao: Any) -> None:
         """The restricted compliance as ``tao``'s ``H0`` (:class:`FreeSetPreconditioner`)."""
@@ -387,16 +417,32 @@ class BoundSolver:
         self.initial = [h0, pc]
 
     def _load(self, x0: np.ndarray, lower: float | np.ndarray, upper: np.ndarray | None) -> None:
-        """The start point and the bounds into the solver's Vecs."""
-        with self.x as xa:
-            xa[...] = x0.reshape(-1)
+        """The start point into the solver's Vec, the bounds into its bound Vecs where it
+        has them (:meth:`_bound_vecs`)."""
+        if self.answer is None:
+            self._solution()
+        assert self.answer is not None
+        self.answer[...] = x0.reshape(-1)
+        self.bounds = (lower, self.petsc.INFINITY if upper is None else upper)
+        if self.lower is not None:
+            self._fill_bounds()
+
+    def _bound_vecs(self, tao: Any) -> None:
+        """Make the bound Vecs, fill them with :attr:`bounds` and give them to ``tao``."""
+        self.lower, self.upper = self.x.duplicate(), self.x.duplicate()
+        self._fill_bounds()
+        tao.setVariableBounds(self.lower, self.upper)
+
+    def _fill_bounds(self) -> None:
+        """:attr:`bounds` into the bound Vecs."""
+        lower, upper = self.bounds
         if np.ndim(lower) == 0:
             self.lower.set(float(lower))
         else:
             with self.lower as la:
                 la[...] = np.asarray(lower).reshape(-1)
-        if upper is None:
-            self.upper.set(self.petsc.INFINITY)
+        if np.ndim(upper) == 0:
+            self.upper.set(float(upper))
         else:
             with self.upper as ua:
                 ua[...] = upper
@@ -424,7 +470,8 @@ class BoundSolver:
             tao.setPythonType(DEFAULT_PYTHON_TYPE)
         tao.setObjectiveGradient(tao_objgrad, None)
         tao.setHessian(tao_hessian, self.hessian, self.hessian if self.pmat is None else self.pmat)
-        tao.setVariableBounds(self.lower, self.upper)
+        if self.tao_type != "python":  # TAO's own types read them (before their options)
+            self._bound_vecs(tao)
         tao.setTolerances(gatol=DEFAULT_GATOL, grtol=0.0, gttol=0.0)
         tao.setMaximumIterations(DEFAULT_MAX_IT)
         tao.setMaximumFunctionEvaluations(10 * DEFAULT_MAX_IT)
@@ -445,11 +492,13 @@ class BoundSolver:
             if default_matrix:
                 opts.delValue("tao_bncg_mat_type")
         self.requested_gatol = tao.getTolerances()[0]
+        context = tao.getPythonContext() if self.tao_type == "python" else None
+        if self.lower is None and not isinstance(context, TakesBounds):
+            self._bound_vecs(tao)  # a Python type of the user's
         if self.pc is not None and self.tao_type in J0_TYPES:
             attach_lmvm_j0(tao, self.pc)
         if self.use_h0:
             self._attach_h0(tao)
-        context = tao.getPythonContext() if self.tao_type == "python" else None
         if self.pc is not None and isinstance(context, TakesPreconditioner):
             context.set_preconditioner(self.pc)
         tao.setMonitor(self._monitor)
@@ -481,6 +530,6 @@ class BoundSolver:
         for obj in (*kept, self.hessian, self.x, self.lower, self.upper):
             if obj is not None:
                 obj.destroy()
-        self.tao = self.pc = self.pmat = self.free_set = None
+        self.tao = self.pc = self.pmat = self.free_set = self.lower = self.upper = None
         self.initial = []
         self.gradient.clear()

@@ -146,13 +146,18 @@ def clip(x: np.ndarray, lower: Bound, upper: Bound) -> None:
 
 
 @njit(cache=True, fastmath=FAST, nogil=True)
-def scale_spectrum(values: np.ndarray, multiplier: np.ndarray, single: np.ndarray) -> float:
-    """Multiply a spectrum by a real multiplier; return ``sum(w k |s|^2)`` before it.
+def scale_spectrum(
+    values: np.ndarray, multiplier: np.ndarray, single: np.ndarray, factor: float
+) -> float:
+    """Multiply a spectrum by a real multiplier times ``factor``; return ``sum(w k |s|^2)``
+    before it (``k`` the multiplier's entry times ``factor``, formed here: an operator that
+    is another's times a scalar keeps no multiplier of its own).
 
     ``values`` is the float view of the (contiguous, complex) spectrum block, ``multiplier``
-    holds each real entry ``k`` twice in the same layout
-    (:func:`~petsc_contact.backend.operator.twice`),
-    and ``single`` the complex indices of the entries of multiplicity ``w = 1``
+    holds each real entry twice in the same layout
+    (:func:`~petsc_contact.backend.operator.twice`: stored once, the loop would read it
+    otherwise, and its sums round otherwise), and ``single`` the complex indices of the
+    entries of multiplicity ``w = 1``
     (:func:`~petsc_contact.devices.fft.single_entries`; all others have ``w = 2``).  With a
     normalised kernel the sum over all ranks is the quadratic form ``x.Kx`` of the
     transformed field (Parseval).  Flat loops of floats: numba vectorises these, and not a
@@ -162,13 +167,36 @@ def scale_spectrum(values: np.ndarray, multiplier: np.ndarray, single: np.ndarra
     for m in single:
         a = values[2 * m]
         b = values[2 * m + 1]
-        once += multiplier[2 * m] * (a * a + b * b)
+        once += multiplier[2 * m] * factor * (a * a + b * b)
     total = 0.0
     for j in range(values.size):
         a = values[j]
-        k = multiplier[j]
+        k = multiplier[j] * factor
         total += k * a * a
         values[j] = a * k
+    return 2.0 * total - once
+
+
+@njit(cache=True, fastmath=FAST, nogil=True)
+def scale_entries(
+    values: np.ndarray, multiplier: np.ndarray, single: np.ndarray, factor: float
+) -> float:
+    """:func:`scale_spectrum` with each real entry stored once (``multiplier[i]`` scales
+    ``values[2i]`` and ``values[2i + 1]``): the same products, a sum that rounds otherwise
+    (the loop reads the multiplier otherwise and is vectorised otherwise)."""
+    once = 0.0
+    for m in single:
+        a = values[2 * m]
+        b = values[2 * m + 1]
+        once += multiplier[m] * factor * (a * a + b * b)
+    total = 0.0
+    for i in range(multiplier.size):
+        k = multiplier[i] * factor
+        a = values[2 * i]
+        b = values[2 * i + 1]
+        total += k * (a * a + b * b)
+        values[2 * i] = a * k
+        values[2 * i + 1] = b * k
     return 2.0 * total - once
 
 
@@ -212,6 +240,7 @@ def specimen_calls() -> list[tuple[Callable[..., object], tuple[object, ...]]]:
         (fill_outside, (vector(), read_only, mask)),
         (extend_direction, (vector(), vector(), mask, 1.0, vector())),
         (changed_count, (mask, mask)),
-        (scale_spectrum, (vector(), vector(), np.zeros(1, dtype=np.int64))),
+        (scale_spectrum, (vector(), vector(), np.zeros(1, dtype=np.int64), 1.0)),
+        (scale_entries, (vector(), np.zeros(1), np.zeros(1, dtype=np.int64), 1.0)),
         (add_dot, (vector(), vector(), vector())),
     ]

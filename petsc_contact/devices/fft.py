@@ -23,8 +23,9 @@ with :func:`wavevectors` follow it; ``spectral_index`` is always (``qx`` range, 
 
 Each backend owns three buffers: ``real`` (input of :meth:`forward`, never modified by
 either transform), ``spectrum`` (its output, the local block of the ``nx x (ny//2+1)`` half
-spectrum) and ``result`` (output of :meth:`backward`).  Both transforms are unnormalised:
-``backward(forward(x)) = nx ny x``.
+spectrum) and ``result`` (output of :meth:`backward`; the serial backend makes it when first
+asked for: the operators transform back into their callers' arrays, so a periodic run never
+does).  Both transforms are unnormalised: ``backward(forward(x)) = nx ny x``.
 
 :meth:`forward_from` and :meth:`backward_into` are the hot path of every operator (one round
 trip with a spectral multiplier between them, :mod:`petsc_contact.backend.operator`).  The serial
@@ -122,13 +123,13 @@ class SerialFFT:
         self.threads = threads
         self.real = pyfftw.empty_aligned(grid.shape, dtype="float64")
         self.spectrum = pyfftw.empty_aligned((nx, m), dtype="complex128")
-        self.result = pyfftw.empty_aligned(grid.shape, dtype="float64")
+        self._result: np.ndarray | None = None  # made when first asked for (:attr:`result`)
         self._forward = pyfftw.FFTW(
             self.real, self.spectrum, axes=(0, 1), flags=(PLANNER_EFFORT,), threads=threads
         )
-        self._backward = pyfftw.FFTW(
+        self._backward = pyfftw.FFTW(  # planned on ``real`` (as aligned as ``result``)
             self.spectrum,
-            self.result,
+            self.real,
             axes=(0, 1),
             direction="FFTW_BACKWARD",
             flags=(PLANNER_EFFORT, "FFTW_DESTROY_INPUT"),
@@ -141,12 +142,23 @@ class SerialFFT:
     transposed = False
     device = CPU
 
+    @property
+    def result(self) -> np.ndarray:
+        """The output of :meth:`backward`, made at its first use: the operators transform
+        back into their callers' arrays, so a periodic run never makes it (a field less)."""
+        if self._result is None:
+            import pyfftw
+
+            self._result = pyfftw.empty_aligned(self.real.shape, dtype="float64")
+        return self._result
+
     def forward(self) -> None:
         """``spectrum <- FFT(real)``."""
         self._forward.execute()
 
     def backward(self) -> None:
         """``result <- IFFT(spectrum)`` without the ``1/(nx ny)``; destroys ``spectrum``."""
+        self._backward.update_arrays(self.spectrum, self.result)
         self._backward.execute()
 
     def forward_from(self, x: np.ndarray) -> None:
@@ -166,13 +178,12 @@ class SerialFFT:
 
     def backward_into(self, out: np.ndarray) -> None:
         """``out <- IFFT(spectrum)`` (unnormalised, destroys ``spectrum``), in place if aligned."""
-        dst = out.reshape(self.result.shape)
+        dst = out.reshape(self.real.shape)
         if self._direct(dst, self._backward.output_alignment):
             self._backward.update_arrays(self.spectrum, dst)
             self._backward.execute()
-            self._backward.update_arrays(self.spectrum, self.result)
         else:
-            self._backward.execute()
+            self.backward()
             dst[...] = self.result
 
     @staticmethod

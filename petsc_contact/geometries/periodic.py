@@ -101,7 +101,9 @@ class PeriodicProblem:
         Layout and FFT backend.
     heights
         This rank's slab of the rigid surface heights (the mean is removed), on the host or
-        on ``fft``'s device.
+        on ``fft``'s device.  It is kept, not copied, and must not change while the problem
+        is in use: :attr:`heights`, less the mean, is made from it when asked for, and
+        dropped while a solve runs (a field less at 8192^2 is 512 MB).
     modulus
         Contact modulus ``E*``.
     backend
@@ -135,13 +137,14 @@ class PeriodicProblem:
         self.device = fft.device
         self.modulus = float(modulus)
         self.filled: np.ndarray | None = None  # this rank's filled pixels (a measured map)
-        given = self.device.asarray(heights, dtype=float)  # on the device (a GPU's copy)
-        self.heights = self.device.xp.ascontiguousarray(given - grid.mean(given))
+        self._given = heights  # as given: the zero-mean heights are made from it
+        self._mean = grid.mean(self.device.asarray(heights, dtype=float))
+        self._heights: Any = None  # made when asked for (heights)
         self.h_rms = grid.rms(self.heights)
         self.scale_length = self.h_rms if self.h_rms > 0 else max(grid.lengths)
         q = wavevector_magnitude(grid, fft, self.device.xp)  # on the device
         self.stiffness = FourierOperator(grid, fft, self.substrate.stiffness(q))
-        self.hessian = self.stiffness.scaled(1.0)
+        self.hessian = self.stiffness.times(1.0)  # its scale set by each load
         limit = schur_limit(grid.size)
         self.preconditioner = MeanModePreconditioner(grid, fft, self.hessian, limit)
         self.pixel_stiffness = self.stiffness.diagonal()
@@ -152,9 +155,25 @@ class PeriodicProblem:
         self.interfacial_stiffness = np.nan
         self._s = np.nan
         self._held: FourierOperator | None = None
+        self._x_ref: Any = None  # the reference point and the scaled gradient at it (start)
+        self._sp_ref: Any = None
         self._backend: SolverBackend | None = None
         if backend is not None:
             self.use(backend)
+
+    @property
+    def heights(self) -> Any:
+        """This rank's slab of the heights less their mean, on the device: made from the
+        heights given when first asked for after :meth:`drop_heights` (the same numbers)."""
+        if self._heights is None:
+            given = self.device.asarray(self._given, dtype=float)  # a GPU's copy
+            self._heights = self.device.xp.ascontiguousarray(given - self._mean)
+        return self._heights
+
+    def drop_heights(self) -> None:
+        """Let go of :attr:`heights` until it is asked for again: the contact solve and the
+        stiffness solve do not read it."""
+        self._heights = None
 
     @property
     def backend(self) -> SolverBackend:
@@ -193,7 +212,7 @@ class PeriodicProblem:
         self.interfacial_stiffness = k_i
         self._s = 1.0 / (np.sqrt(self.grid.size) * p0)
         c = self._s * self.scale_length
-        np.multiply(self.stiffness.multiplier, c, out=self.hessian.multiplier)
+        self.hessian.factor = c  # the stiffness's multiplier times c
         mean_compliance = self.substrate.mean_mode_compliance(self.grid.q0, k_i)
         self.preconditioner.options = TwoLevelOptions.from_settings(self.backend.settings)
         self.preconditioner.invert(
@@ -233,6 +252,7 @@ class PeriodicProblem:
         the patches' sizes come to the host, and the fields only when ``fields`` asks."""
         grid, ell, p0, device = self.grid, self.scale_length, self.nominal_pressure, self.device
         self.preconditioner.release()  # the solve is over (the stiffness solve builds its own)
+        self._sp_ref = None  # and so is its objective's (made again if it is asked for)
         gap = x.reshape(grid.local_shape) * ell
         pressure = self.pressure(gap)
         filled = None if self.filled is None else device.asarray(self.filled)
@@ -250,6 +270,7 @@ class PeriodicProblem:
         }
         kept = (gap, pressure) if fields else ()
         del gap, pressure  # the stiffness solve's fields take their place unless kept
+        self.drop_heights()  # and so do the heights
         if stiffness:
             scalars.update(self.held_set_stiffness(contact, verdict == "ok"))
         mark_full_contact(scalars)
@@ -377,8 +398,15 @@ class PeriodicProblem:
         as :attr:`start_point`.  ``x0`` is kept, not copied: it must not change until the
         next :meth:`start` (a field less at 8192^2 is 512 MB)."""
         self._x_ref = self.device.asarray(x0, dtype=float).reshape(-1)
+        self._sp_ref = self._reference_gradient()
+        self.drop_heights()  # the solve reads x_ref and the gradient there only
+
+    def _reference_gradient(self) -> Any:
+        """The scaled gradient at the reference point, ``s p(x_ref)`` (flat): made by
+        :meth:`start`, dropped when a solve is measured (a field less for the stiffness
+        solve), and made again, the same numbers, for another solve from the same start."""
         p_ref = self.pressure(self._x_ref.reshape(self.grid.local_shape) * self.scale_length)
-        self._sp_ref = (self._s * p_ref).reshape(-1)  # the scaled gradient at x_ref
+        return (self._s * p_ref).reshape(-1)
 
     @property
     def start_point(self) -> np.ndarray:
@@ -395,6 +423,8 @@ class PeriodicProblem:
         ``d`` is formed in the FFT's input buffer, which the real-to-complex transform keeps;
         ``d.K d`` comes from its spectrum (Parseval), in the pass that multiplies it.
         """
+        if self._sp_ref is None:
+            self._sp_ref = self._reference_gradient()
         d = self.stiffness.fft.real.reshape(-1)
         np.subtract(x, self._x_ref, out=d)
         d_skd = self.hessian.transform(d)  # the Hessian is s l K

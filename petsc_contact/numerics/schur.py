@@ -240,12 +240,12 @@ def _next_row(comm: Any, held: range, part: np.ndarray) -> None:
 def response_quarter(grid: Grid, apply: Any, work: Any, device: Device = CPU) -> Any:
     """:func:`quarter` of an operator's response to a unit value at pixel ``(0, 0)``;
     ``apply(x, out)`` applies it to this rank's slab, ``work`` is two flat field-sized
-    arrays of ``device``, the first zero (it is left zero)."""
+    arrays of ``device`` to compute in (overwritten)."""
     impulse, response = (w.reshape(grid.local_shape) for w in work)
+    impulse.fill(0.0)
     if grid.rows.start == 0:
         impulse[0, 0] = 1.0
     apply(impulse, response)
-    impulse[0, 0] = 0.0
     return quarter(grid, response, device)
 
 

@@ -10,13 +10,23 @@ preconditioned residual against ``rtol`` times its first value.
 from __future__ import annotations
 
 import warnings
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from ..conventions.grid import Grid
 from ..conventions.warnings import PetscContactWarning, user_level
 from ..devices.device import Device
+
+
+@runtime_checkable
+class ReadsInputFirst(Protocol):
+    """An operator with a field of its own that its application may take as its input: it
+    overwrites that field only once the input is read (the FFT operators' input buffer), so
+    a :class:`Restricted` form of it makes its masked copy of the input there."""
+
+    @property
+    def input_field(self) -> Any: ...
 
 
 class StiffnessNotConverged(PetscContactWarning):
@@ -50,7 +60,8 @@ class Restricted:
     scratch
         A field of the device that every application overwrites (``P x``); give one
         :class:`Restricted`'s :attr:`scratch` to another applied in turn with it (the
-        operator and the preconditioner of one solve) to share it; default: a new one.
+        operator and the preconditioner of one solve) to share it; default: the operator's
+        :attr:`~ReadsInputFirst.input_field` where it has one (no field more), else a new one.
     """
 
     def __init__(self, op: Any, mask: Any, device: Device, scratch: Any = None) -> None:
@@ -58,7 +69,10 @@ class Restricted:
         self.grid = op.grid
         self.mask = mask.reshape(-1)
         self.passes = device.passes
-        self.scratch = device.xp.empty(self.mask.shape) if scratch is None else scratch
+        if scratch is None:
+            own = isinstance(op, ReadsInputFirst)
+            scratch = op.input_field if own else device.xp.empty(self.mask.shape)
+        self.scratch = scratch
         self.applications = 0
 
     def apply_array(self, x: Any, out: Any) -> Any:

@@ -105,6 +105,7 @@ def test_figure_1_redraws_from_study_files(tmp_path):
         assert f["ratio8"]["stiffness"].shape == (16,) and f["punch"]["force"].shape == (16,)
 
 
+@pytest.mark.slow
 def test_figures_redraw_from_study_files(tmp_path):
     """The study's files at a toy size (grids divided by 64: 128^2 for Fig. 2, so that every
     ratio of Fig. 3 keeps a grid of its own, 16^2 to 128^2) redraw Figs. 2 and 3 of the paper
@@ -238,6 +239,7 @@ def test_an_unfinished_study_is_read_over_the_loads_every_seed_has(tmp_path):
         assert f["H0.7"]["alpha"][()] == pytest.approx(0.6, abs=1e-9)
 
 
+@pytest.mark.slow
 def test_the_gallery_draws_every_picture(tmp_path):
     """examples/gallery.py at 64^2 (each map still has pixels in and out of contact): every
     command of docs/gallery.md runs and draws, each in this process
@@ -260,6 +262,7 @@ def test_the_gallery_draws_every_picture(tmp_path):
     assert all((tmp_path / name).stat().st_size > 5000 for name in drawn)
 
 
+@pytest.mark.slow
 def test_punch_figure_redraws_from_study_files(tmp_path):
     """The punch pieces at a toy size (grids divided by 128, the most the study allows: 16^2
     faces, the cut ones from 64^2) draw the punch figure: every variant has its 8 seeds,

@@ -161,10 +161,10 @@ WARM = ("petsc_contact.cli.main", "petsc_contact.cli.runs", "petsc_contact.cli.s
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """The tests marked ``slow`` first, in their order, then the rest: ``-n 2`` hands tests
+    """The tests marked ``slow`` first, in their order, then the rest: ``-n 2`` (with
+    pyproject's ``--dist loadfile``: a file's tests together on one worker) hands the files
     out in this order as its workers free up, so the longest are not left for the end, when
-    one worker would run them while the other idles (the longest first: a worker's last
-    test is a short one)."""
+    one worker would run them while the other idles (a worker's last file is a short one)."""
     items.sort(key=lambda item: item.get_closest_marker("slow") is None)
 
 

@@ -587,6 +587,7 @@ def test_study_runs_in_resumable_pieces(tmp_path):
     assert sum(f.stat().st_size for f in files) < 2e6  # scalars only
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("ranks", [0, 2])
 def test_studies_on_the_same_data_share_the_pieces(tmp_path, ranks):
     """A piece another run is writing (its lock held here) is left to it: the study (on one

@@ -47,6 +47,8 @@ import sys
 from petsc_contact.cli.main import main
 from petsc_contact.numerics import kernels
 
+pytestmark = pytest.mark.slow  # compiles every kernel: started first (tests/conftest.py)
+
 kernels.main()  # the set-up's step again: it loads every kernel, compiling none
 for k, args in enumerate(
     [

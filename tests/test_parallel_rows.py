@@ -16,6 +16,8 @@ import pytest
 from conftest import ROOT, cli, python
 from kill_at import same_result
 
+pytestmark = pytest.mark.slow  # MPI launches: started first (tests/conftest.py)
+
 # 60 rows: 8 ranks hold 8 or 7 rows each (no slab ends on a chunk), 4 ranks 15
 SWEEP = "periodic --grid 60 --hurst 0.7 --rms-slope 0.1 --seed 3 --sweep 3,1e-4,1e-2 --stiffness"
 TIMES = ("solve_time", "stiffness_time")  # wall time: the columns that differ

@@ -42,6 +42,8 @@ from petsc_contact.cli.main import main
 from petsc_contact.cli.study import STATUS, _piece
 from petsc_contact.paper.paper_study import punch_pieces, run_pieces
 
+pytestmark = pytest.mark.slow  # MPI launches: started first (tests/conftest.py)
+
 for args in json.loads(sys.argv[1]):
     if main(args):
         sys.exit(f"failed: {args}")

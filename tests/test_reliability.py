@@ -52,6 +52,7 @@ def _leftovers(out: Path) -> list[str]:
     return sorted(p.name for name in (out.name, table) for p in out.parent.glob(name + ".*"))
 
 
+@pytest.mark.slow
 def test_sigkill_at_every_point_of_the_write_path(tmp_path, whole_fields):
     """A sweep with fields killed at each point of its write path: --resume ends it with
     every step, equal to the uninterrupted run, and its step table beside it (a kill after

@@ -15,6 +15,8 @@ from conftest import ROOT, cli, python
 from petsc_contact.devices import compiled
 from petsc_contact.numerics import aggregates, kernels
 
+pytestmark = pytest.mark.slow  # compiles every kernel: started first (tests/conftest.py)
+
 SCENE = ("--grid", "32", "--hurst", "0.7", "--rms-slope", "0.1", "--seed", "1", "--quiet")
 
 
@@ -46,8 +48,6 @@ RUNS = """
 import sys
 from petsc_contact.cli.main import main
 from petsc_contact.numerics import kernels
-
-pytestmark = pytest.mark.slow  # compiles every kernel: started first (tests/conftest.py)
 
 kernels.main()  # the set-up's step again: it loads every kernel, compiling none
 for k, args in enumerate(

@@ -20,6 +20,8 @@ from test_measured import _map
 
 from petsc_contact.physics.preparation import rms_slope
 
+pytestmark = pytest.mark.slow  # MPI launches: started first (tests/conftest.py)
+
 FACE = "--grid 32 --hurst 0.7 --rms-slope 0.1 --seed 3 --approaches 0.002,0.01 --stiffness"
 RANKS = 4  # each rank a core on 2 cores is half the oversubscription of 8
 HOLES = [(2, 4), (3, 4), (17, 20), (30, 9), (45, 31)]  # undefined pixels in each rank's rows
@@ -41,8 +43,6 @@ import sys
 from petsc_contact.cli.main import main
 from petsc_contact.cli.study import STATUS, _piece
 from petsc_contact.paper.paper_study import punch_pieces, run_pieces
-
-pytestmark = pytest.mark.slow  # MPI launches: started first (tests/conftest.py)
 
 for args in json.loads(sys.argv[1]):
     if main(args):

@@ -26,6 +26,17 @@ from petsc_contact.workflows.periodic_sweep import periodic_contact
 LOADS = [1e-5, 1e-4, 1e-3, 1e-2, 5e-2]  # first contact to about half the area
 
 
+def assert_same_steps(reference, steps, iterations: int, gaps: float, stiffnesses: float) -> None:
+    """Each of ``steps`` converged as its ``reference`` step did: iterations within
+    ``iterations``, mean gaps and stiffnesses to the relative tolerances given."""
+    for a, b in zip(reference, steps, strict=True):
+        sa, sb = a.scalars, b.scalars
+        assert sb["converged"], sb["verification"]
+        assert abs(sb["iterations"] - sa["iterations"]) <= iterations
+        assert sb["mean_gap"] == pytest.approx(sa["mean_gap"], rel=gaps)
+        assert sb["stiffness"] == pytest.approx(sa["stiffness"], rel=stiffnesses)
+
+
 def surface(n: int, hurst: float, cutoff: float, seed: int = 1) -> np.ndarray:
     grid = Grid(n, 1.0)
     return self_affine(

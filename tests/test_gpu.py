@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_device import assert_same_steps
 
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.devices.device import DeviceUnavailable, get_device
@@ -51,12 +52,7 @@ def test_the_gpu_solves_as_its_stand_in_does(gpu, n):
     device = periodic_contact(
         h, length=1.0, modulus=1.0, pressures=loads, stiffness=True, device="gpu"
     )
-    for a, b in zip(host, device, strict=True):
-        sa, sb = a.scalars, b.scalars
-        assert sb["converged"], sb["verification"]
-        assert abs(sb["iterations"] - sa["iterations"]) <= 2
-        assert sb["mean_gap"] == pytest.approx(sa["mean_gap"], rel=1e-9)
-        assert sb["stiffness"] == pytest.approx(sa["stiffness"], rel=1e-8)
+    assert_same_steps(host, device, iterations=2, gaps=1e-9, stiffnesses=1e-8)
 
 
 def test_fields_and_state_come_back_to_the_host(gpu):
@@ -139,9 +135,4 @@ def test_the_gpu_with_its_plans_and_float32_solves_as_its_stand_in_does(gpu, mon
     host = periodic_contact(h, device="cpu-array", **run)
     monkeypatch.setenv(CUFFT_PLANS_VARIABLE, "on")
     device = periodic_contact(h, device="gpu", options=["-petsc_contact_pc_float32"], **run)
-    for a, b in zip(host, device, strict=True):
-        sa, sb = a.scalars, b.scalars
-        assert sb["converged"], sb["verification"]
-        assert abs(sb["iterations"] - sa["iterations"]) <= 2
-        assert sb["mean_gap"] == pytest.approx(sa["mean_gap"], rel=1e-9)
-        assert sb["stiffness"] == pytest.approx(sa["stiffness"], rel=1e-8)
+    assert_same_steps(host, device, iterations=2, gaps=1e-9, stiffnesses=1e-8)

@@ -1,6 +1,13 @@
-"""The serial FFT backend keeps FFTW's measured plans on disk between runs."""
+"""The serial FFT backend keeps FFTW's measured plans on disk between runs, with the threads
+it is given."""
 
+import os
+
+import pytest
 from conftest import python
+
+from petsc_contact.conventions.grid import Grid
+from petsc_contact.devices.fft import THREADS_VARIABLE, SerialFFT, default_threads
 
 SCRIPT = r"""
 import pyfftw
@@ -32,3 +39,16 @@ def test_wisdom_reused_by_the_next_run(tmp_path, monkeypatch):
     monkeypatch.setenv("PETSC_CONTACT_FFTW_WISDOM", "off")
     path.unlink()
     assert run() == "measured" and not path.exists()
+
+
+def test_the_threads_variable_sets_the_serial_fft_s_threads(monkeypatch):
+    """``PETSC_CONTACT_FFT_THREADS`` gives the serial FFT its threads; unset, the cores this
+    process may use; a value that is not a whole number >= 1 is refused, naming it."""
+    monkeypatch.setenv(THREADS_VARIABLE, "3")
+    assert default_threads() == 3 and SerialFFT(Grid(16, 1.0)).threads == 3
+    monkeypatch.delenv(THREADS_VARIABLE)
+    assert default_threads() == len(os.sched_getaffinity(0))
+    for bad in ("0", "two", "-1", "1.5"):
+        monkeypatch.setenv(THREADS_VARIABLE, bad)
+        with pytest.raises(ValueError, match=THREADS_VARIABLE):
+            default_threads()

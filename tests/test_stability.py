@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from petsc_contact import periodic_contact
+from petsc_contact.backend._petsc import init
 from petsc_contact.conventions.grid import Grid
 from petsc_contact.devices.fft import make_fft
 from petsc_contact.physics.surface import self_affine
@@ -109,4 +110,5 @@ def test_first_order_tao_types_with_fourier_h0(tao_type, extra):
         pressures=[1e-7],
         options=["-tao_type", tao_type, "-petsc_contact_no_j0"],
     )
-    assert not without.converged
+    said = {k: without.scalars[k] for k in ("iterations", "tao_reason", "tolerance")}
+    assert not without.converged, (said, init().Options().getAll())  # the database: no leak

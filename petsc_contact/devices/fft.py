@@ -49,11 +49,20 @@ from .device import CPU, Device
 
 PLANNER_EFFORT = "FFTW_MEASURE"
 WISDOM_VARIABLE = "PETSC_CONTACT_FFTW_WISDOM"  # a file for FFTW's wisdom, or "off"
+THREADS_VARIABLE = "PETSC_CONTACT_FFT_THREADS"  # the serial FFT's threads (default: the cores)
 
 
 def default_threads() -> int:
-    """FFT threads for a one-rank run: the cores this process may use."""
-    return max(1, len(os.sched_getaffinity(0)))
+    """FFT threads for a one-rank run: ``PETSC_CONTACT_FFT_THREADS`` where it is set (say 1
+    for several runs side by side on one machine's cores, each then a core's), else the
+    cores this process may use.  ``ValueError`` for a value that is not a positive whole
+    number."""
+    given = os.environ.get(THREADS_VARIABLE, "").strip()
+    if not given:
+        return max(1, len(os.sched_getaffinity(0)))
+    if not given.isdigit() or int(given) < 1:
+        raise ValueError(f"{THREADS_VARIABLE}={given!r}: the FFT's threads, a whole number >= 1")
+    return int(given)
 
 
 class _Wisdom:

@@ -72,7 +72,6 @@ def init(petsc_args: list[str] | None = None) -> ModuleType:
             petsc4py.init([sys.argv[0] if sys.argv and sys.argv[0] else "petsc-contact"] + args)
             from petsc4py import PETSc
         _python_sigpipe()
-        _mapped_blocks()
         return PETSc
     from petsc4py import PETSc
 
@@ -88,20 +87,6 @@ def _python_sigpipe() -> None:
 
     with suppress(ValueError):  # not the main thread: leave it
         signal.signal(signal.SIGPIPE, signal.SIG_IGN)
-
-
-GLIBC_MMAP_MAX = (-4, 65536)  # mallopt's M_MMAP_MAX and glibc's default for it
-
-
-def _mapped_blocks() -> None:
-    """Let glibc map large blocks again, and so give a freed field back to the system.
-    Debian's PETSc loads SuperLU_DIST, whose library constructor sets ``M_MMAP_MAX`` to 0:
-    every block then comes from the heap, whose freed space stays resident (a 4096^2 field
-    freed kept its 128 MiB) and can be reused only by blocks that fit in its holes.  The
-    package never calls SuperLU_DIST; elsewhere than glibc this does nothing."""
-    libc = ctypes.CDLL(None)
-    if hasattr(libc, "mallopt"):
-        libc.mallopt(*GLIBC_MMAP_MAX)
 
 
 def library_path() -> str:

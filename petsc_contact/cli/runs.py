@@ -8,6 +8,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from ..conventions.units import format_quantity
+from ..io.names import csv_path
 from .common import EXIT_INTERRUPTED, EXIT_NOT_CONVERGED, EXIT_PAUSED, describe, say
 
 LOAD_COLUMNS = {
@@ -222,8 +223,9 @@ def _conclude(
              units=units)  # fmt: skip
     if root and not args.quiet and description.adhesion is not None and table:
         print(_adhesive_summary(table[-1], result.record), flush=True)
-    written = [description.output] if wrote else []
-    if root and not args.quiet and (written or plot):
-        print(f"# wrote {' and '.join([*written, *([plot] if plot else [])])}")
+    written = [description.output, csv_path(description.output)] if wrote else []
+    written += [plot] if plot else []
+    if root and not args.quiet and written:
+        print(f"# wrote {', '.join(written[:-1])}{' and ' if written[1:] else ''}{written[-1]}")
     flagged = [s for s in table if not s["converged"] or not s.get("accurate", True)]
     return EXIT_NOT_CONVERGED if flagged else 0  # the run's Unconverged warning said which

@@ -21,13 +21,16 @@ from pathlib import Path
 # imported: a threaded BLAS beside FFTW's threads slows every in-process run many times
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
-# -n N's workers share the cores: one FFT thread each (and in the processes they start), not
-# one per core each, whose contention took a fifth more CPU (the README's commands, 2 cores)
-if int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")) > 1:
-    os.environ.setdefault("PETSC_CONTACT_FFT_THREADS", "1")
 
 import numpy as np
 import pytest
+
+from petsc_contact.devices.fft import THREADS_VARIABLE
+
+# -n N's workers share the cores: one FFT thread each (and in the processes they start), not
+# one per core each, whose contention took a fifth more CPU (the README's commands, 2 cores)
+if int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")) > 1:
+    os.environ.setdefault(THREADS_VARIABLE, "1")
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -734,6 +734,9 @@ def test_demo_runs_again_over_its_own_output(tmp_path, monkeypatch):
     for warned in (False, True):
         r = cli(*demo, "--output", "other.h5")
         assert r.returncode == 0 and ("is replaced when this run ends" in r.stderr) is warned
+    said = cli("demo", "--grid", "64", "--output", "other.h5", "--overwrite").stdout
+    assert said.splitlines()[-1] == "# wrote other.h5, other.csv and demo.png", said  # all three
+    assert (tmp_path / "other.csv").exists()
     paused = cli(*demo, "--stop-after", "1e-9")
     assert paused.returncode == 75, paused.stderr  # an interrupted demo's steps: not deleted
     r = cli(*demo)

@@ -226,6 +226,7 @@ def _conclude(
     written = [description.output, csv_path(description.output)] if wrote else []
     written += [plot] if plot else []
     if root and not args.quiet and written:
-        print(f"# wrote {', '.join(written[:-1])}{' and ' if written[1:] else ''}{written[-1]}")
+        *others, last = written
+        print(f"# wrote {', '.join(others)}{' and ' if others else ''}{last}")
     flagged = [s for s in table if not s["converged"] or not s.get("accurate", True)]
     return EXIT_NOT_CONVERGED if flagged else 0  # the run's Unconverged warning said which

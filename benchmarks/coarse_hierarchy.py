@@ -131,12 +131,14 @@ def flexible() -> None:
         assert apply is not None
 
         def polak_ribiere(r: np.ndarray, z: np.ndarray) -> None:
+            residual = r.copy()  # the CG preconditions in place (z is r)
+            cg.r_old = residual  # type: ignore[attr-defined]
             apply(r, z)
             if not isinstance(getattr(cg.contact, "correction", None), Hierarchy):
                 return
             if last is not None and cg.rz_old > 0:
                 rz, z_last = cg.allsum(
-                    cg.passes.restrict_dot(z, cg.free, r), float(np.dot(z, last))
+                    cg.passes.restrict_dot(z, cg.free, residual), float(np.dot(z, last))
                 )
                 cg.rz_old *= rz / (rz - z_last) if rz > z_last else np.inf
 
@@ -145,7 +147,6 @@ def flexible() -> None:
             return direction(cg, rr, bound_count)
         finally:
             cg.preconditioner = apply
-            cg.r_old = cg.r.copy()  # type: ignore[attr-defined]
 
     ConstrainedCG._direction = flexible_direction  # type: ignore[method-assign]
 

@@ -116,3 +116,28 @@ sizes = patch_sizes(grid, step.contact[grid.rows])
 if grid.comm.rank == 0:
     print(" ".join(map(str, sizes)))
 """
+
+
+def test_observables_of_row_blocks_are_the_fields(monkeypatch):
+    """The observables reduced a few rows at a time (blocks of 200 points: 3 rows of 64,
+    the last block shorter) are those of the whole field at once: the same counts and
+    histograms, sums within their rounding."""
+    from petsc_contact.paper.figures import surface
+    from petsc_contact.physics import observables
+
+    h, _ = surface(64, 0.7, 1.0, 32.0, 2)
+    (step,) = periodic_contact(h, length=1.0, modulus=1.0, pressures=[1e-2], fields=True)
+    gap, pressure = step.gap, step.pressure
+    heights = h - h.mean()
+    args = (Grid(64, 1.0), gap, pressure, heights, 1e-2, 2.0 * 64)
+    whole = observables.step_observables(*args)
+    monkeypatch.setattr(observables, "BLOCK_POINTS", 200)
+    assert len(observables.row_blocks(gap.shape)) == 22
+    blocked = observables.step_observables(*args)
+    assert whole.keys() == blocked.keys()
+    for key, value in whole.items():
+        if isinstance(value, float):
+            assert blocked[key] == pytest.approx(value, rel=1e-13, abs=1e-300), key
+        else:
+            assert np.array_equal(blocked[key], value), key
+    assert whole["contact"].sum() == whole["pressure_histogram"].sum() > 0

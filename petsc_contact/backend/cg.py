@@ -42,6 +42,7 @@ from ..solver.constrained_cg import (
     compact_bound,
 )
 from . import _petsc
+from .operator import ShellInterface
 
 __all__ = ["ContactPreconditioner", "PolonskyKeer", "PreconditionedCG", "SplitHessian"]
 __all__ += ["check_converged", "compact_bound"]
@@ -158,6 +159,24 @@ def _reductions(petsc_comm: Any) -> Reductions:
     return Reductions(sum=allsum, min=lambda v: float(comm.allreduce(v, op=MPI.MIN)))
 
 
+def _in_place(pc: Any, context: Any, arrays: _VecArrays) -> Any:
+    """``apply(r, z)`` of a preconditioner for a ``z`` that may be ``r`` (the constrained CG
+    preconditions in place): the package's operators (a ``PC`` whose Python context is a
+    :class:`~petsc_contact.backend.operator.ShellInterface`) apply on the arrays; any other
+    ``PC`` on a copy of ``r`` (PETSc refuses a ``PCApply`` from a Vec into itself)."""
+    if isinstance(context, ShellInterface):
+        return context.apply_array
+
+    def precondition(r: Any, z: Any) -> None:
+        copy = arrays.vec(r).copy()
+        try:
+            pc.apply(copy, arrays.vec(z))
+        finally:
+            copy.destroy()
+
+    return precondition
+
+
 def _context(pc: Any) -> Any:
     """A preconditioner's Python context (a ``PC`` of type ``python``), or the object itself."""
     from petsc4py import PETSc
@@ -174,7 +193,8 @@ class PolonskyKeer:
     ----------
     preconditioner
         A PETSc ``PC`` (or any object with ``apply(x, y)`` on Vecs) approximating the inverse
-        Hessian, or ``None``.
+        Hessian, or ``None``; a Python ``PC`` of the package's operators is applied on the
+        arrays, in place (:func:`_in_place`).
     """
 
     use_preconditioner = False
@@ -248,16 +268,13 @@ class PolonskyKeer:
         def mult(d: Any, out: Any) -> None:
             hessian.mult(arrays.vec(d), arrays.vec(out))
 
-        def precondition(r: Any, z: Any) -> None:
-            pc.apply(arrays.vec(r), arrays.vec(z))
-
         cg = ConstrainedCG(
             xa,
             lower,
             upper,
             gradient,
             split if isinstance(split, SplitHessian) else mult,
-            precondition if pc is not None else None,
+            None if pc is None else _in_place(pc, context, arrays),
             context if isinstance(context, ContactPreconditioner) else None,
             TaoConvergence(tao),
             CPU.passes,

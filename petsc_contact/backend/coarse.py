@@ -511,19 +511,26 @@ class CoarseSpace:
         return a[self.labels], c
 
 
+def input_sum(grid: Grid, x: Any) -> float:
+    """The sum of a field over every rank of ``grid`` (collective): what
+    :func:`add_correction` needs of the input, taken before ``G x`` may overwrite it."""
+    return float(grid.sum(x.sum())[0])
+
+
 def add_correction(
-    apply: Any, correction: Any, x: np.ndarray, out: np.ndarray, work: Any
+    apply: Any, correction: Any, total: float, out: np.ndarray, work: Any
 ) -> np.ndarray:
     """``out <- out + G (reactions) + c`` for ``out = G x``: the Schur or two-level form.
 
     ``apply(x, out)`` applies ``G``; ``correction`` is a :class:`CoarseSpace` or a
     :class:`~petsc_contact.numerics.schur.ContactSchur` (``solve`` and ``local``);
-    ``work`` is two flat field-sized arrays, overwritten once ``G x`` and the sum of ``x``
-    are made (:meth:`~petsc_contact.backend.preconditioner.MeanModePreconditioner.
-    work_fields`: the FFT's input buffer twice; the first may be ``x``, neither ``out``).
+    ``total`` is the sum of ``x`` over every rank (:func:`input_sum`: all the correction
+    needs of ``x``, so that ``out`` may be ``x``); ``work`` is two flat field-sized arrays,
+    overwritten (:meth:`~petsc_contact.backend.preconditioner.MeanModePreconditioner.
+    work_fields`: the FFT's input buffer twice; not ``out``).
     Returns the reactions on this rank's pixels of ``correction.local``.
     """
-    reactions, shift = correction.solve(out, float(correction.grid.sum(x.sum())[0]))
+    reactions, shift = correction.solve(out, total)
     spread, response = work
     spread.fill(0.0)
     spread[correction.local] = reactions
@@ -561,8 +568,9 @@ class CoarseCorrected(ShellInterface):
 
     def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
         self.applications += 1
+        total = input_sum(self.grid, x)
         self.op.apply_array(x, out)
-        add_correction(self.op.apply_array, self.correction, x, out, self._work)
+        add_correction(self.op.apply_array, self.correction, total, out, self._work)
         return out
 
     def diagonal(self) -> float:

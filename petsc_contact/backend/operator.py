@@ -27,10 +27,10 @@ from ..devices.fft import FFT, half_spectrum_weights, make_fft, single_entries
 from . import _petsc
 
 
-def twice(values: Any, xp: ModuleType = np) -> Any:
-    """A real spectral multiplier with each entry twice, laid out as a spectrum's float view
-    (an array of ``xp``, the array module ``values`` belong to)."""
-    return xp.repeat(xp.ascontiguousarray(xp.real(values), dtype=float), 2, axis=-1)
+def real_multiplier(values: Any, xp: ModuleType = np) -> Any:
+    """A real spectral multiplier of its own (C-contiguous float64, one float per complex
+    entry of the spectrum block: an array of ``xp``, the array module ``values`` belong to)."""
+    return xp.array(xp.real(values), dtype=float, order="C")
 
 
 class ShellInterface:
@@ -115,7 +115,7 @@ class SpectralOperator(ShellInterface):
     it needs ``Hd`` at all (after a projection it evaluates the gradient afresh instead).
     No other transform on the same FFT may run between the two.  Subclasses define
     :meth:`_forward` and :meth:`_backward`, and hold :attr:`multiplier` (the normalised
-    spectrum, :func:`real_block`) and :attr:`fft`.
+    spectrum block, one float per complex entry: :func:`real_multiplier`) and :attr:`fft`.
     """
 
     fft: FFT
@@ -144,16 +144,7 @@ class SpectralOperator(ShellInterface):
         values = self.fft.spectrum.view(np.float64).reshape(-1)  # a view: spectra are dense
         passes = self.fft.device.passes
         multiplier, factor = self.multiplier.reshape(-1), self.factor
-        if self.stored_once:
-            return float(passes.scale_entries(values, multiplier, self._single, factor))
-        return float(passes.scale_spectrum(values, multiplier, self._single, factor))
-
-    @property
-    def stored_once(self) -> bool:
-        """Whether :attr:`multiplier` holds each entry once (the spectrum block's shape), not
-        twice (:func:`twice`): an operator whose ``x.Ax`` is not used (a preconditioner) keeps
-        half the floats; the product is the same, the sum rounds otherwise."""
-        return bool(self.multiplier.shape == self.fft.spectrum.shape)
+        return float(passes.scale_entries(values, multiplier, self._single, factor))
 
     def end_mult(self, out: np.ndarray) -> np.ndarray:
         """``out <- A x`` for the ``x`` of the last :meth:`begin_mult`."""
@@ -169,7 +160,7 @@ class SpectralOperator(ShellInterface):
     def spectrum(self) -> np.ndarray:
         """The normalised real multiplier on the local spectrum block (a view: read only; a
         new array where :attr:`factor` is not 1)."""
-        values = self.multiplier if self.stored_once else self.multiplier[:, ::2]
+        values = self.multiplier
         return values if self.factor == 1.0 else values * self.factor
 
     def _with(self, multiplier: np.ndarray) -> Any:
@@ -204,15 +195,13 @@ class FourierOperator(SpectralOperator):
         or on ``fft``'s device.
     """
 
-    def __init__(self, grid: Grid, fft: FFT, kernel: np.ndarray, once: bool = False) -> None:
+    def __init__(self, grid: Grid, fft: FFT, kernel: np.ndarray) -> None:
         self.grid = grid
         self.fft = fft
         self.transform_size = grid.size
         device = fft.device  # the multiplier made where the kernel is moved to, once
         values = self.normalised(device.asarray(kernel, dtype=float))
-        self.multiplier = (
-            device.xp.array(values, order="C") if once else twice(values, device.xp)
-        )  # each entry once: :attr:`stored_once`
+        self.multiplier = real_multiplier(values, device.xp)
         self._single = fft.device.asarray(single_entries(grid, fft))
         self.applications = 0
 
@@ -247,22 +236,14 @@ class FourierOperator(SpectralOperator):
         the normalised multiplier is ``N^-2/(op.multiplier + support)``, so a zero entry
         of ``op`` gives ``inf`` when ``support`` is 0 (the caller sets that entry).
         """
-        entries = op.multiplier
-        if op.stored_once != self.stored_once:
-            if not self.stored_once:
-                raise ValueError("an inverse kept twice per entry of one kept once")
-            entries = op.multiplier[:, ::2]  # each entry once, as this one keeps them
-        np.multiply(entries, op.factor, out=self.multiplier)  # op's spectrum
+        np.multiply(op.multiplier, op.factor, out=self.multiplier)  # op's spectrum
         np.add(self.multiplier, support, out=self.multiplier)
         with np.errstate(divide="ignore"):  # 1/(N a) normalised: N^-2 / a
             np.divide(self.normalised(self.normalised(1.0)), self.multiplier, out=self.multiplier)
 
     def set_entry(self, row: int, column: int, value: float) -> None:
         """Set one entry of the normalised multiplier (local spectrum indices)."""
-        if self.stored_once:
-            self.multiplier[row, column] = value
-        else:
-            self.multiplier[row, 2 * column : 2 * column + 2] = value
+        self.multiplier[row, column] = value
 
     def _forward(self, x: np.ndarray) -> None:
         self.fft.forward_from(x)
@@ -310,7 +291,7 @@ class PaddedOperator(SpectralOperator):
         self.fft.real[...] = where.asarray(kernel_rows(self.padded.rows))
         self.fft.forward()
         self.transform_size = self.padded.size
-        self.multiplier = twice(self.normalised(self.fft.spectrum.real), where.xp)
+        self.multiplier = real_multiplier(self.normalised(self.fft.spectrum.real), where.xp)
         self._single = where.asarray(single_entries(self.padded, self.fft))
         self._centre = float(kernel_rows(slice(0, 1))[0, 0])
         self.exchange = RowExchange(grid.comm, grid.shape, self.padded.shape[0])
@@ -324,7 +305,7 @@ class PaddedOperator(SpectralOperator):
 
     def with_spectrum(self, spectrum: Any) -> PaddedOperator:
         """Another operator on the same padded FFT with the given (normalised) spectrum."""
-        other = self._with(twice(spectrum, self.fft.device.xp))
+        other = self._with(real_multiplier(spectrum, self.fft.device.xp))
         other._centre = other._weighted_sum(self.padded)
         return other
 

@@ -11,7 +11,7 @@ import numpy as np
 from ..conventions.grid import Grid
 from ..devices.fft import FFT, ArrayFFT
 from ..numerics.schur import ContactSchur, response_quarter
-from .coarse import CoarseSpace, TwoLevelOptions, add_correction
+from .coarse import CoarseSpace, TwoLevelOptions, add_correction, input_sum
 from .operator import FourierOperator
 
 SCHUR_MAX = 4096  # the most bound variables for the Schur form (dense matrix: 134 MB)
@@ -62,7 +62,7 @@ class MeanModePreconditioner(FourierOperator):
 
     def __init__(self, grid: Grid, fft: FFT, hessian: FourierOperator, schur_max: int) -> None:
         zeros = fft.device.xp.zeros(fft.spectrum.shape)
-        super().__init__(grid, fft, zeros, once=True)  # filled by invert; x.Mx is never used
+        super().__init__(grid, fft, zeros)  # filled by invert
         self._hessian = hessian
         self.schur_max = schur_max  # the Schur form's largest bound set
         self.options = TwoLevelOptions()  # the two-level form's: the solve's settings
@@ -244,13 +244,17 @@ class MeanModePreconditioner(FourierOperator):
         self._multiplier32 = None
 
     def apply_array(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
-        """``out <- M x``; in the Schur form ``x`` must vanish on the bound set."""
+        """``out <- M x``, ``out`` may be ``x`` (the constrained CG preconditions in place);
+        in the Schur form ``x`` must vanish on the bound set."""
         exact = self._fft32 is None or self.schur is not None
         round_trip = super().apply_array if exact else self._single_round_trip
+        total = None if self.correction is None else input_sum(self.grid, x)
         round_trip(x, out)
         self._reactions = None
-        if self.correction is not None:
-            reactions = add_correction(round_trip, self.correction, x, out, self.work_fields())
+        if total is not None:
+            assert self.correction is not None
+            work = self.work_fields()
+            reactions = add_correction(round_trip, self.correction, total, out, work)
             if self.schur is not None:
                 self._reactions = reactions
         return out
@@ -260,9 +264,7 @@ class MeanModePreconditioner(FourierOperator):
         fft = self._fft32
         assert fft is not None
         if self._multiplier32 is None:  # laid out as the spectrum's float view
-            entries = self.multiplier * self.factor
-            if self.stored_once:
-                entries = self.device.xp.repeat(entries, 2, axis=-1)
+            entries = self.device.xp.repeat(self.multiplier * self.factor, 2, axis=-1)
             self._multiplier32 = entries.astype(np.float32).reshape(-1)
         self.applications += 1
         fft.forward_from(x)
@@ -271,25 +273,29 @@ class MeanModePreconditioner(FourierOperator):
         fft.backward_into(out)
         return out
 
-    def hessian_image(self, r: np.ndarray, out: np.ndarray, beta: float) -> bool:
-        """``out <- beta out + H z`` without a transform, for ``z`` the last application to
-        ``r``, when the form gives ``H z`` exactly; ``False`` (``out`` untouched) otherwise.
+    def hessian_image(self, g: np.ndarray, out: np.ndarray, beta: float) -> bool:
+        """``out <- beta out + H z`` without a transform, for ``z`` the last application, to
+        ``r = P_F g``, when the form gives ``H z`` exactly; ``False`` (``out`` untouched)
+        otherwise.
 
         In the exact Schur form ``z = G (r + lambda) + c`` vanishes on the bound set and
         ``r + lambda`` sums to zero, so ``H z = r + lambda``: the restricted residual plus
-        the reactions on the bound pixels (to rounding).  The other forms are restricted to
-        the free set after they are applied, and their image needs the Hessian.
+        the reactions on the bound pixels (to rounding).  The bound set is the one the form
+        was built on (:meth:`adapt` is told every new set before an application), so ``r``
+        is ``g`` off its pixels and the reactions on them.  The other forms are restricted
+        to the free set after they are applied, and their image needs the Hessian.
         """
         schur = self.schur
         if self._reactions is None or schur is None:
             return False
+        flat, bound = out.reshape(-1), schur.local
+        kept = beta * flat[bound] if beta != 0.0 else 0.0  # r vanishes there
         if beta == 0.0:
-            out[...] = r.reshape(out.shape)
+            flat[...] = g.reshape(-1)
         else:
-            out *= beta
-            out += r.reshape(out.shape)
-        flat = out.reshape(-1)
-        flat[schur.local] += self._reactions
+            flat *= beta
+            flat += g.reshape(-1)
+        flat[bound] = kept + self._reactions
         return True
 
 

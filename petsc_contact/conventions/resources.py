@@ -18,12 +18,14 @@ import gc
 import os
 from typing import Any
 
-BYTES_PER_POINT = {"periodic": 200.0, "punch": 440.0}
+BYTES_PER_POINT = {"periodic": 180.0, "punch": 380.0}
 """Peak bytes per grid point (footprint point for the punch) of the default solver: a 512^2
 periodic sweep with the stiffness and its resume state took 246, and 181 since the contact
 solve keeps no bound Vecs, no FFT output buffer, no scaled copy of the stiffness's multiplier
-and no copy of its answer, and its preconditioner no work fields of its own; the punch's two
-approaches at 512^2, 396 (tests/test_resources.py; docs/performance.md, "Memory")."""
+and no copy of its answer, and its preconditioner no work fields of its own; 163 since the CG
+keeps no residual, every multiplier is kept once per entry and no FFT plan holds its last
+output; the punch's two approaches at 512^2, 396, then 335 (tests/test_resources.py;
+docs/performance.md, "Memory")."""
 OTHER_TAO_FACTOR = 2.0  # TAO's own types keep about twice the default's fields
 FIELD_BYTES = 24.0  # gap, pressure and contact of one step on rank 0, with the state
 

@@ -149,20 +149,9 @@ def clip(x: np.ndarray, lower: Bound, upper: Bound) -> None:
 def scale_spectrum(
     values: np.ndarray, multiplier: np.ndarray, single: np.ndarray, factor: float
 ) -> float:
-    """Multiply a spectrum by a real multiplier times ``factor``; return ``sum(w k |s|^2)``
-    before it (``k`` the multiplier's entry times ``factor``, formed here: an operator that
-    is another's times a scalar keeps no multiplier of its own).
-
-    ``values`` is the float view of the (contiguous, complex) spectrum block, ``multiplier``
-    holds each real entry twice in the same layout
-    (:func:`~petsc_contact.backend.operator.twice`: stored once, the loop would read it
-    otherwise, and its sums round otherwise), and ``single`` the complex indices of the
-    entries of multiplicity ``w = 1``
-    (:func:`~petsc_contact.devices.fft.single_entries`; all others have ``w = 2``).  With a
-    normalised kernel the sum over all ranks is the quadratic form ``x.Kx`` of the
-    transformed field (Parseval).  Flat loops of floats: numba vectorises these, and not a
-    loop over complex entries.
-    """
+    """:func:`scale_entries` with each real entry held twice, in the layout of the
+    spectrum's float view: the operators' layout before they kept each entry once (half the
+    memory), kept for the deprecated name ``numerics.kernels.scale_spectrum`` until 0.3.0."""
     once = 0.0
     for m in single:
         a = values[2 * m]
@@ -181,9 +170,17 @@ def scale_spectrum(
 def scale_entries(
     values: np.ndarray, multiplier: np.ndarray, single: np.ndarray, factor: float
 ) -> float:
-    """:func:`scale_spectrum` with each real entry stored once (``multiplier[i]`` scales
-    ``values[2i]`` and ``values[2i + 1]``): the same products, a sum that rounds otherwise
-    (the loop reads the multiplier otherwise and is vectorised otherwise)."""
+    """Multiply a spectrum by a real multiplier times ``factor``; return ``sum(w k |s|^2)``
+    before it (``k`` the multiplier's entry times ``factor``, formed here: an operator that
+    is another's times a scalar keeps no multiplier of its own).
+
+    ``values`` is the float view of the (contiguous, complex) spectrum block, ``multiplier``
+    holds one real entry per complex one (``multiplier[i]`` scales ``values[2i]`` and
+    ``values[2i + 1]``), and ``single`` the complex indices of the entries of multiplicity
+    ``w = 1`` (:func:`~petsc_contact.devices.fft.single_entries`; all others have ``w =
+    2``).  With a normalised kernel the sum over all ranks is the quadratic form ``x.Kx``
+    of the transformed field (Parseval).
+    """
     once = 0.0
     for m in single:
         a = values[2 * m]

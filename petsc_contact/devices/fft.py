@@ -186,11 +186,16 @@ class SerialFFT:
             self._forward.execute()
 
     def backward_into(self, out: np.ndarray) -> None:
-        """``out <- IFFT(spectrum)`` (unnormalised, destroys ``spectrum``), in place if aligned."""
+        """``out <- IFFT(spectrum)`` (unnormalised, destroys ``spectrum``), in place if aligned.
+
+        The plan is pointed back at ``real`` after, as :meth:`forward_from` does: a plan holds
+        its arrays, and ``out`` must not outlive its caller's use of it (the pressure of a
+        step's observables had stayed alive through the stiffness solve, a field more)."""
         dst = out.reshape(self.real.shape)
         if self._direct(dst, self._backward.output_alignment):
             self._backward.update_arrays(self.spectrum, dst)
             self._backward.execute()
+            self._backward.update_arrays(self.spectrum, self.real)
         else:
             self.backward()
             dst[...] = self.result

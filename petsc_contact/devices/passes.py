@@ -68,26 +68,16 @@ class ArrayPasses:
         """``y <- y + a x``."""
         y += a * x
 
-    def scale_spectrum(self, values: Any, multiplier: Any, single: Any, factor: float) -> float:
-        """Multiply a spectrum's float view by a real multiplier (each entry twice) times
-        ``factor``; return ``sum(w k |s|^2)`` before it (``w = 1`` on ``single``, 2
-        elsewhere; Parseval)."""
-        xp = self.xp
-        if factor != 1.0:
-            multiplier = multiplier * factor  # a temporary of the pass
-        re, im = values[2 * single], values[2 * single + 1]
-        once = xp.dot(multiplier[2 * single], re * re + im * im)
-        total = xp.dot(multiplier, values * values)
-        values *= multiplier
-        return float(2.0 * total - once)
-
     def scale_entries(self, values: Any, multiplier: Any, single: Any, factor: float) -> float:
-        """:meth:`scale_spectrum` with each real entry stored once."""
+        """Multiply a spectrum's float view by a real multiplier (one entry per complex
+        value) times ``factor``; return ``sum(w k |s|^2)`` before it (``w = 1`` on
+        ``single``, 2 elsewhere; Parseval)."""
         xp = self.xp
         if factor != 1.0:
             multiplier = multiplier * factor  # a temporary of the pass
         pairs = values.reshape(-1, 2)
-        power = (pairs * pairs).sum(axis=1)
+        power = pairs[:, 0] * pairs[:, 0]  # |s|^2, half a field
+        power += pairs[:, 1] * pairs[:, 1]
         once = xp.dot(multiplier[single], power[single])
         total = xp.dot(multiplier, power)
         pairs *= multiplier[:, None]

@@ -405,8 +405,12 @@ class PeriodicProblem:
         """The scaled gradient at the reference point, ``s p(x_ref)`` (flat): made by
         :meth:`start`, dropped when a solve is measured (a field less for the stiffness
         solve), and made again, the same numbers, for another solve from the same start."""
-        p_ref = self.pressure(self._x_ref.reshape(self.grid.local_shape) * self.scale_length)
-        return (self._s * p_ref).reshape(-1)
+        sp = self._x_ref.reshape(self.grid.local_shape) * self.scale_length  # the one field
+        sp += self.heights  # p = K(g + h) + p0 (:meth:`pressure`), computed in place
+        self.stiffness.apply_array(sp, sp)
+        sp += self.nominal_pressure
+        sp *= self._s
+        return sp.reshape(-1)
 
     @property
     def start_point(self) -> np.ndarray:

@@ -92,6 +92,23 @@ def patch_sizes(
     return np.asarray(grid.comm.bcast(total, root=0))
 
 
+BLOCK_POINTS = 1 << 20
+"""The points of the row blocks the observables are reduced over: their temporaries are a
+block's (8 MiB a float field), not a field's, so that they add nothing to a run's peak."""
+
+
+def row_blocks(shape: tuple[int, ...]) -> list[slice]:
+    """Blocks of whole rows of a slab of ``shape`` of about :data:`BLOCK_POINTS` points each
+    (none for an empty slab)."""
+    rows = max(1, BLOCK_POINTS // max(shape[1], 1))
+    return [slice(i, i + rows) for i in range(0, shape[0], rows)]
+
+
+def _larger(a: float, b: float) -> float:
+    """The larger of two numbers, NaN if either is (as ``np.maximum``)."""
+    return float(np.maximum(a, b))
+
+
 PRESSURE_BINS = 40  # equal bins from zero to the largest contact pressure
 GAP_BINS = 40  # equal bins from zero to the largest gap
 
@@ -162,16 +179,30 @@ def _histograms(
     device: Device,
 ) -> dict[str, Any]:
     """The contact pixels' pressures and the open pixels' gaps (of those ``inside``), in
-    equal bins from zero to the largest (same on every rank)."""
+    equal bins from zero to the largest (same on every rank), a row block at a time."""
     xp = device.xp
-    open_ = inside & ~contact
-    p_top = grid.max(largest(xp.where(contact, pressure, 0.0)))
-    g_top = grid.max(largest(xp.where(open_, gap, 0.0)))
+
+    def chosen(rows: slice) -> tuple[Any, Any]:  # the block's contact pressures, open gaps
+        in_contact = contact[rows]
+        return pressure[rows][in_contact], gap[rows][inside[rows] & ~in_contact]
+
+    p_top = g_top = 0.0
+    blocks = row_blocks(gap.shape)
+    for rows in blocks:
+        p, g = chosen(rows)
+        p_top, g_top = _larger(p_top, largest(p)), _larger(g_top, largest(g))
+    p_top, g_top = grid.max(p_top), grid.max(g_top)
     p_range = (0.0, p_top if p_top > 0 else 1.0)
     g_range = (0.0, g_top if g_top > 0 else 1.0)
-    # equal bins given by their number and range: numpy's fast path (edges need a search)
-    p_hist, p_edges = xp.histogram(pressure[contact], PRESSURE_BINS, p_range)
-    g_hist, g_edges = xp.histogram(gap[open_], GAP_BINS, g_range)
+    # equal bins given by their number and range: numpy's fast path (edges need a search);
+    # each value's bin does not depend on the others, so the blocks' counts add up
+    none = xp.empty(0)
+    p_hist, p_edges = xp.histogram(none, PRESSURE_BINS, p_range)
+    g_hist, g_edges = xp.histogram(none, GAP_BINS, g_range)
+    for rows in blocks:
+        p, g = chosen(rows)
+        p_hist += xp.histogram(p, PRESSURE_BINS, p_range)[0]
+        g_hist += xp.histogram(g, GAP_BINS, g_range)[0]
     counts = grid.sum(*device.to_host(p_hist), *device.to_host(g_hist)).astype(np.int64)
     return {
         "pressure_histogram": counts[:PRESSURE_BINS],
@@ -215,6 +246,35 @@ def _joined_sizes(touching: list[tuple[np.ndarray, np.ndarray]], sizes: np.ndarr
     return np.bincount(component, weights=sizes).astype(np.int64)
 
 
+def _block_sums(
+    gap: Any,
+    pressure: Any,
+    contact: Any,
+    heights: Any,
+    nominal_pressure: float,
+    pixel_stiffness: float,
+    device: Device,
+) -> tuple[Any, ...]:
+    """This rank's sums of :func:`step_observables`, a block of rows at a time (the
+    temporaries a block's): the contact pressure's sum and largest entry, ``(g + h).(p -
+    p0)``, ``p+.g``, ``sum(p+)`` and the natural residual's ``r.r``."""
+    xp = device.xp
+    pc_sum: Any = 0.0
+    pc_largest = work = pg = p_sum = r2 = pc_sum
+    for rows in row_blocks(gap.shape):
+        g, p = gap[rows], pressure[rows]
+        p_plus = xp.maximum(p, 0.0)
+        p_contact = xp.where(contact[rows], p_plus, 0.0)
+        pc_sum += p_contact.sum()
+        pc_largest = _larger(pc_largest, largest(p_contact))
+        pg += xp.vdot(p_plus, g)
+        p_sum += p_plus.sum()
+        r = natural_residual(g, p, pixel_stiffness, device)
+        r2 += xp.vdot(r, r)
+        work += xp.vdot(g + heights[rows], p - nominal_pressure)
+    return pc_sum, pc_largest, work, pg, p_sum, r2
+
+
 def step_observables(
     grid: Grid,
     gap: np.ndarray,
@@ -243,17 +303,9 @@ def step_observables(
     xp = device.xp
     contact = contact_mask(gap, pressure, pixel_stiffness)
     sizes = patch_sizes(grid, contact, device=device)
-    # each field-sized temporary reduced and dropped before the next: two at a time at most
-    p_plus = xp.maximum(pressure, 0.0)
-    p_contact = xp.where(contact, p_plus, 0.0)
-    pc_sum, pc_largest = p_contact.sum(), largest(p_contact)
-    del p_contact
-    pg, p_sum = xp.vdot(p_plus, gap), p_plus.sum()
-    del p_plus
-    r = natural_residual(gap, pressure, pixel_stiffness, device)
-    r2 = xp.vdot(r, r)
-    del r
-    work = xp.vdot(gap + heights, pressure - nominal_pressure)
+    pc_sum, pc_largest, work, pg, p_sum, r2 = _block_sums(
+        gap, pressure, contact, heights, nominal_pressure, pixel_stiffness, device
+    )
     sums = grid.sum(
         gap.sum(), xp.count_nonzero(contact), pc_sum, work, pg, p_sum, r2, xp.vdot(heights, heights)
     )

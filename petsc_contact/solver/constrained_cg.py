@@ -121,9 +121,10 @@ class ExactImage(Protocol):
     """A preconditioner that knows the Hessian's image of its output in some forms (the
     package's exact Schur form: ``H z = r + lambda``), so that the step needs no transform."""
 
-    def hessian_image(self, r: Array, out: Array, beta: float) -> bool:
-        """``out <- beta out + H z`` for ``z`` its last application to ``r``, when known
-        exactly; ``False`` (``out`` untouched) otherwise."""
+    def hessian_image(self, g: Array, out: Array, beta: float) -> bool:
+        """``out <- beta out + H z`` for ``z`` its last application, to ``r = P_F g`` (the
+        gradient ``g`` restricted to the free set it was told last), when known exactly;
+        ``False`` (``out`` untouched) otherwise."""
         ...
 
 
@@ -245,10 +246,12 @@ def distance_to_bound(
 
 @dataclass
 class Outcome:
-    """How a solve ended: the reason (TAO's name, or :data:`MONITOR`) and its iterations."""
+    """How a solve ended: the reason (TAO's name, or :data:`MONITOR`), its iterations and
+    the natural residual ``||P_F g||`` of the last iterate."""
 
     reason: str
     iterations: int
+    residual: float
 
 
 _GO, _RETEST, _STOP = 0, 1, 2  # what an iteration's stage lets the loop do next
@@ -269,7 +272,8 @@ class ConstrainedCG:
     hessian
         A :class:`SplitHessian`, or ``mult(d, out)`` for any other Hessian.
     preconditioner
-        ``apply(r, z)``: ``z <- M r``, or ``None`` for ``M = I``.
+        ``apply(r, z)``: ``z <- M r``, or ``None`` for ``M = I``; called in place (``z`` is
+        ``r``: the residual is not kept, a field less).
     contact
         The preconditioner's :class:`ContactPreconditioner`, if it follows the bound set.
     convergence
@@ -311,7 +315,8 @@ class ConstrainedCG:
         self.preconditioner, self.contact = preconditioner, contact
         self.image = contact if isinstance(contact, ExactImage) else None
         self.beta, self.image_valid = 0.0, False  # d = z + beta d_old; whether w = H d
-        self.g, self.d, self.w, self.r, self.z = (vector() for _ in range(5))
+        # the residual r = P_F g is not kept: it is written where z is made from it
+        self.g, self.d, self.w, self.z = (vector() for _ in range(4))
         expected = contact.expected_bound_count if contact is not None else 0
         self.min_limit = max(MIN_GROWTH, EXPECTED_GROWTH * expected)
         self.global_size = x.size if size is None else size
@@ -322,6 +327,7 @@ class ConstrainedCG:
         self.since_refresh = 0
         self.confirming, self.confirmed, self.stalls = False, np.inf, 0  # see _test
         self.reason = ""
+        self.residual = np.inf  # the last iteration's ||r||: the iterate's (tested at each)
         self.d[...] = 0.0
         self.f = self._evaluate()
 
@@ -342,9 +348,9 @@ class ConstrainedCG:
         """Iterate until a stopping rule holds; ``x`` holds the last iterate."""
         it = 0
         while True:
-            # free set F = {x > lower} U {g < 0} (minus {x >= upper, g < 0}); r = P_F g
+            # free set F = {x > lower} U {g < 0} (minus {x >= upper, g < 0}); z <- r = P_F g
             rr, changed, joined, n_free = self.allsum(
-                *self.passes.free_set(self.xa, self.g, self.lower, self.upper, self.free, self.r)
+                *self.passes.free_set(self.xa, self.g, self.lower, self.upper, self.free, self.z)
             )
             self.pending_changed += changed
             self.pending_joined += joined
@@ -356,12 +362,12 @@ class ConstrainedCG:
                 if stage == _GO:
                     stage = self._step(bound_count)
             if stage == _STOP:
-                return Outcome(self.reason, it)
+                return Outcome(self.reason, it, self.residual)
 
     def _test(self, it: int, rr: float) -> int:
         """Report the iteration; stop where the convergence test says so (a verdict of
         convergence confirmed on an exactly evaluated gradient)."""
-        rnorm = float(np.sqrt(rr))
+        rnorm = self.residual = float(np.sqrt(rr))
         verdict = self.convergence.check(it, self.f, rnorm, self.step_length)
         if verdict == MONITOR:
             return self._stop(MONITOR)
@@ -383,18 +389,19 @@ class ConstrainedCG:
         return _GO if verdict is None else self._stop(verdict)
 
     def _direction(self, rr: float, bound_count: int) -> int:
-        """The preconditioner follows a changed set; ``z = P_F M r``, then the direction
-        ``d <- z + beta d``, kept in ``z``'s buffer and swapped with ``d``'s (one memory
-        pass; no copy after a restart).  Sets :attr:`rd`, ``r.d``."""
+        """The preconditioner follows a changed set; ``z = P_F M r`` in place of ``r``
+        (``z``'s buffer holds ``r = P_F g``), then the direction ``d <- z + beta d``, kept in
+        ``z``'s buffer and swapped with ``d``'s (one memory pass; no copy after a restart).
+        Sets :attr:`rd`, ``r.d``.  ``r`` is not kept: its products with vectors that vanish
+        off the free set are taken with ``g``."""
         changed, joined = self.pending_changed, self.pending_joined
         self.pending_changed = self.pending_joined = 0.0
-        contact, free, r, passes = self.contact, self.free, self.r, self.passes
+        contact, free, g, passes = self.contact, self.free, self.g, self.passes
         exact = bool(changed) and contact is not None and contact.adapt(bound_count, free)
         if self.preconditioner is not None:
-            self.preconditioner(r, self.z)
-            (rz,) = self.allsum(passes.restrict_dot(self.z, free, r))
+            self.preconditioner(self.z, self.z)
+            (rz,) = self.allsum(passes.restrict_dot(self.z, free, g))
         else:
-            self.z[...] = r
             rz = rr
         restart = changed > 0
         if changed and self.rz_old > 0 and not exact:
@@ -410,10 +417,10 @@ class ConstrainedCG:
         if not restart:
             beta = rz / self.rz_old
             if changed:  # z's buffer holds the new direction, with d restricted to F
-                (rd,) = self.allsum(passes.extend_direction(self.z, self.d, free, beta, r))
+                (rd,) = self.allsum(passes.extend_direction(self.z, self.d, free, beta, g))
                 self.image_valid = False  # H of the restricted old direction is not known
                 if not rd > 0:  # no longer a descent direction: restart
-                    passes.extend_direction(self.z, self.d, free, -beta, r)
+                    passes.extend_direction(self.z, self.d, free, -beta, g)
                     rd, beta = rz, 0.0
             else:
                 passes.axpy(beta, self.d, self.z)
@@ -444,7 +451,8 @@ class ConstrainedCG:
         settled = self.contact is not None and self.contact.two_level
         limit = int(max((TWO_LEVEL_GROWTH if settled else GROWTH) * bound_count, self.min_limit))
         if below > limit:
-            work = (self.z, self.r)  # the old direction and the residual: used up
+            work = (self.z, self.w)  # the old direction, and H d: the gradient is evaluated
+            self.image_valid = False
             fraction = growth_fraction(xa, d, alpha, lower, limit, self.allsum, work)
             passes.axpy((fraction - 1.0) * alpha, d, xa)
             alpha *= fraction
@@ -467,5 +475,5 @@ class ConstrainedCG:
         (:class:`ExactImage`), when it has one and ``w`` holds ``H d_old``."""
         if self.image is None or not (self.beta == 0.0 or self.image_valid):
             return False
-        self.image_valid = self.image.hessian_image(self.r, self.w, self.beta)
+        self.image_valid = self.image.hessian_image(self.g, self.w, self.beta)
         return self.image_valid

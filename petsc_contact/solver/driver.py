@@ -298,7 +298,6 @@ class ArraySolver:
         """What a solve reports, as ``BoundSolver`` reports it: ``before`` are the Hessian's
         and the preconditioner's applications at its start."""
         reason = USER if outcome.reason == MONITOR else outcome.reason
-        rnorm = float(np.sqrt(cg.allsum(float(self.device.xp.dot(cg.r, cg.r)))[0]))
         return SolveInfo(
             tao_type=TYPE_NAME,
             reason=reason,
@@ -307,7 +306,7 @@ class ArraySolver:
             objective_gradient_evaluations=watch.evaluations,
             hessian_applications=self.hessian.applications - before[0],
             preconditioner_applications=self.preconditioner.applications - before[1],
-            gradient_norm=rnorm,
+            gradient_norm=outcome.residual,
             solve_time=elapsed,
             tolerance=float(gatol),
             relative_tolerance=float(self.settings.grtol),

@@ -121,7 +121,11 @@ class PeriodicSteps:
         self, problem: PeriodicProblem, start: np.ndarray | None, held: Held | None
     ) -> None:
         ell, device = problem.scale_length, problem.device
-        x = (problem.initial_gap() if start is None else device.asarray(start)).reshape(-1) / ell
+        if start is None:
+            x = problem.initial_gap().reshape(-1)  # a field of its own: scaled in place
+            x /= ell
+        else:
+            x = device.asarray(start).reshape(-1) / ell
         self.problem, self.x = problem, x
         self.path = (
             LoadPath() if held is None or start is None else _resumed_path(held, x, ell, device)

@@ -182,3 +182,20 @@ def test_leaving_the_schur_form_keeps_the_recurrence(petsc, monkeypatch, device)
     assert s["iterations"] <= 22 < t["iterations"]
     # both stop at the same gradient tolerance: the mean gaps agree to well below it
     assert abs(s["mean_gap"] - t["mean_gap"]) <= 1e-8 * abs(t["mean_gap"])
+
+
+def test_a_multiplier_kept_once_says_once_is_deprecated():
+    """``FourierOperator(..., once=)`` still works, warns, and keeps the one layout: one float
+    per complex entry of the spectrum, the same operator either way."""
+    from petsc_contact.backend.operator import FourierOperator
+
+    grid, h = heights()
+    fft = make_fft(grid)
+    kernel = np.abs(np.fft.rfftfreq(grid.shape[1]))[None, :] + np.zeros(fft.spectrum.shape)
+    plain = FourierOperator(grid, fft, kernel)
+    with pytest.warns(DeprecationWarning, match="once= is deprecated"):
+        old = FourierOperator(grid, fft, kernel, once=False)
+    assert plain.multiplier.shape == old.multiplier.shape == fft.spectrum.shape
+    x = h.reshape(-1)
+    a, b = plain.apply_array(x, np.empty_like(x)), old.apply_array(x, np.empty_like(x))
+    assert np.array_equal(a, b) and np.abs(a).max() > 0

@@ -91,3 +91,20 @@ def test_stiffness_solves_release_their_operators():
     assert all(s.converged and s.scalars["stiffness"] > 0 for s in steps)
     gc.collect()
     assert not [o for o in gc.get_objects() if isinstance(o, Restricted)]
+
+
+def test_the_iteration_limit_fits_petsc_s_integer(petsc):
+    """Ten iterations per unknown, capped where PETSc's integer ends: a 15360^2 grid (235.9
+    million points) asks for more than a 32-bit ``PetscInt`` holds, and the KSP takes the
+    cap, not an ``OverflowError`` after the contact solve."""
+    from petsc_contact.backend.stiffness import iteration_cap
+
+    most = int(np.iinfo(petsc.IntType).max)
+    assert iteration_cap(512**2, petsc.IntType) == 10 * 512**2
+    assert iteration_cap(15360**2, petsc.IntType) == min(10 * 15360**2, most)
+    ksp = petsc.KSP().create()
+    try:
+        ksp.setTolerances(max_it=iteration_cap(15360**2, petsc.IntType))
+        assert ksp.getTolerances()[3] == min(10 * 15360**2, most)
+    finally:
+        ksp.destroy()

@@ -16,12 +16,14 @@ of them (the package's own solver calls ``apply_array`` and the two halves direc
 from __future__ import annotations
 
 import copy
+import warnings
 from types import ModuleType
 from typing import Any
 
 import numpy as np
 
 from ..conventions.grid import Grid, block_rows
+from ..conventions.warnings import user_level
 from ..devices.device import CPU, Device
 from ..devices.fft import FFT, half_spectrum_weights, make_fft, single_entries
 from . import _petsc
@@ -193,9 +195,20 @@ class FourierOperator(SpectralOperator):
     kernel
         The multiplier on ``fft.spectrum``'s block (without FFT normalisation), on the host
         or on ``fft``'s device.
+    once
+        Deprecated and ignored (every multiplier is kept once per entry); until 0.3.0.
     """
 
-    def __init__(self, grid: Grid, fft: FFT, kernel: np.ndarray) -> None:
+    def __init__(
+        self, grid: Grid, fft: FFT, kernel: np.ndarray, once: bool | None = None
+    ) -> None:
+        if once is not None:
+            warnings.warn(
+                "FourierOperator's once= is deprecated and ignored: every multiplier is kept "
+                "once per entry; it will be removed in 0.3.0",
+                DeprecationWarning,
+                stacklevel=user_level(),
+            )
         self.grid = grid
         self.fft = fft
         self.transform_size = grid.size

@@ -34,6 +34,14 @@ class _Shell(Restricted, ShellInterface):
     """:class:`~petsc_contact.solver.linear.Restricted` as a shell ``Mat``/``PC`` context."""
 
 
+def iteration_cap(points: int, int_type: Any) -> int:
+    """The held-set solve's iteration limit on ``points`` unknowns: ten per unknown, no more
+    than PETSc's integer (``int_type``, ``PETSc.IntType``) holds: 32 bits in Debian's PETSc,
+    which ten per unknown overflows above 214.7 million points (14654^2; a 15360^2 run
+    failed with ``OverflowError`` after its contact solve)."""
+    return int(min(10 * points, np.iinfo(int_type).max))
+
+
 def restricted_solve(
     grid: Grid,
     op: ShellInterface,
@@ -65,7 +73,7 @@ def restricted_solve(
         ksp.setType("cg")
         ksp.setPC(pcobj)  # before the operators, which the KSP hands on to its PC
         ksp.setOperators(mat)
-        ksp.setTolerances(rtol=rtol, atol=0.0, max_it=10 * grid.size)
+        ksp.setTolerances(rtol=rtol, atol=0.0, max_it=iteration_cap(grid.size, petsc.IntType))
         given = _petsc.options_prefix() if prefix is None else prefix
         ksp.setOptionsPrefix(given + "stiffness_")
         ksp.setFromOptions()

@@ -199,9 +199,7 @@ class FourierOperator(SpectralOperator):
         Deprecated and ignored (every multiplier is kept once per entry); until 0.3.0.
     """
 
-    def __init__(
-        self, grid: Grid, fft: FFT, kernel: np.ndarray, once: bool | None = None
-    ) -> None:
+    def __init__(self, grid: Grid, fft: FFT, kernel: np.ndarray, once: bool | None = None) -> None:
         if once is not None:
             warnings.warn(
                 "FourierOperator's once= is deprecated and ignored: every multiplier is kept "

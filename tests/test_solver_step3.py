@@ -199,3 +199,31 @@ def test_a_multiplier_kept_once_says_once_is_deprecated():
     x = h.reshape(-1)
     a, b = plain.apply_array(x, np.empty_like(x)), old.apply_array(x, np.empty_like(x))
     assert np.array_equal(a, b) and np.abs(a).max() > 0
+
+
+def test_a_pc_of_petsc_s_own_preconditions_in_place(petsc):
+    """The constrained CG preconditions in place (``z`` is ``r``); a ``PC`` that is not the
+    package's Python one is applied on a copy (PETSc refuses aliased vectors): Jacobi on a
+    diagonal matrix gives ``r / diag`` into ``r``'s own array."""
+    from petsc_contact.backend.cg import _context, _in_place, _VecArrays
+
+    diag = petsc.Vec().createSeq(5)
+    diag.setArray(np.arange(1.0, 6.0))
+    mat = petsc.Mat().createAIJ((5, 5), nnz=1)
+    mat.setUp()
+    mat.setDiagonal(diag)
+    mat.assemble()
+    pc = petsc.PC().create()
+    pc.setType("jacobi")
+    pc.setOperators(mat)
+    pc.setUp()
+    arrays = _VecArrays()
+    x = diag.duplicate()
+    arrays.begin(x)
+    r = arrays.new()
+    r[...] = 6.0
+    _in_place(pc, _context(pc), arrays)(r, r)
+    assert np.allclose(r, 6.0 / np.arange(1.0, 6.0))
+    arrays.close()
+    for obj in (pc, mat, diag, x):
+        obj.destroy()

@@ -80,11 +80,11 @@ class TwoLevelOptions:
         ``-petsc_contact_two_level_block``: the aggregates' block side in pixels.
     max_fraction
         ``-petsc_contact_two_level_max_fraction``: the largest fraction of the grid in contact
-        at which it is used.  Above 10% it pays on paper-bandwidth surfaces of 1024^2 and more
-        (at 2048^2 and 17.6% contact 77 -> 31 iterations, 10.2 -> 6.8 s) but not where the
-        held compliance alone converges in about 35 iterations (fewer, larger contact
-        patches) or at 512^2, where its builds cost more than the iterations it saves
-        (docs/performance.md).
+        at which it is used.  Above 10% it pays where the held compliance alone is slow (at
+        2048^2 on H = 0.7, ``L/lambda_r = 1``: 17.6% contact 77 -> 31 iterations, a 12-step
+        sweep 41.5 -> 35.8 s with 0.3) but not where that converges in about 30 iterations
+        (fewer, larger contact patches: 3-20% more time at 2048^2) or at 512^2 and 1024^2,
+        where its builds cost more than the iterations they save (docs/performance.md).
     """
 
     enabled: bool = True

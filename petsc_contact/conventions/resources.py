@@ -1,14 +1,13 @@
 """What a run will need of the machine, checked before it allocates: memory per grid point.
 
-The figures are a whole command's peak over a tiny run's (the process with its imports),
-rounded up: ``petsc-contact periodic`` with a generated surface, the default solver, the exact
-stiffness and an output file (its resume state) took 312, 313, 311 and at least 303 B per
-point at 512^2, 1024^2, 2048^2 and 8192^2 (the last a 25-load sweep of ``study --figure 2``),
-and the punch 467-479 per footprint point at 256^2-1024^2 (its padded FFT has four times
-the points); TAO's quasi-Newton and Newton types keep about twice the default's fields
-(``benchmarks/memory.py``, docs/performance.md, "Memory", where the solver alone is
-measured).  Fields kept for the output (``--fields``, gathered on rank 0) add three 8-byte
-fields.  tests/test_resources.py checks the figures against such runs.
+The figures (:data:`BYTES_PER_POINT`) are a whole command's peak over a tiny run's (the
+process with its imports), rounded up: ``petsc-contact periodic`` with a generated surface,
+the default solver, the exact stiffness and an output file (its resume state), and the punch
+per footprint point (its padded FFT has four times the points); TAO's quasi-Newton and Newton
+types keep about twice the default's fields (``benchmarks/memory.py``, docs/performance.md,
+"Memory", where the solver alone is measured).  Fields kept for the output (``--fields``,
+gathered on rank 0) add three 8-byte fields.  tests/test_resources.py checks the figures
+against such runs.
 """
 
 from __future__ import annotations

@@ -80,11 +80,8 @@ class TwoLevelOptions:
         ``-petsc_contact_two_level_block``: the aggregates' block side in pixels.
     max_fraction
         ``-petsc_contact_two_level_max_fraction``: the largest fraction of the grid in contact
-        at which it is used.  Above 10% it pays where the held compliance alone is slow (at
-        2048^2 on H = 0.7, ``L/lambda_r = 1``: 17.6% contact 77 -> 31 iterations, a 12-step
-        sweep 41.5 -> 35.8 s with 0.3) but not where that converges in about 30 iterations
-        (fewer, larger contact patches: 3-20% more time at 2048^2) or at 512^2 and 1024^2,
-        where its builds cost more than the iterations they save (docs/performance.md).
+        at which it is used.  Above 10% it takes fewer iterations but pays in time only where
+        the held compliance alone is slow (docs/solvers.md).
     """
 
     enabled: bool = True
